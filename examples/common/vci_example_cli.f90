@@ -1,0 +1,309 @@
+!> What the example programs share: command-line flags, a summary observer that prints impacts
+!> and shows progress on a terminal, reading the last state of a previous run, the run itself.
+module vci_example_cli
+  use, intrinsic :: iso_c_binding, only: c_int
+  use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
+  use vci
+  implicit none
+  private
+
+  !> Options common to every example.
+  type, public :: example_options_t
+    real(dp) :: h = 0.0_dp, t_final = 0.0_dp
+    character(len=:), allocatable :: output, from
+    logical :: backward = .false., quiet = .false., no_output = .false., analytic_hessian = .true.
+    logical :: t_final_given = .false.
+    integer :: impact_energy = VCI_IMPACT_DISCRETE
+    real(dp) :: rtol = 1.0e-12_dp
+    integer :: max_impacts = 16
+  end type example_options_t
+
+  !> Prints one line per impact and a progress line on stderr; forwards everything to `next`.
+  type, extends(vci_observer_t), public :: summary_observer_t
+    class(vci_observer_t), pointer :: next => null()
+    integer(i8) :: impacts = 0, steps = 0, total_steps = 0
+    logical :: quiet = .false., progress = .false.
+    real(dp) :: h_first = 0.0_dp, h_last = 0.0_dp
+    logical :: have_first = .false.
+    real(dp) :: e_first = 0.0_dp, e_last = 0.0_dp
+  contains
+    procedure :: on_start => s_start
+    procedure :: on_step => s_step
+    procedure :: on_impact => s_impact
+    procedure :: on_finish => s_finish
+  end type summary_observer_t
+
+  interface
+    function c_isatty(fd) bind(C, name='isatty') result(r)
+      import :: c_int
+      integer(c_int), value :: fd
+      integer(c_int) :: r
+    end function c_isatty
+  end interface
+
+  public :: parse_options, run_example, read_last_state
+
+contains
+
+  !> Parse the command line. `usage` is the program-specific help text (printed by --help).
+  subroutine parse_options(opts, name, usage)
+    type(example_options_t), intent(inout) :: opts
+    character(len=*), intent(in) :: name, usage
+    integer :: i, nargs
+    character(len=:), allocatable :: arg, val
+    nargs = command_argument_count()
+    i = 1
+    do while (i <= nargs)
+      arg = get_arg(i)
+      select case (arg)
+      case ('--help', '-h')
+        write (output_unit, '(a)') usage
+        write (output_unit, '(a)') 'Common flags:'
+        write (output_unit, '(a)') '  --h H                 step length'
+        write (output_unit, '(a)') '  --t-final T           integrate up to time T (backward: down to T)'
+        write (output_unit, '(a)') '  --output FILE         trajectory file (.csv; .h5 when built with HDF5)'
+        write (output_unit, '(a)') '  --no-output           write no trajectory'
+        write (output_unit, '(a)') '  --backward            integrate backward in time with the (-) scheme'
+        write (output_unit, '(a)') '  --from FILE           start from the last state written by a previous run'
+        write (output_unit, '(a)') '  --impact-energy MODE  discrete (paper, default) or hamiltonian'
+        write (output_unit, '(a)') '  --rtol R              Newton tolerance relative to term sizes (1e-12)'
+        write (output_unit, '(a)') '  --max-impacts K       impacts allowed in one step (16)'
+        write (output_unit, '(a)') '  --differenced-hessian let the library difference the mixed Hessian'
+        write (output_unit, '(a)') '  --quiet               print the summary only'
+        stop
+      case ('--h', '--t-final', '--output', '--from', '--impact-energy', '--rtol', '--max-impacts')
+        if (i == nargs) call die(name//': '//arg//' needs a value')
+        i = i + 1
+        val = get_arg(i)
+        select case (arg)
+        case ('--h'); opts%h = to_real(val, arg)
+        case ('--t-final'); opts%t_final = to_real(val, arg); opts%t_final_given = .true.
+        case ('--output'); opts%output = val
+        case ('--from'); opts%from = val
+        case ('--rtol'); opts%rtol = to_real(val, arg)
+        case ('--max-impacts'); opts%max_impacts = nint(to_real(val, arg))
+        case ('--impact-energy')
+          select case (val)
+          case ('discrete'); opts%impact_energy = VCI_IMPACT_DISCRETE
+          case ('hamiltonian'); opts%impact_energy = VCI_IMPACT_HAMILTONIAN
+          case default; call die(name//': --impact-energy must be discrete or hamiltonian')
+          end select
+        end select
+      case ('--backward'); opts%backward = .true.
+      case ('--quiet'); opts%quiet = .true.
+      case ('--no-output'); opts%no_output = .true.
+      case ('--differenced-hessian'); opts%analytic_hessian = .false.
+      case default
+        call die(name//': unknown flag '//arg//' (see --help)')
+      end select
+      i = i + 1
+    end do
+    if (.not. (opts%h > 0.0_dp)) call die(name//': --h must be positive')
+  end subroutine parse_options
+
+  !> Create, initialise and run; print the summary. `init` is called when not starting from a file.
+  subroutine run_example(name, model, opts, init)
+    character(len=*), intent(in) :: name
+    class(vci_model_t), target, intent(inout) :: model
+    type(example_options_t), intent(inout) :: opts
+    interface
+      subroutine init(integ, stat)
+        import :: vci_integrator_t
+        type(vci_integrator_t), intent(inout) :: integ
+        integer, intent(out) :: stat
+      end subroutine init
+    end interface
+    type(vci_integrator_t) :: integ
+    type(summary_observer_t) :: summary
+    type(vci_csv_writer_t), target :: csv
+    integer :: stat, dir
+    integer(i8) :: nsteps, c0, c1, rate
+    real(dp) :: t_first, t_last, t_target, h0, h1, e_first
+    real(dp), allocatable :: q(:), p(:)
+    logical :: has_h
+
+    call integ%create(model, opts%h, stat)
+    if (stat == VCI_OK) call integ%set_tolerances(0.0_dp, opts%rtol, 30, stat)
+    if (stat == VCI_OK) call integ%set_max_impacts(opts%max_impacts, stat)
+    if (stat /= VCI_OK) call die(name//': '//trim(integ%message))
+    dir = merge(-1, 1, opts%backward)
+    if (allocated(opts%from)) then
+      allocate (q(model%n), p(model%n))
+      call read_last_state(opts%from, model%n, t_first, t_last, q, p, stat)
+      if (stat /= 0) call die(name//': cannot read the last state of '//opts%from)
+      call integ%init_from_momentum(t_last, q, p, stat)
+    else
+      call init(integ, stat)
+    end if
+    if (stat /= VCI_OK) call die(name//': '//trim(integ%message))
+    if (opts%impact_energy /= VCI_IMPACT_DISCRETE) then
+      call integ%set_impact_energy(opts%impact_energy, stat)
+      if (stat /= VCI_OK) call die(name//': '//trim(integ%message))
+    end if
+
+    ! how far: to --t-final, or (backward from a file) back to that run's first state
+    t_target = opts%t_final
+    if (opts%backward .and. allocated(opts%from) .and. .not. opts%t_final_given) t_target = t_first
+    if (opts%backward .and. .not. allocated(opts%from) .and. .not. opts%t_final_given) t_target = -opts%t_final
+    nsteps = max(0_i8, ceiling(real(dir, dp) * (t_target - integ%t) / opts%h - 1.0e-9_dp, i8))
+
+    if (.not. opts%no_output) then
+      if (.not. allocated(opts%output)) opts%output = name//merge('_backward', '         ', opts%backward)
+      opts%output = trim(opts%output)
+      if (index(opts%output, '.') == 0) opts%output = opts%output//'.csv'
+      call csv%open(opts%output, stat)
+      if (stat /= VCI_OK) call die(name//': '//trim(csv%message))
+      summary%next => csv
+    end if
+    summary%quiet = opts%quiet
+    summary%total_steps = nsteps
+    summary%progress = c_isatty(2_c_int) == 1
+
+    has_h = model_has_energy(model, integ)
+    if (has_h) call model%energy(integ%q, integ%p, h0, stat)
+    e_first = integ%energy   ! NaN when starting from (q, p): no step taken yet
+    write (output_unit, '(a)') 'scene: '//name//'   direction: '//trim(merge('backward', 'forward ', opts%backward))// &
+      '   impact energy: '//trim(merge('hamiltonian', 'discrete   ', opts%impact_energy == VCI_IMPACT_HAMILTONIAN))
+    write (output_unit, '(a,es10.3,a,f0.6,a,f0.6,a,i0)') 'h = ', opts%h, '   t from ', integ%t, ' to ', &
+      integ%t + dir * nsteps * opts%h, '   steps: ', nsteps
+    if (opts%backward) call print_state('start state', integ)
+    call system_clock(c0, rate)
+    call integ%integrate(nsteps, dir, stat, summary)
+    call system_clock(c1)
+    write (output_unit, '(a,i0)') 'impacts: ', integ%stats%impacts
+    write (output_unit, '(a,i0,a,es11.4)') 'steps: ', integ%stats%steps, '   t = ', integ%t
+    if (e_first == e_first) then
+      write (output_unit, '(a,es23.15,a,es23.15,a,es10.3)') 'energy E_d: start ', e_first, '  end ', integ%energy, &
+        '  change ', integ%energy - e_first
+    else
+      write (output_unit, '(a,es23.15,a)') 'energy E_d: end ', integ%energy, '  (start from (q, p): no step yet)'
+    end if
+    if (has_h) then
+      call model%energy(integ%q, integ%p, h1, stat)
+      write (output_unit, '(a,es23.15,a,es23.15,a,es10.3)') 'energy H(q,p): start ', h0, '  end ', h1, &
+        '  change ', h1 - h0
+    end if
+    write (output_unit, '(a,i0,a,i0,a,i0)') 'newton: solves ', integ%stats%newton_solves, '  iterations ', &
+      integ%stats%newton_iterations, '  least-squares fallbacks ', integ%stats%fallbacks
+    write (output_unit, '(a,f0.4,a)') 'wall time: ', real(c1 - c0, dp) / real(rate, dp), ' s'
+    if (opts%backward) call print_state('end state', integ)
+    if (.not. opts%no_output) write (output_unit, '(a)') 'output: '//opts%output
+    if (integ%status /= VCI_OK) then
+      write (output_unit, '(a)') 'status: '//vci_status_name(integ%status)//': '//trim(integ%message)
+      stop 2
+    end if
+    write (output_unit, '(a)') 'status: ok'
+  end subroutine run_example
+
+  logical function model_has_energy(model, integ)
+    class(vci_model_t), intent(inout) :: model
+    type(vci_integrator_t), intent(in) :: integ
+    real(dp) :: e
+    integer :: s
+    s = 0
+    call model%energy(integ%q, integ%p, e, s)
+    model_has_energy = (s == 0)
+  end function model_has_energy
+
+  subroutine print_state(what, integ)
+    character(len=*), intent(in) :: what
+    type(vci_integrator_t), intent(in) :: integ
+    write (output_unit, '(a,es24.16,a,*(es24.16))') what//': t = ', integ%t, '  q =', integ%q
+    write (output_unit, '(a,*(es24.16))') repeat(' ', len(what) + 2)//'p =', integ%p
+  end subroutine print_state
+
+  !> The first time and the last (t, q, p) of a trajectory file written by the CSV observer.
+  subroutine read_last_state(path, n, t_first, t_last, q, p, stat)
+    character(len=*), intent(in) :: path
+    integer, intent(in) :: n
+    real(dp), intent(out) :: t_first, t_last, q(:), p(:)
+    integer, intent(out) :: stat
+    integer :: u, ios, nrow
+    integer(i8) :: step
+    character(len=4096) :: line, last
+    real(dp) :: vals(2 * n)
+    open (newunit=u, file=path, status='old', action='read', iostat=stat)
+    if (stat /= 0) return
+    read (u, '(a)', iostat=stat) line   ! header
+    nrow = 0
+    do
+      read (u, '(a)', iostat=ios) line
+      if (ios /= 0) exit
+      if (line(1:1) == '#') cycle
+      nrow = nrow + 1
+      if (nrow == 1) then
+        read (line, *, iostat=stat) step, t_first
+        if (stat /= 0) exit
+      end if
+      last = line
+    end do
+    close (u)
+    if (stat /= 0 .or. nrow == 0) then
+      stat = 1; return
+    end if
+    read (last, *, iostat=stat) step, t_last, vals
+    q = vals(1:n); p = vals(n + 1:2 * n)
+  end subroutine read_last_state
+
+  subroutine s_start(self, info, q, p, stat)
+    class(summary_observer_t), intent(inout) :: self
+    type(vci_run_info_t), intent(in) :: info
+    real(dp), intent(in) :: q(:), p(:)
+    integer, intent(inout) :: stat
+    if (associated(self%next)) call self%next%on_start(info, q, p, stat)
+  end subroutine s_start
+
+  subroutine s_step(self, step, t, q, p, lambda, energy, stat)
+    class(summary_observer_t), intent(inout) :: self
+    integer(i8), intent(in) :: step
+    real(dp), intent(in) :: t, q(:), p(:), lambda(:), energy
+    integer, intent(inout) :: stat
+    self%steps = self%steps + 1
+    if (self%progress .and. self%total_steps >= 100000 .and. mod(self%steps, self%total_steps / 100) == 0) then
+      write (error_unit, '(a,i3,a,f0.3,a)', advance='no') achar(13)//'progress ', &
+        int(100 * self%steps / self%total_steps), '%  t = ', t, '   '
+      if (self%steps == self%total_steps) write (error_unit, '(a)') ''
+    end if
+    if (associated(self%next)) call self%next%on_step(step, t, q, p, lambda, energy, stat)
+  end subroutine s_step
+
+  subroutine s_impact(self, impact, stat)
+    class(summary_observer_t), intent(inout) :: self
+    type(vci_impact_t), intent(in) :: impact
+    integer, intent(inout) :: stat
+    self%impacts = self%impacts + 1
+    if (.not. self%quiet) write (output_unit, '(a,i0,a,f0.12,a,i0,a,f8.6,a,es12.5)') 'impact ', self%impacts, &
+      ' t=', impact%t, ' wall=', impact%gap, ' alpha=', impact%alpha, ' impulse=', impact%impulse
+    if (associated(self%next)) call self%next%on_impact(impact, stat)
+  end subroutine s_impact
+
+  subroutine s_finish(self, status, message, stat)
+    class(summary_observer_t), intent(inout) :: self
+    integer, intent(in) :: status
+    character(len=*), intent(in) :: message
+    integer, intent(inout) :: stat
+    if (associated(self%next)) call self%next%on_finish(status, message, stat)
+  end subroutine s_finish
+
+  function get_arg(i) result(s)
+    integer, intent(in) :: i
+    character(len=:), allocatable :: s
+    integer :: l
+    call get_command_argument(i, length=l)
+    allocate (character(len=l) :: s)
+    call get_command_argument(i, s)
+  end function get_arg
+
+  real(dp) function to_real(s, flag)
+    character(len=*), intent(in) :: s, flag
+    integer :: ios
+    read (s, *, iostat=ios) to_real
+    if (ios /= 0) call die('invalid number for '//flag//': '//s)
+  end function to_real
+
+  subroutine die(msg)
+    character(len=*), intent(in) :: msg
+    write (error_unit, '(a)') msg
+    error stop 1
+  end subroutine die
+end module vci_example_cli

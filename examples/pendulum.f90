@@ -1,0 +1,27 @@
+!> The paper's nonholonomic spherical pendulum in a cylinder (DESIGN.md §2): m = 1, g = 9.8,
+!> l = 2, R = 1.5, f = pi + cos^2 theta, h = 1e-3, q(0) = (0.75 pi, 0),
+!> qdot(0) = (pi/4, (pi + 0.5) pi/4), pair q0 = q(0), q1 = q(0) + h qdot(0), 5 s.
+program pendulum
+  use vci
+  use vci_scene_pendulum, only: pendulum_t, pendulum_model
+  use vci_example_cli
+  implicit none
+  type(pendulum_t), target :: model
+  type(example_options_t) :: opts
+  opts%h = 1.0e-3_dp; opts%t_final = 5.0_dp
+  call parse_options(opts, 'pendulum', &
+    'pendulum: the nonholonomic pendulum in a cylinder of the paper (defaults h = 1e-3, t-final = 5)')
+  model = pendulum_model()
+  model%analytic_hessian = opts%analytic_hessian
+  call run_example('pendulum', model, opts, init)
+contains
+  subroutine init(integ, stat)
+    type(vci_integrator_t), intent(inout) :: integ
+    integer, intent(out) :: stat
+    real(dp) :: q0(2), qd(2), pi
+    pi = acos(-1.0_dp)
+    q0 = [0.75_dp * pi, 0.0_dp]
+    qd = [pi / 4.0_dp, (pi + 0.5_dp) * pi / 4.0_dp]
+    call integ%init_from_pair(0.0_dp, q0, q0 + integ%h * qd, stat)
+  end subroutine init
+end program pendulum

@@ -1,0 +1,100 @@
+!> The paper's bouncing ellipse: q = (theta, x, y), midpoint L_d with gravity, floor gap
+!> g(q) = y - phi(theta), phi = sqrt(a^2 sin^2 theta + b^2 cos^2 theta). DESIGN.md §2.
+module vci_scene_ellipse
+  use vci_kinds, only: dp
+  use vci_model, only: vci_model_t
+  use vci_status, only: VCI_NOT_PROVIDED
+  implicit none
+  private
+
+  type, extends(vci_model_t), public :: ellipse_t
+    real(dp) :: mass = 1.0_dp, grav = 9.8_dp, a = 1.0_dp, b = 0.5_dp
+    logical :: analytic_hessian = .true.
+  contains
+    procedure :: d1, d2, d3, mixed_hessian, gaps, gap_gradients, energy
+    procedure :: inertia
+  end type ellipse_t
+
+  public :: ellipse_model
+
+contains
+
+  function ellipse_model() result(model)
+    type(ellipse_t) :: model
+    model%n = 3; model%n_gaps = 1
+  end function ellipse_model
+
+  pure real(dp) function inertia(self)
+    class(ellipse_t), intent(in) :: self
+    inertia = self%mass * (self%a**2 + self%b**2) / 4.0_dp
+  end function inertia
+
+  subroutine d1(self, q, v, h, out, stat)
+    class(ellipse_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:), h
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    out(1) = -self%inertia() * (v(1) - q(1)) / h
+    out(2) = -self%mass * (v(2) - q(2)) / h
+    out(3) = -self%mass * (v(3) - q(3)) / h - 0.5_dp * h * self%mass * self%grav
+  end subroutine d1
+
+  subroutine d2(self, q, v, h, out, stat)
+    class(ellipse_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:), h
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    out(1) = self%inertia() * (v(1) - q(1)) / h
+    out(2) = self%mass * (v(2) - q(2)) / h
+    out(3) = self%mass * (v(3) - q(3)) / h - 0.5_dp * h * self%mass * self%grav
+  end subroutine d2
+
+  subroutine d3(self, q, v, h, out, stat)
+    class(ellipse_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:), h
+    real(dp), intent(out) :: out
+    integer, intent(inout) :: stat
+    out = -0.5_dp * (self%inertia() * (v(1) - q(1))**2 + self%mass * ((v(2) - q(2))**2 + (v(3) - q(3))**2)) / h**2 &
+          - 0.5_dp * self%mass * self%grav * (q(3) + v(3))
+  end subroutine d3
+
+  subroutine mixed_hessian(self, q, v, h, hess, stat)
+    class(ellipse_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:), h
+    real(dp), intent(out) :: hess(:, :)
+    integer, intent(inout) :: stat
+    if (.not. self%analytic_hessian) then
+      stat = VCI_NOT_PROVIDED; return
+    end if
+    hess = 0.0_dp
+    hess(1, 1) = -self%inertia() / h
+    hess(2, 2) = -self%mass / h
+    hess(3, 3) = -self%mass / h
+  end subroutine mixed_hessian
+
+  subroutine gaps(self, q, g, stat)
+    class(ellipse_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: g(:)
+    integer, intent(inout) :: stat
+    g(1) = q(3) - sqrt(self%a**2 * sin(q(1))**2 + self%b**2 * cos(q(1))**2)
+  end subroutine gaps
+
+  subroutine gap_gradients(self, q, dg, stat)
+    class(ellipse_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: dg(:, :)
+    integer, intent(inout) :: stat
+    real(dp) :: phi
+    phi = sqrt(self%a**2 * sin(q(1))**2 + self%b**2 * cos(q(1))**2)
+    dg(:, 1) = [-(self%a**2 - self%b**2) * sin(q(1)) * cos(q(1)) / phi, 0.0_dp, 1.0_dp]
+  end subroutine gap_gradients
+
+  subroutine energy(self, q, p, e, stat)
+    class(ellipse_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), p(:)
+    real(dp), intent(out) :: e
+    integer, intent(inout) :: stat
+    e = 0.5_dp * p(1)**2 / self%inertia() + 0.5_dp * (p(2)**2 + p(3)**2) / self%mass + self%mass * self%grav * q(3)
+  end subroutine energy
+end module vci_scene_ellipse

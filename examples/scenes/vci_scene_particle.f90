@@ -1,0 +1,118 @@
+!> A point mass in the plane with gravity, an optional stiff vertical spring and flat walls
+!> g_j(q) = normal_j . q - offset_j >= 0; midpoint discrete Lagrangian
+!> L_d(q, v, h) = h [ m |v - q|^2 / (2 h^2) - V((q + v)/2) ],  V(q) = m g y + k/2 (y - y_rest)^2.
+!> Used for the bouncing particle (one floor), the particle in a box (four walls, g = 0) and the
+!> stiff and extreme-magnitude stability cases.
+module vci_scene_particle
+  use vci_kinds, only: dp
+  use vci_model, only: vci_model_t
+  use vci_status, only: VCI_NOT_PROVIDED
+  implicit none
+  private
+
+  type, extends(vci_model_t), public :: particle_t
+    real(dp) :: mass = 1.0_dp, grav = 9.8_dp
+    real(dp) :: k = 0.0_dp, y_rest = 0.0_dp       !< vertical spring (stiff cases)
+    real(dp), allocatable :: normal(:, :), offset(:)  !< walls: normal(:, j) . q >= offset(j)
+    logical :: analytic_hessian = .true.
+  contains
+    procedure :: d1, d2, d3, mixed_hessian, gaps, gap_gradients, energy
+  end type particle_t
+
+  public :: particle_on_floor, particle_in_box
+
+contains
+
+  !> The paper's bouncing particle: floor y >= 0.
+  function particle_on_floor(mass, grav) result(model)
+    real(dp), intent(in) :: mass, grav
+    type(particle_t) :: model
+    model%n = 2; model%n_gaps = 1
+    model%mass = mass; model%grav = grav
+    allocate (model%normal(2, 1), model%offset(1))
+    model%normal = reshape([0.0_dp, 1.0_dp], [2, 1])
+    model%offset = [0.0_dp]
+  end function particle_on_floor
+
+  !> No gravity, walls x = 0, x = width, y = 0, y = height.
+  function particle_in_box(width, height) result(model)
+    real(dp), intent(in) :: width, height
+    type(particle_t) :: model
+    model%n = 2; model%n_gaps = 4; model%grav = 0.0_dp
+    allocate (model%normal(2, 4), model%offset(4))
+    model%normal = reshape([1.0_dp, 0.0_dp, -1.0_dp, 0.0_dp, 0.0_dp, 1.0_dp, 0.0_dp, -1.0_dp], [2, 4])
+    model%offset = [0.0_dp, -width, 0.0_dp, -height]
+  end function particle_in_box
+
+  pure real(dp) function dvdy(self, y)
+    class(particle_t), intent(in) :: self
+    real(dp), intent(in) :: y
+    dvdy = self%mass * self%grav + self%k * (y - self%y_rest)
+  end function dvdy
+
+  subroutine d1(self, q, v, h, out, stat)
+    class(particle_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:), h
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    out = -self%mass * (v - q) / h
+    out(2) = out(2) - 0.5_dp * h * dvdy(self, 0.5_dp * (q(2) + v(2)))
+  end subroutine d1
+
+  subroutine d2(self, q, v, h, out, stat)
+    class(particle_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:), h
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    out = self%mass * (v - q) / h
+    out(2) = out(2) - 0.5_dp * h * dvdy(self, 0.5_dp * (q(2) + v(2)))
+  end subroutine d2
+
+  subroutine d3(self, q, v, h, out, stat)
+    class(particle_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:), h
+    real(dp), intent(out) :: out
+    integer, intent(inout) :: stat
+    real(dp) :: ym
+    ym = 0.5_dp * (q(2) + v(2))
+    out = -0.5_dp * self%mass * sum((v - q)**2) / h**2 &
+          - (self%mass * self%grav * ym + 0.5_dp * self%k * (ym - self%y_rest)**2)
+  end subroutine d3
+
+  subroutine mixed_hessian(self, q, v, h, hess, stat)
+    class(particle_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:), h
+    real(dp), intent(out) :: hess(:, :)
+    integer, intent(inout) :: stat
+    if (.not. self%analytic_hessian) then   ! let the library difference it (tests and benchmarks)
+      stat = VCI_NOT_PROVIDED; return
+    end if
+    hess = 0.0_dp
+    hess(1, 1) = -self%mass / h
+    hess(2, 2) = -self%mass / h - 0.25_dp * h * self%k
+  end subroutine mixed_hessian
+
+  subroutine gaps(self, q, g, stat)
+    class(particle_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: g(:)
+    integer, intent(inout) :: stat
+    g = matmul(q, self%normal) - self%offset
+  end subroutine gaps
+
+  subroutine gap_gradients(self, q, dg, stat)
+    class(particle_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: dg(:, :)
+    integer, intent(inout) :: stat
+    dg = self%normal
+  end subroutine gap_gradients
+
+  subroutine energy(self, q, p, e, stat)
+    class(particle_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), p(:)
+    real(dp), intent(out) :: e
+    integer, intent(inout) :: stat
+    e = 0.5_dp * sum(p**2) / self%mass + self%mass * self%grav * q(2) + 0.5_dp * self%k * (q(2) - self%y_rest)**2
+  end subroutine energy
+end module vci_scene_particle

@@ -1,0 +1,129 @@
+!> The paper's nonholonomic spherical pendulum in a cylinder: q = (theta, phi),
+!> L_d(q, v, h) = m l^2/(2h) ((v_th - th)^2 + (v_ph - ph)^2 sin^2 th) - h m g l cos th (anchored at q),
+!> constraint form omega = f(theta) dtheta - dphi with f = pi + cos^2 theta, discrete constraint
+!> omega_d(q, v, h) = (f(theta)(v_th - th) - (v_ph - ph)) / h, and the cylinder wall
+!> g = R^2 - l^2 sin^2 theta >= 0 (DESIGN.md §2: the paper's l sin theta <= R stops binding past pi).
+module vci_scene_pendulum
+  use vci_kinds, only: dp
+  use vci_model, only: vci_model_t
+  use vci_status, only: VCI_NOT_PROVIDED
+  implicit none
+  private
+
+  real(dp), parameter :: pi = acos(-1.0_dp)
+
+  type, extends(vci_model_t), public :: pendulum_t
+    real(dp) :: mass = 1.0_dp, grav = 9.8_dp, length = 2.0_dp, radius = 1.5_dp
+    logical :: analytic_hessian = .true.
+  contains
+    procedure :: d1, d2, d3, mixed_hessian, constraint_forms, discrete_constraint, gaps, gap_gradients, energy
+  end type pendulum_t
+
+  public :: pendulum_model, pendulum_f
+
+contains
+
+  function pendulum_model() result(model)
+    type(pendulum_t) :: model
+    model%n = 2; model%m = 1; model%n_gaps = 1
+  end function pendulum_model
+
+  elemental real(dp) function pendulum_f(theta)
+    real(dp), intent(in) :: theta
+    pendulum_f = pi + cos(theta)**2
+  end function pendulum_f
+
+  subroutine d1(self, q, v, h, out, stat)
+    class(pendulum_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:), h
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    real(dp) :: ml2, s, c
+    ml2 = self%mass * self%length**2; s = sin(q(1)); c = cos(q(1))
+    out(1) = -ml2 * (v(1) - q(1)) / h + ml2 * (v(2) - q(2))**2 * s * c / h + h * self%mass * self%grav * self%length * s
+    out(2) = -ml2 * (v(2) - q(2)) * s**2 / h
+  end subroutine d1
+
+  subroutine d2(self, q, v, h, out, stat)
+    class(pendulum_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:), h
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    real(dp) :: ml2
+    ml2 = self%mass * self%length**2
+    out(1) = ml2 * (v(1) - q(1)) / h
+    out(2) = ml2 * (v(2) - q(2)) * sin(q(1))**2 / h
+  end subroutine d2
+
+  subroutine d3(self, q, v, h, out, stat)
+    class(pendulum_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:), h
+    real(dp), intent(out) :: out
+    integer, intent(inout) :: stat
+    out = -0.5_dp * self%mass * self%length**2 * ((v(1) - q(1))**2 + (v(2) - q(2))**2 * sin(q(1))**2) / h**2 &
+          - self%mass * self%grav * self%length * cos(q(1))
+  end subroutine d3
+
+  subroutine mixed_hessian(self, q, v, h, hess, stat)
+    class(pendulum_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:), h
+    real(dp), intent(out) :: hess(:, :)
+    integer, intent(inout) :: stat
+    real(dp) :: ml2, s, c
+    if (.not. self%analytic_hessian) then
+      stat = VCI_NOT_PROVIDED; return
+    end if
+    ml2 = self%mass * self%length**2; s = sin(q(1)); c = cos(q(1))
+    hess(1, 1) = -ml2 / h
+    hess(1, 2) = 2.0_dp * ml2 * (v(2) - q(2)) * s * c / h
+    hess(2, 1) = 0.0_dp
+    hess(2, 2) = -ml2 * s**2 / h
+  end subroutine mixed_hessian
+
+  subroutine constraint_forms(self, q, omega, stat)
+    class(pendulum_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: omega(:, :)
+    integer, intent(inout) :: stat
+    omega(:, 1) = [pendulum_f(q(1)), -1.0_dp]
+  end subroutine constraint_forms
+
+  subroutine discrete_constraint(self, base, other, h, out, stat)
+    class(pendulum_t), intent(inout) :: self
+    real(dp), intent(in) :: base(:), other(:), h
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    out(1) = (pendulum_f(base(1)) * (other(1) - base(1)) - (other(2) - base(2))) / h
+  end subroutine discrete_constraint
+
+  subroutine gaps(self, q, g, stat)
+    class(pendulum_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: g(:)
+    integer, intent(inout) :: stat
+    g(1) = self%radius**2 - self%length**2 * sin(q(1))**2
+  end subroutine gaps
+
+  subroutine gap_gradients(self, q, dg, stat)
+    class(pendulum_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: dg(:, :)
+    integer, intent(inout) :: stat
+    dg(:, 1) = [-2.0_dp * self%length**2 * sin(q(1)) * cos(q(1)), 0.0_dp]
+  end subroutine gap_gradients
+
+  !> H = p_th^2/(2 m l^2) + p_ph^2/(2 m l^2 sin^2 th) + m g l cos th; singular at sin th = 0, which
+  !> the walls (|sin th| = R/l there) never reach, and H is only evaluated on a wall.
+  subroutine energy(self, q, p, e, stat)
+    class(pendulum_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), p(:)
+    real(dp), intent(out) :: e
+    integer, intent(inout) :: stat
+    real(dp) :: ml2, s2
+    ml2 = self%mass * self%length**2; s2 = sin(q(1))**2
+    if (s2 < 1.0e-300_dp) then
+      stat = 1; e = 0.0_dp; return
+    end if
+    e = 0.5_dp * p(1)**2 / ml2 + 0.5_dp * p(2)**2 / (ml2 * s2) + self%mass * self%grav * self%length * cos(q(1))
+  end subroutine energy
+end module vci_scene_pendulum

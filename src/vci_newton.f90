@@ -1,0 +1,261 @@
+!> Damped Newton iteration on LAPACK for small dense systems R(x) = 0.
+!>
+!> Convergence is judged row by row against the size of the terms that make up each row
+!> (|r_i| <= atol + rtol * scale_i), because the sub-steps of an impact can be arbitrarily short
+!> and residuals then scale like 1/step. The linear solve is an LU factorisation (dgetrf/dgetrs)
+!> of the row-equilibrated Jacobian; when that matrix is singular, a rank-revealing least-squares
+!> solve (dgelsd) gives the minimum-norm step instead. All workspace is allocated by `reserve`,
+!> so `solve` allocates nothing.
+module vci_newton
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+  use vci_kinds, only: dp
+  use vci_status, only: VCI_OK, VCI_ERR_NEWTON, VCI_ERR_NONFINITE
+  use vci_lapack, only: dgetrf, dgetrs, dgelsd
+  implicit none
+  private
+
+  !> Why a solve stopped.
+  integer, parameter, public :: NEWTON_CONVERGED = 0
+  integer, parameter, public :: NEWTON_MAX_ITERATIONS = 1  !< iteration cap reached
+  integer, parameter, public :: NEWTON_NO_DESCENT = 2      !< backtracking found no decrease
+  integer, parameter, public :: NEWTON_SINGULAR = 3        !< even the least-squares solve failed
+  integer, parameter, public :: NEWTON_EVALUATION = 4      !< the residual or Jacobian reported failure
+
+  !> A nonlinear system as Newton sees it.
+  type, abstract, public :: vci_system_t
+  contains
+    procedure(residual_iface), deferred :: residual
+    procedure(jacobian_iface), deferred :: jacobian
+    procedure :: admissible => always_admissible
+  end type vci_system_t
+
+  abstract interface
+    !> r = R(x); scale(i) = size of the terms summed in row i; stat /= 0 on failure.
+    subroutine residual_iface(self, x, r, scale, stat)
+      import :: vci_system_t, dp
+      class(vci_system_t), intent(inout) :: self
+      real(dp), intent(in) :: x(:)
+      real(dp), intent(out) :: r(:), scale(:)
+      integer, intent(out) :: stat
+    end subroutine residual_iface
+    !> jac = dR/dx at x (r is R(x), already evaluated, for difference quotients).
+    subroutine jacobian_iface(self, x, r, jac, stat)
+      import :: vci_system_t, dp
+      class(vci_system_t), intent(inout) :: self
+      real(dp), intent(in) :: x(:), r(:)
+      real(dp), intent(out) :: jac(:, :)
+      integer, intent(out) :: stat
+    end subroutine jacobian_iface
+  end interface
+
+  !> Outcome of one solve.
+  type, public :: vci_newton_result_t
+    integer :: status = VCI_OK         !< VCI_OK, VCI_ERR_NEWTON, or the evaluation's own status
+    integer :: reason = NEWTON_CONVERGED
+    integer :: iterations = 0          !< Jacobian evaluations + polishing step
+    logical :: used_fallback = .false. !< the least-squares solve was needed
+    real(dp) :: scaled_residual = 0.0_dp  !< max_i |r_i| / (atol + rtol scale_i) at the end
+  end type vci_newton_result_t
+
+  type, public :: vci_newton_t
+    real(dp) :: atol = 0.0_dp          !< absolute floor of the per-row tolerance
+    real(dp) :: rtol = 1.0e-12_dp      !< tolerance relative to the size of each row's terms
+    integer :: max_iterations = 30
+    integer :: max_backtracks = 12
+    logical :: polish = .true.         !< one extra step with the last factorisation: ~ machine precision
+    integer :: capacity = 0
+    real(dp), allocatable, private :: jac(:, :), lu(:, :), r(:), sc(:), dx(:), xt(:), rt(:), sct(:)
+    real(dp), allocatable, private :: sv(:), work(:)
+    integer, allocatable, private :: ipiv(:), iwork(:)
+  contains
+    procedure :: reserve
+    procedure :: solve
+    procedure :: linear_solve
+  end type vci_newton_t
+
+contains
+
+  logical function always_admissible(self, x)
+    class(vci_system_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:)
+    always_admissible = .true.
+  end function always_admissible
+
+  !> Allocate workspace for systems of up to nmax unknowns (call once, outside the step loop).
+  subroutine reserve(self, nmax)
+    class(vci_newton_t), intent(inout) :: self
+    integer, intent(in) :: nmax
+    real(dp) :: query(1), a(1, 1), b(1, 1), s(1)
+    integer :: iq(1), rank, info, lwork, liwork, nlvl
+    if (self%capacity >= nmax) return
+    self%capacity = nmax
+    if (allocated(self%jac)) deallocate (self%jac, self%lu, self%r, self%sc, self%dx, self%xt, &
+                                         self%rt, self%sct, self%sv, self%work, self%ipiv, self%iwork)
+    allocate (self%jac(nmax, nmax), self%lu(nmax, nmax), self%r(nmax), self%sc(nmax), self%dx(nmax), &
+              self%xt(nmax), self%rt(nmax), self%sct(nmax), self%sv(nmax), self%ipiv(nmax))
+    call dgelsd(nmax, nmax, 1, a, nmax, b, nmax, s, -1.0_dp, rank, query, -1, iq, info)
+    lwork = max(1, int(query(1)))
+    nlvl = max(0, int(log(real(nmax, dp) / 26.0_dp) / log(2.0_dp)) + 1)
+    liwork = max(1, 3 * nmax * nlvl + 11 * nmax, iq(1))
+    allocate (self%work(lwork), self%iwork(liwork))
+  end subroutine reserve
+
+  !> Solve sys%residual(x) = 0 for x(1:n), starting from the given x. On failure x holds the best
+  !> iterate found and res says why.
+  subroutine solve(self, sys, x, res)
+    class(vci_newton_t), intent(inout) :: self
+    class(vci_system_t), intent(inout) :: sys
+    real(dp), intent(inout) :: x(:)
+    type(vci_newton_result_t), intent(out) :: res
+    integer :: n, stat, it, ib
+    real(dp) :: phi, phit, step
+    logical :: factored
+
+    n = size(x)
+    res = vci_newton_result_t()
+    factored = .false.
+    call sys%residual(x, self%r(1:n), self%sc(1:n), stat)
+    if (stat /= VCI_OK) then
+      call fail_eval(res, stat); return
+    end if
+    phi = merit(self, self%r(1:n), self%sc(1:n))
+    res%scaled_residual = phi
+
+    do it = 1, self%max_iterations
+      if (phi <= 1.0_dp) exit
+      res%iterations = res%iterations + 1
+      call sys%jacobian(x, self%r(1:n), self%jac(1:n, 1:n), stat)
+      if (stat /= VCI_OK) then
+        call fail_eval(res, stat); return
+      end if
+      call newton_direction(self, n, factored, res)
+      if (res%reason == NEWTON_SINGULAR) then
+        res%status = VCI_ERR_NEWTON; return
+      end if
+      ! Backtracking on the scaled residual: halve the step until the merit decreases.
+      step = 1.0_dp
+      do ib = 0, self%max_backtracks
+        self%xt(1:n) = x - step * self%dx(1:n)
+        if (sys%admissible(self%xt(1:n))) then
+          call sys%residual(self%xt(1:n), self%rt(1:n), self%sct(1:n), stat)
+          if (stat == VCI_OK) then
+            phit = merit(self, self%rt(1:n), self%sct(1:n))
+            if (phit < (1.0_dp - 1.0e-4_dp * step) * phi) exit
+          end if
+        end if
+        step = 0.5_dp * step
+      end do
+      if (ib > self%max_backtracks) then
+        res%reason = NEWTON_NO_DESCENT
+        res%status = VCI_ERR_NEWTON
+        return
+      end if
+      x = self%xt(1:n)
+      self%r(1:n) = self%rt(1:n)
+      self%sc(1:n) = self%sct(1:n)
+      phi = phit
+      res%scaled_residual = phi
+    end do
+
+    if (phi > 1.0_dp) then
+      res%reason = NEWTON_MAX_ITERATIONS
+      res%status = VCI_ERR_NEWTON
+      return
+    end if
+    if (self%polish .and. factored .and. phi > 0.0_dp) call polish_step(self, sys, x, n, phi, res)
+  end subroutine solve
+
+  !> Solve the small dense system a x = b in place (b becomes x), with the solver's workspace.
+  subroutine linear_solve(self, n, a, b, info)
+    class(vci_newton_t), intent(inout) :: self
+    integer, intent(in) :: n
+    real(dp), intent(in) :: a(:, :)
+    real(dp), intent(inout) :: b(:)
+    integer, intent(out) :: info
+    self%lu(1:n, 1:n) = a(1:n, 1:n)
+    call dgetrf(n, n, self%lu, self%capacity, self%ipiv, info)
+    if (info == 0) call dgetrs('N', n, 1, self%lu, self%capacity, self%ipiv, b, n, info)
+  end subroutine linear_solve
+
+  !> Newton direction dx = J^{-1} r on the row-equilibrated system; least squares when singular.
+  subroutine newton_direction(self, n, factored, res)
+    type(vci_newton_t), intent(inout) :: self
+    integer, intent(in) :: n
+    logical, intent(out) :: factored
+    type(vci_newton_result_t), intent(inout) :: res
+    integer :: i, info, rank
+    real(dp) :: w, dmin, dmax
+    do i = 1, n
+      w = 1.0_dp / max(self%atol + self%rtol * self%sc(i), tiny(1.0_dp))
+      self%lu(i, 1:n) = self%jac(i, 1:n) * w
+      self%dx(i) = self%r(i) * w
+    end do
+    self%jac(1:n, 1:n) = self%lu(1:n, 1:n)   ! keep the equilibrated matrix for the fallback
+    call dgetrf(n, n, self%lu, self%capacity, self%ipiv, info)
+    factored = .false.
+    if (info == 0) then
+      dmin = huge(1.0_dp); dmax = 0.0_dp
+      do i = 1, n
+        dmin = min(dmin, abs(self%lu(i, i))); dmax = max(dmax, abs(self%lu(i, i)))
+      end do
+      if (dmin > 1.0e-14_dp * dmax) then
+        call dgetrs('N', n, 1, self%lu, self%capacity, self%ipiv, self%dx, self%capacity, info)
+        factored = all(ieee_is_finite(self%dx(1:n)))
+      end if
+    end if
+    if (factored) return
+    ! Singular (or numerically so): minimum-norm least-squares step, rank decided at 1e-12.
+    do i = 1, n
+      self%dx(i) = self%r(i) / max(self%atol + self%rtol * self%sc(i), tiny(1.0_dp))
+    end do
+    call dgelsd(n, n, 1, self%jac, self%capacity, self%dx, self%capacity, self%sv, 1.0e-12_dp, rank, &
+                self%work, size(self%work), self%iwork, info)
+    res%used_fallback = .true.
+    if (info /= 0 .or. .not. all(ieee_is_finite(self%dx(1:n)))) res%reason = NEWTON_SINGULAR
+  end subroutine newton_direction
+
+  !> One chord step with the last LU factors; kept only if it does not make the residual worse.
+  subroutine polish_step(self, sys, x, n, phi, res)
+    type(vci_newton_t), intent(inout) :: self
+    class(vci_system_t), intent(inout) :: sys
+    real(dp), intent(inout) :: x(:)
+    integer, intent(in) :: n
+    real(dp), intent(in) :: phi
+    type(vci_newton_result_t), intent(inout) :: res
+    integer :: i, info, stat
+    real(dp) :: phit
+    do i = 1, n
+      self%dx(i) = self%r(i) / max(self%atol + self%rtol * self%sc(i), tiny(1.0_dp))
+    end do
+    call dgetrs('N', n, 1, self%lu, self%capacity, self%ipiv, self%dx, self%capacity, info)
+    if (info /= 0) return
+    self%xt(1:n) = x - self%dx(1:n)
+    if (.not. sys%admissible(self%xt(1:n))) return
+    call sys%residual(self%xt(1:n), self%rt(1:n), self%sct(1:n), stat)
+    if (stat /= VCI_OK) return
+    phit = merit(self, self%rt(1:n), self%sct(1:n))
+    res%iterations = res%iterations + 1
+    if (phit <= phi) then
+      x = self%xt(1:n)
+      res%scaled_residual = phit
+    end if
+  end subroutine polish_step
+
+  pure real(dp) function merit(self, r, sc)
+    type(vci_newton_t), intent(in) :: self
+    real(dp), intent(in) :: r(:), sc(:)
+    integer :: i
+    merit = 0.0_dp
+    do i = 1, size(r)
+      merit = max(merit, abs(r(i)) / max(self%atol + self%rtol * sc(i), tiny(1.0_dp)))
+    end do
+    if (.not. ieee_is_finite(merit)) merit = huge(1.0_dp)
+  end function merit
+
+  subroutine fail_eval(res, stat)
+    type(vci_newton_result_t), intent(inout) :: res
+    integer, intent(in) :: stat
+    res%reason = NEWTON_EVALUATION
+    res%status = stat
+  end subroutine fail_eval
+end module vci_newton

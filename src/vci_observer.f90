@@ -1,0 +1,78 @@
+!> The observer interface: the integrator reports every accepted step and every impact to it,
+!> so output formats (CSV, HDF5, in-memory recorders) are not the stepper's business.
+!> All procedures have empty defaults; extend the type and override what you need. Set `stat`
+!> nonzero to stop the run (reported as VCI_ERR_IO by the integrator).
+module vci_observer
+  use vci_kinds, only: dp, i8
+  implicit none
+  private
+
+  !> What an observer learns when a run starts.
+  type, public :: vci_run_info_t
+    integer :: n = 0, m = 0, n_gaps = 0
+    integer :: direction = 1            !< +1 forward, -1 backward
+    real(dp) :: h = 0.0_dp
+    real(dp) :: t0 = 0.0_dp
+    integer(i8) :: step0 = 0_i8         !< index of the starting state
+    integer :: impact_energy = 0        !< VCI_IMPACT_DISCRETE or VCI_IMPACT_HAMILTONIAN
+  end type vci_run_info_t
+
+  !> One impact, as resolved by stages 1 and 2.
+  type, public :: vci_impact_t
+    real(dp) :: t = 0.0_dp              !< impact time t_k + alpha h (forward) or t_k+1 - beta h (backward)
+    integer(i8) :: step = 0_i8          !< index of the state the step started from
+    real(dp) :: alpha = 0.0_dp          !< fraction of the step, from its start in the direction of motion
+    integer :: gap = 0                  !< index j of the wall reached
+    real(dp) :: impulse = 0.0_dp        !< normal impulse: p_after - p_before = impulse * grad g_j (forward time)
+    real(dp), allocatable :: q(:)       !< the configuration on the wall
+    real(dp), allocatable :: p_before(:), p_after(:)  !< momenta at the wall before/after, in direction of motion
+    real(dp), allocatable :: grad_g(:)  !< gradient of the gap at q
+    real(dp) :: energy_before = 0.0_dp  !< E_d of the arriving sub-step (or H(q, p_before))
+    real(dp) :: energy_after = 0.0_dp   !< E_d of the leaving sub-step (or H(q, p_after))
+    real(dp) :: leave_rate = 0.0_dp     !< grad g . (q_next - q) / sub-step: > 0, the motion leaves the wall
+    real(dp) :: stage1_residual = 0.0_dp  !< scaled residuals (<= 1 means within tolerance)
+    real(dp) :: stage2_residual = 0.0_dp
+  end type vci_impact_t
+
+  type, public :: vci_observer_t
+  contains
+    procedure :: on_start => default_on_start
+    procedure :: on_step => default_on_step
+    procedure :: on_impact => default_on_impact
+    procedure :: on_finish => default_on_finish
+  end type vci_observer_t
+
+contains
+
+  !> The run starts from (t0, q, p).
+  subroutine default_on_start(self, info, q, p, stat)
+    class(vci_observer_t), intent(inout) :: self
+    type(vci_run_info_t), intent(in) :: info
+    real(dp), intent(in) :: q(:), p(:)
+    integer, intent(inout) :: stat
+  end subroutine default_on_start
+
+  !> An accepted step: state index `step`, time t, (q, p), multipliers lambda (size m) and the
+  !> discrete energy E_d of the step (of its last sub-step when it had impacts).
+  subroutine default_on_step(self, step, t, q, p, lambda, energy, stat)
+    class(vci_observer_t), intent(inout) :: self
+    integer(i8), intent(in) :: step
+    real(dp), intent(in) :: t, q(:), p(:), lambda(:), energy
+    integer, intent(inout) :: stat
+  end subroutine default_on_step
+
+  !> An impact inside the step that is about to be reported by on_step.
+  subroutine default_on_impact(self, impact, stat)
+    class(vci_observer_t), intent(inout) :: self
+    type(vci_impact_t), intent(in) :: impact
+    integer, intent(inout) :: stat
+  end subroutine default_on_impact
+
+  !> The run ended with `status` (VCI_OK or an error) and its message.
+  subroutine default_on_finish(self, status, message, stat)
+    class(vci_observer_t), intent(inout) :: self
+    integer, intent(in) :: status
+    character(len=*), intent(in) :: message
+    integer, intent(inout) :: stat
+  end subroutine default_on_finish
+end module vci_observer

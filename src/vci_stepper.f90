@@ -1,0 +1,458 @@
+!> One step of the (+) or (-) scheme with elastic impacts (paper, Theorem and Algorithm 1;
+!> DESIGN.md §1): a regular sub-step, and while its end leaves the admissible set, stage 1 (reach
+!> the first wall) and stage 2 (reflect with the energy and tangential-momentum conditions) on the
+!> remaining fraction of the step, up to a bound on the number of impacts.
+module vci_stepper
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+  use vci_kinds, only: dp, i8
+  use vci_status
+  use vci_model, only: vci_model_t
+  use vci_newton, only: vci_newton_t, vci_newton_result_t, NEWTON_MAX_ITERATIONS, NEWTON_NO_DESCENT, &
+                        NEWTON_SINGULAR, NEWTON_EVALUATION
+  use vci_step_system, only: vci_step_system_t, KIND_SUBSTEP, KIND_WALL, KIND_REFLECT, &
+                             VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN
+  use vci_observer, only: vci_impact_t
+  implicit none
+  private
+
+  !> Solver and impact settings.
+  type, public :: vci_settings_t
+    real(dp) :: atol = 0.0_dp            !< absolute floor of Newton's per-row tolerance
+    real(dp) :: rtol = 1.0e-12_dp        !< Newton tolerance relative to the size of each row's terms
+    integer :: max_iterations = 30       !< Newton iteration cap per solve
+    integer :: max_impacts_per_step = 16 !< beyond this: VCI_ERR_TOO_MANY_IMPACTS (contact, chatter)
+    integer :: impact_energy = VCI_IMPACT_DISCRETE
+  end type vci_settings_t
+
+  !> Cumulative solver statistics.
+  type, public :: vci_solver_stats_t
+    integer(i8) :: newton_solves = 0, newton_iterations = 0, fallbacks = 0
+  end type vci_solver_stats_t
+
+  type, public :: vci_stepper_t
+    type(vci_step_system_t) :: sys
+    type(vci_newton_t) :: newton
+    type(vci_settings_t) :: settings
+    type(vci_solver_stats_t) :: stats
+    integer :: n = 0, m = 0, ng = 0
+    type(vci_impact_t), allocatable :: impacts(:)  !< impacts of the last step
+    integer :: n_impacts = 0
+    character(len=VCI_MSG_LEN) :: cause = ''       !< why the last step failed
+    real(dp) :: last_residual = 0.0_dp              !< scaled residual of the last Newton solve
+    real(dp), allocatable, private :: x(:), a(:), pa(:), b(:), qt(:), pminus(:), gb(:), ga(:), dga(:, :)
+    real(dp), allocatable, private :: best_x(:), jac(:, :), rhs(:), r(:), sc(:), vin(:)
+  contains
+    procedure :: setup
+    procedure :: advance
+    procedure :: arriving_energy
+  end type vci_stepper_t
+
+  real(dp), parameter :: landing_fraction = 1.0e-10_dp  ! stage 1 within this of the step's end: landed on the wall
+
+contains
+
+  subroutine setup(self, model, settings)
+    class(vci_stepper_t), intent(inout) :: self
+    class(vci_model_t), target, intent(inout) :: model
+    type(vci_settings_t), intent(in) :: settings
+    integer :: n, m, ng, nx, i
+    n = model%n; m = model%m; ng = model%n_gaps
+    self%n = n; self%m = m; self%ng = ng
+    self%settings = settings
+    self%stats = vci_solver_stats_t()
+    call self%sys%setup(model)
+    nx = n + m + 1
+    call self%newton%reserve(nx)
+    call apply_settings(self)
+    if (allocated(self%x)) deallocate (self%x, self%a, self%pa, self%b, self%qt, self%pminus, self%gb, &
+                                       self%ga, self%dga, self%best_x, self%jac, self%rhs, self%r, self%sc, &
+                                       self%vin, self%impacts)
+    allocate (self%x(nx), self%a(n), self%pa(n), self%b(n), self%qt(n), self%pminus(n), &
+              self%gb(max(1, ng)), self%ga(max(1, ng)), self%dga(n, max(1, ng)), self%best_x(nx), &
+              self%jac(nx, nx), self%rhs(nx), self%r(nx), self%sc(nx), self%vin(n))
+    allocate (self%impacts(max(1, settings%max_impacts_per_step)))
+    do i = 1, size(self%impacts)
+      allocate (self%impacts(i)%q(n), self%impacts(i)%p_before(n), self%impacts(i)%p_after(n), &
+                self%impacts(i)%grad_g(n))
+    end do
+  end subroutine setup
+
+  subroutine apply_settings(self)
+    type(vci_stepper_t), intent(inout) :: self
+    self%newton%atol = self%settings%atol
+    self%newton%rtol = self%settings%rtol
+    self%newton%max_iterations = self%settings%max_iterations
+    self%sys%impact_energy = self%settings%impact_energy
+  end subroutine apply_settings
+
+  !> Advance from (q, p) by one step of length h in direction dir (+1/-1).
+  !> vel: forward-time velocity estimate (initial guesses; updated). e_arrive: E_d of the sub-step
+  !> that arrived at q in this direction (needed only when q is on a wall and the motion goes into it).
+  !> On success qn, pn, lambdan hold the new state and e_step the E_d of the step's last sub-step.
+  subroutine advance(self, dir, h, t, q, p, lambda, vel, e_arrive, qn, pn, lambdan, e_step, stat)
+    class(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: dir
+    real(dp), intent(in) :: h, t, q(:), p(:), lambda(:)
+    real(dp), intent(inout) :: vel(:), e_arrive
+    real(dp), intent(out) :: qn(:), pn(:), lambdan(:), e_step
+    integer, intent(out) :: stat
+    integer :: n, m, j, jstar
+    real(dp) :: tau, alpha, alpha_j, consumed, e_minus, s1res
+    logical :: landed
+
+    n = self%n; m = self%m
+    call apply_settings(self)
+    self%sys%dir = dir
+    self%n_impacts = 0
+    self%cause = ''
+    self%a = q; self%pa = p; tau = h; consumed = 0.0_dp
+    ! the regular step, from the extrapolated guess
+    self%x(1:n) = q + real(dir, dp) * h * vel
+    if (m > 0) self%x(n + 1:n + m) = lambda
+    call substep(self, self%a, self%pa, tau, stat)
+    if (stat /= VCI_OK) return
+
+    landed = .false.
+    do
+      if (self%ng == 0) exit
+      call self%sys%eval_gaps(self%x(1:n), self%gb(1:self%ng), stat)
+      if (stat /= VCI_OK) then
+        call set_cause(self, 'gap evaluation'); return
+      end if
+      if (all(self%gb(1:self%ng) >= 0.0_dp)) exit
+      if (self%n_impacts >= self%settings%max_impacts_per_step) then
+        stat = VCI_ERR_TOO_MANY_IMPACTS
+        write (self%cause, '(a,i0,a)') 'more than ', self%settings%max_impacts_per_step, &
+          ' impacts in one step (persistent contact or chatter)'
+        return
+      end if
+      self%b = self%x(1:n)
+      call self%sys%eval_gaps(self%a, self%ga(1:self%ng), stat)
+      if (stat == VCI_OK) call self%sys%eval_gap_gradients(self%a, self%dga(:, 1:self%ng), stat)
+      if (stat /= VCI_OK) then
+        call set_cause(self, 'gap evaluation at the start of the sub-step'); return
+      end if
+
+      ! Already on a wall and moving into it: the impact is at the start of this sub-step.
+      jstar = 0
+      do j = 1, self%ng
+        if (self%gb(j) < 0.0_dp .and. on_wall(self, j) .and. &
+            dot_product(self%dga(:, j), self%b - self%a) < 0.0_dp) then
+          jstar = j; exit
+        end if
+      end do
+      if (jstar > 0) then
+        alpha = 0.0_dp
+        self%qt = self%a; self%pminus = self%pa
+        if (self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN) then
+          call self%sys%hamiltonian(self%qt, self%pminus, e_minus, stat)
+        else
+          if (.not. ieee_is_finite(e_arrive)) call self%arriving_energy(dir, h, e_arrive, stat)
+          e_minus = e_arrive
+        end if
+        if (stat /= VCI_OK) then
+          call set_cause(self, 'energy of the arriving sub-step'); return
+        end if
+        s1res = 0.0_dp
+        if (m > 0) self%best_x(n + 1:n + m) = self%x(n + 1:n + m)
+      else
+        ! Stage 1 on every violated wall; the first one reached (smallest alpha) is the impact.
+        alpha = huge(1.0_dp)
+        do j = 1, self%ng
+          if (self%gb(j) >= 0.0_dp) cycle
+          call stage_wall(self, j, tau, alpha_j, stat)
+          if (stat /= VCI_OK) return
+          if (alpha_j < alpha) then
+            alpha = alpha_j; jstar = j
+            self%best_x(1:n + m + 1) = self%x(1:n + m + 1)
+            s1res = self%last_residual
+          end if
+        end do
+        self%qt = self%best_x(1:n)
+        call self%sys%momentum_out(self%a, self%qt, alpha * tau, self%pminus, stat)
+        if (stat == VCI_OK) then
+          if (self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN) then
+            call self%sys%hamiltonian(self%qt, self%pminus, e_minus, stat)
+          else
+            call self%sys%energy_of(self%a, self%qt, alpha * tau, e_minus, stat)
+          end if
+        end if
+        if (stat /= VCI_OK) then
+          call set_cause(self, 'momentum at the wall'); return
+        end if
+        ! Reached the wall (to round-off) exactly at the end of the step: no reflection yet;
+        ! the next step starts on the wall and reflects there.
+        if (1.0_dp - alpha <= landing_fraction) then
+          self%a = self%qt; self%pa = self%pminus
+          if (m > 0) lambdan = self%best_x(n + 1:n + m)
+          qn = self%qt; pn = self%pminus; e_step = e_minus
+          vel = real(dir, dp) * (self%qt - q) / h
+          e_arrive = e_minus
+          landed = .true.
+          exit
+        end if
+      end if
+
+      ! Stage 2: reflect from (qt, p_minus) over the rest of the sub-step.
+      self%vin = (self%b - self%a) / tau
+      call stage_reflect(self, jstar, (1.0_dp - alpha) * tau, e_minus, stat)
+      if (stat /= VCI_OK) return
+      call record_impact(self, dir, h, t, consumed + alpha * tau, jstar, e_minus, s1res, (1.0_dp - alpha) * tau)
+      consumed = consumed + alpha * tau
+      tau = (1.0_dp - alpha) * tau
+      self%a = self%qt
+      self%pa = self%impacts(self%n_impacts)%p_after
+      e_arrive = e_minus
+    end do
+    if (landed) return
+
+    qn = self%x(1:n)
+    if (m > 0) lambdan = self%x(n + 1:n + m)
+    call self%sys%momentum_out(self%a, qn, tau, pn, stat)
+    if (stat == VCI_OK) call self%sys%energy_of(self%a, qn, tau, e_step, stat)
+    if (stat /= VCI_OK) then
+      call set_cause(self, 'momentum of the new state'); return
+    end if
+    vel = real(dir, dp) * (qn - self%a) / tau
+    e_arrive = e_step
+  end subroutine advance
+
+  !> Is configuration a (the sub-step's start) on wall j, to solver tolerance?
+  logical function on_wall(self, j)
+    type(vci_stepper_t), intent(in) :: self
+    integer, intent(in) :: j
+    real(dp) :: scale
+    scale = abs(self%ga(j)) + sum(abs(self%dga(:, j)) * abs(self%a))
+    on_wall = self%ga(j) <= 10.0_dp * (self%settings%atol + self%settings%rtol * scale)
+  end function on_wall
+
+  !> Regular sub-step of length tau from (a, pa); x holds the initial guess and returns the solution.
+  subroutine substep(self, a, pa, tau, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    real(dp), intent(in) :: a(:), pa(:), tau
+    integer, intent(out) :: stat
+    integer :: nx
+    nx = self%n + self%m
+    self%sys%kind = KIND_SUBSTEP
+    self%sys%a = a; self%sys%pa = pa; self%sys%tau = tau
+    if (self%m > 0) then
+      call self%sys%eval_forms(a, self%sys%omega, stat)
+      if (stat /= VCI_OK) then
+        call set_cause(self, 'constraint forms'); return
+      end if
+    end if
+    call run_newton(self, nx, 'regular step', stat)
+  end subroutine substep
+
+  !> Stage 1 for wall j: find alpha in (0, 1], b on the wall, lambda. Initial guess from the chord a -> b.
+  subroutine stage_wall(self, j, tau, alpha, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: j
+    real(dp), intent(in) :: tau
+    real(dp), intent(out) :: alpha
+    integer, intent(out) :: stat
+    integer :: n, m, i
+    real(dp) :: lo, hi, mid, gq(self%ng)
+    character(len=40) :: what
+    n = self%n; m = self%m
+    ! Bracket the first crossing along the chord: sample, then bisect (g is cheap).
+    lo = 0.0_dp; hi = 1.0_dp
+    do i = 1, 8
+      mid = real(i, dp) / 8.0_dp
+      call self%sys%eval_gaps(self%a + mid * (self%b - self%a), gq, stat)
+      if (stat /= VCI_OK) then
+        call set_cause(self, 'gap evaluation'); return
+      end if
+      if (gq(j) < 0.0_dp) then
+        hi = mid; exit
+      end if
+      lo = mid
+    end do
+    do i = 1, 20
+      mid = 0.5_dp * (lo + hi)
+      call self%sys%eval_gaps(self%a + mid * (self%b - self%a), gq, stat)
+      if (stat /= VCI_OK) then
+        call set_cause(self, 'gap evaluation'); return
+      end if
+      if (gq(j) > 0.0_dp) then
+        lo = mid
+      else
+        hi = mid
+      end if
+    end do
+    alpha = max(hi, 1.0e-6_dp)
+    self%x(1:n) = self%a + alpha * (self%b - self%a)
+    self%x(n + m + 1) = alpha
+    self%sys%kind = KIND_WALL
+    self%sys%a = self%a; self%sys%pa = self%pa; self%sys%tau = tau; self%sys%gap = j
+    self%sys%gscale = abs(self%dga(:, j))
+    if (m > 0) then
+      call self%sys%eval_forms(self%a, self%sys%omega, stat)
+      if (stat /= VCI_OK) then
+        call set_cause(self, 'constraint forms'); return
+      end if
+    end if
+    write (what, '(a,i0,a)') 'stage 1 (reaching wall ', j, ')'
+    call run_newton(self, n + m + 1, trim(what), stat)
+    if (stat /= VCI_OK) return
+    alpha = self%x(n + m + 1)
+    if (.not. (alpha > 0.0_dp .and. alpha <= 1.0_dp)) then
+      stat = VCI_ERR_IMPACT
+      write (self%cause, '(a,es10.3,a)') trim(what)//': impact fraction ', alpha, ' outside (0, 1]'
+    end if
+  end subroutine stage_wall
+
+  !> Stage 2 on wall j from (qt, p_minus) over tau2: q_next, lambda, impulse mu. Newton starts from
+  !> the linearised reflection so that it converges to the reflected root, not the pass-through one.
+  subroutine stage_reflect(self, j, tau2, e_minus, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: j
+    real(dp), intent(in) :: tau2, e_minus
+    integer, intent(out) :: stat
+    integer :: n, m, nx0, info
+    real(dp) :: num, den, mu0
+    character(len=40) :: what
+    n = self%n; m = self%m; nx0 = n + m
+    write (what, '(a,i0,a)') 'stage 2 (reflecting at wall ', j, ')'
+    call self%sys%eval_gap_gradients(self%qt, self%dga(:, 1:self%ng), stat)
+    if (stat /= VCI_OK) then
+      call set_cause(self, 'gap gradients at the wall'); return
+    end if
+    self%sys%grad = self%dga(:, j)
+    ! the motion with no impulse, and its sensitivity d = d(q_next, lambda)/d mu
+    self%x(1:n) = self%qt + tau2 * self%vin
+    call substep(self, self%qt, self%pminus, tau2, stat)
+    if (stat /= VCI_OK) return
+    num = dot_product(self%sys%grad, self%x(1:n) - self%qt)
+    mu0 = 0.0_dp
+    if (num < 0.0_dp) then
+      call self%sys%residual(self%x(1:nx0), self%r(1:nx0), self%sc(1:nx0), stat)
+      if (stat == VCI_OK) call self%sys%jacobian(self%x(1:nx0), self%r(1:nx0), self%jac(1:nx0, 1:nx0), stat)
+      if (stat /= VCI_OK) then
+        call set_cause(self, trim(what)//' initial guess'); return
+      end if
+      self%rhs(1:n) = -self%sys%grad
+      self%rhs(n + 1:nx0) = 0.0_dp
+      call self%newton%linear_solve(nx0, self%jac, self%rhs, info)
+      den = dot_product(self%sys%grad, self%rhs(1:n))
+      if (info /= 0 .or. .not. (abs(den) > 0.0_dp) .or. .not. ieee_is_finite(den)) then
+        stat = VCI_ERR_IMPACT
+        self%cause = trim(what)//': the motion does not depend on the impulse (singular normal direction)'
+        return
+      end if
+      mu0 = -2.0_dp * num / den
+      self%x(1:nx0) = self%x(1:nx0) + mu0 * self%rhs(1:nx0)
+    end if
+    ! num >= 0: the free motion from the wall already moves into the admissible set (a graze);
+    ! no impulse is needed and the sub-step stands as computed.
+    self%x(nx0 + 1) = mu0
+    if (mu0 /= 0.0_dp) then
+      self%sys%kind = KIND_REFLECT
+      self%sys%a = self%qt; self%sys%pa = self%pminus; self%sys%tau = tau2; self%sys%gap = j
+      self%sys%e_minus = e_minus
+      call run_newton(self, nx0 + 1, trim(what), stat)
+      if (stat /= VCI_OK) return
+      if (dot_product(self%sys%grad, self%x(1:n) - self%qt) <= 0.0_dp) then
+        stat = VCI_ERR_IMPACT
+        self%cause = trim(what)//': the reflected motion does not leave the wall'
+        return
+      end if
+    else
+      self%last_residual = 0.0_dp
+    end if
+  end subroutine stage_reflect
+
+  subroutine record_impact(self, dir, h, t, elapsed, j, e_minus, s1res, tau2)
+    type(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: dir, j
+    real(dp), intent(in) :: h, t, elapsed, e_minus, s1res, tau2
+    integer :: n, stat
+    real(dp) :: mu, e_after
+    n = self%n
+    mu = self%x(n + self%m + 1)
+    self%n_impacts = self%n_impacts + 1
+    associate (imp => self%impacts(self%n_impacts))
+      imp%t = t + real(dir, dp) * elapsed
+      imp%alpha = elapsed / h
+      imp%gap = j
+      imp%q = self%qt
+      imp%p_before = self%pminus
+      imp%p_after = self%pminus + mu * self%sys%grad
+      imp%grad_g = self%sys%grad
+      imp%impulse = real(dir, dp) * mu
+      imp%energy_before = e_minus
+      if (self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN) then
+        call self%sys%hamiltonian(self%qt, imp%p_after, e_after, stat)
+      else
+        call self%sys%energy_of(self%qt, self%x(1:n), tau2, e_after, stat)
+      end if
+      imp%energy_after = e_after
+      imp%leave_rate = dot_product(self%sys%grad, self%x(1:n) - self%qt) / tau2
+      imp%stage1_residual = s1res
+      imp%stage2_residual = self%last_residual
+    end associate
+  end subroutine record_impact
+
+  !> E_d of the sub-step that would have arrived at the current point in direction dir: one
+  !> regular sub-step in the opposite direction (walls ignored). Needed only when a run starts on
+  !> a wall moving into it and no previous step is known.
+  subroutine arriving_energy(self, dir, h, e, stat)
+    class(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: dir
+    real(dp), intent(in) :: h
+    real(dp), intent(out) :: e
+    integer, intent(out) :: stat
+    integer :: nx
+    nx = self%n + self%m + 1
+    self%best_x(1:nx) = self%x(1:nx)
+    self%sys%dir = -dir
+    self%x(1:self%n) = self%a
+    if (self%m > 0) self%x(self%n + 1:self%n + self%m) = 0.0_dp
+    call substep(self, self%a, self%pa, h, stat)
+    if (stat == VCI_OK) call self%sys%energy_of(self%a, self%x(1:self%n), h, e, stat)
+    self%sys%dir = dir
+    self%x(1:nx) = self%best_x(1:nx)
+  end subroutine arriving_energy
+
+  subroutine run_newton(self, nx, what, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: nx
+    character(len=*), intent(in) :: what
+    integer, intent(out) :: stat
+    type(vci_newton_result_t) :: res
+    self%sys%failed_callback = ''
+    call self%newton%solve(self%sys, self%x(1:nx), res)
+    self%stats%newton_solves = self%stats%newton_solves + 1
+    self%stats%newton_iterations = self%stats%newton_iterations + res%iterations
+    if (res%used_fallback) self%stats%fallbacks = self%stats%fallbacks + 1
+    self%last_residual = res%scaled_residual
+    stat = res%status
+    if (stat == VCI_OK) return
+    select case (res%reason)
+    case (NEWTON_MAX_ITERATIONS)
+      write (self%cause, '(a,i0,a,es9.2,a)') what//': Newton did not converge in ', res%iterations, &
+        ' iterations (scaled residual ', res%scaled_residual, ')'
+    case (NEWTON_NO_DESCENT)
+      write (self%cause, '(a,es9.2,a)') what//': Newton line search found no decrease (scaled residual ', &
+        res%scaled_residual, ')'
+    case (NEWTON_SINGULAR)
+      self%cause = what//': Newton matrix singular and least-squares solve failed'
+    case (NEWTON_EVALUATION)
+      if (stat == VCI_ERR_NONFINITE) then
+        self%cause = what//': callback '//trim(self%sys%failed_callback)//' returned NaN or Inf'
+      else
+        self%cause = what//': callback '//trim(self%sys%failed_callback)//' reported failure'
+      end if
+    end select
+  end subroutine run_newton
+
+  subroutine set_cause(self, what)
+    type(vci_stepper_t), intent(inout) :: self
+    character(len=*), intent(in) :: what
+    if (len_trim(self%sys%failed_callback) > 0) then
+      self%cause = what//': callback '//trim(self%sys%failed_callback)//' failed or returned NaN/Inf'
+    else
+      self%cause = what//' failed'
+    end if
+  end subroutine set_cause
+end module vci_stepper
