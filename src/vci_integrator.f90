@@ -21,6 +21,15 @@ module vci_integrator
     integer(i8) :: steps = 0, impacts = 0, newton_solves = 0, newton_iterations = 0, fallbacks = 0
   end type vci_stats_t
 
+  !> Everything needed to continue a run bit for bit: the state plus the solver's memory
+  !> (velocity used for initial guesses, energy of the arriving sub-step).
+  type, public :: vci_checkpoint_t
+    real(dp) :: t0 = 0.0_dp, h = 0.0_dp, energy = 0.0_dp, e_arrive = 0.0_dp
+    integer(i8) :: k = 0_i8
+    integer :: e_dir = 0
+    real(dp), allocatable :: q(:), p(:), lambda(:), vel(:)
+  end type vci_checkpoint_t
+
   type, public :: vci_integrator_t
     class(vci_model_t), pointer :: model => null()
     type(vci_stepper_t) :: stepper
@@ -48,6 +57,8 @@ module vci_integrator
     procedure :: step
     procedure :: integrate
     procedure :: run_info
+    procedure :: checkpoint
+    procedure :: restore
   end type vci_integrator_t
 
 contains
@@ -297,6 +308,9 @@ contains
       call finish(self, failure_of(stat), stat); return
     end if
     self%e_dir = direction
+    do i = 1, self%stepper%n_impacts
+      self%stepper%impacts(i)%step = self%k
+    end do
     self%q = self%qn; self%p = self%pn
     if (self%model%m > 0) self%lambda = self%lambdan
     self%k = self%k + direction
@@ -364,6 +378,42 @@ contains
     end if
     self%status = stat
   end subroutine integrate
+
+  !> The current state and solver memory, for restarts that continue bit for bit.
+  function checkpoint(self) result(cp)
+    class(vci_integrator_t), intent(in) :: self
+    type(vci_checkpoint_t) :: cp
+    cp%t0 = self%t0; cp%h = self%h; cp%energy = self%energy; cp%e_arrive = self%e_arrive
+    cp%k = self%k; cp%e_dir = self%e_dir
+    cp%q = self%q; cp%p = self%p; cp%lambda = self%lambda; cp%vel = self%vel
+  end function checkpoint
+
+  !> Continue from a checkpoint taken with the same model and step length.
+  subroutine restore(self, cp, stat)
+    class(vci_integrator_t), intent(inout) :: self
+    type(vci_checkpoint_t), intent(in) :: cp
+    integer, intent(out) :: stat
+    if (.not. self%created) then
+      self%message = 'restore: create the integrator first'
+      call finish(self, VCI_ERR_STATE, stat); return
+    end if
+    if (.not. allocated(cp%q)) then
+      self%message = 'restore: empty checkpoint'
+      call finish(self, VCI_ERR_ARGUMENT, stat); return
+    end if
+    if (size(cp%q) /= self%model%n .or. size(cp%lambda) /= self%model%m .or. cp%h /= self%h) then
+      self%message = 'restore: checkpoint does not match this model or step length'
+      call finish(self, VCI_ERR_ARGUMENT, stat); return
+    end if
+    call check_init(self, 'restore', cp%t0, cp%q, cp%p, stat)
+    if (stat /= VCI_OK) return
+    self%t0 = cp%t0; self%energy = cp%energy; self%e_arrive = cp%e_arrive
+    self%k = cp%k; self%e_dir = cp%e_dir
+    self%q = cp%q; self%p = cp%p; self%lambda = cp%lambda; self%vel = cp%vel
+    self%t = self%t0 + real(self%k, dp) * self%h
+    self%initialized = .true.
+    call finish(self, VCI_OK, stat)
+  end subroutine restore
 
   !> What observers are told at the start of a run.
   function run_info(self, direction) result(info)

@@ -29,6 +29,7 @@ module vci_step_system
     real(dp) :: tau = 0.0_dp             !< sub-step length (sub-step, stage 2); alpha * tau is stage 1's
     integer :: gap = 0                   !< wall of stage 1 / stage 2
     integer :: impact_energy = VCI_IMPACT_DISCRETE
+    real(dp) :: rtol = 1.0e-12_dp        !< the Newton tolerance, to express the round-off floor in its units
     logical :: has_hessian = .false., has_gap_gradients = .false.
     real(dp), allocatable :: a(:), pa(:), omega(:, :), grad(:), gscale(:)
     real(dp) :: e_minus = 0.0_dp         !< E_d of the arriving sub-step, or H(qt, p_minus)
@@ -271,7 +272,9 @@ contains
     real(dp), intent(out) :: r(:), scale(:)
     integer, intent(out) :: stat
     call rows(self, x, r, scale, .true., stat)
-    if (stat == VCI_OK) scale = scale + self%jscale(1:size(x))
+    ! round-off floor of each row: a few ulps of sum_j |dR_i/dx_j| |x_j|, in units of rtol
+    if (stat == VCI_OK) scale = scale + (8.0_dp * epsilon(1.0_dp) / max(self%rtol, epsilon(1.0_dp))) * &
+                                self%jscale(1:size(x))
   end subroutine step_residual
 
   !> Jacobian: the momentum block from the model's mixed Hessian when it has one, multiplier and

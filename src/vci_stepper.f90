@@ -83,6 +83,7 @@ contains
     self%newton%rtol = self%settings%rtol
     self%newton%max_iterations = self%settings%max_iterations
     self%sys%impact_energy = self%settings%impact_energy
+    self%sys%rtol = self%settings%rtol
   end subroutine apply_settings
 
   !> Advance from (q, p) by one step of length h in direction dir (+1/-1).
@@ -222,7 +223,8 @@ contains
     type(vci_stepper_t), intent(in) :: self
     integer, intent(in) :: j
     real(dp) :: scale
-    scale = abs(self%ga(j)) + sum(abs(self%dga(:, j)) * abs(self%a))
+    ! the size of g's terms and of its change over the sub-step (as in stage 1's gap row)
+    scale = abs(self%ga(j)) + sum(abs(self%dga(:, j)) * (abs(self%a) + abs(self%b - self%a)))
     on_wall = self%ga(j) <= 10.0_dp * (self%settings%atol + self%settings%rtol * scale)
   end function on_wall
 

@@ -30,7 +30,9 @@ module vci_ref_pendulum
     real(dp) :: g = 9.8_dp        !< gravitational acceleration
     real(dp) :: ell = 2.0_dp      !< length
     real(dp) :: radius = 1.5_dp   !< cylinder radius R
-    real(dp) :: step = 5.0e-3_dp  !< internal Gauss–Legendre step (see the report for accuracy)
+    !> Internal Gauss–Legendre step. At 5e-3 the paper's run has its impact times within 1e-13
+    !> of quadrature over 100 s (rounding-limited; 1e-2 gives 5e-13, 2e-2 gives 4e-9).
+    real(dp) :: step = 5.0e-3_dp
   end type pendulum_params
 
   !> Status values of pendulum_exact.
@@ -206,14 +208,15 @@ contains
 
   !> Increment dy of one Gauss–Legendre step of length h from y. The stage equations
   !> K_i = F(y + h Σ_j a_ij K_j) are solved by fixed-point iteration (a contraction for h well
-  !> below the motion's time scale) until the update reaches rounding level or stops shrinking.
+  !> below the motion's time scale) until the update reaches rounding level or stops shrinking
+  !> near it.
   pure subroutine gl_step(gl, par, y, h, dy, info)
     type(gauss4), intent(in) :: gl
     type(pendulum_params), intent(in) :: par
     real(dp), intent(in) :: y(2), h
     real(dp), intent(out) :: dy(2)
     integer, intent(inout) :: info
-    real(dp) :: kk(2, 4), k_new(2, 4), change, change_old
+    real(dp) :: kk(2, 4), k_new(2, 4), change, change_old, scale
     integer :: i, it
 
     kk = spread(rhs(par, y), 2, 4)
@@ -224,8 +227,13 @@ contains
       end do
       change = maxval(abs(k_new - kk))
       kk = k_new
-      if (change <= 2.0_dp*epsilon(1.0_dp)*maxval(abs(kk))) exit
-      if (it > 3 .and. change >= change_old) exit
+      scale = epsilon(1.0_dp)*maxval(abs(kk))
+      if (change <= 2.0_dp*scale) exit
+      if (it > 3 .and. change >= change_old) then
+        ! Stalled: rounding noise is fine, anything larger means the step is too long.
+        if (change > 1.0e3_dp*scale) info = pendulum_solve_failed
+        exit
+      end if
       change_old = change
     end do
     if (it > max_stage_iter) info = pendulum_solve_failed
