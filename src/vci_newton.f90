@@ -65,7 +65,7 @@ module vci_newton
     logical :: polish = .true.         !< one extra step with the last factorisation: ~ machine precision
     integer :: capacity = 0
     real(dp), allocatable, private :: jac(:, :), lu(:, :), r(:), sc(:), dx(:), xt(:), rt(:), sct(:)
-    real(dp), allocatable, private :: sv(:), work(:)
+    real(dp), allocatable, private :: sv(:), work(:), rw(:)
     integer, allocatable, private :: ipiv(:), iwork(:)
   contains
     procedure :: reserve
@@ -90,9 +90,9 @@ contains
     if (self%capacity >= nmax) return
     self%capacity = nmax
     if (allocated(self%jac)) deallocate (self%jac, self%lu, self%r, self%sc, self%dx, self%xt, &
-                                         self%rt, self%sct, self%sv, self%work, self%ipiv, self%iwork)
+                                         self%rt, self%sct, self%sv, self%work, self%ipiv, self%iwork, self%rw)
     allocate (self%jac(nmax, nmax), self%lu(nmax, nmax), self%r(nmax), self%sc(nmax), self%dx(nmax), &
-              self%xt(nmax), self%rt(nmax), self%sct(nmax), self%sv(nmax), self%ipiv(nmax))
+              self%xt(nmax), self%rt(nmax), self%sct(nmax), self%sv(nmax), self%ipiv(nmax), self%rw(nmax))
     call dgelsd(nmax, nmax, 1, a, nmax, b, nmax, s, -1.0_dp, rank, query, -1, iq, info)
     lwork = max(1, int(query(1)))
     nlvl = max(0, int(log(real(nmax, dp) / 26.0_dp) / log(2.0_dp)) + 1)
@@ -185,10 +185,17 @@ contains
     type(vci_newton_result_t), intent(inout) :: res
     integer :: i, info, rank
     real(dp) :: w, dmin, dmax
+    ! rows equilibrated by their largest entry, so rows in different units pivot fairly
     do i = 1, n
-      w = 1.0_dp / max(self%atol + self%rtol * self%sc(i), tiny(1.0_dp))
+      w = maxval(abs(self%jac(i, 1:n)))
+      if (w > 0.0_dp) then
+        w = 1.0_dp / w
+      else
+        w = 1.0_dp
+      end if
       self%lu(i, 1:n) = self%jac(i, 1:n) * w
       self%dx(i) = self%r(i) * w
+      self%rw(i) = w
     end do
     self%jac(1:n, 1:n) = self%lu(1:n, 1:n)   ! keep the equilibrated matrix for the fallback
     call dgetrf(n, n, self%lu, self%capacity, self%ipiv, info)
@@ -206,7 +213,7 @@ contains
     if (factored) return
     ! Singular (or numerically so): minimum-norm least-squares step, rank decided at 1e-12.
     do i = 1, n
-      self%dx(i) = self%r(i) / max(self%atol + self%rtol * self%sc(i), tiny(1.0_dp))
+      self%dx(i) = self%r(i) * self%rw(i)
     end do
     call dgelsd(n, n, 1, self%jac, self%capacity, self%dx, self%capacity, self%sv, 1.0e-12_dp, rank, &
                 self%work, size(self%work), self%iwork, info)
@@ -225,7 +232,7 @@ contains
     integer :: i, info, stat
     real(dp) :: phit
     do i = 1, n
-      self%dx(i) = self%r(i) / max(self%atol + self%rtol * self%sc(i), tiny(1.0_dp))
+      self%dx(i) = self%r(i) * self%rw(i)
     end do
     call dgetrs('N', n, 1, self%lu, self%capacity, self%ipiv, self%dx, self%capacity, info)
     if (info /= 0) return
