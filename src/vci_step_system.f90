@@ -8,7 +8,11 @@
 !>              omega_d(qt, b, tau) = 0,  E_d(qt, b, tau) = E_minus             (unknown mu)
 !>              or, for the Hamiltonian condition, H(qt, p_minus + mu grad g_j) = H(qt, p_minus).
 !>
-!> The new momentum is p_b = s D2 L^s(a, b, tau). Unknowns are packed as x = [b(n), lambda(m), extra].
+!>   impulse :  (Hamiltonian condition) p+ = p_minus + mu grad g_j + Omega(qt) nu with
+!>              H(qt, p+) = H(qt, p_minus) and Omega^T dH/dp(qt, p+) = 0     (unknowns nu, mu)
+!>
+!> The new momentum is p_b = s D2 L^s(a, b, tau). Unknowns are packed as x = [b(n), lambda(m), extra],
+!> except for the impulse system, x = [nu(m), mu].
 module vci_step_system
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use vci_kinds, only: dp
@@ -18,7 +22,7 @@ module vci_step_system
   implicit none
   private
 
-  integer, parameter, public :: KIND_SUBSTEP = 1, KIND_WALL = 2, KIND_REFLECT = 3
+  integer, parameter, public :: KIND_SUBSTEP = 1, KIND_WALL = 2, KIND_REFLECT = 3, KIND_IMPULSE = 4
   integer, parameter, public :: VCI_IMPACT_DISCRETE = 0, VCI_IMPACT_HAMILTONIAN = 1
 
   type, extends(vci_system_t), public :: vci_step_system_t
@@ -82,6 +86,7 @@ contains
     class(vci_step_system_t), intent(in) :: self
     nunk = self%n + self%m
     if (self%kind /= KIND_SUBSTEP) nunk = nunk + 1
+    if (self%kind == KIND_IMPULSE) nunk = self%m + 1
   end function nunk
 
   !> Sub-step length at the unknowns x.
@@ -176,7 +181,7 @@ contains
     if (self%has_gap_gradients) then
       call self%model%gap_gradients(q, dg, stat)
       call check(self, stat, dg(:, 1), 'gap gradients')
-      if (stat == VCI_OK .and. size(dg, 2) > 1) call check(self, stat, reshape(dg, [size(dg)]), 'gap gradients')
+      if (stat == VCI_OK .and. size(dg, 2) > 1) call check_matrix(self, stat, dg, 'gap gradients')
       return
     end if
     ng = size(dg, 2)
@@ -202,7 +207,7 @@ contains
     stat = 0
     if (self%m == 0) return
     call self%model%constraint_forms(q, omega, stat)
-    if (stat == VCI_OK) call check(self, stat, reshape(omega, [size(omega)]), 'constraint forms')
+    if (stat == VCI_OK) call check_matrix(self, stat, omega, 'constraint forms')
     if (stat /= VCI_OK .and. self%failed_callback == '') self%failed_callback = 'constraint forms'
   end subroutine eval_forms
 
@@ -214,8 +219,8 @@ contains
     real(dp), intent(out) :: r(:), sc(:)
     logical, intent(in) :: momentum_rows
     integer, intent(out) :: stat
-    integer :: n, m, mu, last
-    real(dp) :: tau, e, hp
+    integer :: n, m, mu, last, i
+    real(dp) :: tau, e, hp, ol, ols
     n = self%n; m = self%m; last = n + m + 1
     tau = step_length(self, x)
     stat = VCI_OK
@@ -225,8 +230,16 @@ contains
       r(1:n) = self%d1 + self%pa
       sc(1:n) = abs(self%d1) + abs(self%pa)
       if (m > 0) then
-        r(1:n) = r(1:n) - matmul(self%omega, x(n + 1:n + m))
-        sc(1:n) = sc(1:n) + matmul(abs(self%omega), abs(x(n + 1:n + m)))
+        ! - Omega lambda and its size, as explicit loops: matmul here allocated temporaries per call
+        do i = 1, n
+          ol = 0.0_dp; ols = 0.0_dp
+          do mu = 1, m
+            ol = ol + self%omega(i, mu) * x(n + mu)
+            ols = ols + abs(self%omega(i, mu)) * abs(x(n + mu))
+          end do
+          r(i) = r(i) - ol
+          sc(i) = sc(i) + ols
+        end do
       end if
       if (self%kind == KIND_REFLECT) then
         r(1:n) = r(1:n) + x(last) * self%grad
@@ -271,6 +284,10 @@ contains
     real(dp), intent(in) :: x(:)
     real(dp), intent(out) :: r(:), scale(:)
     integer, intent(out) :: stat
+    if (self%kind == KIND_IMPULSE) then
+      call impulse_rows(self, x, r, scale, stat)
+      return
+    end if
     call rows(self, x, r, scale, .true., stat)
     ! round-off floor of each row: a few ulps of sum_j |dR_i/dx_j| |x_j|, in units of rtol
     if (stat == VCI_OK) scale = scale + (8.0_dp * epsilon(1.0_dp) / max(self%rtol, epsilon(1.0_dp))) * &
@@ -287,19 +304,23 @@ contains
     integer :: n, m, nx, j, last
     real(dp) :: tau, d, hp, hm
     n = self%n; m = self%m; nx = nunk(self); last = n + m + 1
-    tau = step_length(self, x)
     jac = 0.0_dp
     stat = VCI_OK
+    if (self%kind == KIND_IMPULSE) then
+      call impulse_jacobian(self, x, jac, stat)
+      return
+    end if
+    tau = step_length(self, x)
     ! columns of b
     if (self%has_hessian) then
       if (self%dir > 0) then
         call self%model%mixed_hessian(self%a, x(1:n), tau, self%hess, stat)
-        call check(self, stat, reshape(self%hess, [n * n]), 'mixed Hessian')
+        call check_matrix(self, stat, self%hess, 'mixed Hessian')
         if (stat /= VCI_OK) return
         jac(1:n, 1:n) = self%hess
       else
         call self%model%mixed_hessian(x(1:n), self%a, tau, self%hess, stat)
-        call check(self, stat, reshape(self%hess, [n * n]), 'mixed Hessian')
+        call check_matrix(self, stat, self%hess, 'mixed Hessian')
         if (stat /= VCI_OK) return
         jac(1:n, 1:n) = -transpose(self%hess)
       end if
@@ -338,6 +359,72 @@ contains
       self%jscale(j) = sum(abs(jac(j, 1:nx)) * abs(x(1:nx)))
     end do
   end subroutine step_jacobian
+
+  !> The Hamiltonian impact: energy row and, with constraints, the outgoing velocity dH/dp(qt, p+)
+  !> annihilated by the constraint forms. dH/dp by central differences: exact for H quadratic in p.
+  subroutine impulse_rows(self, x, r, sc, stat)
+    class(vci_step_system_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:)
+    real(dp), intent(out) :: r(:), sc(:)
+    integer, intent(out) :: stat
+    integer :: m, i, mu
+    real(dp) :: hp, hplus, hminus, d, pmax, noise
+    m = self%m
+    self%pplus = self%pa + x(m + 1) * self%grad
+    if (m > 0) self%pplus = self%pplus + matmul(self%omega, x(1:m))
+    call self%hamiltonian(self%a, self%pplus, hp, stat)
+    if (stat /= VCI_OK) return
+    r(m + 1) = hp - self%e_minus
+    sc(m + 1) = abs(hp) + abs(self%e_minus)
+    if (m == 0) return
+    pmax = max(maxval(abs(self%pplus)), tiny(1.0_dp))
+    d = 1.0e-4_dp * pmax
+    do i = 1, self%n
+      self%xp(i) = self%pplus(i)
+      self%pplus(i) = self%xp(i) + d
+      call self%hamiltonian(self%a, self%pplus, hplus, stat)
+      if (stat /= VCI_OK) return
+      self%pplus(i) = self%xp(i) - d
+      call self%hamiltonian(self%a, self%pplus, hminus, stat)
+      if (stat /= VCI_OK) return
+      self%pplus(i) = self%xp(i)
+      self%d1(i) = (hplus - hminus) / (2.0_dp * d)      ! outgoing velocity dH/dp
+    end do
+    noise = 4.0_dp * epsilon(1.0_dp) * abs(hp) / d      ! round-off of the difference quotients
+    do mu = 1, m
+      r(mu) = dot_product(self%omega(:, mu), self%d1)
+      sc(mu) = sum(abs(self%omega(:, mu)) * (abs(self%d1) + noise / max(self%rtol, epsilon(1.0_dp))))
+    end do
+  end subroutine impulse_rows
+
+  subroutine impulse_jacobian(self, x, jac, stat)
+    class(vci_step_system_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:)
+    real(dp), intent(out) :: jac(:, :)
+    integer, intent(out) :: stat
+    integer :: j, nx
+    real(dp) :: d, xj, pscale
+    real(dp) :: xl(size(x))
+    nx = size(x)
+    pscale = max(maxval(abs(self%pa)), tiny(1.0_dp))
+    xl = x
+    do j = 1, nx
+      xj = x(j)
+      if (j == nx) then
+        d = fd_rel * max(abs(xj), pscale / max(maxval(abs(self%grad)), tiny(1.0_dp)))
+      else
+        d = fd_rel * max(abs(xj), pscale / max(maxval(abs(self%omega(:, j))), tiny(1.0_dp)))
+      end if
+      xl(j) = xj + d
+      call impulse_rows(self, xl, self%rp(1:nx), self%sp(1:nx), stat)
+      if (stat /= VCI_OK) return
+      xl(j) = xj - d
+      call impulse_rows(self, xl, self%rm(1:nx), self%sm(1:nx), stat)
+      if (stat /= VCI_OK) return
+      xl(j) = xj
+      jac(1:nx, j) = (self%rp(1:nx) - self%rm(1:nx)) / (2.0_dp * d)
+    end do
+  end subroutine impulse_jacobian
 
   pure real(dp) function fd_step(xj, motion)
     real(dp), intent(in) :: xj, motion
@@ -384,14 +471,33 @@ contains
     integer, intent(inout) :: stat
     real(dp), intent(in) :: values(:)
     character(len=*), intent(in) :: what
+    integer :: i
     if (stat /= 0) then
       stat = VCI_ERR_CALLBACK
       self%failed_callback = what
-    else if (.not. all(ieee_is_finite(values))) then
-      stat = VCI_ERR_NONFINITE
-      self%failed_callback = what
-    else
-      stat = VCI_OK
+      return
     end if
+    stat = VCI_OK
+    do i = 1, size(values)
+      if (.not. (abs(values(i)) <= huge(1.0_dp))) then   ! NaN or +-Inf
+        stat = VCI_ERR_NONFINITE
+        self%failed_callback = what
+        return
+      end if
+    end do
   end subroutine check
+
+  !> check() for a matrix, without the temporary a reshape would allocate.
+  subroutine check_matrix(self, stat, values, what)
+    class(vci_step_system_t), intent(inout) :: self
+    integer, intent(inout) :: stat
+    real(dp), intent(in) :: values(:, :)
+    character(len=*), intent(in) :: what
+    integer :: j
+    call check(self, stat, values(:, 1), what)
+    do j = 2, size(values, 2)
+      if (stat /= VCI_OK) return
+      call check(self, stat, values(:, j), what)
+    end do
+  end subroutine check_matrix
 end module vci_step_system

@@ -9,7 +9,7 @@ module vci_stepper
   use vci_model, only: vci_model_t
   use vci_newton, only: vci_newton_t, vci_newton_result_t, NEWTON_MAX_ITERATIONS, NEWTON_NO_DESCENT, &
                         NEWTON_SINGULAR, NEWTON_EVALUATION
-  use vci_step_system, only: vci_step_system_t, KIND_SUBSTEP, KIND_WALL, KIND_REFLECT, &
+  use vci_step_system, only: vci_step_system_t, KIND_SUBSTEP, KIND_WALL, KIND_REFLECT, KIND_IMPULSE, &
                              VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN
   use vci_observer, only: vci_impact_t
   implicit none
@@ -40,7 +40,7 @@ module vci_stepper
     character(len=VCI_MSG_LEN) :: cause = ''       !< why the last step failed
     real(dp) :: last_residual = 0.0_dp              !< scaled residual of the last Newton solve
     real(dp), allocatable, private :: x(:), a(:), pa(:), b(:), qt(:), pminus(:), gb(:), ga(:), dga(:, :)
-    real(dp), allocatable, private :: best_x(:), jac(:, :), rhs(:), r(:), sc(:), vin(:)
+    real(dp), allocatable, private :: best_x(:), jac(:, :), rhs(:), r(:), sc(:), vin(:), pimp(:), nu(:)
   contains
     procedure :: setup
     procedure :: advance
@@ -66,10 +66,10 @@ contains
     call apply_settings(self)
     if (allocated(self%x)) deallocate (self%x, self%a, self%pa, self%b, self%qt, self%pminus, self%gb, &
                                        self%ga, self%dga, self%best_x, self%jac, self%rhs, self%r, self%sc, &
-                                       self%vin, self%impacts)
+                                       self%vin, self%impacts, self%pimp, self%nu)
     allocate (self%x(nx), self%a(n), self%pa(n), self%b(n), self%qt(n), self%pminus(n), &
               self%gb(max(1, ng)), self%ga(max(1, ng)), self%dga(n, max(1, ng)), self%best_x(nx), &
-              self%jac(nx, nx), self%rhs(nx), self%r(nx), self%sc(nx), self%vin(n))
+              self%jac(nx, nx), self%rhs(nx), self%r(nx), self%sc(nx), self%vin(n), self%pimp(n), self%nu(m))
     allocate (self%impacts(max(1, settings%max_impacts_per_step)))
     do i = 1, size(self%impacts)
       allocate (self%impacts(i)%q(n), self%impacts(i)%p_before(n), self%impacts(i)%p_after(n), &
@@ -348,7 +348,43 @@ contains
     ! num >= 0: the free motion from the wall already moves into the admissible set (a graze);
     ! no impulse is needed and the sub-step stands as computed.
     self%x(nx0 + 1) = mu0
-    if (mu0 /= 0.0_dp) then
+    if (self%m > 0) self%nu = 0.0_dp
+    if (mu0 /= 0.0_dp .and. self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN) then
+      ! H(qt, p+) = H(qt, p-) fixes the impulse from the momenta alone (with constraints, together
+      ! with the constraint impulse nu that makes the outgoing velocity admissible); the leaving
+      ! sub-step is then a regular one from p- + mu grad g (Omega nu is absorbed by its multiplier).
+      self%best_x(1:nx0) = self%x(1:nx0)
+      self%x(1:m) = 0.0_dp
+      self%x(m + 1) = mu0
+      self%sys%kind = KIND_IMPULSE
+      self%sys%a = self%qt; self%sys%pa = self%pminus; self%sys%e_minus = e_minus
+      if (m > 0) then
+        ! start nu where the outgoing velocity satisfies the constraints for the estimated mu
+        ! (one linear solve: exact when H is quadratic in p)
+        call self%sys%residual(self%x(1:m + 1), self%r(1:m + 1), self%sc(1:m + 1), stat)
+        if (stat == VCI_OK) call self%sys%jacobian(self%x(1:m + 1), self%r(1:m + 1), self%jac(1:m + 1, 1:m + 1), stat)
+        if (stat /= VCI_OK) then
+          call set_cause(self, trim(what)//' impulse initial guess'); return
+        end if
+        self%rhs(1:m) = -self%r(1:m)
+        call self%newton%linear_solve(m, self%jac, self%rhs, info)
+        if (info == 0) self%x(1:m) = self%rhs(1:m)
+      end if
+      call run_newton(self, m + 1, trim(what)//' impulse', stat)
+      if (stat /= VCI_OK) return
+      mu0 = self%x(m + 1)
+      if (m > 0) self%nu = self%x(1:m)
+      self%x(1:nx0) = self%best_x(1:nx0)
+      self%pimp = self%pminus + mu0 * self%sys%grad
+      call substep(self, self%qt, self%pimp, tau2, stat)
+      if (stat /= VCI_OK) return
+      self%x(nx0 + 1) = mu0
+      if (dot_product(self%sys%grad, self%x(1:n) - self%qt) <= 0.0_dp) then
+        stat = VCI_ERR_IMPACT
+        self%cause = trim(what)//': the reflected motion does not leave the wall'
+        return
+      end if
+    else if (mu0 /= 0.0_dp) then
       self%sys%kind = KIND_REFLECT
       self%sys%a = self%qt; self%sys%pa = self%pminus; self%sys%tau = tau2; self%sys%gap = j
       self%sys%e_minus = e_minus
@@ -380,6 +416,8 @@ contains
       imp%q = self%qt
       imp%p_before = self%pminus
       imp%p_after = self%pminus + mu * self%sys%grad
+      if (self%m > 0 .and. self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN) &
+        imp%p_after = imp%p_after + matmul(self%sys%omega, self%nu)
       imp%grad_g = self%sys%grad
       imp%impulse = real(dir, dp) * mu
       imp%energy_before = e_minus

@@ -121,7 +121,7 @@ contains
     integer, intent(inout) :: stat
     real(dp) :: ml2, s2
     ml2 = self%mass * self%length**2; s2 = sin(q(1))**2
-    if (s2 < 1.0e-300_dp) then
+    if (sqrt(s2) <= 4.0_dp * epsilon(1.0_dp)) then   ! sin theta = 0 to round-off: H undefined
       stat = 1; e = 0.0_dp; return
     end if
     e = 0.5_dp * p(1)**2 / ml2 + 0.5_dp * p(2)**2 / (ml2 * s2) + self%mass * self%grav * self%length * cos(q(1))
