@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Install, from Debian's archive, whatever vci's build, tests and demos need and is missing.
+# Usage: tools/install-deps.sh [extra packages...]. Runs apt-get only when something is missing.
+set -euo pipefail
+packages=(cmake make gfortran gcc liblapack-dev libblas-dev libhdf5-dev hdf5-tools pkg-config python3
+          python3-numpy python3-h5py python3-matplotlib "$@")
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+[ ${#missing[@]} -eq 0 ] && exit 0
+echo "installing: ${missing[*]}"
+if [ "$(id -u)" -ne 0 ]; then
+  SUDO=sudo
+  command -v sudo >/dev/null || { echo "need root (or sudo) to apt-get install: ${missing[*]}" >&2; exit 1; }
+else
+  SUDO=
+fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
