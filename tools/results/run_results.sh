@@ -1,0 +1,76 @@
+#!/bin/sh
+# Regenerate docs/RESULTS.md and docs/figures/results_*.png: error against run time of vci and its
+# peers (SUNDIALS CVODE, SciPy solve_ivp, Siconos) on the paper's scenes, and the long-time energy
+# of the ellipse. Installs missing Debian packages, builds, runs everything one job at a time (the
+# timings must not compete with each other), writes the page. About 10 minutes on 2 cores.
+#
+#   tools/results/run_results.sh
+#
+# Environment: VCI_RESULTS_BUILD (build directory, default $TMPDIR/vci-results-build),
+# VCI_RESULTS_OUT (raw CSV output, default $VCI_RESULTS_BUILD/out).
+set -eu
+
+ROOT=$(cd "$(dirname "$0")/../.." && pwd)
+BUILD=${VCI_RESULTS_BUILD:-${TMPDIR:-/tmp}/vci-results-build}
+OUT=${VCI_RESULTS_OUT:-$BUILD/out}
+PY=/usr/bin/python3
+START=$(date +%s)
+
+# --- Debian packages -------------------------------------------------------------------------
+PKGS="gfortran gcc cmake make liblapack-dev python3-numpy python3-scipy python3-matplotlib
+      libsundials-dev libsundials-fortran-dev python3-siconos"
+MISSING=""
+for p in $PKGS; do
+  dpkg -s "$p" >/dev/null 2>&1 || MISSING="$MISSING $p"
+done
+if [ -n "$MISSING" ]; then
+  SUDO=""
+  [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+  echo "installing:$MISSING"
+  $SUDO apt-get install -y $MISSING || { $SUDO apt-get update && $SUDO apt-get install -y $MISSING; }
+fi
+
+# --- build -----------------------------------------------------------------------------------
+cmake -S "$ROOT/tools/results" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release -DVCI_ROOT="$ROOT" >"$BUILD.cmake.log" 2>&1 \
+  || { cat "$BUILD.cmake.log"; exit 1; }
+cmake --build "$BUILD" -j2 >"$BUILD.build.log" 2>&1 || { tail -40 "$BUILD.build.log"; exit 1; }
+[ -x "$BUILD/cvode_results_driver" ] || { echo "CVODE driver not built (see $BUILD.cmake.log)"; exit 1; }
+
+mkdir -p "$OUT/long"
+rm -f "$OUT"/*.csv "$OUT"/long/*.csv
+
+# --- runs ------------------------------------------------------------------------------------
+echo "== references"
+"$BUILD/vci_results_driver" reference "$OUT/reference.json"
+echo "== vci step-size sweep (both impact conditions)"
+"$BUILD/vci_results_driver" sweep "$OUT/vci_sweep.csv" 2>"$OUT/vci_sweep.stderr"
+echo "== pendulum: reference vs Richardson extrapolation of vci"
+"$BUILD/vci_results_driver" richardson "$OUT/richardson.csv"
+echo "== CVODE tolerance sweep"
+"$BUILD/cvode_results_driver" sweep "$OUT/cvode_sweep.csv"
+echo "== SciPy tolerance sweep"
+$PY "$ROOT/tools/results/peers_scipy.py" sweep "$OUT/reference.json" "$OUT/scipy_sweep.csv"
+echo "== Siconos step-size sweep"
+$PY "$ROOT/tools/results/peers_siconos.py" sweep "$OUT/reference.json" "$BUILD" "$OUT/siconos_sweep.csv"
+echo "== long runs: the ellipse over 1e4 s"
+"$BUILD/vci_results_driver" long "$OUT/long"
+for tol in 1e-6 1e-8 1e-10 1e-12; do
+  "$BUILD/cvode_results_driver" long "$OUT/long" $tol
+done
+$PY "$ROOT/tools/results/peers_scipy.py" long "$OUT/long" DOP853 1e-6
+$PY "$ROOT/tools/results/peers_scipy.py" long "$OUT/long" Radau 1e-6
+$PY "$ROOT/tools/results/peers_siconos.py" long "$BUILD" "$OUT/long" 1e-2
+
+# --- the page --------------------------------------------------------------------------------
+END=$(date +%s)
+ver() { dpkg-query -W -f='${Version}' "$1" 2>/dev/null || echo "?"; }
+cat >"$OUT/meta.json" <<EOF
+{"date": "$(date -u +%Y-%m-%d\ %H:%M\ UTC)", "nproc": $(nproc),
+ "cpu": "$(grep -m1 'model name' /proc/cpuinfo | sed 's/.*: //; s/"//g')",
+ "elapsed_s": $((END - START)),
+ "commit": "$(git -C "$ROOT" describe --always --dirty 2>/dev/null || echo "${VCI_RESULTS_COMMIT:-unknown}")",
+ "sundials": "$(ver libsundials-dev)",
+ "versions": "gfortran $(gfortran -dumpfullversion), LAPACK $(ver liblapack3), SUNDIALS $(ver libsundials-dev), SciPy $($PY -c 'import scipy; print(scipy.__version__)'), NumPy $($PY -c 'import numpy; print(numpy.__version__)'), Siconos $(ver python3-siconos)"}
+EOF
+$PY "$ROOT/tools/results/make_report.py" "$OUT" "$ROOT"
+echo "wrote $ROOT/docs/RESULTS.md and $ROOT/docs/figures/results_*.png in $((END - START)) s (raw data: $OUT)"

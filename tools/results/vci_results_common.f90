@@ -1,0 +1,154 @@
+!> Shared by the results drivers (vci and CVODE): the three scenes' set-ups (DESIGN.md §2), their
+!> independent references (test/support/vci_ref_*.f90), the error measures and the timers.
+!>
+!> Error measures, the same for every method:
+!>  - final error: max-norm of the configuration error at the final time (particle (x, y),
+!>    ellipse (theta, x, y), pendulum (theta, phi)) against the reference at that same time;
+!>  - energy error: largest |E - E0| over the run, E0 the exact energy of the initial condition;
+!>  - impact-time error: for every reference impact in the horizon, the distance to the nearest
+!>    impact time of the method; the largest of these (matched impacts).
+module vci_results_common
+  use, intrinsic :: iso_fortran_env, only: real64, int64, output_unit
+  use vci_ref_particle, only: particle_exact
+  use vci_ref_ellipse, only: ellipse_params, ellipse_exact, ellipse_energy
+  use vci_ref_pendulum, only: pendulum_params, pendulum_exact, pendulum_energy
+  implicit none
+  private
+
+  integer, parameter, public :: rk = real64
+  real(rk), parameter, public :: pi = acos(-1.0_rk)
+
+  integer, parameter, public :: SCENE_PARTICLE = 1, SCENE_ELLIPSE = 2, SCENE_PENDULUM = 3
+  character(len=8), parameter, public :: scene_names(3) = [character(len=8) :: 'particle', 'ellipse', 'pendulum']
+
+  !> Horizons: particle and pendulum as in the examples; the ellipse is chaotic, so only as far as
+  !> the coarsest step's impact sequence still follows the exact one (DESIGN.md §2).
+  real(rk), parameter, public :: t_final(3) = [3.0_rk, 3.0_rk, 5.0_rk]
+
+  ! physical parameters (the paper's)
+  real(rk), parameter, public :: grav = 9.8_rk, mass = 1.0_rk
+  real(rk), parameter, public :: ell_a = 1.0_rk, ell_b = 0.5_rk
+  real(rk), parameter, public :: pend_l = 2.0_rk, pend_r = 1.5_rk
+
+  public :: initial_state, reference_at, exact_energy0, impact_time_error, median
+  public :: wall_now, cpu_now, energy_of_velocity, pend_f
+
+contains
+
+  !> Initial configuration and velocity at t = 0 (pendulum: (theta, phi) with phidot = f thetadot).
+  subroutine initial_state(scene, q0, qd0)
+    integer, intent(in) :: scene
+    real(rk), allocatable, intent(out) :: q0(:), qd0(:)
+    select case (scene)
+    case (SCENE_PARTICLE)
+      q0 = [0.0_rk, 1.0_rk]; qd0 = [1.0_rk, 0.0_rk]
+    case (SCENE_ELLIPSE)
+      q0 = [pi / 2.0_rk, 0.0_rk, 3.5_rk]; qd0 = [-3.0_rk, 2.0_rk, 0.0_rk]
+    case default
+      q0 = [0.75_rk * pi, 0.0_rk]; qd0 = [pi / 4.0_rk, (pi + 0.5_rk) * pi / 4.0_rk]
+    end select
+  end subroutine initial_state
+
+  elemental real(rk) function pend_f(theta)
+    real(rk), intent(in) :: theta
+    pend_f = pi + cos(theta)**2
+  end function pend_f
+
+  !> Energy from configuration and velocity (same formula for every method).
+  real(rk) function energy_of_velocity(scene, q, qd) result(e)
+    integer, intent(in) :: scene
+    real(rk), intent(in) :: q(:), qd(:)
+    select case (scene)
+    case (SCENE_PARTICLE)
+      e = 0.5_rk * mass * sum(qd**2) + mass * grav * q(2)
+    case (SCENE_ELLIPSE)
+      e = 0.5_rk * (mass * (ell_a**2 + ell_b**2) / 4.0_rk * qd(1)**2 + mass * (qd(2)**2 + qd(3)**2)) &
+          + mass * grav * q(3)
+    case default
+      e = 0.5_rk * mass * pend_l**2 * (qd(1)**2 + sin(q(1))**2 * qd(2)**2) + mass * grav * pend_l * cos(q(1))
+    end select
+  end function energy_of_velocity
+
+  real(rk) function exact_energy0(scene) result(e)
+    integer, intent(in) :: scene
+    real(rk), allocatable :: q0(:), qd0(:)
+    call initial_state(scene, q0, qd0)
+    select case (scene)
+    case (SCENE_ELLIPSE)
+      e = ellipse_energy(ellipse_params(), q0, qd0)
+    case (SCENE_PENDULUM)
+      e = pendulum_energy(pendulum_params(), q0(1), qd0(1))
+    case default
+      e = energy_of_velocity(scene, q0, qd0)
+    end select
+  end function exact_energy0
+
+  !> Reference configuration and velocity at time t, and the reference impact times in (0, t].
+  subroutine reference_at(scene, t, q, qd, times, status)
+    integer, intent(in) :: scene
+    real(rk), intent(in) :: t
+    real(rk), allocatable, intent(out) :: q(:), qd(:), times(:)
+    integer, intent(out) :: status
+    real(rk), allocatable :: q0(:), qd0(:)
+    real(rk) :: x, y, vx, vy, q3(3), v3(3), th, ph, thd
+    integer :: n
+    call initial_state(scene, q0, qd0)
+    status = 0
+    select case (scene)
+    case (SCENE_PARTICLE)
+      call particle_exact(q0(2), qd0(1), qd0(2), grav, t, x, y, vx, vy, times, n)
+      q = [x, y]; qd = [vx, vy]
+    case (SCENE_ELLIPSE)
+      call ellipse_exact(ellipse_params(), q0, qd0, t, q3, v3, times, n, status=status)
+      q = q3; qd = v3
+    case default
+      call pendulum_exact(pendulum_params(), q0(1), qd0(1), q0(2), t, th, ph, thd, times, n, status)
+      q = [th, ph]; qd = [thd, pend_f(th) * thd]
+    end select
+  end subroutine reference_at
+
+  !> Largest distance from a reference impact time to the nearest impact time of the method
+  !> (huge when the method found no impact at all but the reference has some).
+  real(rk) function impact_time_error(ref, got, n_got) result(err)
+    real(rk), intent(in) :: ref(:), got(:)
+    integer, intent(in) :: n_got
+    integer :: i
+    err = 0.0_rk
+    do i = 1, size(ref)
+      if (n_got == 0) then
+        err = huge(1.0_rk); return
+      end if
+      err = max(err, minval(abs(got(1:n_got) - ref(i))))
+    end do
+  end function impact_time_error
+
+  real(rk) function median(x)
+    real(rk), intent(in) :: x(:)
+    real(rk) :: y(size(x)), t
+    integer :: i, j, n
+    n = size(x); y = x
+    do i = 2, n          ! insertion sort: a handful of repeats
+      t = y(i); j = i - 1
+      do while (j >= 1)
+        if (y(j) <= t) exit
+        y(j + 1) = y(j); j = j - 1
+      end do
+      y(j + 1) = t
+    end do
+    if (mod(n, 2) == 1) then
+      median = y((n + 1) / 2)
+    else
+      median = 0.5_rk * (y(n / 2) + y(n / 2 + 1))
+    end if
+  end function median
+
+  real(rk) function wall_now()
+    integer(int64) :: c, r
+    call system_clock(c, r)
+    wall_now = real(c, rk) / real(r, rk)
+  end function wall_now
+
+  real(rk) function cpu_now()
+    call cpu_time(cpu_now)
+  end function cpu_now
+end module vci_results_common
