@@ -45,7 +45,13 @@ module vci_step_system
     !> sum_j |dR_i/dx_j| |x_j| from the last Jacobian: the round-off floor of row i (positions are
     !> often large next to their change over a step), added to each row's scale
     real(dp), allocatable, private :: jscale(:)
+    !> |dR/dx| from the last Jacobian of the current solve (zero until the first one): with it,
+    !> sum_j |dR_i/db_j| |b_j - a_j| sizes the kinetic term M (b - a)/tau of a momentum row, which
+    !> the row's value alone does not show when it cancels the force term (a body released from
+    !> rest: p_a = 0 and D1 -> 0 at the solution, so the row would have no size at all)
+    real(dp), allocatable, private :: jabs(:, :)
   contains
+    procedure :: forget_jacobian
     procedure :: setup
     procedure :: residual => step_residual
     procedure :: jacobian => step_jacobian
@@ -73,12 +79,14 @@ contains
     nx = n + m + 1
     if (allocated(self%a)) deallocate (self%a, self%pa, self%omega, self%grad, self%gscale, self%d1, &
                                        self%hess, self%g, self%dg, self%rp, self%rm, self%sp, self%sm, &
-                                       self%xp, self%pplus, self%jscale)
+                                       self%xp, self%pplus, self%jscale, self%jabs)
     allocate (self%a(n), self%pa(n), self%omega(n, m), self%grad(n), self%gscale(n), self%d1(n), &
               self%hess(n, n), self%g(max(1, model%n_gaps)), self%dg(n, max(1, model%n_gaps)), &
-              self%rp(nx), self%rm(nx), self%sp(nx), self%sm(nx), self%xp(nx), self%pplus(n), self%jscale(nx))
+              self%rp(nx), self%rm(nx), self%sp(nx), self%sm(nx), self%xp(nx), self%pplus(n), self%jscale(nx), &
+              self%jabs(nx, nx))
     self%omega = 0.0_dp
     self%jscale = 0.0_dp
+    self%jabs = 0.0_dp
   end subroutine setup
 
   !> Number of unknowns of the current kind.
@@ -289,6 +297,9 @@ contains
       return
     end if
     call rows(self, x, r, scale, .true., stat)
+    ! size of the kinetic terms of the momentum rows, from the current solve's Jacobian
+    if (stat == VCI_OK) scale(1:self%n) = scale(1:self%n) + &
+                                          matmul(self%jabs(1:self%n, 1:self%n), abs(x(1:self%n) - self%a))
     ! round-off floor of each row: a few ulps of sum_j |dR_i/dx_j| |x_j|, in units of rtol
     if (stat == VCI_OK) scale = scale + (8.0_dp * epsilon(1.0_dp) / max(self%rtol, epsilon(1.0_dp))) * &
                                 self%jscale(1:size(x))
@@ -358,7 +369,14 @@ contains
     do j = 1, nx
       self%jscale(j) = sum(abs(jac(j, 1:nx)) * abs(x(1:nx)))
     end do
+    self%jabs(1:nx, 1:nx) = abs(jac(1:nx, 1:nx))
   end subroutine step_jacobian
+
+  !> A new solve starts: its Jacobian is not known yet (see jabs).
+  subroutine forget_jacobian(self)
+    class(vci_step_system_t), intent(inout) :: self
+    self%jabs = 0.0_dp
+  end subroutine forget_jacobian
 
   !> The Hamiltonian impact: energy row and, with constraints, the outgoing velocity dH/dp(qt, p+)
   !> annihilated by the constraint forms. dH/dp by central differences: exact for H quadratic in p.

@@ -461,6 +461,7 @@ contains
     integer, intent(out) :: stat
     type(vci_newton_result_t) :: res
     self%sys%failed_callback = ''
+    call self%sys%forget_jacobian()
     call self%newton%solve(self%sys, self%x(1:nx), res)
     self%stats%newton_solves = self%stats%newton_solves + 1
     self%stats%newton_iterations = self%stats%newton_iterations + res%iterations
