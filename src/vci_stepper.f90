@@ -41,6 +41,7 @@ module vci_stepper
     real(dp) :: last_residual = 0.0_dp              !< scaled residual of the last Newton solve
     real(dp), allocatable, private :: x(:), a(:), pa(:), b(:), qt(:), pminus(:), gb(:), ga(:), dga(:, :)
     real(dp), allocatable, private :: best_x(:), jac(:, :), rhs(:), r(:), sc(:), vin(:), pimp(:), nu(:)
+    real(dp), allocatable, private :: qs(:), gw(:), xlo(:), xhi(:), lam0(:)
   contains
     procedure :: setup
     procedure :: advance
@@ -66,10 +67,12 @@ contains
     call apply_settings(self)
     if (allocated(self%x)) deallocate (self%x, self%a, self%pa, self%b, self%qt, self%pminus, self%gb, &
                                        self%ga, self%dga, self%best_x, self%jac, self%rhs, self%r, self%sc, &
-                                       self%vin, self%impacts, self%pimp, self%nu)
+                                       self%vin, self%impacts, self%pimp, self%nu, self%qs, self%gw, &
+                                       self%xlo, self%xhi, self%lam0)
     allocate (self%x(nx), self%a(n), self%pa(n), self%b(n), self%qt(n), self%pminus(n), &
               self%gb(max(1, ng)), self%ga(max(1, ng)), self%dga(n, max(1, ng)), self%best_x(nx), &
-              self%jac(nx, nx), self%rhs(nx), self%r(nx), self%sc(nx), self%vin(n), self%pimp(n), self%nu(m))
+              self%jac(nx, nx), self%rhs(nx), self%r(nx), self%sc(nx), self%vin(n), self%pimp(n), self%nu(m), &
+              self%qs(n), self%gw(max(1, ng)), self%xlo(nx), self%xhi(nx), self%lam0(m))
     allocate (self%impacts(max(1, settings%max_impacts_per_step)))
     do i = 1, size(self%impacts)
       allocate (self%impacts(i)%q(n), self%impacts(i)%p_before(n), self%impacts(i)%p_after(n), &
@@ -97,7 +100,7 @@ contains
     real(dp), intent(inout) :: vel(:), e_arrive
     real(dp), intent(out) :: qn(:), pn(:), lambdan(:), e_step
     integer, intent(out) :: stat
-    integer :: n, m, j, jstar
+    integer :: n, m, j, jstar, last_gap
     real(dp) :: tau, alpha, alpha_j, consumed, e_minus, s1res
     logical :: landed
 
@@ -114,6 +117,7 @@ contains
     if (stat /= VCI_OK) return
 
     landed = .false.
+    last_gap = 0
     do
       if (self%ng == 0) exit
       call self%sys%eval_gaps(self%x(1:n), self%gb(1:self%ng), stat)
@@ -137,6 +141,7 @@ contains
       ! Already on a wall and moving into it: the impact is at the start of this sub-step.
       jstar = 0
       do j = 1, self%ng
+        if (j == last_gap) cycle   ! just reflected there: the motion leaves it (checked in stage 2)
         if (self%gb(j) < 0.0_dp .and. on_wall(self, j) .and. &
             dot_product(self%dga(:, j), self%b - self%a) < 0.0_dp) then
           jstar = j; exit
@@ -201,6 +206,7 @@ contains
       call record_impact(self, dir, h, t, consumed + alpha * tau, jstar, e_minus, s1res, (1.0_dp - alpha) * tau)
       consumed = consumed + alpha * tau
       tau = (1.0_dp - alpha) * tau
+      last_gap = jstar
       self%a = self%qt
       self%pa = self%impacts(self%n_impacts)%p_after
       e_arrive = e_minus
@@ -254,36 +260,127 @@ contains
     real(dp), intent(out) :: alpha
     integer, intent(out) :: stat
     integer :: n, m, i
-    real(dp) :: lo, hi, mid, gq(self%ng)
+    real(dp) :: lo, hi, mid
     character(len=40) :: what
     n = self%n; m = self%m
-    ! Bracket the first crossing along the chord: sample, then bisect (g is cheap).
+    write (what, '(a,i0,a)') 'stage 1 (reaching wall ', j, ')'
+    ! Initial guess: the first crossing along the chord a -> b, by sampling then bisection (g is cheap).
     lo = 0.0_dp; hi = 1.0_dp
     do i = 1, 8
       mid = real(i, dp) / 8.0_dp
-      call self%sys%eval_gaps(self%a + mid * (self%b - self%a), gq, stat)
-      if (stat /= VCI_OK) then
-        call set_cause(self, 'gap evaluation'); return
-      end if
-      if (gq(j) < 0.0_dp) then
+      call chord_gap(self, mid, stat)
+      if (stat /= VCI_OK) return
+      if (self%gw(j) < 0.0_dp) then
         hi = mid; exit
       end if
       lo = mid
     end do
     do i = 1, 20
       mid = 0.5_dp * (lo + hi)
-      call self%sys%eval_gaps(self%a + mid * (self%b - self%a), gq, stat)
-      if (stat /= VCI_OK) then
-        call set_cause(self, 'gap evaluation'); return
-      end if
-      if (gq(j) > 0.0_dp) then
+      call chord_gap(self, mid, stat)
+      if (stat /= VCI_OK) return
+      if (self%gw(j) > 0.0_dp) then
         lo = mid
       else
         hi = mid
       end if
     end do
     alpha = max(hi, 1.0e-6_dp)
+    self%lam0(1:m) = self%x(n + 1:n + m)
     self%x(1:n) = self%a + alpha * (self%b - self%a)
+    call solve_wall(self, j, tau, alpha, trim(what), stat)
+    if (stat == VCI_OK) then
+      alpha = self%x(n + m + 1)
+      if (alpha > 0.0_dp .and. alpha <= 1.0_dp) return
+    end if
+    ! The chord is a poor guess when the sub-step is strongly curved (stiff forces, a second
+    ! bounce in one step): bracket the crossing on the discrete trajectory itself, i.e. on the
+    ! end points of regular sub-steps of length s tau, and start Newton inside that bracket.
+    call trajectory_bracket(self, j, tau, alpha, stat)
+    if (stat /= VCI_OK) return
+    call solve_wall(self, j, tau, alpha, trim(what), stat)
+    if (stat /= VCI_OK) return
+    alpha = self%x(n + m + 1)
+    if (.not. (alpha > 0.0_dp .and. alpha <= 1.0_dp)) then
+      stat = VCI_ERR_IMPACT
+      write (self%cause, '(a,es10.3,a)') trim(what)//': impact fraction ', alpha, ' outside (0, 1]'
+    end if
+  end subroutine stage_wall
+
+  !> Gaps at the chord point a + s (b - a), into gw.
+  subroutine chord_gap(self, s, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    real(dp), intent(in) :: s
+    integer, intent(out) :: stat
+    self%qs = self%a + s * (self%b - self%a)
+    call self%sys%eval_gaps(self%qs, self%gw(1:self%ng), stat)
+    if (stat /= VCI_OK) call set_cause(self, 'gap evaluation')
+  end subroutine chord_gap
+
+  !> Bracket stage 1's alpha on regular sub-steps of length s tau (8 samples, 8 bisections, then
+  !> linear interpolation); leaves the interpolated (b, lambda) in x and alpha.
+  subroutine trajectory_bracket(self, j, tau, alpha, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: j
+    real(dp), intent(in) :: tau
+    real(dp), intent(out) :: alpha
+    integer, intent(out) :: stat
+    integer :: n, m, i
+    real(dp) :: lo, hi, mid, glo, ghi, g
+    n = self%n; m = self%m
+    lo = 0.0_dp; hi = 1.0_dp
+    glo = self%ga(j); ghi = self%gb(j)
+    self%xlo(1:n) = self%a; self%xlo(n + 1:n + m) = self%lam0(1:m)
+    self%xhi(1:n) = self%b; self%xhi(n + 1:n + m) = self%lam0(1:m)
+    do i = 1, 16
+      if (i <= 8) then
+        mid = real(i, dp) / 8.0_dp        ! first crossing: sample from the start
+        if (mid >= hi) exit
+      else
+        mid = 0.5_dp * (lo + hi)          ! then bisect the bracket
+      end if
+      call trajectory_gap(self, j, tau, lo, hi, mid, g, stat)
+      if (stat /= VCI_OK) return
+      if (g < 0.0_dp) then
+        hi = mid; ghi = g; self%xhi(1:n + m) = self%x(1:n + m)
+        if (i <= 8) cycle
+      else
+        lo = mid; glo = g; self%xlo(1:n + m) = self%x(1:n + m)
+      end if
+    end do
+    alpha = lo + (hi - lo) * glo / max(glo - ghi, tiny(1.0_dp))
+    alpha = min(max(alpha, lo + 1.0e-3_dp * (hi - lo)), hi)
+    self%x(1:n + m) = self%xlo(1:n + m) + (alpha - lo) / (hi - lo) * (self%xhi(1:n + m) - self%xlo(1:n + m))
+  end subroutine trajectory_bracket
+
+  !> g_j at the end of the regular sub-step of length s tau (its solution left in x).
+  subroutine trajectory_gap(self, j, tau, lo, hi, s, g, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: j
+    real(dp), intent(in) :: tau, lo, hi, s
+    real(dp), intent(out) :: g
+    integer, intent(out) :: stat
+    integer :: nm
+    nm = self%n + self%m
+    self%x(1:nm) = self%xlo(1:nm) + (s - lo) / (hi - lo) * (self%xhi(1:nm) - self%xlo(1:nm))
+    call substep(self, self%a, self%pa, s * tau, stat)
+    if (stat /= VCI_OK) return
+    call self%sys%eval_gaps(self%x(1:self%n), self%gw(1:self%ng), stat)
+    if (stat /= VCI_OK) then
+      call set_cause(self, 'gap evaluation'); return
+    end if
+    g = self%gw(j)
+  end subroutine trajectory_gap
+
+  !> Newton on stage 1 from x(1:n) (and lambda in lam0) with alpha.
+  subroutine solve_wall(self, j, tau, alpha, what, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: j
+    real(dp), intent(in) :: tau, alpha
+    character(len=*), intent(in) :: what
+    integer, intent(out) :: stat
+    integer :: n, m
+    n = self%n; m = self%m
     self%x(n + m + 1) = alpha
     self%sys%kind = KIND_WALL
     self%sys%a = self%a; self%sys%pa = self%pa; self%sys%tau = tau; self%sys%gap = j
@@ -294,15 +391,8 @@ contains
         call set_cause(self, 'constraint forms'); return
       end if
     end if
-    write (what, '(a,i0,a)') 'stage 1 (reaching wall ', j, ')'
-    call run_newton(self, n + m + 1, trim(what), stat)
-    if (stat /= VCI_OK) return
-    alpha = self%x(n + m + 1)
-    if (.not. (alpha > 0.0_dp .and. alpha <= 1.0_dp)) then
-      stat = VCI_ERR_IMPACT
-      write (self%cause, '(a,es10.3,a)') trim(what)//': impact fraction ', alpha, ' outside (0, 1]'
-    end if
-  end subroutine stage_wall
+    call run_newton(self, n + m + 1, what, stat)
+  end subroutine solve_wall
 
   !> Stage 2 on wall j from (qt, p_minus) over tau2: q_next, lambda, impulse mu. Newton starts from
   !> the linearised reflection so that it converges to the reflected root, not the pass-through one.
@@ -312,7 +402,7 @@ contains
     real(dp), intent(in) :: tau2, e_minus
     integer, intent(out) :: stat
     integer :: n, m, nx0, info
-    real(dp) :: num, den, mu0
+    real(dp) :: num, den, mu0, mu_lin
     character(len=40) :: what
     n = self%n; m = self%m; nx0 = n + m
     write (what, '(a,i0,a)') 'stage 2 (reflecting at wall ', j, ')'
@@ -372,6 +462,7 @@ contains
       end if
       call run_newton(self, m + 1, trim(what)//' impulse', stat)
       if (stat /= VCI_OK) return
+      mu_lin = mu0
       mu0 = self%x(m + 1)
       if (m > 0) self%nu = self%x(1:m)
       self%x(1:nx0) = self%best_x(1:nx0)
@@ -379,19 +470,20 @@ contains
       call substep(self, self%qt, self%pimp, tau2, stat)
       if (stat /= VCI_OK) return
       self%x(nx0 + 1) = mu0
-      if (dot_product(self%sys%grad, self%x(1:n) - self%qt) <= 0.0_dp) then
-        stat = VCI_ERR_IMPACT
+      if (.not. reflected(self, j, mu_lin, mu0, stat)) then
+        if (stat == VCI_OK) stat = VCI_ERR_IMPACT
         self%cause = trim(what)//': the reflected motion does not leave the wall'
         return
       end if
     else if (mu0 /= 0.0_dp) then
+      mu_lin = mu0
       self%sys%kind = KIND_REFLECT
       self%sys%a = self%qt; self%sys%pa = self%pminus; self%sys%tau = tau2; self%sys%gap = j
       self%sys%e_minus = e_minus
       call run_newton(self, nx0 + 1, trim(what), stat)
       if (stat /= VCI_OK) return
-      if (dot_product(self%sys%grad, self%x(1:n) - self%qt) <= 0.0_dp) then
-        stat = VCI_ERR_IMPACT
+      if (.not. reflected(self, j, mu_lin, self%x(nx0 + 1), stat)) then
+        if (stat == VCI_OK) stat = VCI_ERR_IMPACT
         self%cause = trim(what)//': the reflected motion does not leave the wall'
         return
       end if
@@ -399,6 +491,23 @@ contains
       self%last_residual = 0.0_dp
     end if
   end subroutine stage_reflect
+
+  !> Did stage 2 find the reflection? Either the sub-step ends inside the admissible side of the
+  !> wall, or (a strongly curved sub-step, e.g. a stiff force towards the wall) it ends beyond the
+  !> wall again with an impulse of the size of the linearised reflection mu_lin: the pass-through
+  !> root has an impulse near zero. The re-entry is then the next impact of this step.
+  logical function reflected(self, j, mu_lin, mu, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: j
+    real(dp), intent(in) :: mu_lin, mu
+    integer, intent(out) :: stat
+    stat = VCI_OK
+    reflected = dot_product(self%sys%grad, self%x(1:self%n) - self%qt) > 0.0_dp
+    if (reflected .or. .not. (mu / mu_lin > 0.5_dp)) return
+    call self%sys%eval_gaps(self%x(1:self%n), self%gw(1:self%ng), stat)
+    if (stat /= VCI_OK) return
+    reflected = self%gw(j) < 0.0_dp
+  end function reflected
 
   subroutine record_impact(self, dir, h, t, elapsed, j, e_minus, s1res, tau2)
     type(vci_stepper_t), intent(inout) :: self

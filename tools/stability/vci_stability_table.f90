@@ -197,7 +197,7 @@ contains
     if (s%status == VCI_OK) then
       w = 'runs through; no blow-up; energy bounded'
     else
-      w = 'no blow-up before it stops; stage 1 Newton from the chord guess fails (curved stiff sub-step)'
+      w = 'no blow-up; stops with the status shown (strongly curved stiff sub-step)'
     end if
   end function what_stiff
 
@@ -223,7 +223,7 @@ contains
     if (r >= 1.0_dp) then
       w = 'one impact per bounce, all resolved'
     else if (s%status /= VCI_OK) then
-      w = 'a 2nd bounce inside the step: stops with a status (on-wall start taken for an impact at alpha = 0)'
+      w = 'a 2nd bounce inside the step: stops with the status shown'
     else if (mode == 0) then
       w = 'runs on, but the paper''s condition adds ~m g^2 h^2/8 per impact: bounces wrong (not a failure status)'
     else
