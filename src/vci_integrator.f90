@@ -85,7 +85,7 @@ contains
     if (allocated(self%q)) deallocate (self%q, self%p, self%lambda, self%vel, self%qn, self%pn, self%lambdan)
     allocate (self%q(model%n), self%p(model%n), self%lambda(model%m), self%vel(model%n), &
               self%qn(model%n), self%pn(model%n), self%lambdan(model%m))
-    self%lambda = 0.0_dp
+    self%lambda = 0.0_dp; self%q = 0.0_dp; self%p = 0.0_dp; self%vel = 0.0_dp
     call self%stepper%setup(model, self%settings)
     self%created = .true.
     self%message = ''
@@ -260,7 +260,11 @@ contains
       if (present(q1)) then
         s = 0
         call self%model%gaps(q1, w2, s)
-        if (s == 0) g = min(g, w2)
+        if (s /= 0 .or. .not. all(ieee_is_finite(w2))) then
+          self%message = who//': callback gaps failed or returned NaN/Inf at the second configuration'
+          call finish(self, VCI_ERR_CALLBACK, stat); return
+        end if
+        g = min(g, w2)
       end if
       do j = 1, self%model%n_gaps
         if (g(j) < 0.0_dp) then

@@ -1,9 +1,14 @@
 !> What the example programs share: command-line flags, a summary observer that prints impacts
 !> and shows progress on a terminal, reading the last state of a previous run, the run itself.
+!> Trajectories go to HDF5 (.h5) when built with it (VCI_HAVE_HDF5), else to CSV; `.csv` names
+!> always give CSV. `--from` reads either; `--append` continues the `--from` file itself.
 module vci_example_cli
   use, intrinsic :: iso_c_binding, only: c_int
   use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
   use vci
+#ifdef VCI_HAVE_HDF5
+  use vci_hdf5_output, only: vci_hdf5_writer_t, vci_hdf5_read_checkpoint
+#endif
   implicit none
   private
 
@@ -12,7 +17,9 @@ module vci_example_cli
     real(dp) :: h = 0.0_dp, t_final = 0.0_dp
     character(len=:), allocatable :: output, from
     logical :: backward = .false., quiet = .false., no_output = .false., analytic_hessian = .true.
-    logical :: t_final_given = .false.
+    logical :: t_final_given = .false., h_given = .false.
+    logical :: append = .false.          !< continue the --from file (HDF5) instead of a new file
+    integer :: flush_every = 4096        !< HDF5: steps between flushes
     integer :: impact_energy = VCI_IMPACT_DISCRETE
     real(dp) :: rtol = 1.0e-12_dp
     integer :: max_impacts = 16
@@ -43,6 +50,12 @@ module vci_example_cli
 
   public :: parse_options, run_example, read_last_state
 
+#ifdef VCI_HAVE_HDF5
+  character(len=*), parameter :: default_extension = '.h5'
+#else
+  character(len=*), parameter :: default_extension = '.csv'
+#endif
+
 contains
 
   !> Parse the command line. `usage` is the program-specific help text (printed by --help).
@@ -61,22 +74,25 @@ contains
         write (output_unit, '(a)') 'Common flags:'
         write (output_unit, '(a)') '  --h H                 step length'
         write (output_unit, '(a)') '  --t-final T           integrate up to time T (backward: down to T)'
-        write (output_unit, '(a)') '  --output FILE         trajectory file (.csv; .h5 when built with HDF5)'
+        write (output_unit, '(a)') '  --output FILE         trajectory file: .h5 (default when built with HDF5) or .csv'
         write (output_unit, '(a)') '  --no-output           write no trajectory'
         write (output_unit, '(a)') '  --backward            integrate backward in time with the (-) scheme'
-        write (output_unit, '(a)') '  --from FILE           start from the last state written by a previous run'
+        write (output_unit, '(a)') '  --from FILE           start from the last state written by a previous run (.h5 or .csv)'
+        write (output_unit, '(a)') '  --append              continue the --from file (.h5, same direction) instead of a new one'
+        write (output_unit, '(a)') '  --flush-every K       HDF5: write and flush every K steps (4096) and after every impact'
         write (output_unit, '(a)') '  --impact-energy MODE  discrete (paper, default) or hamiltonian'
         write (output_unit, '(a)') '  --rtol R              Newton tolerance relative to term sizes (1e-12)'
         write (output_unit, '(a)') '  --max-impacts K       impacts allowed in one step (16)'
         write (output_unit, '(a)') '  --differenced-hessian let the library difference the mixed Hessian'
         write (output_unit, '(a)') '  --quiet               print the summary only'
         stop
-      case ('--h', '--t-final', '--output', '--from', '--impact-energy', '--rtol', '--max-impacts')
+      case ('--h', '--t-final', '--output', '--from', '--impact-energy', '--rtol', '--max-impacts', '--flush-every')
         if (i == nargs) call die(name//': '//arg//' needs a value')
         i = i + 1
         val = get_arg(i)
         select case (arg)
-        case ('--h'); opts%h = to_real(val, arg)
+        case ('--h'); opts%h = to_real(val, arg); opts%h_given = .true.
+        case ('--flush-every'); opts%flush_every = nint(to_real(val, arg))
         case ('--t-final'); opts%t_final = to_real(val, arg); opts%t_final_given = .true.
         case ('--output'); opts%output = val
         case ('--from'); opts%from = val
@@ -90,6 +106,7 @@ contains
           end select
         end select
       case ('--backward'); opts%backward = .true.
+      case ('--append'); opts%append = .true.
       case ('--quiet'); opts%quiet = .true.
       case ('--no-output'); opts%no_output = .true.
       case ('--differenced-hessian'); opts%analytic_hessian = .false.
@@ -99,6 +116,9 @@ contains
       i = i + 1
     end do
     if (.not. (opts%h > 0.0_dp)) call die(name//': --h must be positive')
+    if (opts%append .and. .not. allocated(opts%from)) call die(name//': --append needs --from FILE')
+    if (opts%append .and. opts%no_output) call die(name//': --append and --no-output exclude each other')
+    if (opts%flush_every < 1) call die(name//': --flush-every must be >= 1')
   end subroutine parse_options
 
   !> Create, initialise and run; print the summary. `init` is called when not starting from a file.
@@ -113,26 +133,32 @@ contains
         integer, intent(out) :: stat
       end subroutine init
     end interface
-    type(vci_integrator_t) :: integ
+    type(vci_integrator_t), target :: integ
     type(summary_observer_t) :: summary
     type(vci_csv_writer_t), target :: csv
+#ifdef VCI_HAVE_HDF5
+    type(vci_hdf5_writer_t), target :: h5
+#endif
     integer :: stat, dir
     integer(i8) :: nsteps, c0, c1, rate
     real(dp) :: t_first, t_last, t_target, h0, h1, e_first
     real(dp), allocatable :: q(:), p(:)
     logical :: has_h
 
-    call integ%create(model, opts%h, stat)
-    if (stat == VCI_OK) call integ%set_tolerances(0.0_dp, opts%rtol, 30, stat)
-    if (stat == VCI_OK) call integ%set_max_impacts(opts%max_impacts, stat)
-    if (stat /= VCI_OK) call die(name//': '//trim(integ%message))
     dir = merge(-1, 1, opts%backward)
     if (allocated(opts%from)) then
-      allocate (q(model%n), p(model%n))
-      call read_last_state(opts%from, model%n, t_first, t_last, q, p, stat)
-      if (stat /= 0) call die(name//': cannot read the last state of '//opts%from)
-      call integ%init_from_momentum(t_last, q, p, stat)
+      if (is_csv(opts%from)) then
+        if (opts%append) call die(name//': --append needs an .h5 --from file')
+        call create_integrator(name, model, opts, integ)
+        allocate (q(model%n), p(model%n))
+        call read_last_state(opts%from, model%n, t_first, t_last, q, p, stat)
+        if (stat /= 0) call die(name//': cannot read the last state of '//opts%from)
+        call integ%init_from_momentum(t_last, q, p, stat)
+      else
+        call start_from_h5(name, model, opts, integ, t_first, stat)
+      end if
     else
+      call create_integrator(name, model, opts, integ)
       call init(integ, stat)
     end if
     if (stat /= VCI_OK) call die(name//': '//trim(integ%message))
@@ -148,12 +174,27 @@ contains
     nsteps = max(0_i8, ceiling(real(dir, dp) * (t_target - integ%t) / opts%h - 1.0e-9_dp, i8))
 
     if (.not. opts%no_output) then
+      if (opts%append .and. .not. allocated(opts%output)) opts%output = opts%from
       if (.not. allocated(opts%output)) opts%output = name//merge('_backward', '         ', opts%backward)
       opts%output = trim(opts%output)
-      if (index(opts%output, '.') == 0) opts%output = opts%output//'.csv'
-      call csv%open(opts%output, stat)
-      if (stat /= VCI_OK) call die(name//': '//trim(csv%message))
-      summary%next => csv
+      if (index(opts%output, '.') == 0) opts%output = opts%output//default_extension
+      if (is_csv(opts%output)) then
+        if (opts%append) call die(name//': --append writes HDF5 only (not '//opts%output//')')
+        call csv%open(opts%output, stat)
+        if (stat /= VCI_OK) call die(name//': '//trim(csv%message))
+        summary%next => csv
+      else
+#ifdef VCI_HAVE_HDF5
+        ! examples replace their output unless appending; the library's default is to keep files
+        call h5%open(opts%output, stat, overwrite=.not. opts%append, append=opts%append, scene=name, &
+                     flush_every=opts%flush_every)
+        if (stat /= VCI_OK) call die(name//': '//trim(h5%message))
+        call h5%attach(integ)
+        summary%next => h5
+#else
+        call die(name//': built without HDF5; use an --output name ending in .csv')
+#endif
+      end if
     end if
     summary%quiet = opts%quiet
     summary%total_steps = nsteps
@@ -194,6 +235,52 @@ contains
     end if
     write (output_unit, '(a)') 'status: ok'
   end subroutine run_example
+
+  !> Create the integrator with the command line's step length and solver settings.
+  subroutine create_integrator(name, model, opts, integ)
+    character(len=*), intent(in) :: name
+    class(vci_model_t), target, intent(inout) :: model
+    type(example_options_t), intent(in) :: opts
+    type(vci_integrator_t), intent(inout) :: integ
+    integer :: stat
+    call integ%create(model, opts%h, stat)
+    if (stat == VCI_OK) call integ%set_tolerances(0.0_dp, opts%rtol, 30, stat)
+    if (stat == VCI_OK) call integ%set_max_impacts(opts%max_impacts, stat)
+    if (stat /= VCI_OK) call die(name//': '//trim(integ%message))
+  end subroutine create_integrator
+
+  !> Start from the last state of an .h5 file: its checkpoint (bitwise continuation) when the step
+  !> length is the file's (taken from the file unless --h is given), else its last (t, q, p).
+  subroutine start_from_h5(name, model, opts, integ, t_first, stat)
+    character(len=*), intent(in) :: name
+    class(vci_model_t), target, intent(inout) :: model
+    type(example_options_t), intent(inout) :: opts
+    type(vci_integrator_t), intent(inout) :: integ
+    real(dp), intent(out) :: t_first
+    integer, intent(out) :: stat
+#ifdef VCI_HAVE_HDF5
+    type(vci_checkpoint_t) :: cp
+    character(len=VCI_MSG_LEN) :: msg
+    call vci_hdf5_read_checkpoint(opts%from, cp, stat, msg, t_first=t_first)
+    if (stat /= VCI_OK) call die(name//': '//trim(msg))
+    if (.not. opts%h_given) opts%h = cp%h
+    call create_integrator(name, model, opts, integ)
+    if (cp%h == opts%h) then
+      call integ%restore(cp, stat)
+    else
+      call integ%init_from_momentum(cp%t0 + real(cp%k, dp) * cp%h, cp%q, cp%p, stat)
+    end if
+#else
+    t_first = 0.0_dp; stat = VCI_ERR_IO
+    call die(name//': built without HDF5, cannot read '//opts%from//' (use a .csv file)')
+#endif
+  end subroutine start_from_h5
+
+  logical function is_csv(path)
+    character(len=*), intent(in) :: path
+    is_csv = .false.
+    if (len(path) >= 4) is_csv = path(len(path) - 3:) == '.csv'
+  end function is_csv
 
   logical function model_has_energy(model, integ)
     class(vci_model_t), intent(inout) :: model

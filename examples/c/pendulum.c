@@ -1,0 +1,51 @@
+/* The paper's nonholonomic pendulum in a cylinder through the C API: the same run as
+ * build/bin/pendulum (h = 1e-3, 5 s, Newton rtol 1e-12), one line per impact.
+ * Usage: vci_c_pendulum [h [t_final]]. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include "vci.h"
+#include "scenes.h"
+
+static int print_impact(double t, double alpha, int gap, const double *q, double impulse, void *user) {
+  int *count = (int *)user;
+  (void)q;
+  printf("impact %d t=%.15f wall=%d alpha=%f impulse=%.5e\n", ++*count, t, gap + 1, alpha, impulse);
+  return 0;
+}
+
+int main(int argc, char **argv) {
+  double h = argc > 1 ? atof(argv[1]) : 1e-3, t_final = argc > 2 ? atof(argv[2]) : 5.0;
+  double q0[2], q1[2], t, q[2], p[2], lambda[1];
+  pendulum_params par = pendulum_default;
+  vci_callbacks cb = pendulum_callbacks();
+  vci_model model = NULL;
+  vci_integrator integ = NULL;
+  long steps, impacts, iterations;
+  int count = 0, status;
+  char msg[512];
+
+  status = vci_model_create(&model, 2, 1, 1, &cb, &par);
+  if (status == VCI_OK) status = vci_integrator_create(&integ, model, h);
+  if (status == VCI_OK) status = vci_set_tolerances(integ, 0.0, 1e-12, 30);
+  if (status == VCI_OK) status = vci_set_impact_callback(integ, print_impact, &count);
+  pendulum_initial_pair(h, q0, q1);
+  if (status == VCI_OK) status = vci_init_from_pair(integ, 0.0, q0, q1);
+  if (status == VCI_OK) {
+    vci_get_state(integ, &t, NULL, NULL);
+    status = vci_integrate(integ, (long)ceil((t_final - t) / h - 1e-9), +1);
+  }
+  if (status != VCI_OK) {
+    vci_last_error(integ, msg, sizeof msg);
+    fprintf(stderr, "pendulum: %s: %s\n", vci_status_string(status), msg);
+  } else {
+    vci_get_state(integ, &t, q, p);
+    vci_get_multipliers(integ, lambda);
+    vci_get_stats(integ, &steps, &impacts, &iterations);
+    printf("impacts: %ld\nsteps: %ld   t = %.6f\nq = %.15e %.15e\nlambda = %.15e\n", impacts, steps, t, q[0], q[1],
+           lambda[0]);
+  }
+  vci_integrator_destroy(&integ);
+  vci_model_destroy(&model);
+  return status == VCI_OK ? 0 : 1;
+}

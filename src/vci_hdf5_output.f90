@@ -1,0 +1,1002 @@
+!> An observer that streams a run into one HDF5 file (layout: docs/OUTPUT.md), and the reader that
+!> takes the last state of such a file for a restart.
+!>
+!> Streaming: steps are kept in a buffer of `flush_every` rows; when it is full, and after every
+!> impact, the rows are appended to chunked extendible datasets and the file is flushed (H5Fflush).
+!> Between flushes the file is not touched, so a killed run leaves a file that opens and holds every
+!> step up to the last flush. Memory does not grow with the number of steps.
+!>
+!> Restart: when the writer is attached to the integrator (`attach`), each flush also stores the
+!> integrator's checkpoint in `/checkpoint`; `vci_hdf5_read_checkpoint` + `restore` then continue the
+!> run bit for bit, and `open(..., append=.true.)` continues the same file.
+!>
+!> Nothing here stops or prints (HDF5's own error printing is switched off); failures give
+!> VCI_ERR_IO and a message naming the file and the cause.
+module vci_hdf5_output
+  use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
+  use hdf5
+  use vci_kinds, only: dp, i8
+  use vci_status, only: VCI_OK, VCI_ERR_IO, VCI_MSG_LEN
+  use vci_observer, only: vci_observer_t, vci_run_info_t, vci_impact_t
+  use vci_integrator, only: vci_integrator_t, vci_checkpoint_t
+  implicit none
+  private
+
+  !> Value of the root attribute `status` while a run is being written. A file that still says so
+  !> after the run was not closed (the process was killed); its data are valid up to `steps_completed`.
+  integer, parameter, public :: VCI_HDF5_RUNNING = -1
+
+  !> Written as the root attribute `vci_version`.
+  character(len=*), parameter, public :: VCI_HDF5_LIBRARY_VERSION = VCI_VERSION_STRING
+
+  !> Default number of steps between flushes.
+  integer, parameter, public :: VCI_HDF5_FLUSH_EVERY = 4096
+
+  ! rows per chunk: states and steps, impacts (few, so small chunks)
+  integer, parameter :: chunk_rows = 1024, impact_chunk_rows = 64
+
+  !> The HDF5 observer. Use: `call w%open(path, stat)`, optionally `call w%attach(integ)`, then
+  !> `call integ%integrate(nsteps, dir, stat, w)`; the file is closed by the run's end (on_finish).
+  type, extends(vci_observer_t), public :: vci_hdf5_writer_t
+    character(len=VCI_MSG_LEN) :: message = ''   !< what went wrong, naming the file
+    character(len=:), allocatable :: path
+    character(len=:), allocatable :: scene        !< root attribute `scene`
+    integer :: flush_every = VCI_HDF5_FLUSH_EVERY  !< steps between flushes
+    logical :: flush_on_impact = .true.           !< flush after the step of every impact
+    logical :: append = .false.                   !< continuing an existing file
+    logical :: is_open = .false.
+    type(vci_integrator_t), pointer, private :: integ => null()
+    integer(hid_t), private :: file = -1, g_imp = -1, g_cp = -1
+    integer(hid_t), private :: d_t = -1, d_q = -1, d_p = -1, d_e = -1, d_l = -1
+    integer(hid_t), private :: d_it = -1, d_is = -1, d_ia = -1, d_ig = -1, d_iq = -1, d_ii = -1
+    integer, private :: n = 0, m = 0, n_gaps = 0, direction = 1
+    logical, private :: started = .false., flush_pending = .false.
+    real(dp), private :: h = 0.0_dp
+    integer(i8), private :: rows = 0, steps = 0, impacts = 0   ! already in the file
+    integer(i8), private :: row_start = 0, step0 = 0           ! row and integrator index of the start state
+    ! buffered states (ns of them), steps (ne) and impacts (ni), not yet in the file
+    integer, private :: ns = 0, ne = 0, ni = 0
+    real(dp), allocatable, private :: bt(:), bq(:, :), bp(:, :), be(:), bl(:, :)
+    real(dp), allocatable, private :: it(:), ia(:), iq(:, :), ii(:)
+    integer(i8), allocatable, private :: is(:)
+    integer, allocatable, private :: ig(:)
+  contains
+    procedure :: open => w_open
+    procedure :: attach => w_attach
+    procedure :: close => w_close
+    procedure :: on_start => w_start
+    procedure :: on_step => w_step
+    procedure :: on_impact => w_impact
+    procedure :: on_finish => w_finish
+  end type vci_hdf5_writer_t
+
+  public :: vci_hdf5_read_checkpoint
+
+contains
+
+  !> Open PATH for a run. A new file is created; an existing one is kept (VCI_ERR_IO) unless
+  !> `overwrite`. With `append`, PATH must exist and the run must continue its last state in the same
+  !> direction. `scene` names the model (root attribute), `flush_every` sets the flush interval.
+  subroutine w_open(self, path, stat, overwrite, append, scene, flush_every)
+    class(vci_hdf5_writer_t), intent(inout) :: self
+    character(len=*), intent(in) :: path
+    integer, intent(out) :: stat
+    logical, intent(in), optional :: overwrite, append
+    character(len=*), intent(in), optional :: scene
+    integer, intent(in), optional :: flush_every
+    logical :: exists, replace
+    integer :: err
+
+    stat = VCI_OK
+    self%message = ''
+    if (self%is_open) call w_close(self)
+    self%path = path
+    self%append = .false.
+    if (present(append)) self%append = append
+    replace = .false.
+    if (present(overwrite)) replace = overwrite
+    if (present(scene)) then
+      self%scene = scene
+    else if (.not. allocated(self%scene)) then
+      self%scene = ''
+    end if
+    if (present(flush_every)) then
+      if (flush_every < 1) then
+        call fail(self, 'flush_every must be >= 1', stat); return
+      end if
+      self%flush_every = flush_every
+    end if
+    self%started = .false.; self%flush_pending = .false.
+    self%ns = 0; self%ne = 0; self%ni = 0
+
+    call h5open_f(err)
+    if (err == 0) call h5eset_auto_f(0, err)   ! the library never prints
+    if (err /= 0) then
+      call fail(self, 'the HDF5 library could not be initialised', stat); return
+    end if
+
+    inquire (file=path, exist=exists)
+    if (self%append) then
+      if (.not. exists) then
+        call fail(self, 'cannot append: the file does not exist', stat); return
+      end if
+      call h5fopen_f(path, H5F_ACC_RDWR_F, self%file, err)
+      if (err /= 0) then
+        call fail(self, 'cannot open for appending (not an HDF5 file, or not writable)', stat); return
+      end if
+      self%is_open = .true.
+      call open_existing(self, stat)
+      if (stat /= VCI_OK) call w_close(self)
+      return
+    end if
+
+    if (exists .and. .not. replace) then
+      call fail(self, 'the file exists and is kept (pass overwrite=.true. to replace it)', stat); return
+    end if
+    call h5fcreate_f(path, H5F_ACC_TRUNC_F, self%file, err)
+    if (err /= 0) then
+      call fail(self, 'cannot create the file: '//os_reason(path), stat); return
+    end if
+    self%is_open = .true.
+    call put_attr_str(self, self%file, 'vci_version', VCI_HDF5_LIBRARY_VERSION, stat)
+    call put_attr_str(self, self%file, 'scene', self%scene, stat)
+    call put_attr_str(self, self%file, 'created', iso_now(), stat)
+    call put_attr_int(self, self%file, 'status', VCI_HDF5_RUNNING, stat)
+    call put_attr_str(self, self%file, 'status_message', 'opened, no run yet', stat)
+    if (stat == VCI_OK) call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
+    if (stat == VCI_OK .and. err /= 0) call fail(self, 'flush after creation failed', stat)
+    if (stat /= VCI_OK) call w_close(self)
+  end subroutine w_open
+
+  !> Store `integ`'s checkpoint at every flush so that a restart from the file is bitwise. The
+  !> integrator must be the one running with this observer and must outlive the run.
+  subroutine w_attach(self, integ)
+    class(vci_hdf5_writer_t), intent(inout) :: self
+    type(vci_integrator_t), target, intent(in) :: integ
+    self%integ => integ
+  end subroutine w_attach
+
+  !> Close the file without a run end (e.g. when a run could not start). Safe to call twice.
+  subroutine w_close(self)
+    class(vci_hdf5_writer_t), intent(inout) :: self
+    integer :: err
+    call close_dset(self%d_t); call close_dset(self%d_q); call close_dset(self%d_p)
+    call close_dset(self%d_e); call close_dset(self%d_l)
+    call close_dset(self%d_it); call close_dset(self%d_is); call close_dset(self%d_ia)
+    call close_dset(self%d_ig); call close_dset(self%d_iq); call close_dset(self%d_ii)
+    if (self%g_imp >= 0) call h5gclose_f(self%g_imp, err)
+    if (self%g_cp >= 0) call h5gclose_f(self%g_cp, err)
+    self%g_imp = -1; self%g_cp = -1
+    if (self%is_open) call h5fclose_f(self%file, err)
+    self%file = -1
+    self%is_open = .false.; self%started = .false.
+  end subroutine w_close
+
+  subroutine close_dset(d)
+    integer(hid_t), intent(inout) :: d
+    integer :: err
+    if (d >= 0) call h5dclose_f(d, err)
+    d = -1
+  end subroutine close_dset
+
+  !> Reopen the datasets of an existing file and read what on_start will check.
+  subroutine open_existing(self, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer, intent(inout) :: stat
+    character(len=:), allocatable :: dirname
+    integer :: err
+    logical :: ex
+    call get_attr_int(self, self%file, 'n', self%n, stat)
+    call get_attr_int(self, self%file, 'm', self%m, stat)
+    call get_attr_int(self, self%file, 'n_gaps', self%n_gaps, stat)
+    call get_attr_real(self, self%file, 'h', self%h, stat)
+    call get_attr_str(self, self%file, 'direction', dirname, stat)
+    if (stat /= VCI_OK) return
+    self%direction = merge(-1, 1, dirname == 'backward')
+    call open_dset(self, self%file, 't', self%d_t, stat)
+    call open_dset(self, self%file, 'q', self%d_q, stat)
+    call open_dset(self, self%file, 'p', self%d_p, stat)
+    call open_dset(self, self%file, 'energy', self%d_e, stat)
+    if (self%m > 0) call open_dset(self, self%file, 'lambda', self%d_l, stat)
+    if (stat /= VCI_OK) return
+    ! Trust the steps that steps_completed (written last at every flush) vouches for: a file whose
+    ! run was killed during a flush may hold a few more rows, which are dropped here.
+    call get_attr_i8(self, self%file, 'steps_completed', self%steps, stat)
+    if (stat /= VCI_OK) return
+    self%steps = min(self%steps, extent(self%d_e), extent(self%d_t) - 1)
+    if (self%m > 0) self%steps = min(self%steps, extent(self%d_l))
+    if (self%steps < 0) then
+      call fail(self, 'the file holds no state (/t is empty)', stat); return
+    end if
+    self%rows = self%steps + 1
+    if (self%n_gaps > 0) then
+      call h5gopen_f(self%file, 'impacts', self%g_imp, err)
+      if (err /= 0) then
+        call fail(self, 'cannot append: group /impacts missing', stat); return
+      end if
+      call open_dset(self, self%g_imp, 'time', self%d_it, stat)
+      call open_dset(self, self%g_imp, 'step', self%d_is, stat)
+      call open_dset(self, self%g_imp, 'alpha', self%d_ia, stat)
+      call open_dset(self, self%g_imp, 'gap_index', self%d_ig, stat)
+      call open_dset(self, self%g_imp, 'q', self%d_iq, stat)
+      call open_dset(self, self%g_imp, 'impulse', self%d_ii, stat)
+      if (stat /= VCI_OK) return
+      self%impacts = trusted_impacts(self, stat)
+    end if
+    if (self%append) call truncate_to_trusted(self, stat)
+    call h5lexists_f(self%file, 'checkpoint', ex, err)
+    if (err == 0 .and. ex) call h5gopen_f(self%file, 'checkpoint', self%g_cp, err)
+  end subroutine open_existing
+
+  !> Impacts within the trusted steps (their step starts before the last trusted row).
+  integer(i8) function trusted_impacts(self, stat) result(k)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer, intent(inout) :: stat
+    integer(i8), allocatable :: steps(:)
+    integer :: err
+    k = extent(self%d_is)
+    allocate (steps(k))
+    if (k > 0) call h5dread_f(self%d_is, h5kind_to_type(i8, H5_INTEGER_KIND), steps, [int(k, hsize_t)], err)
+    if (k > 0 .and. err /= 0) then
+      call fail(self, 'cannot read /impacts/step', stat); return
+    end if
+    k = min(k, extent(self%d_it), extent(self%d_ia), extent(self%d_ig), extent(self%d_iq), extent(self%d_ii))
+    k = count(steps(1:k) < self%rows - 1)
+  end function trusted_impacts
+
+  !> Appending: cut every dataset to the trusted lengths before new rows follow.
+  subroutine truncate_to_trusted(self, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer, intent(inout) :: stat
+    integer :: err, e(11)
+    e = 0
+    call h5dset_extent_f(self%d_t, [int(self%rows, hsize_t)], e(1))
+    call h5dset_extent_f(self%d_q, [int(self%n, hsize_t), int(self%rows, hsize_t)], e(2))
+    call h5dset_extent_f(self%d_p, [int(self%n, hsize_t), int(self%rows, hsize_t)], e(3))
+    call h5dset_extent_f(self%d_e, [int(self%steps, hsize_t)], e(4))
+    if (self%m > 0) call h5dset_extent_f(self%d_l, [int(self%m, hsize_t), int(self%steps, hsize_t)], e(5))
+    if (self%n_gaps > 0) then
+      call h5dset_extent_f(self%d_it, [int(self%impacts, hsize_t)], e(6))
+      call h5dset_extent_f(self%d_is, [int(self%impacts, hsize_t)], e(7))
+      call h5dset_extent_f(self%d_ia, [int(self%impacts, hsize_t)], e(8))
+      call h5dset_extent_f(self%d_ig, [int(self%impacts, hsize_t)], e(9))
+      call h5dset_extent_f(self%d_iq, [int(self%n, hsize_t), int(self%impacts, hsize_t)], e(10))
+      call h5dset_extent_f(self%d_ii, [int(self%impacts, hsize_t)], e(11))
+    end if
+    err = minval(e)
+    if (err /= 0) call fail(self, 'cannot cut the datasets to the trusted steps', stat)
+  end subroutine truncate_to_trusted
+
+  subroutine w_start(self, info, q, p, stat)
+    class(vci_hdf5_writer_t), intent(inout) :: self
+    type(vci_run_info_t), intent(in) :: info
+    real(dp), intent(in) :: q(:), p(:)
+    integer, intent(inout) :: stat
+    integer :: s
+    s = VCI_OK
+    if (.not. self%is_open) then
+      if (len_trim(self%message) == 0) self%message = 'HDF5 output: no file open (call open first)'
+      stat = VCI_ERR_IO; return
+    end if
+    if (self%started) then
+      call fail(self, 'one file holds one run (open it again with append=.true. to continue)', s)
+    else if (self%append) then
+      call start_append(self, info, q, p, s)
+    else
+      call start_new(self, info, s)
+    end if
+    if (s == VCI_OK) then
+      call alloc_buffers(self)
+      self%step0 = info%step0
+      self%started = .true.
+      if (.not. self%append) call buffer_state(self, info%t0, q, p)
+      call put_attr_int(self, self%file, 'status', VCI_HDF5_RUNNING, s)
+      call put_attr_str(self, self%file, 'status_message', 'running (not closed yet)', s)
+      if (s == VCI_OK) call flush_file(self, s)
+    end if
+    if (s /= VCI_OK) then
+      call w_close(self)
+      stat = VCI_ERR_IO
+    end if
+  end subroutine w_start
+
+  !> A new file: the run's attributes, empty datasets, the /impacts and /checkpoint groups.
+  subroutine start_new(self, info, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    type(vci_run_info_t), intent(in) :: info
+    integer, intent(inout) :: stat
+    integer :: err
+    self%n = info%n; self%m = info%m; self%n_gaps = info%n_gaps
+    self%direction = info%direction; self%h = info%h
+    self%rows = 0; self%steps = 0; self%impacts = 0; self%row_start = 0
+    call put_attr_str(self, self%file, 'direction', trim(merge('forward ', 'backward', info%direction > 0)), stat)
+    call put_attr_real(self, self%file, 'h', info%h, stat)
+    call put_attr_real(self, self%file, 't0', info%t0, stat)
+    call put_attr_int(self, self%file, 'n', info%n, stat)
+    call put_attr_int(self, self%file, 'm', info%m, stat)
+    call put_attr_int(self, self%file, 'n_gaps', info%n_gaps, stat)
+    call put_attr_i8(self, self%file, 'steps_completed', 0_i8, stat)
+    call make_dset(self, self%file, 't', 0, chunk_rows, H5T_IEEE_F64LE, self%d_t, stat)
+    call make_dset(self, self%file, 'q', info%n, chunk_rows, H5T_IEEE_F64LE, self%d_q, stat)
+    call make_dset(self, self%file, 'p', info%n, chunk_rows, H5T_IEEE_F64LE, self%d_p, stat)
+    call make_dset(self, self%file, 'energy', 0, chunk_rows, H5T_IEEE_F64LE, self%d_e, stat)
+    if (info%m > 0) call make_dset(self, self%file, 'lambda', info%m, chunk_rows, H5T_IEEE_F64LE, self%d_l, stat)
+    if (stat /= VCI_OK) return
+    if (info%n_gaps > 0) then
+      call h5gcreate_f(self%file, 'impacts', self%g_imp, err)
+      if (err /= 0) then
+        call fail(self, 'cannot create group /impacts', stat); return
+      end if
+      call make_dset(self, self%g_imp, 'time', 0, impact_chunk_rows, H5T_IEEE_F64LE, self%d_it, stat)
+      call make_dset(self, self%g_imp, 'step', 0, impact_chunk_rows, H5T_STD_I64LE, self%d_is, stat)
+      call make_dset(self, self%g_imp, 'alpha', 0, impact_chunk_rows, H5T_IEEE_F64LE, self%d_ia, stat)
+      call make_dset(self, self%g_imp, 'gap_index', 0, impact_chunk_rows, H5T_STD_I32LE, self%d_ig, stat)
+      call make_dset(self, self%g_imp, 'q', info%n, impact_chunk_rows, H5T_IEEE_F64LE, self%d_iq, stat)
+      call make_dset(self, self%g_imp, 'impulse', 0, impact_chunk_rows, H5T_IEEE_F64LE, self%d_ii, stat)
+    end if
+    if (stat == VCI_OK .and. associated(self%integ)) then
+      call h5gcreate_f(self%file, 'checkpoint', self%g_cp, err)
+      if (err /= 0) call fail(self, 'cannot create group /checkpoint', stat)
+    end if
+  end subroutine start_new
+
+  !> Appending: the run must continue the file's last state, same sizes, step and direction.
+  subroutine start_append(self, info, q, p, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    type(vci_run_info_t), intent(in) :: info
+    real(dp), intent(in) :: q(:), p(:)
+    integer, intent(inout) :: stat
+    real(dp) :: t_last(1), q_last(info%n, 1)
+    integer :: err
+    if (info%n /= self%n .or. info%m /= self%m .or. info%n_gaps /= self%n_gaps .or. info%h /= self%h) then
+      call fail(self, 'cannot append: the run''s n, m, n_gaps or h differ from the file''s', stat); return
+    end if
+    if (info%direction /= self%direction) then
+      call fail(self, 'cannot append: the run goes the other way in time (write the reversal to a new file)', stat)
+      return
+    end if
+    call read_rows(self, self%d_t, 0, self%rows - 1, t_last, stat)
+    call read_rows(self, self%d_q, info%n, self%rows - 1, q_last, stat)
+    if (stat /= VCI_OK) return
+    if (t_last(1) /= info%t0 .or. any(q_last(:, 1) /= q)) then
+      call fail(self, 'cannot append: the run does not start from the file''s last state', stat); return
+    end if
+    self%row_start = self%rows - 1
+    if (associated(self%integ) .and. self%g_cp < 0) then
+      call h5gcreate_f(self%file, 'checkpoint', self%g_cp, err)
+      if (err /= 0) call fail(self, 'cannot create group /checkpoint', stat)
+    end if
+  end subroutine start_append
+
+  subroutine alloc_buffers(self)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer :: c
+    c = self%flush_every + 1
+    if (allocated(self%bt)) deallocate (self%bt, self%bq, self%bp, self%be, self%bl)
+    allocate (self%bt(c), self%bq(self%n, c), self%bp(self%n, c), self%be(c), self%bl(self%m, c))
+    if (allocated(self%it)) deallocate (self%it, self%is, self%ia, self%ig, self%iq, self%ii)
+    allocate (self%it(16), self%is(16), self%ia(16), self%ig(16), self%iq(self%n, 16), self%ii(16))
+  end subroutine alloc_buffers
+
+  subroutine buffer_state(self, t, q, p)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    real(dp), intent(in) :: t, q(:), p(:)
+    self%ns = self%ns + 1
+    self%bt(self%ns) = t; self%bq(:, self%ns) = q; self%bp(:, self%ns) = p
+  end subroutine buffer_state
+
+  subroutine w_step(self, step, t, q, p, lambda, energy, stat)
+    class(vci_hdf5_writer_t), intent(inout) :: self
+    integer(i8), intent(in) :: step
+    real(dp), intent(in) :: t, q(:), p(:), lambda(:), energy
+    integer, intent(inout) :: stat
+    if (.not. self%started) then
+      stat = VCI_ERR_IO; return
+    end if
+    call buffer_state(self, t, q, p)
+    self%ne = self%ne + 1
+    self%be(self%ne) = energy
+    if (self%m > 0) self%bl(:, self%ne) = lambda
+    if (self%ne >= self%flush_every .or. self%flush_pending) then
+      call flush_file(self, stat)
+      if (stat /= VCI_OK) stat = VCI_ERR_IO
+    end if
+  end subroutine w_step
+
+  subroutine w_impact(self, impact, stat)
+    class(vci_hdf5_writer_t), intent(inout) :: self
+    type(vci_impact_t), intent(in) :: impact
+    integer, intent(inout) :: stat
+    if (.not. self%started) then
+      stat = VCI_ERR_IO; return
+    end if
+    if (self%ni == size(self%it)) call grow_impacts(self)
+    self%ni = self%ni + 1
+    self%it(self%ni) = impact%t
+    ! the row of /t the step started from: t(step) and t(step + 1) bracket the impact
+    self%is(self%ni) = self%row_start + (impact%step - self%step0) * self%direction
+    self%ia(self%ni) = impact%alpha
+    self%ig(self%ni) = impact%gap
+    self%iq(:, self%ni) = impact%q
+    self%ii(self%ni) = impact%impulse
+    if (self%flush_on_impact) self%flush_pending = .true.
+  end subroutine w_impact
+
+  subroutine grow_impacts(self)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    real(dp), allocatable :: r1(:), r2(:, :)
+    integer(i8), allocatable :: l1(:)
+    integer, allocatable :: i1(:)
+    integer :: k
+    k = size(self%it)
+    allocate (r1(2 * k)); r1(1:k) = self%it; call move_alloc(r1, self%it)
+    allocate (r1(2 * k)); r1(1:k) = self%ia; call move_alloc(r1, self%ia)
+    allocate (r1(2 * k)); r1(1:k) = self%ii; call move_alloc(r1, self%ii)
+    allocate (l1(2 * k)); l1(1:k) = self%is; call move_alloc(l1, self%is)
+    allocate (i1(2 * k)); i1(1:k) = self%ig; call move_alloc(i1, self%ig)
+    allocate (r2(self%n, 2 * k)); r2(:, 1:k) = self%iq; call move_alloc(r2, self%iq)
+  end subroutine grow_impacts
+
+  !> The run ended: write what is buffered, the status and its message, and close the file.
+  subroutine w_finish(self, status, message, stat)
+    class(vci_hdf5_writer_t), intent(inout) :: self
+    integer, intent(in) :: status
+    character(len=*), intent(in) :: message
+    integer, intent(inout) :: stat
+    integer :: s
+    if (.not. self%started) then
+      call w_close(self); return
+    end if
+    s = VCI_OK
+    call put_attr_int(self, self%file, 'status', status, s)
+    if (status == VCI_OK .and. len_trim(message) == 0) then
+      call put_attr_str(self, self%file, 'status_message', 'ok', s)
+    else
+      call put_attr_str(self, self%file, 'status_message', trim(message), s)
+    end if
+    call flush_file(self, s)
+    call w_close(self)
+    if (s /= VCI_OK) stat = VCI_ERR_IO
+  end subroutine w_finish
+
+  !> Append the buffered rows, store the checkpoint and steps_completed, H5Fflush.
+  subroutine flush_file(self, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer, intent(inout) :: stat
+    integer :: err
+    if (stat /= VCI_OK) return
+    if (self%ns > 0) then
+      call append_real(self, self%d_t, 0, self%rows, self%bt(1:self%ns), self%ns, stat)
+      call append_real(self, self%d_q, self%n, self%rows, self%bq(:, 1:self%ns), self%ns, stat)
+      call append_real(self, self%d_p, self%n, self%rows, self%bp(:, 1:self%ns), self%ns, stat)
+    end if
+    if (self%ne > 0) then
+      call append_real(self, self%d_e, 0, self%steps, self%be(1:self%ne), self%ne, stat)
+      if (self%m > 0) call append_real(self, self%d_l, self%m, self%steps, self%bl(:, 1:self%ne), self%ne, stat)
+    end if
+    if (self%ni > 0) then
+      call append_real(self, self%d_it, 0, self%impacts, self%it(1:self%ni), self%ni, stat)
+      call append_i8(self, self%d_is, self%impacts, self%is(1:self%ni), self%ni, stat)
+      call append_real(self, self%d_ia, 0, self%impacts, self%ia(1:self%ni), self%ni, stat)
+      call append_int(self, self%d_ig, self%impacts, self%ig(1:self%ni), self%ni, stat)
+      call append_real(self, self%d_iq, self%n, self%impacts, self%iq(:, 1:self%ni), self%ni, stat)
+      call append_real(self, self%d_ii, 0, self%impacts, self%ii(1:self%ni), self%ni, stat)
+    end if
+    if (stat /= VCI_OK) return
+    ! two phases: the rows reach the disk before the checkpoint and steps_completed that vouch for them
+    call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
+    if (err /= 0) then
+      call fail(self, 'H5Fflush failed (disk full?)', stat); return
+    end if
+    self%rows = self%rows + self%ns; self%steps = self%steps + self%ne; self%impacts = self%impacts + self%ni
+    self%ns = 0; self%ne = 0; self%ni = 0
+    self%flush_pending = .false.
+    ! steps_completed last: it marks what a reader of a killed run's file can trust
+    if (associated(self%integ) .and. self%g_cp >= 0) call put_checkpoint(self, self%integ%checkpoint(), stat)
+    call put_attr_i8(self, self%file, 'steps_completed', self%steps, stat)
+    if (stat /= VCI_OK) return
+    call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
+    if (err /= 0) call fail(self, 'H5Fflush failed (disk full?)', stat)
+  end subroutine flush_file
+
+  !> /checkpoint/record: the integrator's state and solver memory at the file's last row, as one
+  !> float64 vector [row, k, t0, h, energy, e_arrive, e_dir, q(n), p(n), vel(n), lambda(m)] written
+  !> in one piece, so a kill cannot leave half of it.
+  subroutine put_checkpoint(self, cp, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    type(vci_checkpoint_t), intent(in) :: cp
+    integer, intent(inout) :: stat
+    call put_vector(self, self%g_cp, 'record', [real(self%rows - 1, dp), real(cp%k, dp), cp%t0, cp%h, cp%energy, &
+                    cp%e_arrive, real(cp%e_dir, dp), cp%q, cp%p, cp%vel, cp%lambda], stat)
+  end subroutine put_checkpoint
+
+  !> The state a restart from PATH starts with, as a checkpoint for `integ%restore`. With a
+  !> /checkpoint group (written when the writer was attached) the restart is bitwise; without one
+  !> it is the last row (t, q, p, lambda) with index 0 at that time, like init_from_momentum.
+  !> Optional: t_first (time of row 0), direction (+1/-1), message (why stat /= 0).
+  subroutine vci_hdf5_read_checkpoint(path, cp, stat, message, t_first, direction)
+    character(len=*), intent(in) :: path
+    type(vci_checkpoint_t), intent(out) :: cp
+    integer, intent(out) :: stat
+    character(len=*), intent(out), optional :: message
+    real(dp), intent(out), optional :: t_first
+    integer, intent(out), optional :: direction
+    type(vci_hdf5_writer_t) :: r   ! reuses the writer's helpers for reading
+    integer :: err, n
+    logical :: ex, use_cp
+    real(dp), allocatable :: rec(:)
+    real(dp) :: buf(1)
+    real(dp), allocatable :: row(:, :)
+
+    stat = VCI_OK
+    r%path = path
+    call h5open_f(err)
+    if (err == 0) call h5eset_auto_f(0, err)
+    inquire (file=path, exist=ex)
+    if (.not. ex) then
+      call fail(r, 'cannot read: the file does not exist', stat)
+    else
+      call h5fopen_f(path, H5F_ACC_RDONLY_F, r%file, err)
+      if (err /= 0) call fail(r, 'cannot open: not an HDF5 file or not readable', stat)
+    end if
+    if (stat == VCI_OK) then
+      r%is_open = .true.
+      call open_existing(r, stat)
+    end if
+    if (stat == VCI_OK .and. present(t_first)) call read_rows(r, r%d_t, 0, 0_i8, buf, stat)
+    if (stat == VCI_OK .and. present(t_first)) t_first = buf(1)
+    if (present(direction)) direction = r%direction
+    ! the checkpoint counts only if it is the state of the last trusted row
+    use_cp = .false.
+    if (stat == VCI_OK .and. r%g_cp >= 0) then
+      n = r%n
+      allocate (rec(7 + 3 * n + r%m), row(n, 1))
+      call get_vector(r, r%g_cp, 'record', rec, stat)
+      if (stat == VCI_OK) use_cp = nint(rec(1), i8) == r%rows - 1
+      if (use_cp) call read_rows(r, r%d_q, n, r%rows - 1, row, stat)
+      if (use_cp .and. stat == VCI_OK) use_cp = all(row(:, 1) == rec(8:7 + n))
+      if (use_cp) call read_rows(r, r%d_p, n, r%rows - 1, row, stat)
+      if (use_cp .and. stat == VCI_OK) use_cp = all(row(:, 1) == rec(8 + n:7 + 2 * n))
+      deallocate (row)
+      if (stat /= VCI_OK) then   ! an unreadable checkpoint: fall back to the last row
+        stat = VCI_OK; use_cp = .false.
+      end if
+    end if
+    if (use_cp) then
+      cp%k = nint(rec(2), i8); cp%t0 = rec(3); cp%h = rec(4); cp%energy = rec(5); cp%e_arrive = rec(6)
+      cp%e_dir = nint(rec(7))
+      cp%q = rec(8:7 + n); cp%p = rec(8 + n:7 + 2 * n); cp%vel = rec(8 + 2 * n:7 + 3 * n)
+      cp%lambda = rec(8 + 3 * n:)
+    else if (stat == VCI_OK) then
+      allocate (cp%q(r%n), cp%p(r%n), cp%vel(r%n), cp%lambda(r%m), row(max(r%n, r%m, 1), 1))
+      call read_rows(r, r%d_t, 0, r%rows - 1, buf, stat)
+      cp%t0 = buf(1); cp%k = 0; cp%h = r%h
+      call read_rows(r, r%d_q, r%n, r%rows - 1, row(1:r%n, :), stat); cp%q = row(1:r%n, 1)
+      call read_rows(r, r%d_p, r%n, r%rows - 1, row(1:r%n, :), stat); cp%p = row(1:r%n, 1)
+      cp%lambda = 0.0_dp; cp%vel = 0.0_dp; cp%e_dir = 0
+      cp%e_arrive = ieee_value(1.0_dp, ieee_quiet_nan)
+      cp%energy = ieee_value(1.0_dp, ieee_quiet_nan)
+      if (r%steps > 0) then
+        call read_rows(r, r%d_e, 0, r%steps - 1, buf, stat); cp%energy = buf(1)
+        if (r%m > 0) call read_rows(r, r%d_l, r%m, r%steps - 1, row(1:r%m, :), stat)
+        if (r%m > 0) cp%lambda = row(1:r%m, 1)
+      end if
+    end if
+    call w_close(r)
+    if (present(message)) message = r%message
+  end subroutine vci_hdf5_read_checkpoint
+
+  ! ---------------------------------------------------------------------------------------------
+  ! HDF5 helpers. Each takes stat (inout): it does nothing if stat is already nonzero, and on
+  ! failure sets stat = VCI_ERR_IO and the message. Dims are given in Fortran order (row last).
+  ! ---------------------------------------------------------------------------------------------
+
+  subroutine fail(self, cause, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    character(len=*), intent(in) :: cause
+    integer, intent(inout) :: stat
+    if (allocated(self%path)) then
+      self%message = self%path//': '//cause
+    else
+      self%message = 'HDF5 output: '//cause
+    end if
+    stat = VCI_ERR_IO
+  end subroutine fail
+
+  !> Why the OS refuses to create PATH, as Fortran's runtime reports it.
+  function os_reason(path) result(reason)
+    character(len=*), intent(in) :: path
+    character(len=:), allocatable :: reason
+    character(len=256) :: iomsg
+    integer :: u, ios
+    open (newunit=u, file=path, status='new', action='write', iostat=ios, iomsg=iomsg)
+    if (ios == 0) then
+      close (u, status='delete')
+      reason = 'HDF5 refused it'
+    else
+      reason = trim(iomsg)
+    end if
+  end function os_reason
+
+  function iso_now() result(s)
+    character(len=:), allocatable :: s
+    character(len=8) :: d
+    character(len=10) :: t
+    character(len=5) :: z
+    call date_and_time(d, t, z)
+    s = d(1:4)//'-'//d(5:6)//'-'//d(7:8)//'T'//t(1:2)//':'//t(3:4)//':'//t(5:6)//z(1:3)//':'//z(4:5)
+  end function iso_now
+
+  !> An extendible dataset of 0 rows, each row `width` values (width 0: a 1-D dataset).
+  subroutine make_dset(self, loc, name, width, rows_per_chunk, ftype, dset, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer(hid_t), intent(in) :: loc, ftype
+    character(len=*), intent(in) :: name
+    integer, intent(in) :: width, rows_per_chunk
+    integer(hid_t), intent(out) :: dset
+    integer, intent(inout) :: stat
+    integer(hid_t) :: space, plist
+    integer(hsize_t) :: dims(2), maxdims(2), chunk(2)
+    integer :: rank, err, e2
+    dset = -1
+    if (stat /= VCI_OK) return
+    if (width > 0) then
+      rank = 2; dims = [int(width, hsize_t), 0_hsize_t]; maxdims = [int(width, hsize_t), H5S_UNLIMITED_F]
+      chunk = [int(width, hsize_t), int(rows_per_chunk, hsize_t)]
+    else
+      rank = 1; dims = 0; maxdims = [H5S_UNLIMITED_F, 0_hsize_t]; chunk = [int(rows_per_chunk, hsize_t), 0_hsize_t]
+    end if
+    call h5screate_simple_f(rank, dims(1:rank), space, err, maxdims(1:rank))
+    if (err == 0) call h5pcreate_f(H5P_DATASET_CREATE_F, plist, err)
+    if (err == 0) call h5pset_chunk_f(plist, rank, chunk(1:rank), err)
+    if (err == 0) call h5dcreate_f(loc, name, ftype, space, dset, err, plist)
+    call h5pclose_f(plist, e2); call h5sclose_f(space, e2)
+    if (err /= 0) call fail(self, 'cannot create dataset '//name, stat)
+  end subroutine make_dset
+
+  subroutine open_dset(self, loc, name, dset, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer(hid_t), intent(in) :: loc
+    character(len=*), intent(in) :: name
+    integer(hid_t), intent(out) :: dset
+    integer, intent(inout) :: stat
+    integer :: err
+    dset = -1
+    if (stat /= VCI_OK) return
+    call h5dopen_f(loc, name, dset, err)
+    if (err /= 0) call fail(self, 'dataset '//name//' missing', stat)
+  end subroutine open_dset
+
+  !> Number of rows (the last Fortran dimension) of a dataset.
+  integer(i8) function extent(dset)
+    integer(hid_t), intent(in) :: dset
+    integer(hid_t) :: space
+    integer(hsize_t) :: dims(2), maxdims(2)
+    integer :: rank, err
+    extent = 0
+    call h5dget_space_f(dset, space, err)
+    call h5sget_simple_extent_ndims_f(space, rank, err)
+    call h5sget_simple_extent_dims_f(space, dims(1:rank), maxdims(1:rank), err)
+    call h5sclose_f(space, err)
+    extent = int(dims(rank), i8)
+  end function extent
+
+  !> Extend a dataset to first + count rows and select rows first.. in the file; a matching memory space.
+  subroutine select_rows(self, dset, width, first, count, fspace, mspace, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer(hid_t), intent(in) :: dset
+    integer, intent(in) :: width, count
+    integer(i8), intent(in) :: first
+    integer(hid_t), intent(out) :: fspace, mspace
+    integer, intent(inout) :: stat
+    integer(hsize_t) :: newdims(2), offset(2), cnt(2)
+    integer :: rank, err
+    if (width > 0) then
+      rank = 2; newdims = [int(width, hsize_t), int(first + count, hsize_t)]
+      offset = [0_hsize_t, int(first, hsize_t)]; cnt = [int(width, hsize_t), int(count, hsize_t)]
+    else
+      rank = 1; newdims = [int(first + count, hsize_t), 0_hsize_t]
+      offset = [int(first, hsize_t), 0_hsize_t]; cnt = [int(count, hsize_t), 0_hsize_t]
+    end if
+    call h5dset_extent_f(dset, newdims(1:rank), err)
+    if (err == 0) call h5dget_space_f(dset, fspace, err)
+    if (err == 0) call h5sselect_hyperslab_f(fspace, H5S_SELECT_SET_F, offset(1:rank), cnt(1:rank), err)
+    if (err == 0) call h5screate_simple_f(rank, cnt(1:rank), mspace, err)
+    if (err /= 0) call fail(self, 'cannot extend a dataset', stat)
+  end subroutine select_rows
+
+  subroutine append_real(self, dset, width, first, buf, count, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer(hid_t), intent(in) :: dset
+    integer, intent(in) :: width, count
+    integer(i8), intent(in) :: first
+    real(dp), intent(in) :: buf(*)
+    integer, intent(inout) :: stat
+    integer(hid_t) :: fspace, mspace
+    integer(hsize_t) :: dims(2)
+    integer :: err, e2
+    if (stat /= VCI_OK) return
+    call select_rows(self, dset, width, first, count, fspace, mspace, stat)
+    if (stat /= VCI_OK) return
+    dims = [int(max(width, 1), hsize_t), int(count, hsize_t)]
+    call h5dwrite_f(dset, H5T_NATIVE_DOUBLE, buf(1:max(width, 1) * count), dims(1:1) * dims(2), err, mspace, fspace)
+    call h5sclose_f(mspace, e2); call h5sclose_f(fspace, e2)
+    if (err /= 0) call fail(self, 'writing rows failed (disk full?)', stat)
+  end subroutine append_real
+
+  subroutine append_i8(self, dset, first, buf, count, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer(hid_t), intent(in) :: dset
+    integer, intent(in) :: count
+    integer(i8), intent(in) :: first, buf(:)
+    integer, intent(inout) :: stat
+    integer(hid_t) :: fspace, mspace
+    integer :: err, e2
+    if (stat /= VCI_OK) return
+    call select_rows(self, dset, 0, first, count, fspace, mspace, stat)
+    if (stat /= VCI_OK) return
+    call h5dwrite_f(dset, h5kind_to_type(i8, H5_INTEGER_KIND), buf, [int(count, hsize_t)], err, mspace, fspace)
+    call h5sclose_f(mspace, e2); call h5sclose_f(fspace, e2)
+    if (err /= 0) call fail(self, 'writing rows failed (disk full?)', stat)
+  end subroutine append_i8
+
+  subroutine append_int(self, dset, first, buf, count, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer(hid_t), intent(in) :: dset
+    integer, intent(in) :: count
+    integer(i8), intent(in) :: first
+    integer, intent(in) :: buf(:)
+    integer, intent(inout) :: stat
+    integer(hid_t) :: fspace, mspace
+    integer :: err, e2
+    if (stat /= VCI_OK) return
+    call select_rows(self, dset, 0, first, count, fspace, mspace, stat)
+    if (stat /= VCI_OK) return
+    call h5dwrite_f(dset, H5T_NATIVE_INTEGER, buf, [int(count, hsize_t)], err, mspace, fspace)
+    call h5sclose_f(mspace, e2); call h5sclose_f(fspace, e2)
+    if (err /= 0) call fail(self, 'writing rows failed (disk full?)', stat)
+  end subroutine append_int
+
+  !> Read row `row` (0-based) of a dataset of rows of `width` values into buf(:, 1) (or buf(1)).
+  subroutine read_rows(self, dset, width, row, buf, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer(hid_t), intent(in) :: dset
+    integer, intent(in) :: width
+    integer(i8), intent(in) :: row
+    real(dp), intent(out) :: buf(*)
+    integer, intent(inout) :: stat
+    integer(hid_t) :: fspace, mspace
+    integer(hsize_t) :: offset(2), cnt(2)
+    integer :: rank, err, e2
+    if (stat /= VCI_OK) return
+    if (width > 0) then
+      rank = 2; offset = [0_hsize_t, int(row, hsize_t)]; cnt = [int(width, hsize_t), 1_hsize_t]
+    else
+      rank = 1; offset = [int(row, hsize_t), 0_hsize_t]; cnt = [1_hsize_t, 0_hsize_t]
+    end if
+    call h5dget_space_f(dset, fspace, err)
+    if (err == 0) call h5sselect_hyperslab_f(fspace, H5S_SELECT_SET_F, offset(1:rank), cnt(1:rank), err)
+    if (err == 0) call h5screate_simple_f(rank, cnt(1:rank), mspace, err)
+    if (err == 0) call h5dread_f(dset, H5T_NATIVE_DOUBLE, buf(1:max(width, 1)), [cnt(1) * max(cnt(2), 1_hsize_t)], &
+                                 err, mspace, fspace)
+    call h5sclose_f(mspace, e2); call h5sclose_f(fspace, e2)
+    if (err /= 0) call fail(self, 'cannot read the last row', stat)
+  end subroutine read_rows
+
+  !> A small fixed dataset (n values), created on first use, overwritten afterwards.
+  subroutine put_vector(self, loc, name, v, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer(hid_t), intent(in) :: loc
+    character(len=*), intent(in) :: name
+    real(dp), intent(in) :: v(:)
+    integer, intent(inout) :: stat
+    integer(hid_t) :: space, dset
+    integer :: err, e2
+    logical :: ex
+    if (stat /= VCI_OK) return
+    call h5lexists_f(loc, name, ex, err)
+    if (err == 0 .and. ex) then
+      call h5dopen_f(loc, name, dset, err)
+    else if (err == 0) then
+      call h5screate_simple_f(1, [int(size(v), hsize_t)], space, err)
+      if (err == 0) call h5dcreate_f(loc, name, H5T_IEEE_F64LE, space, dset, err)
+      call h5sclose_f(space, e2)
+    end if
+    if (err == 0) call h5dwrite_f(dset, H5T_NATIVE_DOUBLE, v, [int(size(v), hsize_t)], err)
+    call h5dclose_f(dset, e2)
+    if (err /= 0) call fail(self, 'cannot write checkpoint '//name, stat)
+  end subroutine put_vector
+
+  subroutine get_vector(self, loc, name, v, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer(hid_t), intent(in) :: loc
+    character(len=*), intent(in) :: name
+    real(dp), intent(out) :: v(:)
+    integer, intent(inout) :: stat
+    integer(hid_t) :: dset
+    integer :: err, e2
+    if (stat /= VCI_OK) return
+    call h5dopen_f(loc, name, dset, err)
+    if (err == 0) then
+      if (extent(dset) /= size(v)) err = -1
+    end if
+    if (err == 0) call h5dread_f(dset, H5T_NATIVE_DOUBLE, v, [int(size(v), hsize_t)], err)
+    call h5dclose_f(dset, e2)
+    if (err /= 0) call fail(self, 'cannot read checkpoint '//name, stat)
+  end subroutine get_vector
+
+  !> A scalar attribute of type ftype, returned open: an existing one is reused (numbers are
+  !> rewritten in place) or, with `replace` (strings, whose size changes), deleted and made anew.
+  subroutine new_attr(self, loc, name, ftype, attr, stat, replace)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer(hid_t), intent(in) :: loc, ftype
+    character(len=*), intent(in) :: name
+    integer(hid_t), intent(out) :: attr
+    integer, intent(inout) :: stat
+    logical, intent(in), optional :: replace
+    integer(hid_t) :: space
+    integer :: err, e2
+    logical :: ex
+    attr = -1
+    if (stat /= VCI_OK) return
+    call h5aexists_f(loc, name, ex, err)
+    if (err == 0 .and. ex .and. .not. present(replace)) then
+      call h5aopen_f(loc, name, attr, err)
+      if (err /= 0) call fail(self, 'cannot open attribute '//name, stat)
+      return
+    end if
+    if (err == 0 .and. ex) call h5adelete_f(loc, name, err)
+    if (err == 0) call h5screate_f(H5S_SCALAR_F, space, err)
+    if (err == 0) call h5acreate_f(loc, name, ftype, space, attr, err)
+    call h5sclose_f(space, e2)
+    if (err /= 0) call fail(self, 'cannot write attribute '//name, stat)
+  end subroutine new_attr
+
+  subroutine put_attr_real(self, loc, name, v, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer(hid_t), intent(in) :: loc
+    character(len=*), intent(in) :: name
+    real(dp), intent(in) :: v
+    integer, intent(inout) :: stat
+    integer(hid_t) :: attr
+    integer :: err, e2
+    call new_attr(self, loc, name, H5T_IEEE_F64LE, attr, stat)
+    if (stat /= VCI_OK) return
+    call h5awrite_f(attr, H5T_NATIVE_DOUBLE, v, [1_hsize_t], err)
+    call h5aclose_f(attr, e2)
+    if (err /= 0) call fail(self, 'cannot write attribute '//name, stat)
+  end subroutine put_attr_real
+
+  subroutine put_attr_int(self, loc, name, v, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer(hid_t), intent(in) :: loc
+    character(len=*), intent(in) :: name
+    integer, intent(in) :: v
+    integer, intent(inout) :: stat
+    integer(hid_t) :: attr
+    integer :: err, e2
+    call new_attr(self, loc, name, H5T_STD_I32LE, attr, stat)
+    if (stat /= VCI_OK) return
+    call h5awrite_f(attr, H5T_NATIVE_INTEGER, v, [1_hsize_t], err)
+    call h5aclose_f(attr, e2)
+    if (err /= 0) call fail(self, 'cannot write attribute '//name, stat)
+  end subroutine put_attr_int
+
+  subroutine put_attr_i8(self, loc, name, v, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer(hid_t), intent(in) :: loc
+    character(len=*), intent(in) :: name
+    integer(i8), intent(in) :: v
+    integer, intent(inout) :: stat
+    integer(hid_t) :: attr
+    integer :: err, e2
+    call new_attr(self, loc, name, H5T_STD_I64LE, attr, stat)
+    if (stat /= VCI_OK) return
+    call h5awrite_f(attr, h5kind_to_type(i8, H5_INTEGER_KIND), v, [1_hsize_t], err)
+    call h5aclose_f(attr, e2)
+    if (err /= 0) call fail(self, 'cannot write attribute '//name, stat)
+  end subroutine put_attr_i8
+
+  !> A fixed-length, null-padded string of exactly len(v) characters (h5py: numpy.bytes_).
+  subroutine put_attr_str(self, loc, name, v, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer(hid_t), intent(in) :: loc
+    character(len=*), intent(in) :: name, v
+    integer, intent(inout) :: stat
+    integer(hid_t) :: attr, stype
+    integer :: err, e2
+    character(len=max(1, len(v))) :: buf
+    if (stat /= VCI_OK) return
+    buf = v
+    if (len(v) == 0) buf = achar(0)
+    call h5tcopy_f(H5T_FORTRAN_S1, stype, err)
+    if (err == 0) call h5tset_size_f(stype, int(len(buf), size_t), err)
+    if (err == 0) call h5tset_strpad_f(stype, H5T_STR_NULLPAD_F, err)
+    if (err /= 0) then
+      call fail(self, 'cannot make a string type', stat); return
+    end if
+    call new_attr(self, loc, name, stype, attr, stat, replace=.true.)
+    if (stat == VCI_OK) then
+      call h5awrite_f(attr, stype, buf, [1_hsize_t], err)
+      call h5aclose_f(attr, e2)
+      if (err /= 0) call fail(self, 'cannot write attribute '//name, stat)
+    end if
+    call h5tclose_f(stype, e2)
+  end subroutine put_attr_str
+
+  subroutine get_attr_real(self, loc, name, v, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer(hid_t), intent(in) :: loc
+    character(len=*), intent(in) :: name
+    real(dp), intent(out) :: v
+    integer, intent(inout) :: stat
+    integer(hid_t) :: attr
+    integer :: err, e2
+    v = 0.0_dp
+    if (stat /= VCI_OK) return
+    call h5aopen_f(loc, name, attr, err)
+    if (err == 0) call h5aread_f(attr, H5T_NATIVE_DOUBLE, v, [1_hsize_t], err)
+    call h5aclose_f(attr, e2)
+    if (err /= 0) call fail(self, 'attribute '//name//' missing or unreadable', stat)
+  end subroutine get_attr_real
+
+  subroutine get_attr_int(self, loc, name, v, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer(hid_t), intent(in) :: loc
+    character(len=*), intent(in) :: name
+    integer, intent(out) :: v
+    integer, intent(inout) :: stat
+    integer(hid_t) :: attr
+    integer :: err, e2
+    v = 0
+    if (stat /= VCI_OK) return
+    call h5aopen_f(loc, name, attr, err)
+    if (err == 0) call h5aread_f(attr, H5T_NATIVE_INTEGER, v, [1_hsize_t], err)
+    call h5aclose_f(attr, e2)
+    if (err /= 0) call fail(self, 'attribute '//name//' missing or unreadable', stat)
+  end subroutine get_attr_int
+
+  subroutine get_attr_i8(self, loc, name, v, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer(hid_t), intent(in) :: loc
+    character(len=*), intent(in) :: name
+    integer(i8), intent(out) :: v
+    integer, intent(inout) :: stat
+    integer(hid_t) :: attr
+    integer :: err, e2
+    v = 0
+    if (stat /= VCI_OK) return
+    call h5aopen_f(loc, name, attr, err)
+    if (err == 0) call h5aread_f(attr, h5kind_to_type(i8, H5_INTEGER_KIND), v, [1_hsize_t], err)
+    call h5aclose_f(attr, e2)
+    if (err /= 0) call fail(self, 'attribute '//name//' missing or unreadable', stat)
+  end subroutine get_attr_i8
+
+  subroutine get_attr_str(self, loc, name, v, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer(hid_t), intent(in) :: loc
+    character(len=*), intent(in) :: name
+    character(len=:), allocatable, intent(out) :: v
+    integer, intent(inout) :: stat
+    integer(hid_t) :: attr, ftype
+    integer(size_t) :: sz
+    integer :: err, e2, k
+    v = ''
+    if (stat /= VCI_OK) return
+    call h5aopen_f(loc, name, attr, err)
+    if (err == 0) call h5aget_type_f(attr, ftype, err)
+    if (err == 0) call h5tget_size_f(ftype, sz, err)
+    if (err == 0) then
+      deallocate (v)
+      allocate (character(len=sz) :: v)
+      call h5aread_f(attr, ftype, v, [1_hsize_t], err)
+      call h5tclose_f(ftype, e2)
+    end if
+    call h5aclose_f(attr, e2)
+    if (err /= 0) then
+      call fail(self, 'attribute '//name//' missing or unreadable', stat); return
+    end if
+    k = index(v, achar(0))
+    if (k > 0) v = v(1:k - 1)
+  end subroutine get_attr_str
+end module vci_hdf5_output

@@ -1,0 +1,513 @@
+!> The legacy Fortran entry point: external subroutines (no module needed by the caller) that a
+!> fixed-form Fortran 77 program calls with one EXTERNAL model routine, explicit-shape arrays,
+!> RPAR/IPAR user arrays and an integer status, in the manner of ODEPACK's and DASSL's drivers.
+!> See docs/C_API.md ("Legacy Fortran") for the calling sequence in full.
+!>
+!>     CALL VCIRUN(MODEL, N, M, NG, IOPT, H, T0, Q0, Q1, NSTEPS,
+!>    &            T, Q, P, NIMP, TIMP, LTIMP, RPAR, IPAR, ISTAT, MSG)
+!>
+!> integrates NSTEPS steps forward from the initial pair (Q0 at T0, Q1 at T0 + H) and returns the
+!> final state and the impact times. For runs in pieces, backward runs or other tolerances there
+!> is an integer-handle interface over the same integrator:
+!>
+!>     VCINEW(MODEL, N, M, NG, IOPT, H, RPAR, IPAR, IH, ISTAT)   create; IH > 0 names it
+!>     VCITOL(IH, ATOL, RTOL, MAXIT, ISTAT)                      Newton tolerances
+!>     VCIENG(IH, MODE, ISTAT)                                   impact energy: 0 discrete, 1 hamiltonian
+!>     VCIINP(IH, T0, Q0, Q1, ISTAT)                             start from a pair
+!>     VCIINM(IH, T0, Q0, P0, ISTAT)                             start from (q, p)
+!>     VCIADV(IH, NSTEPS, IDIR, T, Q, P, NIMP, TIMP, LTIMP, ISTAT) advance; state and impacts out
+!>     VCIMSG(IH, MSG)                                           message of the last call
+!>     VCIDEL(IH)                                                free; IH becomes 0
+!>
+!> The model routine (one EXTERNAL, selecting what to compute by TASK as MINPACK's FCN does
+!> with IFLAG):
+!>
+!>     SUBROUTINE MODEL(TASK, N, M, NG, Q, V, H, OUT, RPAR, IPAR, IERR)
+!>     INTEGER TASK, N, M, NG, IPAR(*), IERR
+!>     DOUBLE PRECISION Q(N), V(N), H, OUT(*), RPAR(*)
+!>
+!>     TASK 1: OUT(1:N)    = D1 L_d(Q, V, H)          2: OUT(1:N) = D2 L_d(Q, V, H)
+!>     TASK 3: OUT(1)      = D3 L_d(Q, V, H)
+!>     TASK 4: OUT(1:N*N)  = d2 L_d/dQ_i dV_j at (Q, V, H), column-major        (IOPT bit 1)
+!>     TASK 5: OUT(1:N*M)  = one-forms Omega(Q), column mu = omega^mu            (M > 0)
+!>     TASK 6: OUT(1:M)    = omega_d(Q, V, H) with Q the base, V the other point (M > 0)
+!>     TASK 7: OUT(1:NG)   = gap functions g(Q)                                  (NG > 0)
+!>     TASK 8: OUT(1:N*NG) = gap gradients at Q, column j = grad g_j            (IOPT bit 2)
+!>     TASK 9: OUT(1)      = energy H(Q, P) with P passed in V                   (IOPT bit 4)
+!>
+!> IERR arrives 0; set it nonzero to stop the step (ISTAT = 2). IOPT declares the optional tasks
+!> the routine supplies (sum of 1: mixed Hessian, 2: gap gradients, 4: energy); the others are
+!> differenced or not needed, and the routine is never called for them. ISTAT takes the values of
+!> the C enum (0 ok, 1 argument, 2 callback, 3 non-finite, 4 Newton, 5 impact, 6 too many impacts,
+!> 7 inadmissible, 8 I/O, 9 call out of order).
+module vci_legacy
+  use, intrinsic :: iso_c_binding, only: c_ptr, c_f_pointer, c_null_ptr
+  use vci_kinds, only: dp, i8
+  use vci_status
+  use vci_model, only: vci_model_t
+  use vci_observer, only: vci_observer_t, vci_impact_t
+  use vci_integrator, only: vci_integrator_t
+  implicit none
+  private
+
+  public :: vci_legacy_model_fn, legacy_new, legacy_get, legacy_after, legacy_delete, legacy_advance, legacy_message
+
+  !> TASK codes of the model routine.
+  integer, parameter, public :: TASK_D1 = 1, TASK_D2 = 2, TASK_D3 = 3, TASK_HESSIAN = 4, TASK_FORMS = 5, &
+                                TASK_DCONSTRAINT = 6, TASK_GAPS = 7, TASK_GAP_GRADS = 8, TASK_ENERGY = 9
+  !> IOPT bits: which optional tasks the model routine supplies.
+  integer, parameter, public :: IOPT_HESSIAN = 1, IOPT_GAP_GRADS = 2, IOPT_ENERGY = 4
+
+  !> The model routine's interface as the library sees it (the caller needs no interface).
+  abstract interface
+    subroutine vci_legacy_model_fn(task, n, m, ng, q, v, h, out, rpar, ipar, ierr)
+      import :: dp
+      integer, intent(in) :: task, n, m, ng
+      real(dp), intent(in) :: q(n), v(n), h
+      real(dp), intent(inout) :: out(*)
+      real(dp), intent(inout) :: rpar(*)
+      integer, intent(inout) :: ipar(*)
+      integer, intent(inout) :: ierr
+    end subroutine vci_legacy_model_fn
+  end interface
+
+  !> A model made of the caller's EXTERNAL routine and its RPAR/IPAR (which must outlive it).
+  type, extends(vci_model_t) :: legacy_model_t
+    procedure(vci_legacy_model_fn), pointer, nopass :: fn => null()
+    integer :: iopt = 0
+    type(c_ptr) :: rpar = c_null_ptr, ipar = c_null_ptr
+    integer :: last_ierr = 0, last_task = 0   !< the last nonzero IERR and its TASK (0: none)
+  contains
+    procedure :: d1 => lm_d1
+    procedure :: d2 => lm_d2
+    procedure :: d3 => lm_d3
+    procedure :: mixed_hessian => lm_hessian
+    procedure :: constraint_forms => lm_forms
+    procedure :: discrete_constraint => lm_dconstraint
+    procedure :: gaps => lm_gaps
+    procedure :: gap_gradients => lm_gap_grads
+    procedure :: energy => lm_energy
+  end type legacy_model_t
+
+  !> Records the impact times of one VCIADV call.
+  type, extends(vci_observer_t) :: impact_log_t
+    integer :: count = 0
+    real(dp), allocatable :: times(:)
+  contains
+    procedure :: on_impact => log_impact
+  end type impact_log_t
+
+  !> One live integrator of the handle interface.
+  type :: slot_t
+    integer :: id = 0
+    type(legacy_model_t), pointer :: model => null()
+    type(vci_integrator_t), pointer :: integ => null()
+  end type slot_t
+
+  type(slot_t), allocatable, save :: slots(:)
+  integer, save :: last_id = 0     !< handles are never reused, so a deleted one is always detected
+  !> Message of the last failure without a live handle to hold it (VCINEW, bad IH): VCIMSG(0, MSG).
+  character(len=VCI_MSG_LEN), save :: global_message = ''
+
+contains
+
+  !> Call the model routine for one task: IERR nonzero becomes a failure (never "not provided").
+  subroutine call_task(self, task, q, v, h, out, stat)
+    class(legacy_model_t), intent(inout) :: self
+    integer, intent(in) :: task
+    real(dp), intent(in) :: q(:), v(:), h
+    real(dp), intent(inout) :: out(*)
+    integer, intent(inout) :: stat
+    real(dp), pointer, contiguous :: rp(:)
+    integer, pointer, contiguous :: ip(:)
+    integer :: ierr
+    call c_f_pointer(self%rpar, rp, [1])
+    call c_f_pointer(self%ipar, ip, [1])
+    ierr = 0
+    call self%fn(task, self%n, self%m, self%n_gaps, q, v, h, out(1), rp, ip, ierr)   ! out(1): sequence association
+    if (ierr /= 0) then
+      stat = 1
+      self%last_ierr = ierr; self%last_task = task
+    end if
+  end subroutine call_task
+
+  subroutine lm_d1(self, q, v, h, out, stat)
+    class(legacy_model_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:), h
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    call call_task(self, TASK_D1, q, v, h, out, stat)
+  end subroutine lm_d1
+
+  subroutine lm_d2(self, q, v, h, out, stat)
+    class(legacy_model_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:), h
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    call call_task(self, TASK_D2, q, v, h, out, stat)
+  end subroutine lm_d2
+
+  subroutine lm_d3(self, q, v, h, out, stat)
+    class(legacy_model_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:), h
+    real(dp), intent(out) :: out
+    integer, intent(inout) :: stat
+    real(dp) :: tmp(1)
+    tmp = 0.0_dp
+    call call_task(self, TASK_D3, q, v, h, tmp, stat)
+    out = tmp(1)
+  end subroutine lm_d3
+
+  subroutine lm_hessian(self, q, v, h, hess, stat)
+    class(legacy_model_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:), h
+    real(dp), intent(out) :: hess(:, :)
+    integer, intent(inout) :: stat
+    if (iand(self%iopt, IOPT_HESSIAN) == 0) then
+      hess = 0.0_dp; stat = VCI_NOT_PROVIDED; return
+    end if
+    call call_task(self, TASK_HESSIAN, q, v, h, hess, stat)
+  end subroutine lm_hessian
+
+  subroutine lm_forms(self, q, omega, stat)
+    class(legacy_model_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: omega(:, :)
+    integer, intent(inout) :: stat
+    call call_task(self, TASK_FORMS, q, q, 0.0_dp, omega, stat)
+  end subroutine lm_forms
+
+  subroutine lm_dconstraint(self, base, other, h, out, stat)
+    class(legacy_model_t), intent(inout) :: self
+    real(dp), intent(in) :: base(:), other(:), h
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    call call_task(self, TASK_DCONSTRAINT, base, other, h, out, stat)
+  end subroutine lm_dconstraint
+
+  subroutine lm_gaps(self, q, g, stat)
+    class(legacy_model_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: g(:)
+    integer, intent(inout) :: stat
+    call call_task(self, TASK_GAPS, q, q, 0.0_dp, g, stat)
+  end subroutine lm_gaps
+
+  subroutine lm_gap_grads(self, q, dg, stat)
+    class(legacy_model_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: dg(:, :)
+    integer, intent(inout) :: stat
+    if (iand(self%iopt, IOPT_GAP_GRADS) == 0) then
+      dg = 0.0_dp; stat = VCI_NOT_PROVIDED; return
+    end if
+    call call_task(self, TASK_GAP_GRADS, q, q, 0.0_dp, dg, stat)
+  end subroutine lm_gap_grads
+
+  subroutine lm_energy(self, q, p, e, stat)
+    class(legacy_model_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), p(:)
+    real(dp), intent(out) :: e
+    integer, intent(inout) :: stat
+    real(dp) :: tmp(1)
+    if (iand(self%iopt, IOPT_ENERGY) == 0) then
+      e = 0.0_dp; stat = VCI_NOT_PROVIDED; return
+    end if
+    tmp = 0.0_dp
+    call call_task(self, TASK_ENERGY, q, p, 0.0_dp, tmp, stat)
+    e = tmp(1)
+  end subroutine lm_energy
+
+  subroutine log_impact(self, impact, stat)
+    class(impact_log_t), intent(inout) :: self
+    type(vci_impact_t), intent(in) :: impact
+    integer, intent(inout) :: stat
+    self%count = self%count + 1
+    if (self%count <= size(self%times)) self%times(self%count) = impact%t
+  end subroutine log_impact
+
+  ! ---------------------------------------------------------------------------------------------
+  ! the handle table behind the external routines
+
+  !> Create model and integrator; ih > 0 on success, 0 on failure (message for VCIMSG(0, ...)).
+  subroutine legacy_new(fn, n, m, ng, iopt, h, rpar, ipar, ih, stat)
+    procedure(vci_legacy_model_fn) :: fn
+    integer, intent(in) :: n, m, ng, iopt
+    real(dp), intent(in) :: h
+    type(c_ptr), intent(in) :: rpar, ipar
+    integer, intent(out) :: ih, stat
+    type(slot_t), allocatable :: grown(:)
+    integer :: i
+    ih = 0
+    if (iopt < 0 .or. iopt > IOPT_HESSIAN + IOPT_GAP_GRADS + IOPT_ENERGY) then
+      write (global_message, '(a,i0,a)') 'VCINEW: IOPT = ', iopt, &
+        ' (need a sum of 1: mixed Hessian, 2: gap gradients, 4: energy)'
+      stat = VCI_ERR_ARGUMENT; return
+    end if
+    if (.not. allocated(slots)) allocate (slots(4))
+    i = findloc(slots%id, 0, dim=1)
+    if (i == 0) then
+      allocate (grown(2 * size(slots)))
+      grown(1:size(slots)) = slots
+      i = size(slots) + 1
+      call move_alloc(grown, slots)
+    end if
+    allocate (slots(i)%model, slots(i)%integ)
+    slots(i)%model%n = n; slots(i)%model%m = m; slots(i)%model%n_gaps = ng
+    slots(i)%model%fn => fn
+    slots(i)%model%iopt = iopt
+    slots(i)%model%rpar = rpar; slots(i)%model%ipar = ipar
+    call slots(i)%integ%create(slots(i)%model, h, stat)
+    if (stat /= VCI_OK) then
+      global_message = 'VCINEW: '//trim(slots(i)%integ%message)
+      deallocate (slots(i)%model, slots(i)%integ)
+      if (all(slots%id == 0)) deallocate (slots)
+      return
+    end if
+    last_id = last_id + 1
+    slots(i)%id = last_id
+    ih = last_id
+  end subroutine legacy_new
+
+  !> The integrator named ih; null (stat = VCI_ERR_ARGUMENT, message for VCIMSG(0, ...)) if none.
+  subroutine legacy_get(ih, who, integ, stat)
+    integer, intent(in) :: ih
+    character(len=*), intent(in) :: who
+    type(vci_integrator_t), pointer, intent(out) :: integ
+    integer, intent(out) :: stat
+    integer :: i
+    integ => null()
+    i = 0
+    if (ih > 0 .and. allocated(slots)) i = findloc(slots%id, ih, dim=1)
+    if (i == 0) then
+      write (global_message, '(a,i0,a)') who//': IH = ', ih, ' names no live integrator (deleted, or VCINEW failed)'
+      stat = VCI_ERR_ARGUMENT; return
+    end if
+    integ => slots(i)%integ
+    slots(i)%model%last_ierr = 0; slots(i)%model%last_task = 0
+    stat = VCI_OK
+  end subroutine legacy_get
+
+  !> After a call into the integrator: name the failing TASK and its IERR. The Newton line search
+  !> backtracks from trial points where the model routine fails, so a routine that keeps failing
+  !> ends as VCI_ERR_NEWTON; it is reported as VCI_ERR_CALLBACK, the Newton message kept.
+  subroutine legacy_after(ih, stat)
+    integer, intent(in) :: ih
+    integer, intent(inout) :: stat
+    integer :: i
+    character(len=48) :: what
+    i = 0
+    if (ih > 0 .and. allocated(slots)) i = findloc(slots%id, ih, dim=1)
+    if (i == 0) return
+    associate (md => slots(i)%model, integ => slots(i)%integ)
+      if ((stat == VCI_ERR_CALLBACK .or. stat == VCI_ERR_NEWTON) .and. md%last_ierr /= 0) then
+        write (what, '(a,i0,a,i0,a)') ' (MODEL returned IERR = ', md%last_ierr, ' for TASK = ', md%last_task, ')'
+        integ%message = trim(integ%message)//trim(what)
+        stat = VCI_ERR_CALLBACK
+        integ%status = stat
+      end if
+    end associate
+  end subroutine legacy_after
+
+  !> Free the integrator named ih (no-op if none); ih becomes 0.
+  subroutine legacy_delete(ih)
+    integer, intent(inout) :: ih
+    integer :: i
+    i = 0
+    if (ih > 0 .and. allocated(slots)) i = findloc(slots%id, ih, dim=1)
+    if (i > 0) then
+      deallocate (slots(i)%integ, slots(i)%model)
+      slots(i)%id = 0
+      if (all(slots%id == 0)) deallocate (slots)   ! nothing left behind at exit
+    end if
+    ih = 0
+  end subroutine legacy_delete
+
+  !> nsteps steps in direction idir; the state and the impact times of this call out.
+  subroutine legacy_advance(integ, nsteps, idir, t, q, p, nimp, timp, stat)
+    type(vci_integrator_t), intent(inout) :: integ
+    integer, intent(in) :: nsteps, idir
+    real(dp), intent(inout) :: t, q(:), p(:), timp(:)
+    integer, intent(out) :: nimp, stat
+    type(impact_log_t) :: log
+    integer :: k
+    allocate (log%times(size(timp)))
+    call integ%integrate(int(nsteps, i8), idir, stat, log)
+    nimp = log%count
+    k = min(nimp, size(timp))
+    timp(1:k) = log%times(1:k)
+    if (integ%initialized) then
+      t = integ%t; q = integ%q; p = integ%p
+    end if
+  end subroutine legacy_advance
+
+  !> The message of the last call on ih, or of the last failure without a live handle.
+  function legacy_message(ih) result(msg)
+    integer, intent(in) :: ih
+    character(len=VCI_MSG_LEN) :: msg
+    integer :: i
+    msg = global_message
+    i = 0
+    if (ih > 0 .and. allocated(slots)) i = findloc(slots%id, ih, dim=1)
+    if (i > 0) msg = slots(i)%integ%message
+  end function legacy_message
+end module vci_legacy
+
+! -------------------------------------------------------------------------------------------------
+! The external routines: no module needed by the caller. Arrays have the sizes of the model (N).
+
+!> Create an integrator of step H over the EXTERNAL routine MODEL; IH > 0 names it. RPAR and IPAR
+!> are handed to MODEL on every call and must stay in place until VCIDEL.
+subroutine vcinew(model, n, m, ng, iopt, h, rpar, ipar, ih, istat)
+  use, intrinsic :: iso_c_binding, only: c_loc
+  use vci_kinds, only: dp
+  use vci_legacy, only: vci_legacy_model_fn, legacy_new
+  implicit none
+  procedure(vci_legacy_model_fn) :: model
+  integer, intent(in) :: n, m, ng, iopt
+  real(dp), intent(in) :: h
+  real(dp), target, intent(inout) :: rpar(*)
+  integer, target, intent(inout) :: ipar(*)
+  integer, intent(out) :: ih, istat
+  call legacy_new(model, n, m, ng, iopt, h, c_loc(rpar(1)), c_loc(ipar(1)), ih, istat)
+end subroutine vcinew
+
+!> Newton tolerances: |r_i| <= ATOL + RTOL * (size of row i's terms); at most MAXIT iterations.
+subroutine vcitol(ih, atol, rtol, maxit, istat)
+  use vci_kinds, only: dp
+  use vci_status, only: VCI_OK
+  use vci_integrator, only: vci_integrator_t
+  use vci_legacy, only: legacy_get
+  implicit none
+  integer, intent(in) :: ih, maxit
+  real(dp), intent(in) :: atol, rtol
+  integer, intent(out) :: istat
+  type(vci_integrator_t), pointer :: integ
+  call legacy_get(ih, 'VCITOL', integ, istat)
+  if (istat == VCI_OK) call integ%set_tolerances(atol, rtol, maxit, istat)
+end subroutine vcitol
+
+!> Impact energy condition: MODE 0 discrete (the paper's, default), 1 hamiltonian (IOPT bit 4).
+subroutine vcieng(ih, mode, istat)
+  use vci_status, only: VCI_OK
+  use vci_integrator, only: vci_integrator_t
+  use vci_legacy, only: legacy_get
+  implicit none
+  integer, intent(in) :: ih, mode
+  integer, intent(out) :: istat
+  type(vci_integrator_t), pointer :: integ
+  call legacy_get(ih, 'VCIENG', integ, istat)
+  if (istat == VCI_OK) call integ%set_impact_energy(mode, istat)
+end subroutine vcieng
+
+!> Start from Q0 at T0 and Q1 at T0 + H: the state becomes (T0 + H, Q1, D2 L_d(Q0, Q1, H)).
+subroutine vciinp(ih, t0, q0, q1, istat)
+  use vci_kinds, only: dp
+  use vci_status, only: VCI_OK
+  use vci_integrator, only: vci_integrator_t
+  use vci_legacy, only: legacy_get, legacy_after
+  implicit none
+  integer, intent(in) :: ih
+  real(dp), intent(in) :: t0, q0(*), q1(*)
+  integer, intent(out) :: istat
+  type(vci_integrator_t), pointer :: integ
+  call legacy_get(ih, 'VCIINP', integ, istat)
+  if (istat /= VCI_OK) return
+  call integ%init_from_pair(t0, q0(1:integ%model%n), q1(1:integ%model%n), istat)
+  call legacy_after(ih, istat)
+end subroutine vciinp
+
+!> Start from (Q0, P0) at T0.
+subroutine vciinm(ih, t0, q0, p0, istat)
+  use vci_kinds, only: dp
+  use vci_status, only: VCI_OK
+  use vci_integrator, only: vci_integrator_t
+  use vci_legacy, only: legacy_get, legacy_after
+  implicit none
+  integer, intent(in) :: ih
+  real(dp), intent(in) :: t0, q0(*), p0(*)
+  integer, intent(out) :: istat
+  type(vci_integrator_t), pointer :: integ
+  call legacy_get(ih, 'VCIINM', integ, istat)
+  if (istat /= VCI_OK) return
+  call integ%init_from_momentum(t0, q0(1:integ%model%n), p0(1:integ%model%n), istat)
+  call legacy_after(ih, istat)
+end subroutine vciinm
+
+!> NSTEPS steps in direction IDIR (+1 forward, -1 backward). Out: the state (T, Q(N), P(N)) (the
+!> last accepted one when ISTAT /= 0), NIMP impacts in this call and the first LTIMP impact times.
+subroutine vciadv(ih, nsteps, idir, t, q, p, nimp, timp, ltimp, istat)
+  use vci_kinds, only: dp
+  use vci_status, only: VCI_OK, VCI_ERR_ARGUMENT
+  use vci_integrator, only: vci_integrator_t
+  use vci_legacy, only: legacy_get, legacy_advance, legacy_after
+  implicit none
+  integer, intent(in) :: ih, nsteps, idir, ltimp
+  real(dp), intent(inout) :: t, q(*), p(*), timp(*)
+  integer, intent(out) :: nimp, istat
+  type(vci_integrator_t), pointer :: integ
+  nimp = 0
+  call legacy_get(ih, 'VCIADV', integ, istat)
+  if (istat /= VCI_OK) return
+  if (ltimp < 0) then
+    write (integ%message, '(a,i0,a)') 'VCIADV: LTIMP = ', ltimp, ' (need >= 0)'
+    integ%status = VCI_ERR_ARGUMENT; istat = VCI_ERR_ARGUMENT; return
+  end if
+  call legacy_advance(integ, nsteps, idir, t, q(1:integ%model%n), p(1:integ%model%n), nimp, timp(1:ltimp), istat)
+  call legacy_after(ih, istat)
+end subroutine vciadv
+
+!> The message of the last call on IH (blank after success); IH = 0 or a dead handle: the last
+!> failure that had no live integrator (a failed VCINEW, a bad IH).
+subroutine vcimsg(ih, msg)
+  use vci_legacy, only: legacy_message
+  implicit none
+  integer, intent(in) :: ih
+  character(len=*), intent(out) :: msg
+  msg = legacy_message(ih)
+end subroutine vcimsg
+
+!> Free integrator IH; IH becomes 0. Harmless on 0 or a deleted handle.
+subroutine vcidel(ih)
+  use vci_legacy, only: legacy_delete
+  implicit none
+  integer, intent(inout) :: ih
+  call legacy_delete(ih)
+end subroutine vcidel
+
+!> One call: create, start from the pair (Q0 at T0, Q1 at T0 + H), NSTEPS steps forward with the
+!> default tolerances, free. Out: the final state (T, Q, P), NIMP impacts and the first LTIMP
+!> impact times in TIMP, ISTAT, and MSG (blank on success; else names the step, time and cause).
+subroutine vcirun(model, n, m, ng, iopt, h, t0, q0, q1, nsteps, t, q, p, nimp, timp, ltimp, rpar, ipar, istat, msg)
+  use vci_kinds, only: dp
+  use vci_status, only: VCI_OK
+  use vci_legacy, only: vci_legacy_model_fn, legacy_message
+  implicit none
+  procedure(vci_legacy_model_fn) :: model
+  integer, intent(in) :: n, m, ng, iopt, nsteps, ltimp
+  real(dp), intent(in) :: h, t0, q0(*), q1(*)
+  real(dp), intent(inout) :: t, q(*), p(*), timp(*)
+  real(dp), target, intent(inout) :: rpar(*)
+  integer, target, intent(inout) :: ipar(*)
+  integer, intent(out) :: nimp, istat
+  character(len=*), intent(out) :: msg
+  integer :: ih
+  interface
+    subroutine vcinew(model, n, m, ng, iopt, h, rpar, ipar, ih, istat)
+      import :: dp, vci_legacy_model_fn
+      procedure(vci_legacy_model_fn) :: model
+      integer, intent(in) :: n, m, ng, iopt
+      real(dp), intent(in) :: h
+      real(dp), target, intent(inout) :: rpar(*)
+      integer, target, intent(inout) :: ipar(*)
+      integer, intent(out) :: ih, istat
+    end subroutine vcinew
+  end interface
+  nimp = 0
+  msg = ''
+  call vcinew(model, n, m, ng, iopt, h, rpar, ipar, ih, istat)
+  if (istat == VCI_OK) call vciinp(ih, t0, q0, q1, istat)
+  if (istat == VCI_OK) call vciadv(ih, nsteps, 1, t, q, p, nimp, timp, ltimp, istat)
+  if (istat /= VCI_OK) msg = legacy_message(ih)
+  call vcidel(ih)
+end subroutine vcirun

@@ -1,0 +1,755 @@
+/* Tests of the C API against include/vci.h: every function, the numbers it gives on the paper's
+ * scenes, and bad input (NULL and destroyed handles, NULL arrays, bad sizes, failing callbacks,
+ * NaN from callbacks). Usage: vci_api_test <suite>; one CTest entry per suite (CMakeLists.txt).
+ * Each check prints what it compared; the exit status is the number of failed checks. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include "vci.h"
+#include "scenes.h"
+
+static int failures = 0;
+
+#define CHECK(cond) check((cond), #cond, __FILE__, __LINE__)
+#define CHECK_STATUS(call, expected) check_status((call), (expected), #call, __LINE__)
+#define CHECK_CLOSE(actual, expected, tol) check_close((actual), (expected), (tol), #actual, __LINE__)
+
+static void check(int ok, const char *what, const char *file, int line) {
+  if (!ok) {
+    ++failures;
+    printf("FAIL %s:%d: %s\n", file, line, what);
+  }
+}
+
+static void check_status(int actual, int expected, const char *what, int line) {
+  if (actual != expected) {
+    ++failures;
+    printf("FAIL line %d: %s returned %d (%s), expected %d (%s)\n", line, what, actual, vci_status_string(actual),
+           expected, vci_status_string(expected));
+  }
+}
+
+/* |actual - expected| <= tol, and never passes for NaN */
+static void check_close(double actual, double expected, double tol, const char *what, int line) {
+  if (!(fabs(actual - expected) <= tol)) {
+    ++failures;
+    printf("FAIL line %d: %s = %.17g, expected %.17g within %.3g (off by %.3g)\n", line, what, actual, expected, tol,
+           fabs(actual - expected));
+  }
+}
+
+/* the message of the last call on integ (or the library-wide one for NULL) contains `part` */
+static void check_message(vci_integrator integ, const char *part, int line) {
+  char msg[512];
+  vci_last_error(integ, msg, sizeof msg);
+  if (strstr(msg, part) == NULL) {
+    ++failures;
+    printf("FAIL line %d: message \"%s\" does not contain \"%s\"\n", line, msg, part);
+  }
+}
+#define CHECK_MESSAGE(integ, part) check_message((integ), (part), __LINE__)
+
+/* The first impact time of the ellipse at h = 1e-2 with rtol = 1e-12, from the Fortran API
+ * (vci_integrator_t on examples/scenes/vci_scene_ellipse.f90; build/bin/ellipse prints it
+ * rounded as t=.750564104357). The C callbacks do the same arithmetic, so the C run agrees to
+ * round-off; 1e-12 is the Newton tolerance. */
+static const double ELLIPSE_FIRST_IMPACT = 7.50564104356950312e-01;
+static const double ELLIPSE_SECOND_IMPACT = 1.15253289965270556e+00;
+
+/* ---- helpers: an ellipse integrator at h = 1e-2 started from the paper's pair ---- */
+static ellipse_params ellipse_par;
+
+static vci_integrator make_ellipse(vci_model *model, const vci_callbacks *cb, double h) {
+  vci_integrator integ = NULL;
+  double t0, q0[3], q1[3];
+  ellipse_par = ellipse_default;
+  CHECK_STATUS(vci_model_create(model, 3, 0, 1, cb, &ellipse_par), VCI_OK);
+  CHECK_STATUS(vci_integrator_create(&integ, *model, h), VCI_OK);
+  CHECK_STATUS(vci_set_tolerances(integ, 0.0, 1e-12, 30), VCI_OK);
+  ellipse_initial_pair(h, &t0, q0, q1);
+  CHECK_STATUS(vci_init_from_pair(integ, t0, q0, q1), VCI_OK);
+  return integ;
+}
+
+/* what the impact callback saw; g_at_q = the ellipse's gap at q when `ellipse` is set */
+typedef struct { int ellipse, count; double t[16], alpha[16], impulse[16], g_at_q[16]; int gap[16]; } impact_log;
+
+static int log_impact(double t, double alpha, int gap, const double *q, double impulse, void *user) {
+  impact_log *log = (impact_log *)user;
+  double g = NAN;
+  if (log->count < 16) {
+    log->t[log->count] = t; log->alpha[log->count] = alpha; log->gap[log->count] = gap;
+    log->impulse[log->count] = impulse;
+    if (log->ellipse) ellipse_gaps(3, 1, q, &g, &ellipse_par);
+    log->g_at_q[log->count] = g;
+  }
+  log->count++;
+  return 0;
+}
+
+/* ================================================================================================ */
+static void suite_version(void) {
+  static const char *names[] = {"ok", "invalid argument", "user callback failed", "non-finite value",
+                                "Newton iteration did not converge", "impact could not be resolved",
+                                "too many impacts in one step", "state outside the admissible set",
+                                "input/output error", "call out of order"};
+  int s;
+  CHECK(vci_version() == VCI_VERSION_NUMBER);
+  CHECK(vci_version() == 100); /* 0.1.0, as project(VERSION) in CMakeLists.txt */
+  for (s = VCI_OK; s <= VCI_ERR_STATE; ++s) {
+    CHECK(vci_status_string(s) != NULL);
+    if (strcmp(vci_status_string(s), names[s]) != 0) {
+      ++failures;
+      printf("FAIL: vci_status_string(%d) = \"%s\", expected \"%s\"\n", s, vci_status_string(s), names[s]);
+    }
+  }
+  CHECK(strcmp(vci_status_string(-1), "unknown status") == 0);
+  CHECK(strcmp(vci_status_string(10), "unknown status") == 0);
+  CHECK(strcmp(vci_status_string(123456), "unknown status") == 0);
+  CHECK(VCI_ERR_STATE == 9 && VCI_ERR_IO == 8 && VCI_ERR_ARGUMENT == 1);
+}
+
+/* ================================================================================================ */
+static void suite_handles(void) {
+  vci_callbacks cb = ellipse_callbacks();
+  vci_model model = NULL, model_copy, null_model = NULL;
+  vci_integrator integ = NULL, copy, null_integ = NULL;
+  double t, q[3], p[3], lambda[1], e;
+  long k, steps, impacts, iters;
+  char buf[256];
+
+  /* destroy functions are NULL-safe */
+  vci_model_destroy(NULL);
+  vci_model_destroy(&null_model);
+  vci_integrator_destroy(NULL);
+  vci_integrator_destroy(&null_integ);
+  CHECK(null_model == NULL && null_integ == NULL);
+
+  /* NULL handles: every call gives VCI_ERR_ARGUMENT and a library-wide message */
+  CHECK_STATUS(vci_integrator_create(&integ, NULL, 1e-2), VCI_ERR_ARGUMENT);
+  CHECK(integ == NULL);
+  CHECK_MESSAGE(NULL, "model handle is NULL");
+  CHECK_STATUS(vci_set_tolerances(NULL, 0.0, 1e-12, 30), VCI_ERR_ARGUMENT);
+  CHECK_MESSAGE(NULL, "vci_set_tolerances: the integrator handle is NULL");
+  CHECK_STATUS(vci_set_impact_energy(NULL, 0), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_set_max_impacts(NULL, 4), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_init_from_pair(NULL, 0.0, q, q), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_init_from_momentum(NULL, 0.0, q, p), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_step(NULL, 1), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_integrate(NULL, 10, 1), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_get_state(NULL, &t, q, p), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_get_multipliers(NULL, lambda), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_get_energy(NULL, &e), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_get_index(NULL, &k), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_get_stats(NULL, &steps, &impacts, &iters), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_set_impact_callback(NULL, log_impact, NULL), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_open_output(NULL, "x.h5"), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_close_output(NULL), VCI_ERR_ARGUMENT);
+  CHECK_MESSAGE(NULL, "vci_close_output: the integrator handle is NULL");
+
+  /* NULL out-pointers of the create functions */
+  CHECK_STATUS(vci_model_create(NULL, 3, 0, 1, &cb, NULL), VCI_ERR_ARGUMENT);
+  CHECK_MESSAGE(NULL, "vci_model_create: the model argument is NULL");
+  integ = make_ellipse(&model, &cb, 1e-2);
+  CHECK_STATUS(vci_integrator_create(NULL, model, 1e-2), VCI_ERR_ARGUMENT);
+
+  /* a model handle is not an integrator handle, and the reverse */
+  CHECK_STATUS(vci_step((vci_integrator)model, 1), VCI_ERR_ARGUMENT);
+  CHECK_MESSAGE(NULL, "not a live integrator handle");
+  {
+    vci_integrator other = NULL;
+    CHECK_STATUS(vci_integrator_create(&other, (vci_model)integ, 1e-2), VCI_ERR_ARGUMENT);
+    CHECK_MESSAGE(NULL, "not a live model handle");
+    CHECK(other == NULL);
+  }
+
+  /* the integrator keeps its model alive: destroy the model first and keep integrating */
+  model_copy = model;
+  vci_model_destroy(&model);
+  CHECK(model == NULL);
+  CHECK_STATUS(vci_integrate(integ, 100, 1), VCI_OK);
+  CHECK_STATUS(vci_get_index(integ, &k), VCI_OK);
+  CHECK(k == 101);
+  /* ... but the destroyed model handle (a stale copy) is refused */
+  {
+    vci_integrator other = NULL;
+    CHECK_STATUS(vci_integrator_create(&other, model_copy, 1e-2), VCI_ERR_ARGUMENT);
+    CHECK_MESSAGE(NULL, "not a live model handle");
+  }
+  vci_model_destroy(&model_copy); /* destroying it again through the copy: ignored */
+  CHECK(model_copy == NULL);
+
+  /* destroyed integrator: the variable is NULL; a stale copy is refused, not dereferenced */
+  copy = integ;
+  vci_integrator_destroy(&integ);
+  CHECK(integ == NULL);
+  CHECK_STATUS(vci_step(copy, 1), VCI_ERR_ARGUMENT);
+  CHECK_MESSAGE(NULL, "vci_step: not a live integrator handle");
+  CHECK_STATUS(vci_get_state(copy, &t, q, p), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_last_error(copy, buf, sizeof buf), VCI_ERR_ARGUMENT);
+  CHECK(strstr(buf, "not a live integrator handle") != NULL);
+  vci_integrator_destroy(&copy); /* double destroy through the copy: ignored */
+  CHECK(copy == NULL);
+
+  /* many handles at once (the registry grows), destroyed in another order */
+  {
+    vci_model models[20];
+    vci_integrator integs[20];
+    int i;
+    ellipse_par = ellipse_default;
+    for (i = 0; i < 20; ++i) {
+      CHECK_STATUS(vci_model_create(&models[i], 3, 0, 1, &cb, &ellipse_par), VCI_OK);
+      CHECK_STATUS(vci_integrator_create(&integs[i], models[i], 1e-2), VCI_OK);
+    }
+    for (i = 0; i < 20; i += 2) vci_model_destroy(&models[i]);
+    for (i = 19; i >= 0; --i) CHECK_STATUS(vci_set_max_impacts(integs[i], 8), VCI_OK);
+    for (i = 0; i < 20; ++i) vci_integrator_destroy(&integs[i]);
+    for (i = 1; i < 20; i += 2) vci_model_destroy(&models[i]);
+    for (i = 0; i < 20; ++i) CHECK(models[i] == NULL && integs[i] == NULL);
+  }
+}
+
+/* ================================================================================================ */
+static void suite_arguments(void) {
+  vci_callbacks cb = ellipse_callbacks(), partial;
+  vci_model model = (vci_model)&cb; /* garbage that create must overwrite with NULL on failure */
+  vci_integrator integ = NULL;
+  double t0, q0[3], q1[3], bad[3], t, q[3], e, lambda[1];
+  long k;
+  char buf[16];
+  int i;
+
+  ellipse_par = ellipse_default;
+  /* sizes */
+  CHECK_STATUS(vci_model_create(&model, 0, 0, 1, &cb, &ellipse_par), VCI_ERR_ARGUMENT);
+  CHECK(model == NULL);
+  CHECK_MESSAGE(NULL, "n = 0");
+  CHECK_STATUS(vci_model_create(&model, 3, -1, 1, &cb, &ellipse_par), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_model_create(&model, 3, 4, 1, &cb, &ellipse_par), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_model_create(&model, 3, 0, -1, &cb, &ellipse_par), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_model_create(&model, -5, 0, 0, &cb, &ellipse_par), VCI_ERR_ARGUMENT);
+  /* callbacks */
+  CHECK_STATUS(vci_model_create(&model, 3, 0, 1, NULL, &ellipse_par), VCI_ERR_ARGUMENT);
+  CHECK_MESSAGE(NULL, "callbacks argument is NULL");
+  partial = cb; partial.d1_ld = NULL;
+  CHECK_STATUS(vci_model_create(&model, 3, 0, 1, &partial, &ellipse_par), VCI_ERR_ARGUMENT);
+  CHECK_MESSAGE(NULL, "d1_ld is NULL");
+  partial = cb; partial.d3_ld = NULL;
+  CHECK_STATUS(vci_model_create(&model, 3, 0, 1, &partial, &ellipse_par), VCI_ERR_ARGUMENT);
+  CHECK_MESSAGE(NULL, "d3_ld is NULL");
+  partial = cb; partial.gaps = NULL;
+  CHECK_STATUS(vci_model_create(&model, 3, 0, 1, &partial, &ellipse_par), VCI_ERR_ARGUMENT);
+  CHECK_MESSAGE(NULL, "gaps (needed as ngaps > 0)");
+  CHECK_STATUS(vci_model_create(&model, 3, 0, 0, &partial, &ellipse_par), VCI_OK); /* no walls: fine */
+  vci_model_destroy(&model);
+  CHECK_STATUS(vci_model_create(&model, 3, 1, 1, &cb, &ellipse_par), VCI_ERR_ARGUMENT);
+  CHECK_MESSAGE(NULL, "constraint");
+  CHECK(model == NULL);
+
+  /* step length */
+  CHECK_STATUS(vci_model_create(&model, 3, 0, 1, &cb, &ellipse_par), VCI_OK);
+  CHECK_STATUS(vci_integrator_create(&integ, model, 0.0), VCI_ERR_ARGUMENT);
+  CHECK(integ == NULL);
+  CHECK_MESSAGE(NULL, "step length");
+  CHECK_STATUS(vci_integrator_create(&integ, model, -1e-2), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_integrator_create(&integ, model, NAN), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_integrator_create(&integ, model, INFINITY), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_integrator_create(&integ, model, 1e-2), VCI_OK);
+
+  /* settings */
+  CHECK_STATUS(vci_set_tolerances(integ, -1.0, 1e-12, 30), VCI_ERR_ARGUMENT);
+  CHECK_MESSAGE(integ, "set_tolerances");
+  CHECK_STATUS(vci_set_tolerances(integ, 0.0, 0.0, 30), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_set_tolerances(integ, 0.0, NAN, 30), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_set_tolerances(integ, 0.0, 1e-12, 0), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_set_tolerances(integ, 0.0, 1e-12, 30), VCI_OK);
+  CHECK_MESSAGE(integ, ""); /* success clears the message */
+  CHECK_STATUS(vci_set_impact_energy(integ, 2), VCI_ERR_ARGUMENT);
+  CHECK_MESSAGE(integ, "unknown mode 2");
+  CHECK_STATUS(vci_set_impact_energy(integ, -1), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_set_max_impacts(integ, 0), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_set_max_impacts(integ, 16), VCI_OK);
+
+  /* calls out of order */
+  CHECK_STATUS(vci_step(integ, 1), VCI_ERR_STATE);
+  CHECK_MESSAGE(integ, "initialise the integrator first");
+  CHECK_STATUS(vci_integrate(integ, 5, 1), VCI_ERR_STATE);
+  CHECK_STATUS(vci_get_state(integ, &t, q, NULL), VCI_ERR_STATE);
+  CHECK_STATUS(vci_get_energy(integ, &e), VCI_ERR_STATE);
+  CHECK_STATUS(vci_get_index(integ, &k), VCI_ERR_STATE);
+
+  /* NULL and non-finite initial data; inadmissible initial data */
+  ellipse_initial_pair(1e-2, &t0, q0, q1);
+  CHECK_STATUS(vci_init_from_pair(integ, t0, NULL, q1), VCI_ERR_ARGUMENT);
+  CHECK_MESSAGE(integ, "q0 or q1 is NULL");
+  CHECK_STATUS(vci_init_from_pair(integ, t0, q0, NULL), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_init_from_momentum(integ, t0, q0, NULL), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_init_from_momentum(integ, t0, NULL, q0), VCI_ERR_ARGUMENT);
+  for (i = 0; i < 3; ++i) bad[i] = q1[i];
+  bad[1] = NAN;
+  CHECK_STATUS(vci_init_from_pair(integ, t0, q0, bad), VCI_ERR_ARGUMENT);
+  CHECK_MESSAGE(integ, "NaN or Inf");
+  CHECK_STATUS(vci_init_from_pair(integ, INFINITY, q0, q1), VCI_ERR_ARGUMENT);
+  bad[1] = q1[1];
+  bad[2] = 0.1; /* the ellipse's centre below the floor */
+  CHECK_STATUS(vci_init_from_pair(integ, t0, bad, bad), VCI_ERR_INADMISSIBLE);
+  CHECK_MESSAGE(integ, "outside the admissible set");
+  CHECK_STATUS(vci_step(integ, 1), VCI_ERR_STATE); /* a failed init leaves no state */
+
+  /* now properly initialised: bad directions and counts */
+  CHECK_STATUS(vci_init_from_pair(integ, t0, q0, q1), VCI_OK);
+  CHECK_STATUS(vci_step(integ, 0), VCI_ERR_ARGUMENT);
+  CHECK_MESSAGE(integ, "direction 0");
+  CHECK_STATUS(vci_step(integ, 2), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_integrate(integ, 10, -2), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_integrate(integ, -1, 1), VCI_ERR_ARGUMENT);
+  CHECK_MESSAGE(integ, "nsteps = -1");
+  CHECK_STATUS(vci_integrate(integ, 0, 1), VCI_OK);
+  CHECK_STATUS(vci_get_index(integ, &k), VCI_OK);
+  CHECK(k == 1);
+
+  /* getters: NULL outputs */
+  CHECK_STATUS(vci_get_state(integ, NULL, NULL, NULL), VCI_OK); /* all skipped */
+  CHECK_STATUS(vci_get_energy(integ, NULL), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_get_index(integ, NULL), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_get_multipliers(integ, NULL), VCI_OK); /* m = 0: nothing to write */
+  CHECK_STATUS(vci_get_multipliers(integ, lambda), VCI_OK);
+  CHECK_STATUS(vci_get_stats(integ, NULL, NULL, NULL), VCI_OK);
+
+  /* vci_last_error: NULL buffer, size < 1, truncation with NUL */
+  CHECK_STATUS(vci_step(integ, 5), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_last_error(integ, NULL, 16), VCI_ERR_ARGUMENT);
+  memset(buf, 'x', sizeof buf);
+  CHECK_STATUS(vci_last_error(integ, buf, 0), VCI_ERR_ARGUMENT);
+  CHECK(buf[0] == 'x'); /* nothing written */
+  CHECK_STATUS(vci_last_error(integ, buf, -3), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_last_error(integ, buf, 1), VCI_OK);
+  CHECK(buf[0] == '\0' && buf[1] == 'x');
+  CHECK_STATUS(vci_last_error(integ, buf, 8), VCI_OK);
+  CHECK(strcmp(buf, "step: d") == 0 && buf[8] == 'x'); /* 7 characters, NUL, untouched after */
+
+  /* output: NULL or empty path */
+  CHECK_STATUS(vci_open_output(integ, NULL), VCI_ERR_ARGUMENT);
+  CHECK_MESSAGE(integ, "path is NULL");
+  CHECK_STATUS(vci_open_output(integ, ""), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_close_output(integ), VCI_OK); /* nothing open: no-op */
+
+  /* hamiltonian impact condition without the energy callback */
+  {
+    vci_callbacks no_energy = cb;
+    vci_model m2 = NULL;
+    vci_integrator i2 = NULL;
+    no_energy.energy = NULL;
+    CHECK_STATUS(vci_model_create(&m2, 3, 0, 1, &no_energy, &ellipse_par), VCI_OK);
+    CHECK_STATUS(vci_integrator_create(&i2, m2, 1e-2), VCI_OK);
+    CHECK_STATUS(vci_set_impact_energy(i2, VCI_IMPACT_HAMILTONIAN), VCI_ERR_ARGUMENT);
+    CHECK_MESSAGE(i2, "energy");
+    CHECK_STATUS(vci_set_impact_energy(i2, VCI_IMPACT_DISCRETE), VCI_OK);
+    vci_integrator_destroy(&i2);
+    vci_model_destroy(&m2);
+  }
+  vci_integrator_destroy(&integ);
+  vci_model_destroy(&model);
+}
+
+/* ================================================================================================ */
+/* failing callbacks: a wrapper around the ellipse that fails (or returns NaN) from a given call on */
+typedef struct {
+  ellipse_params e;
+  int which;        /* 1 d1, 2 d2, 3 d3, 4 hessian, 7 gaps, 8 gap grads, 9 energy */
+  int nan;          /* 0: return fail_rc; 1: return 0 with a NaN output */
+  int calls, fail_from, fail_rc;
+} failing_params;
+
+static int failing_now(failing_params *f, int which) {
+  if (f->which != which) return 0;
+  return ++f->calls >= f->fail_from;
+}
+
+#define FAILING(name, which, call, out, nout)                                                         \
+  static int name##_f(int n, const double *q, const double *v, double h, double *out_, void *user) { \
+    failing_params *f = (failing_params *)user;                                                       \
+    int rc = call(n, q, v, h, out_, &f->e), i;                                                        \
+    if (failing_now(f, which)) {                                                                      \
+      if (!f->nan) return f->fail_rc;                                                                 \
+      for (i = 0; i < (nout); ++i) out_[i] = NAN;                                                     \
+    }                                                                                                 \
+    return rc;                                                                                        \
+  }
+FAILING(d1, 1, ellipse_d1, out, 3)
+FAILING(d2, 2, ellipse_d2, out, 3)
+FAILING(d3, 3, ellipse_d3, out, 1)
+FAILING(hess, 4, ellipse_hessian, out, 9)
+
+static int gaps_f(int n, int ng, const double *q, double *g, void *user) {
+  failing_params *f = (failing_params *)user;
+  int rc = ellipse_gaps(n, ng, q, g, &f->e);
+  if (failing_now(f, 7)) {
+    if (!f->nan) return f->fail_rc;
+    g[0] = NAN;
+  }
+  return rc;
+}
+
+static int energy_f(int n, const double *q, const double *p, double *e, void *user) {
+  failing_params *f = (failing_params *)user;
+  int rc = ellipse_energy(n, q, p, e, &f->e);
+  if (failing_now(f, 9)) {
+    if (!f->nan) return f->fail_rc;
+    e[0] = NAN;
+  }
+  return rc;
+}
+
+/* Run the ellipse for 200 steps with callback `which` failing from its call number `from`; check
+ * the status, the message and that the state is a state of the clean run (the last accepted one). */
+static void run_failing(int which, int nan, int from, int hamiltonian, int expected, const char *part, int line) {
+  failing_params f;
+  vci_callbacks cb = {0};
+  vci_model model = NULL;
+  vci_integrator integ = NULL, clean = NULL;
+  vci_model clean_model = NULL;
+  vci_callbacks clean_cb = ellipse_callbacks();
+  double t0, q0[3], q1[3], q[3], qc[3], t, tc;
+  long k = -1, kc;
+  int status, i;
+  char msg[512];
+
+  f.e = ellipse_default; f.which = which; f.nan = nan; f.calls = 0; f.fail_from = from; f.fail_rc = 7;
+  cb.d1_ld = d1_f; cb.d2_ld = d2_f; cb.d3_ld = d3_f; cb.mixed_hessian = hess_f; cb.gaps = gaps_f;
+  cb.gap_gradients = NULL; cb.energy = energy_f;
+  CHECK_STATUS(vci_model_create(&model, 3, 0, 1, &cb, &f), VCI_OK);
+  CHECK_STATUS(vci_integrator_create(&integ, model, 1e-2), VCI_OK);
+  CHECK_STATUS(vci_set_tolerances(integ, 0.0, 1e-12, 30), VCI_OK);
+  if (hamiltonian) CHECK_STATUS(vci_set_impact_energy(integ, VCI_IMPACT_HAMILTONIAN), VCI_OK);
+  ellipse_initial_pair(1e-2, &t0, q0, q1);
+  status = vci_init_from_pair(integ, t0, q0, q1);
+  if (status == VCI_OK) status = vci_integrate(integ, 200, 1);
+  check_status(status, expected, "failing-callback run", line);
+  vci_last_error(integ, msg, sizeof msg);
+  if (strstr(msg, part) == NULL) {
+    ++failures;
+    printf("FAIL line %d: message \"%s\" does not contain \"%s\"\n", line, msg, part);
+  } else {
+    printf("  line %d: %s: %s\n", line, vci_status_string(status), msg);
+  }
+  /* the state is the last accepted one: equal to the clean run's state at the same index */
+  if (vci_get_index(integ, &k) == VCI_OK && k >= 1) {
+    vci_get_state(integ, &t, q, NULL);
+    clean = make_ellipse(&clean_model, &clean_cb, 1e-2);
+    if (hamiltonian) vci_set_impact_energy(clean, VCI_IMPACT_HAMILTONIAN);
+    vci_integrate(clean, k - 1, 1);
+    vci_get_state(clean, &tc, qc, NULL);
+    vci_get_index(clean, &kc);
+    check(kc == k, "clean run reaches the same index", __FILE__, line);
+    for (i = 0; i < 3; ++i) check_close(q[i], qc[i], 1e-13 * (1.0 + fabs(qc[i])), "state after failure", line);
+    check_close(t, tc, 1e-14, "time after failure", line);
+    vci_integrator_destroy(&clean);
+    vci_model_destroy(&clean_model);
+  }
+  vci_integrator_destroy(&integ);
+  vci_model_destroy(&model);
+}
+
+static int stop_at_second_impact(double t, double alpha, int gap, const double *q, double impulse, void *user) {
+  int *count = (int *)user;
+  (void)t; (void)alpha; (void)gap; (void)q; (void)impulse;
+  return ++*count == 2 ? 42 : 0;
+}
+
+static void suite_callbacks(void) {
+  /* failing and NaN-producing callbacks, at the initial pair and in mid-run */
+  run_failing(2, 0, 1, 0, VCI_ERR_CALLBACK, "the C callback d2_ld returned 7", __LINE__);   /* D2 at the pair */
+  run_failing(2, 1, 1, 0, VCI_ERR_NONFINITE, "init_from_pair", __LINE__);           /* NaN momentum at the pair */
+  run_failing(1, 0, 50, 0, VCI_ERR_CALLBACK, "step from index", __LINE__);          /* D1 mid-run */
+  run_failing(1, 0, 50, 0, VCI_ERR_CALLBACK, "d1_ld returned 7", __LINE__);
+  run_failing(1, 1, 50, 0, VCI_ERR_NONFINITE, "d1_ld returned NaN", __LINE__);           /* NaN D1 mid-run */
+  run_failing(3, 0, 5, 0, VCI_ERR_CALLBACK, "D3", __LINE__);                        /* D3 (energy) */
+  run_failing(3, 1, 5, 0, VCI_ERR_NONFINITE, "D3", __LINE__);
+  run_failing(4, 0, 30, 0, VCI_ERR_CALLBACK, "Hessian", __LINE__);                  /* analytic Hessian */
+  run_failing(4, 1, 30, 0, VCI_ERR_NONFINITE, "Hessian", __LINE__);
+  run_failing(7, 0, 2, 0, VCI_ERR_CALLBACK, "gaps returned 7", __LINE__);                     /* gaps at the pair */
+  run_failing(7, 0, 100, 0, VCI_ERR_CALLBACK, "gap", __LINE__);                     /* gaps mid-run */
+  run_failing(7, 1, 100, 0, VCI_ERR_NONFINITE, "gap", __LINE__);
+  run_failing(9, 0, 2, 1, VCI_ERR_CALLBACK, "energy", __LINE__);                    /* H at the first impact */
+  run_failing(9, 1, 2, 1, VCI_ERR_NONFINITE, "energy", __LINE__);
+
+  /* a failing impact callback: VCI_ERR_CALLBACK, its code in the message, the step was accepted */
+  {
+    vci_callbacks cb = ellipse_callbacks();
+    vci_model model = NULL;
+    vci_integrator integ = make_ellipse(&model, &cb, 1e-2);
+    int count = 0;
+    double t;
+    CHECK_STATUS(vci_set_impact_callback(integ, stop_at_second_impact, &count), VCI_OK);
+    CHECK_STATUS(vci_integrate(integ, 200, 1), VCI_ERR_CALLBACK);
+    CHECK_MESSAGE(integ, "impact callback returned 42");
+    CHECK(count == 2);
+    CHECK_STATUS(vci_get_state(integ, &t, NULL, NULL), VCI_OK);
+    /* the state is the end of the step containing the second impact */
+    CHECK(t > ELLIPSE_SECOND_IMPACT && t - 1e-2 < ELLIPSE_SECOND_IMPACT);
+    /* the run continues from there once the callback is removed */
+    CHECK_STATUS(vci_set_impact_callback(integ, NULL, NULL), VCI_OK);
+    CHECK_STATUS(vci_integrate(integ, 10, 1), VCI_OK);
+    vci_integrator_destroy(&integ);
+    vci_model_destroy(&model);
+  }
+}
+
+/* ================================================================================================ */
+static void suite_ellipse(void) {
+  vci_callbacks cb = ellipse_callbacks();
+  vci_model model = NULL;
+  vci_integrator integ;
+  impact_log log;
+  double h = 1e-2, t0, q0[3], q1[3], t, q[3], p[3], p1[3], e, e1, qf[3], pf[3];
+  long k, steps, impacts, iters;
+  int i;
+
+  integ = make_ellipse(&model, &cb, h);
+  /* the state vci_init_from_pair leaves: (t0 + h, q1, D2 L_d(q0, q1, h)), index 1, E_d(q0, q1, h) */
+  ellipse_initial_pair(h, &t0, q0, q1);
+  ellipse_d2(3, q0, q1, h, p1, &ellipse_par);
+  ellipse_d3(3, q0, q1, h, &e1, &ellipse_par);
+  CHECK_STATUS(vci_get_state(integ, &t, q, p), VCI_OK);
+  CHECK_STATUS(vci_get_index(integ, &k), VCI_OK);
+  CHECK_STATUS(vci_get_energy(integ, &e), VCI_OK);
+  CHECK(k == 1);
+  CHECK_CLOSE(t, t0 + h, 1e-15);
+  for (i = 0; i < 3; ++i) {
+    CHECK(q[i] == q1[i]); /* copied */
+    CHECK_CLOSE(p[i], p1[i], 1e-14 * (1.0 + fabs(p1[i])));
+  }
+  CHECK_CLOSE(e, -e1, 1e-13 * fabs(e1)); /* E_d = -D3 L_d */
+
+  /* 200 steps to t = 2.005: two impacts, at the Fortran API's times (1e-12: Newton tolerance) */
+  memset(&log, 0, sizeof log);
+  log.ellipse = 1;
+  CHECK_STATUS(vci_set_impact_callback(integ, log_impact, &log), VCI_OK);
+  CHECK_STATUS(vci_integrate(integ, 200, 1), VCI_OK);
+  CHECK_STATUS(vci_get_stats(integ, &steps, &impacts, &iters), VCI_OK);
+  CHECK(steps == 200);
+  CHECK(impacts == 2 && log.count == 2);
+  CHECK(iters >= 200); /* at least one Newton iteration per step */
+  CHECK_CLOSE(log.t[0], ELLIPSE_FIRST_IMPACT, 1e-12);
+  CHECK_CLOSE(log.t[1], ELLIPSE_SECOND_IMPACT, 1e-12);
+  for (i = 0; i < 2; ++i) {
+    CHECK(log.gap[i] == 0);                      /* 0-based gap index */
+    CHECK(log.alpha[i] > 0.0 && log.alpha[i] < 1.0);
+    CHECK(log.impulse[i] > 0.0);                 /* the floor pushes up */
+    CHECK_CLOSE(log.g_at_q[i], 0.0, 1e-10);      /* the impact configuration is on the wall */
+  }
+  CHECK_CLOSE(log.alpha[0], 0.556410, 5e-7);     /* as printed by build/bin/ellipse */
+  CHECK_STATUS(vci_get_state(integ, &t, qf, pf), VCI_OK);
+  CHECK_CLOSE(t, 2.005, 1e-13);
+  CHECK_STATUS(vci_get_index(integ, &k), VCI_OK);
+  CHECK(k == 201);
+
+  /* backward with the (-) scheme retraces the run through both impacts back to the pair */
+  CHECK_STATUS(vci_integrate(integ, 200, -1), VCI_OK);
+  CHECK_STATUS(vci_get_state(integ, &t, q, p), VCI_OK);
+  CHECK_CLOSE(t, t0 + h, 1e-13);
+  for (i = 0; i < 3; ++i) CHECK_CLOSE(q[i], q1[i], 1e-8); /* Newton tolerance amplified over 400 steps */
+  CHECK(log.count == 4);
+  CHECK_CLOSE(log.t[2], ELLIPSE_SECOND_IMPACT, 1e-8);
+  CHECK_CLOSE(log.t[3], ELLIPSE_FIRST_IMPACT, 1e-8);
+
+  /* single steps agree with vci_integrate bit for bit */
+  {
+    vci_model m2 = NULL;
+    vci_integrator i2 = make_ellipse(&m2, &cb, h);
+    for (i = 0; i < 200; ++i) CHECK_STATUS(vci_step(i2, 1), VCI_OK);
+    CHECK_STATUS(vci_get_state(i2, &t, q, p), VCI_OK);
+    for (i = 0; i < 3; ++i) CHECK(q[i] == qf[i] && p[i] == pf[i]);
+    vci_integrator_destroy(&i2);
+    vci_model_destroy(&m2);
+  }
+
+  /* starting from (q1, p1) at t0 + h instead of the pair gives the same run to the solver tolerance */
+  CHECK_STATUS(vci_init_from_momentum(integ, t0 + h, q1, p1), VCI_OK);
+  CHECK_STATUS(vci_get_index(integ, &k), VCI_OK);
+  CHECK(k == 0);
+  CHECK_STATUS(vci_get_energy(integ, &e), VCI_OK);
+  CHECK(e != e); /* NaN: no step taken yet */
+  CHECK_STATUS(vci_integrate(integ, 200, 1), VCI_OK);
+  CHECK_STATUS(vci_get_state(integ, &t, q, p), VCI_OK);
+  CHECK_CLOSE(t, 2.005, 1e-13);
+  for (i = 0; i < 3; ++i) CHECK_CLOSE(q[i], qf[i], 1e-9 * (1.0 + fabs(qf[i])));
+  vci_integrator_destroy(&integ);
+  vci_model_destroy(&model);
+
+  /* without the optional callbacks (differenced Hessian and gap gradients): same impacts to 1e-8 */
+  {
+    vci_callbacks minimal = cb;
+    vci_model m3 = NULL;
+    vci_integrator i3;
+    minimal.mixed_hessian = NULL; minimal.gap_gradients = NULL; minimal.energy = NULL;
+    i3 = make_ellipse(&m3, &minimal, h);
+    memset(&log, 0, sizeof log);
+    CHECK_STATUS(vci_set_impact_callback(i3, log_impact, &log), VCI_OK);
+    CHECK_STATUS(vci_integrate(i3, 200, 1), VCI_OK);
+    CHECK(log.count == 2);
+    CHECK_CLOSE(log.t[0], ELLIPSE_FIRST_IMPACT, 1e-8);
+    vci_integrator_destroy(&i3);
+    vci_model_destroy(&m3);
+  }
+}
+
+/* ================================================================================================ */
+/* issue 7: the Hamiltonian impact condition through the C API (energy callback + setter) */
+static void suite_hamiltonian(void) {
+  vci_callbacks cb = ellipse_callbacks();
+  double h0, hd, hh, q[3], p[3];
+  int mode;
+  for (mode = VCI_IMPACT_DISCRETE; mode <= VCI_IMPACT_HAMILTONIAN; ++mode) {
+    vci_model model = NULL;
+    vci_integrator integ = make_ellipse(&model, &cb, 1e-2);
+    long impacts;
+    CHECK_STATUS(vci_set_impact_energy(integ, mode), VCI_OK);
+    CHECK_STATUS(vci_get_state(integ, NULL, q, p), VCI_OK);
+    ellipse_energy(3, q, p, &h0, &ellipse_par);
+    CHECK_STATUS(vci_integrate(integ, 1000, 1), VCI_OK); /* 10 s, about 10 impacts */
+    CHECK_STATUS(vci_get_stats(integ, NULL, &impacts, NULL), VCI_OK);
+    CHECK(impacts >= 5);
+    CHECK_STATUS(vci_get_state(integ, NULL, q, p), VCI_OK);
+    ellipse_energy(3, q, p, mode == VCI_IMPACT_DISCRETE ? &hd : &hh, &ellipse_par);
+    printf("  impact energy %s: %ld impacts, H - H0 = %.3e\n", mode ? "hamiltonian" : "discrete", impacts,
+           (mode ? hh : hd) - h0);
+    vci_integrator_destroy(&integ);
+    vci_model_destroy(&model);
+  }
+  /* discrete: O(h^2) energy jumps at impacts; hamiltonian: H kept to the solver's tolerance */
+  CHECK(fabs(hd - h0) > 1e-4);
+  CHECK_CLOSE(hh, h0, 1e-8);
+}
+
+/* ================================================================================================ */
+static void suite_pendulum(void) {
+  /* the Fortran example's impact times (build/bin/pendulum prints them to 12 decimals); the C
+   * callbacks round differently, which 5000 steps amplify to ~1e-12 */
+  static const double expected[3] = {1.232288308117, 2.547498996101, 3.862275285217};
+  pendulum_params par = pendulum_default;
+  vci_callbacks cb = pendulum_callbacks(), partial = cb;
+  vci_model model = NULL;
+  vci_integrator integ = NULL;
+  double h = 1e-3, q0[2], q1[2], q[2], p[2], qn[2], lambda[1] = {NAN}, w, omega[2], d1[2], pn[2];
+  long impacts;
+  int i;
+
+  /* a constrained model needs both constraint callbacks */
+  partial.discrete_constraint = NULL;
+  CHECK_STATUS(vci_model_create(&model, 2, 1, 1, &partial, &par), VCI_ERR_ARGUMENT);
+  CHECK_MESSAGE(NULL, "discrete_constraint (needed as m > 0)");
+  partial = cb; partial.constraint_forms = NULL;
+  CHECK_STATUS(vci_model_create(&model, 2, 1, 1, &partial, &par), VCI_ERR_ARGUMENT);
+  CHECK_MESSAGE(NULL, "constraint_forms (needed as m > 0)");
+
+  CHECK_STATUS(vci_model_create(&model, 2, 1, 1, &cb, &par), VCI_OK);
+  CHECK_STATUS(vci_integrator_create(&integ, model, h), VCI_OK);
+  CHECK_STATUS(vci_set_tolerances(integ, 0.0, 1e-12, 30), VCI_OK);
+  pendulum_initial_pair(h, q0, q1);
+  CHECK_STATUS(vci_init_from_pair(integ, 0.0, q0, q1), VCI_OK);
+  CHECK_STATUS(vci_get_multipliers(integ, NULL), VCI_ERR_ARGUMENT); /* m = 1: lambda needed */
+  CHECK_MESSAGE(integ, "lambda is NULL");
+
+  /* one step by hand: the (+) scheme's equations hold at the solver's tolerance */
+  CHECK_STATUS(vci_get_state(integ, NULL, q, p), VCI_OK);
+  CHECK_STATUS(vci_step(integ, 1), VCI_OK);
+  CHECK_STATUS(vci_get_state(integ, NULL, qn, pn), VCI_OK);
+  CHECK_STATUS(vci_get_multipliers(integ, lambda), VCI_OK);
+  pendulum_dconstraint(2, 1, q, qn, h, &w, &par);
+  CHECK_CLOSE(w, 0.0, 1e-9);                            /* omega_d(q_k, q_k+1, h) = 0 */
+  pendulum_d1(2, q, qn, h, d1, &par);
+  pendulum_forms(2, 1, q, omega, &par);
+  for (i = 0; i < 2; ++i)                               /* D1 L_d + p_k - Omega lambda = 0 */
+    CHECK_CLOSE(d1[i] + p[i] - omega[i] * lambda[0], 0.0, 1e-9 * (1.0 + fabs(p[i])));
+  {
+    double p2[2];
+    pendulum_d2(2, q, qn, h, p2, &par);                 /* p_k+1 = D2 L_d(q_k, q_k+1, h) */
+    for (i = 0; i < 2; ++i) CHECK_CLOSE(pn[i], p2[i], 1e-13 * (1.0 + fabs(p2[i])));
+  }
+
+  /* to t = 5: three impacts at the Fortran example's times */
+  CHECK_STATUS(vci_init_from_pair(integ, 0.0, q0, q1), VCI_OK);
+  {
+    impact_log log;
+    memset(&log, 0, sizeof log);
+    CHECK_STATUS(vci_set_impact_callback(integ, log_impact, &log), VCI_OK);
+    CHECK_STATUS(vci_integrate(integ, 4999, 1), VCI_OK);
+    CHECK_STATUS(vci_get_stats(integ, NULL, &impacts, NULL), VCI_OK);
+    CHECK(impacts == 3 && log.count == 3);
+    for (i = 0; i < 3 && i < log.count; ++i) CHECK_CLOSE(log.t[i], expected[i], 5e-11);
+  }
+  CHECK_STATUS(vci_get_multipliers(integ, lambda), VCI_OK);
+  CHECK(lambda[0] == lambda[0]);
+  vci_integrator_destroy(&integ);
+  vci_model_destroy(&model);
+}
+
+/* ================================================================================================ */
+static void suite_output(void) {
+  vci_callbacks cb = ellipse_callbacks();
+  vci_model model = NULL;
+  vci_integrator integ = make_ellipse(&model, &cb, 1e-2);
+  long k;
+#ifdef VCI_TEST_HDF5
+  {
+    const char *path = "capi_output_test.h5";
+    unsigned char sig[8] = {0};
+    static const unsigned char hdf5_sig[8] = {0x89, 'H', 'D', 'F', '\r', '\n', 0x1a, '\n'};
+    FILE *f;
+    remove(path);
+    CHECK_STATUS(vci_open_output(integ, path), VCI_OK);
+    CHECK_STATUS(vci_integrate(integ, 50, 1), VCI_OK);
+    CHECK_STATUS(vci_step(integ, 1), VCI_OK);
+    CHECK_STATUS(vci_integrate(integ, 49, 1), VCI_OK);
+    CHECK_STATUS(vci_close_output(integ), VCI_OK);
+    f = fopen(path, "rb");
+    CHECK(f != NULL);
+    if (f) {
+      CHECK(fread(sig, 1, 8, f) == 8);
+      fclose(f);
+    }
+    CHECK(memcmp(sig, hdf5_sig, 8) == 0);
+    /* a second file, left for vci_integrator_destroy to finish */
+    CHECK_STATUS(vci_open_output(integ, path), VCI_OK);
+    CHECK_STATUS(vci_integrate(integ, 10, 1), VCI_OK);
+    CHECK_STATUS(vci_open_output(integ, "/nonexistent-dir/x.h5"), VCI_ERR_IO);
+    CHECK_MESSAGE(integ, "nonexistent-dir");
+    remove(path);
+  }
+#else
+  CHECK_STATUS(vci_open_output(integ, "capi_output_test.h5"), VCI_ERR_IO);
+  CHECK_MESSAGE(integ, "built without HDF5");
+  /* the integrator is unharmed */
+  CHECK_STATUS(vci_integrate(integ, 10, 1), VCI_OK);
+#endif
+  CHECK_STATUS(vci_get_index(integ, &k), VCI_OK);
+  CHECK(k > 1);
+  vci_integrator_destroy(&integ);
+  vci_model_destroy(&model);
+}
+
+/* ================================================================================================ */
+int main(int argc, char **argv) {
+  static const struct { const char *name; void (*run)(void); } suites[] = {
+      {"version", suite_version},     {"handles", suite_handles},   {"arguments", suite_arguments},
+      {"callbacks", suite_callbacks}, {"ellipse", suite_ellipse},   {"hamiltonian", suite_hamiltonian},
+      {"pendulum", suite_pendulum},   {"output", suite_output}};
+  size_t i, n = sizeof suites / sizeof suites[0];
+  int ran = 0;
+  for (i = 0; i < n; ++i) {
+    if (argc < 2 || strcmp(argv[1], suites[i].name) == 0 || strcmp(argv[1], "all") == 0) {
+      int before = failures;
+      suites[i].run();
+      printf("%s: %s (%d failed checks)\n", suites[i].name, failures == before ? "passed" : "FAILED", failures - before);
+      ++ran;
+    }
+  }
+  if (!ran) {
+    fprintf(stderr, "unknown suite %s\n", argv[1]);
+    return 2;
+  }
+  return failures ? 1 : 0;
+}

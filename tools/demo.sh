@@ -1,0 +1,49 @@
+#!/bin/bash
+# The demo: build vci, run the paper's ellipse and pendulum, and draw the paper's four figures.
+#   bash tools/demo.sh
+# On a fresh Debian 12 run as root it first installs what is missing (apt-get). Leaves the runs'
+# .h5 files and fig1..fig4 PNGs in demo-output/ (next to build/, in the repository root).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+packages="cmake gfortran liblapack-dev libhdf5-dev hdf5-tools python3-h5py python3-matplotlib python3-numpy"
+missing=""
+for p in $packages; do
+  dpkg -s "$p" > /dev/null 2>&1 || missing="$missing $p"
+done
+if [ -n "$missing" ]; then
+  echo "== installing:$missing"
+  if [ "$(id -u)" -ne 0 ]; then
+    echo "missing packages:$missing -- run as root or: sudo apt-get install$missing" >&2
+    exit 1
+  fi
+  export DEBIAN_FRONTEND=noninteractive
+  apt-get update
+  apt-get install -y --no-install-recommends $missing
+fi
+
+echo "== configure and build (build/)"
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DVCI_WITH_HDF5=ON
+cmake --build build -j"$(nproc)"
+
+out=demo-output
+mkdir -p "$out"
+bin=build/bin
+echo
+echo "== ellipse, 2 s (Fig. 1)"
+"$bin/ellipse" --t-final 2 --output "$out/ellipse_2s.h5"
+echo
+echo "== ellipse, 25 s (Fig. 2)"
+"$bin/ellipse" --t-final 25 --output "$out/ellipse_25s.h5"
+echo
+echo "== pendulum, 5 s, h = 1e-3 (Fig. 3)"
+"$bin/pendulum" --t-final 5 --output "$out/pendulum_5s.h5"
+echo
+echo "== pendulum, 100 s, h = 1e-4 (Fig. 4)"
+"$bin/pendulum" --h 1e-4 --t-final 100 --quiet --output "$out/pendulum_100s.h5"
+echo
+echo "== figures"
+/usr/bin/python3 tools/plots/plot_figures.py "$out"
+echo
+echo "demo done: $(cd "$out" && pwd)"
+ls -l "$out"
