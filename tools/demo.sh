@@ -6,25 +6,11 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-packages="cmake gfortran liblapack-dev libhdf5-dev hdf5-tools python3-h5py python3-matplotlib python3-numpy"
-missing=""
-for p in $packages; do
-  dpkg -s "$p" > /dev/null 2>&1 || missing="$missing $p"
-done
-if [ -n "$missing" ]; then
-  echo "== installing:$missing"
-  if [ "$(id -u)" -ne 0 ]; then
-    echo "missing packages:$missing -- run as root or: sudo apt-get install$missing" >&2
-    exit 1
-  fi
-  export DEBIAN_FRONTEND=noninteractive
-  apt-get update
-  apt-get install -y --no-install-recommends $missing
-fi
+bash tools/install-deps.sh
 
 echo "== configure and build (build/)"
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DVCI_WITH_HDF5=ON
-cmake --build build -j"$(nproc)"
+cmake --preset default
+cmake --build --preset default
 
 out=demo-output
 mkdir -p "$out"
