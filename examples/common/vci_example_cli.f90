@@ -63,6 +63,7 @@ contains
     type(example_options_t), intent(inout) :: opts
     character(len=*), intent(in) :: name, usage
     integer :: i, nargs
+    logical :: exists
     character(len=:), allocatable :: arg, val
     nargs = command_argument_count()
     i = 1
@@ -119,6 +120,11 @@ contains
     if (opts%append .and. .not. allocated(opts%from)) call die(name//': --append needs --from FILE')
     if (opts%append .and. opts%no_output) call die(name//': --append and --no-output exclude each other')
     if (opts%flush_every < 1) call die(name//': --flush-every must be >= 1')
+    ! --output FILE without an extension writes FILE plus the default extension; read it back the same way
+    if (allocated(opts%from)) then
+      inquire (file=opts%from, exist=exists)
+      if (.not. exists .and. index(opts%from, '.') == 0) opts%from = opts%from//default_extension
+    end if
   end subroutine parse_options
 
   !> Create, initialise and run; print the summary. `init` is called when not starting from a file.
@@ -207,7 +213,7 @@ contains
       '   impact energy: '//trim(merge('hamiltonian', 'discrete   ', opts%impact_energy == VCI_IMPACT_HAMILTONIAN))
     write (output_unit, '(a,es10.3,a,f0.6,a,f0.6,a,i0)') 'h = ', opts%h, '   t from ', integ%t, ' to ', &
       integ%t + dir * nsteps * opts%h, '   steps: ', nsteps
-    if (opts%backward) call print_state('start state', integ)
+    call print_state('start state', integ)
     call system_clock(c0, rate)
     call integ%integrate(nsteps, dir, stat, summary)
     call system_clock(c1)
@@ -227,7 +233,7 @@ contains
     write (output_unit, '(a,i0,a,i0,a,i0)') 'newton: solves ', integ%stats%newton_solves, '  iterations ', &
       integ%stats%newton_iterations, '  least-squares fallbacks ', integ%stats%fallbacks
     write (output_unit, '(a,f0.4,a)') 'wall time: ', real(c1 - c0, dp) / real(rate, dp), ' s'
-    if (opts%backward) call print_state('end state', integ)
+    call print_state('end state', integ)
     if (.not. opts%no_output) write (output_unit, '(a)') 'output: '//opts%output
     if (integ%status /= VCI_OK) then
       write (output_unit, '(a)') 'status: '//vci_status_name(integ%status)//': '//trim(integ%message)
@@ -391,6 +397,6 @@ contains
   subroutine die(msg)
     character(len=*), intent(in) :: msg
     write (error_unit, '(a)') msg
-    error stop 1
+    stop 1, quiet=.true.   ! a usage error, not a crash: no backtrace
   end subroutine die
 end module vci_example_cli
