@@ -3,9 +3,9 @@
 !> Convergence is judged row by row against the size of the terms that make up each row
 !> (|r_i| <= atol + rtol * scale_i), because the sub-steps of an impact can be arbitrarily short
 !> and residuals then scale like 1/step. The linear solve is an LU factorisation (dgetrf/dgetrs)
-!> of the row-equilibrated Jacobian; when that matrix is singular, a rank-revealing least-squares
-!> solve (dgelsd) gives the minimum-norm step instead. All workspace is allocated by `reserve`,
-!> so `solve` allocates nothing.
+!> of the row-equilibrated Jacobian; when
+!> that matrix is singular, a rank-revealing least-squares solve (dgelsd) gives the minimum-norm
+!> step instead. All workspace is allocated by `reserve`, so `solve` allocates nothing.
 module vci_newton
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use vci_kinds, only: dp
@@ -107,7 +107,7 @@ contains
     class(vci_system_t), intent(inout) :: sys
     real(dp), intent(inout) :: x(:)
     type(vci_newton_result_t), intent(out) :: res
-    integer :: n, stat, it, ib
+    integer :: n, stat, it, ib, trial_stat
     real(dp) :: phi, phit, step
     logical :: factored
 
@@ -134,10 +134,12 @@ contains
       end if
       ! Backtracking on the scaled residual: halve the step until the merit decreases.
       step = 1.0_dp
+      trial_stat = VCI_OK
       do ib = 0, self%max_backtracks
         self%xt(1:n) = x - step * self%dx(1:n)
         if (sys%admissible(self%xt(1:n))) then
           call sys%residual(self%xt(1:n), self%rt(1:n), self%sct(1:n), stat)
+          if (stat /= VCI_OK) trial_stat = stat
           if (stat == VCI_OK) then
             phit = merit(self, self%rt(1:n), self%sct(1:n))
             if (phit < (1.0_dp - 1.0e-4_dp * step) * phi) exit
@@ -146,6 +148,10 @@ contains
         step = 0.5_dp * step
       end do
       if (ib > self%max_backtracks) then
+        ! a callback that failed (or gave NaN) at the trial points is the cause, not the descent
+        if (trial_stat /= VCI_OK) then
+          call fail_eval(res, trial_stat); return
+        end if
         res%reason = NEWTON_NO_DESCENT
         res%status = VCI_ERR_NEWTON
         return
@@ -172,9 +178,19 @@ contains
     real(dp), intent(in) :: a(:, :)
     real(dp), intent(inout) :: b(:)
     integer, intent(out) :: info
+    integer :: rank
     self%lu(1:n, 1:n) = a(1:n, 1:n)
-    call dgetrf(n, n, self%lu, self%capacity, self%ipiv, info)
-    if (info == 0) call dgetrs('N', n, 1, self%lu, self%capacity, self%ipiv, b, n, info)
+    call lu_factor(self, n, info)
+    if (info == 0) then
+      call lu_solve(self, n, b)
+      if (all(ieee_is_finite(b(1:n)))) return
+    end if
+    ! singular: the minimum-norm least-squares solution, as in the Newton direction
+    self%jac(1:n, 1:n) = a(1:n, 1:n)
+    self%dx(1:n) = b(1:n)
+    call dgelsd(n, n, 1, self%jac, self%capacity, self%dx, self%capacity, self%sv, 1.0e-12_dp, rank, &
+                self%work, size(self%work), self%iwork, info)
+    if (info == 0) b(1:n) = self%dx(1:n)
   end subroutine linear_solve
 
   !> Newton direction dx = J^{-1} r on the row-equilibrated system; least squares when singular.
@@ -198,7 +214,7 @@ contains
       self%rw(i) = w
     end do
     self%jac(1:n, 1:n) = self%lu(1:n, 1:n)   ! keep the equilibrated matrix for the fallback
-    call dgetrf(n, n, self%lu, self%capacity, self%ipiv, info)
+    call lu_factor(self, n, info)
     factored = .false.
     if (info == 0) then
       dmin = huge(1.0_dp); dmax = 0.0_dp
@@ -206,7 +222,7 @@ contains
         dmin = min(dmin, abs(self%lu(i, i))); dmax = max(dmax, abs(self%lu(i, i)))
       end do
       if (dmin > 1.0e-14_dp * dmax) then
-        call dgetrs('N', n, 1, self%lu, self%capacity, self%ipiv, self%dx, self%capacity, info)
+        call lu_solve(self, n, self%dx)
         factored = all(ieee_is_finite(self%dx(1:n)))
       end if
     end if
@@ -229,13 +245,12 @@ contains
     integer, intent(in) :: n
     real(dp), intent(in) :: phi
     type(vci_newton_result_t), intent(inout) :: res
-    integer :: i, info, stat
+    integer :: i, stat
     real(dp) :: phit
     do i = 1, n
       self%dx(i) = self%r(i) * self%rw(i)
     end do
-    call dgetrs('N', n, 1, self%lu, self%capacity, self%ipiv, self%dx, self%capacity, info)
-    if (info /= 0) return
+    call lu_solve(self, n, self%dx)
     self%xt(1:n) = x - self%dx(1:n)
     if (.not. sys%admissible(self%xt(1:n))) return
     call sys%residual(self%xt(1:n), self%rt(1:n), self%sct(1:n), stat)
@@ -247,6 +262,24 @@ contains
       res%scaled_residual = phit
     end if
   end subroutine polish_step
+
+  !> LU factorisation with partial pivoting of lu(1:n, 1:n) in place (LAPACK dgetrf).
+  subroutine lu_factor(self, n, info)
+    type(vci_newton_t), intent(inout) :: self
+    integer, intent(in) :: n
+    integer, intent(out) :: info
+    call dgetrf(n, n, self%lu, self%capacity, self%ipiv, info)
+  end subroutine lu_factor
+
+  !> b := A^{-1} b with the factors of lu_factor (dgetrs 'N' with one right-hand side).
+  subroutine lu_solve(self, n, b)
+    type(vci_newton_t), intent(inout) :: self
+    integer, intent(in) :: n
+    real(dp), intent(inout) :: b(:)
+    integer :: info
+    call dgetrs('N', n, 1, self%lu, self%capacity, self%ipiv, b, size(b), info)
+  end subroutine lu_solve
+
 
   pure real(dp) function merit(self, r, sc)
     type(vci_newton_t), intent(in) :: self

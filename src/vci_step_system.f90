@@ -292,14 +292,18 @@ contains
     real(dp), intent(in) :: x(:)
     real(dp), intent(out) :: r(:), scale(:)
     integer, intent(out) :: stat
+    integer :: j
     if (self%kind == KIND_IMPULSE) then
       call impulse_rows(self, x, r, scale, stat)
       return
     end if
     call rows(self, x, r, scale, .true., stat)
     ! size of the kinetic terms of the momentum rows, from the current solve's Jacobian
-    if (stat == VCI_OK) scale(1:self%n) = scale(1:self%n) + &
-                                          matmul(self%jabs(1:self%n, 1:self%n), abs(x(1:self%n) - self%a))
+    if (stat == VCI_OK) then
+      do j = 1, self%n
+        scale(1:self%n) = scale(1:self%n) + self%jabs(1:self%n, j) * abs(x(j) - self%a(j))
+      end do
+    end if
     ! round-off floor of each row: a few ulps of sum_j |dR_i/dx_j| |x_j|, in units of rtol
     if (stat == VCI_OK) scale = scale + (8.0_dp * epsilon(1.0_dp) / max(self%rtol, epsilon(1.0_dp))) * &
                                 self%jscale(1:size(x))
