@@ -144,7 +144,12 @@ contains
         if (j == last_gap) cycle   ! just reflected there: the motion leaves it (checked in stage 2)
         if (self%gb(j) < 0.0_dp .and. on_wall(self, j) .and. &
             dot_product(self%dga(:, j), self%b - self%a) < 0.0_dp) then
-          jstar = j; exit
+          ! the chord points into the wall; so must the motion as it departs (a curved sub-step
+          ! may leave the wall first and come back: that is stage 1's business)
+          if (departs_into(self, j, tau, stat)) then
+            jstar = j; exit
+          end if
+          if (stat /= VCI_OK) return
         end if
       end do
       if (jstar > 0) then
@@ -264,6 +269,20 @@ contains
     character(len=40) :: what
     n = self%n; m = self%m
     write (what, '(a,i0,a)') 'stage 1 (reaching wall ', j, ')'
+    self%lam0(1:m) = self%x(n + 1:n + m)
+    ! Leaving a wall and coming back to it within the sub-step: the chord would point to the start.
+    if (on_wall(self, j)) then
+      call trajectory_bracket(self, j, tau, alpha, stat)
+      if (stat /= VCI_OK) return
+      call solve_wall(self, j, tau, alpha, trim(what), stat)
+      if (stat /= VCI_OK) return
+      alpha = self%x(n + m + 1)
+      if (.not. (alpha > 0.0_dp .and. alpha <= 1.0_dp)) then
+        stat = VCI_ERR_IMPACT
+        write (self%cause, '(a,es10.3,a)') trim(what)//': impact fraction ', alpha, ' outside (0, 1]'
+      end if
+      return
+    end if
     ! Initial guess: the first crossing along the chord a -> b, by sampling then bisection (g is cheap).
     lo = 0.0_dp; hi = 1.0_dp
     do i = 1, 8
@@ -286,7 +305,6 @@ contains
       end if
     end do
     alpha = max(hi, 1.0e-6_dp)
-    self%lam0(1:m) = self%x(n + 1:n + m)
     self%x(1:n) = self%a + alpha * (self%b - self%a)
     call solve_wall(self, j, tau, alpha, trim(what), stat)
     if (stat == VCI_OK) then
@@ -306,6 +324,23 @@ contains
       write (self%cause, '(a,es10.3,a)') trim(what)//': impact fraction ', alpha, ' outside (0, 1]'
     end if
   end subroutine stage_wall
+
+  !> Does the motion from (a, pa) depart into wall j? Sign of grad g_j . (b_eps - a) for the end
+  !> b_eps of a regular sub-step of length 1e-3 tau. Leaves x as it found it.
+  logical function departs_into(self, j, tau, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: j
+    real(dp), intent(in) :: tau
+    integer, intent(out) :: stat
+    real(dp), parameter :: eps_frac = 1.0e-3_dp
+    integer :: nx
+    nx = self%n + self%m
+    self%xhi(1:nx) = self%x(1:nx)
+    self%x(1:self%n) = self%a + eps_frac * (self%b - self%a)
+    call substep(self, self%a, self%pa, eps_frac * tau, stat)
+    departs_into = stat == VCI_OK .and. dot_product(self%dga(:, j), self%x(1:self%n) - self%a) < 0.0_dp
+    self%x(1:nx) = self%xhi(1:nx)
+  end function departs_into
 
   !> Gaps at the chord point a + s (b - a), into gw.
   subroutine chord_gap(self, s, stat)
@@ -332,22 +367,27 @@ contains
     glo = self%ga(j); ghi = self%gb(j)
     self%xlo(1:n) = self%a; self%xlo(n + 1:n + m) = self%lam0(1:m)
     self%xhi(1:n) = self%b; self%xhi(n + 1:n + m) = self%lam0(1:m)
-    do i = 1, 16
-      if (i <= 8) then
-        mid = real(i, dp) / 8.0_dp        ! first crossing: sample from the start
-        if (mid >= hi) exit
-      else
-        mid = 0.5_dp * (lo + hi)          ! then bisect the bracket
-      end if
+    do i = 1, 7                           ! the first crossing: sample from the start ...
+      mid = real(i, dp) / 8.0_dp
       call trajectory_gap(self, j, tau, lo, hi, mid, g, stat)
       if (stat /= VCI_OK) return
       if (g < 0.0_dp) then
         hi = mid; ghi = g; self%xhi(1:n + m) = self%x(1:n + m)
-        if (i <= 8) cycle
+        exit
+      end if
+      lo = mid; glo = g; self%xlo(1:n + m) = self%x(1:n + m)
+    end do
+    do i = 1, 8                           ! ... then bisect the bracket
+      mid = 0.5_dp * (lo + hi)
+      call trajectory_gap(self, j, tau, lo, hi, mid, g, stat)
+      if (stat /= VCI_OK) return
+      if (g < 0.0_dp) then
+        hi = mid; ghi = g; self%xhi(1:n + m) = self%x(1:n + m)
       else
         lo = mid; glo = g; self%xlo(1:n + m) = self%x(1:n + m)
       end if
     end do
+    glo = max(glo, 0.0_dp)                ! a start on the wall may be below it by round-off
     alpha = lo + (hi - lo) * glo / max(glo - ghi, tiny(1.0_dp))
     alpha = min(max(alpha, lo + 1.0e-3_dp * (hi - lo)), hi)
     self%x(1:n + m) = self%xlo(1:n + m) + (alpha - lo) / (hi - lo) * (self%xhi(1:n + m) - self%xlo(1:n + m))
@@ -402,7 +442,7 @@ contains
     real(dp), intent(in) :: tau2, e_minus
     integer, intent(out) :: stat
     integer :: n, m, nx0, info
-    real(dp) :: num, den, mu0, mu_lin
+    real(dp) :: num, den, mu0
     character(len=40) :: what
     n = self%n; m = self%m; nx0 = n + m
     write (what, '(a,i0,a)') 'stage 2 (reflecting at wall ', j, ')'
@@ -462,7 +502,6 @@ contains
       end if
       call run_newton(self, m + 1, trim(what)//' impulse', stat)
       if (stat /= VCI_OK) return
-      mu_lin = mu0
       mu0 = self%x(m + 1)
       if (m > 0) self%nu = self%x(1:m)
       self%x(1:nx0) = self%best_x(1:nx0)
@@ -470,19 +509,18 @@ contains
       call substep(self, self%qt, self%pimp, tau2, stat)
       if (stat /= VCI_OK) return
       self%x(nx0 + 1) = mu0
-      if (.not. reflected(self, j, mu_lin, mu0, stat)) then
+      if (.not. reflected(self, mu0, tau2, stat)) then
         if (stat == VCI_OK) stat = VCI_ERR_IMPACT
         self%cause = trim(what)//': the reflected motion does not leave the wall'
         return
       end if
     else if (mu0 /= 0.0_dp) then
-      mu_lin = mu0
       self%sys%kind = KIND_REFLECT
       self%sys%a = self%qt; self%sys%pa = self%pminus; self%sys%tau = tau2; self%sys%gap = j
       self%sys%e_minus = e_minus
       call run_newton(self, nx0 + 1, trim(what), stat)
       if (stat /= VCI_OK) return
-      if (.not. reflected(self, j, mu_lin, self%x(nx0 + 1), stat)) then
+      if (.not. reflected(self, self%x(nx0 + 1), tau2, stat)) then
         if (stat == VCI_OK) stat = VCI_ERR_IMPACT
         self%cause = trim(what)//': the reflected motion does not leave the wall'
         return
@@ -492,21 +530,28 @@ contains
     end if
   end subroutine stage_reflect
 
-  !> Did stage 2 find the reflection? Either the sub-step ends inside the admissible side of the
-  !> wall, or (a strongly curved sub-step, e.g. a stiff force towards the wall) it ends beyond the
-  !> wall again with an impulse of the size of the linearised reflection mu_lin: the pass-through
-  !> root has an impulse near zero. The re-entry is then the next impact of this step.
-  logical function reflected(self, j, mu_lin, mu, stat)
+  !> Did stage 2 find the reflection? Yes when the sub-step ends on the admissible side of the wall.
+  !> A strongly curved sub-step (gravity or a stiff force towards the wall) may leave the wall and
+  !> come back to end beyond it: then the motion must depart from the wall — the end of a short
+  !> sub-step (1e-3 tau2) from (qt, p- + mu grad g) is on the admissible side — and the re-entry is
+  !> the next impact of this step. The pass-through root departs into the wall.
+  logical function reflected(self, mu, tau2, stat)
     type(vci_stepper_t), intent(inout) :: self
-    integer, intent(in) :: j
-    real(dp), intent(in) :: mu_lin, mu
+    real(dp), intent(in) :: mu, tau2
     integer, intent(out) :: stat
+    real(dp), parameter :: eps_frac = 1.0e-3_dp
+    integer :: nx
     stat = VCI_OK
     reflected = dot_product(self%sys%grad, self%x(1:self%n) - self%qt) > 0.0_dp
-    if (reflected .or. .not. (mu / mu_lin > 0.5_dp)) return
-    call self%sys%eval_gaps(self%x(1:self%n), self%gw(1:self%ng), stat)
-    if (stat /= VCI_OK) return
-    reflected = self%gw(j) < 0.0_dp
+    if (reflected) return
+    nx = self%n + self%m + 1
+    self%xhi(1:nx) = self%x(1:nx)
+    self%x(1:self%n) = self%qt + eps_frac * (self%x(1:self%n) - self%qt)
+    self%pimp = self%pminus + mu * self%sys%grad
+    call substep(self, self%qt, self%pimp, eps_frac * tau2, stat)
+    reflected = stat == VCI_OK .and. dot_product(self%sys%grad, self%x(1:self%n) - self%qt) > 0.0_dp
+    self%x(1:nx) = self%xhi(1:nx)
+    if (.not. reflected) stat = VCI_OK
   end function reflected
 
   subroutine record_impact(self, dir, h, t, elapsed, j, e_minus, s1res, tau2)
