@@ -270,19 +270,6 @@ contains
     n = self%n; m = self%m
     write (what, '(a,i0,a)') 'stage 1 (reaching wall ', j, ')'
     self%lam0(1:m) = self%x(n + 1:n + m)
-    ! Leaving a wall and coming back to it within the sub-step: the chord would point to the start.
-    if (on_wall(self, j)) then
-      call trajectory_bracket(self, j, tau, alpha, stat)
-      if (stat /= VCI_OK) return
-      call solve_wall(self, j, tau, alpha, trim(what), stat)
-      if (stat /= VCI_OK) return
-      alpha = self%x(n + m + 1)
-      if (.not. (alpha > 0.0_dp .and. alpha <= 1.0_dp)) then
-        stat = VCI_ERR_IMPACT
-        write (self%cause, '(a,es10.3,a)') trim(what)//': impact fraction ', alpha, ' outside (0, 1]'
-      end if
-      return
-    end if
     ! Initial guess: the first crossing along the chord a -> b, by sampling then bisection (g is cheap).
     lo = 0.0_dp; hi = 1.0_dp
     do i = 1, 8
