@@ -752,7 +752,8 @@ contains
     integer :: stat
     call get_ready(integ, 'vci_get_multipliers', ip, stat)
     vci_get_multipliers = stat
-    if (stat /= VCI_OK .or. ip%model%m == 0) return
+    if (stat /= VCI_OK) return          ! (Fortran does not short-circuit: ip may be null)
+    if (ip%model%m == 0) return
     if (.not. c_array(lambda, ip%model%m, a)) then
       vci_get_multipliers = fail(ip, VCI_ERR_ARGUMENT, 'vci_get_multipliers: lambda is NULL'); return
     end if
