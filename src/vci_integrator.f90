@@ -115,7 +115,7 @@ contains
     class(vci_integrator_t), intent(inout) :: self
     integer, intent(in) :: mode
     integer, intent(out) :: stat
-    real(dp) :: e, z(1)
+    real(dp) :: e
     integer :: s
     if (mode /= VCI_IMPACT_DISCRETE .and. mode /= VCI_IMPACT_HAMILTONIAN) then
       write (self%message, '(a,i0,a)') 'set_impact_energy: unknown mode ', mode, &
@@ -127,11 +127,10 @@ contains
         self%message = 'set_impact_energy: create the integrator first'
         call finish(self, VCI_ERR_STATE, stat); return
       end if
+      ! probe: the default energy answers VCI_NOT_PROVIDED whatever its arguments (q, p are zero
+      ! before initialisation)
       s = 0
-      z = 0.0_dp
-      if (allocated(self%q)) then
-        call self%model%energy(self%q, self%p, e, s)
-      end if
+      call self%model%energy(self%q, self%p, e, s)
       if (s == VCI_NOT_PROVIDED) then
         self%message = 'set_impact_energy: the hamiltonian condition needs the model''s energy(q, p), '// &
                        'which this model does not supply'
@@ -153,7 +152,8 @@ contains
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
     self%settings%max_impacts_per_step = max_impacts
-    if (self%created) call self%stepper%setup(self%model, self%settings)
+    if (self%created) call self%stepper%reserve_impacts(max_impacts)
+    self%stepper%settings = self%settings
     call finish(self, VCI_OK, stat)
   end subroutine set_max_impacts
 

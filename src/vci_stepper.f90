@@ -44,6 +44,7 @@ module vci_stepper
     real(dp), allocatable, private :: qs(:), gw(:), xlo(:), xhi(:), lam0(:)
   contains
     procedure :: setup
+    procedure :: reserve_impacts
     procedure :: advance
     procedure :: arriving_energy
   end type vci_stepper_t
@@ -56,7 +57,7 @@ contains
     class(vci_stepper_t), intent(inout) :: self
     class(vci_model_t), target, intent(inout) :: model
     type(vci_settings_t), intent(in) :: settings
-    integer :: n, m, ng, nx, i
+    integer :: n, m, ng, nx
     n = model%n; m = model%m; ng = model%n_gaps
     self%n = n; self%m = m; self%ng = ng
     self%settings = settings
@@ -67,18 +68,28 @@ contains
     call apply_settings(self)
     if (allocated(self%x)) deallocate (self%x, self%a, self%pa, self%b, self%qt, self%pminus, self%gb, &
                                        self%ga, self%dga, self%best_x, self%jac, self%rhs, self%r, self%sc, &
-                                       self%vin, self%impacts, self%pimp, self%nu, self%qs, self%gw, &
+                                       self%vin, self%pimp, self%nu, self%qs, self%gw, &
                                        self%xlo, self%xhi, self%lam0)
     allocate (self%x(nx), self%a(n), self%pa(n), self%b(n), self%qt(n), self%pminus(n), &
               self%gb(max(1, ng)), self%ga(max(1, ng)), self%dga(n, max(1, ng)), self%best_x(nx), &
               self%jac(nx, nx), self%rhs(nx), self%r(nx), self%sc(nx), self%vin(n), self%pimp(n), self%nu(m), &
               self%qs(n), self%gw(max(1, ng)), self%xlo(nx), self%xhi(nx), self%lam0(m))
-    allocate (self%impacts(max(1, settings%max_impacts_per_step)))
-    do i = 1, size(self%impacts)
-      allocate (self%impacts(i)%q(n), self%impacts(i)%p_before(n), self%impacts(i)%p_after(n), &
-                self%impacts(i)%grad_g(n))
-    end do
+    call self%reserve_impacts(settings%max_impacts_per_step)
   end subroutine setup
+
+  !> Room for the impact records of one step (the bound on impacts per step).
+  subroutine reserve_impacts(self, max_impacts)
+    class(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: max_impacts
+    integer :: i
+    if (allocated(self%impacts)) deallocate (self%impacts)
+    allocate (self%impacts(max(1, max_impacts)))
+    do i = 1, size(self%impacts)
+      allocate (self%impacts(i)%q(self%n), self%impacts(i)%p_before(self%n), self%impacts(i)%p_after(self%n), &
+                self%impacts(i)%grad_g(self%n))
+    end do
+    self%n_impacts = 0
+  end subroutine reserve_impacts
 
   subroutine apply_settings(self)
     type(vci_stepper_t), intent(inout) :: self

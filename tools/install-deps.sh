@@ -6,7 +6,7 @@ packages=(cmake make gfortran gcc liblapack-dev libblas-dev libhdf5-dev hdf5-too
           python3-numpy python3-h5py python3-matplotlib valgrind "$@")
 missing=()
 for p in "${packages[@]}"; do
-  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep "install ok installed" > /dev/null; then
     missing+=("$p")
   fi
 done
