@@ -78,6 +78,11 @@ function(vci_add_pf_suite)
       OTHER_SOURCES ${arg_EXTRA_SOURCES}
       LINK_LIBRARIES ${arg_LINK})
   else()
+    # Debian's interpreter when present: another python3 first on PATH (pyenv shims, virtual
+    # environments) may not run in every environment; the converter needs only the standard library
+    if(NOT DEFINED Python3_EXECUTABLE AND EXISTS /usr/bin/python3)
+      set(Python3_EXECUTABLE /usr/bin/python3)
+    endif()
     find_package(Python3 COMPONENTS Interpreter REQUIRED)
     _vci_add_funit_lite_library()
     set(converter "${_VCI_PFUNIT_LITE_DIR}/pf2f90.py")
