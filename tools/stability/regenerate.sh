@@ -6,7 +6,7 @@ build=${1:-build}
 root=$(cd "$(dirname "$0")/../.." && pwd)
 cmake --build "$build" --target vci_stability_table
 "$build/bin/vci_stability_table" > "$build/stability_table.md"
-python3 - "$root/docs/STABILITY.md" "$build/stability_table.md" <<'PY'
+"$(command -v /usr/bin/python3 || command -v python3)" - "$root/docs/STABILITY.md" "$build/stability_table.md" <<'PY'
 import sys
 doc, table = sys.argv[1], open(sys.argv[2]).read()
 text = open(doc).read()
