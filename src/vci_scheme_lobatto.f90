@@ -44,6 +44,7 @@ module vci_scheme_lobatto
     procedure :: put_endpoint, get_endpoint, put_multipliers, get_multipliers, momentum_rhs
     procedure :: momentum_out, energy_out, hamiltonian
     procedure :: needs_pair_solve
+    procedure :: forget_jacobian
   end type vci_scheme_lobatto_t
 
 contains
@@ -74,6 +75,14 @@ contains
     if (stat /= 0) return
     self%jscale = 0.0_dp
   end subroutine setup
+
+  !> A new solve starts: the round-off floor of the last Jacobian (another segment length, perhaps
+  !> much shorter) must not size this solve's first residual, or the line search compares merits
+  !> taken with different floors.
+  subroutine forget_jacobian(self)
+    class(vci_scheme_lobatto_t), intent(inout) :: self
+    self%jscale = 0.0_dp
+  end subroutine forget_jacobian
 
   pure logical function needs_pair_solve(self)
     class(vci_scheme_lobatto_t), intent(in) :: self
@@ -146,10 +155,12 @@ contains
     do i = 1, s
       self%y(:, i) = x((i - 1) * n + 1:i * n)
     end do
+    ! V_i = (dir/tau) sum_j D_ij (y_j - a) (the rows of D sum to 0): differences from the known point
+    ! keep the round-off of large positions out of the velocities
     do i = 0, s
       self%v(:, i) = 0.0_dp
-      do j = 0, s
-        self%v(:, i) = self%v(:, i) + self%rule%d(i, j) * self%y(:, j)
+      do j = 1, s
+        self%v(:, i) = self%v(:, i) + self%rule%d(i, j) * (self%y(:, j) - a)
       end do
       self%v(:, i) = (dsign / tau) * self%v(:, i)
     end do
@@ -227,9 +238,11 @@ contains
       r(last) = e - self%e_minus
       scale(last) = abs(e) + abs(self%e_minus) + sum(abs(self%pa) * abs(self%y(:, s) - self%a)) / tau
     end select
-    ! round-off floor of each row: a few ulps of sum_j |dR_i/dx_j| |x_j|, in units of rtol
-    scale(1:size(x)) = scale(1:size(x)) + (8.0_dp * epsilon(1.0_dp) / max(self%rtol, epsilon(1.0_dp))) * &
-                       self%jscale(1:size(x))
+    ! round-off floor of each row, in units of rtol: the rounding of summing its 2(s + 1) terms, and
+    ! a few ulps of sum_j |dR_i/dx_j| |x_j| (positions large next to their change over the segment)
+    scale(1:size(x)) = scale(1:size(x)) * (1.0_dp + real(4 * (s + 1), dp) * epsilon(1.0_dp) / &
+                       max(self%rtol, epsilon(1.0_dp))) + (8.0_dp * epsilon(1.0_dp) / &
+                       max(self%rtol, epsilon(1.0_dp))) * self%jscale(1:size(x))
   end subroutine scheme_residual
 
   !> Analytic Jacobian from the Hessian blocks at the nodes (evaluate() at x was the last residual).
