@@ -2,16 +2,22 @@
 !> q(0) = (pi/2, 0, 3.5), qdot(0) = (-3, 2, 0), initial pair q(0) -/+ (h/2) qdot(0), 2 s.
 program ellipse
   use vci
-  use vci_scene_ellipse, only: ellipse_t, ellipse_model
+  use vci_scene_ellipse, only: ellipse_t, ellipse_model, ellipse_lagrangian_t, ellipse_lagrangian_model
   use vci_example_cli
   implicit none
   type(ellipse_t), target :: model
+  type(ellipse_lagrangian_t), target :: continuous   ! with --scheme
   type(example_options_t) :: opts
   opts%h = 1.0e-2_dp; opts%t_final = 2.0_dp
   call parse_options(opts, 'ellipse', 'ellipse: the bouncing ellipse of the paper (defaults h = 1e-2, t-final = 2)')
-  model = ellipse_model()
-  model%analytic_hessian = opts%analytic_hessian
-  call run_example('ellipse', model, opts, init)
+  if (allocated(opts%scheme)) then
+    continuous = ellipse_lagrangian_model()
+    call run_example('ellipse', continuous, opts, init)
+  else
+    model = ellipse_model()
+    model%analytic_hessian = opts%analytic_hessian
+    call run_example('ellipse', model, opts, init)
+  end if
 contains
   subroutine init(integ, stat)
     type(vci_integrator_t), intent(inout) :: integ

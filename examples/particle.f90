@@ -2,16 +2,22 @@
 !> initial pair q(0) -/+ (h/2) qdot(0); 3 s.
 program particle
   use vci
-  use vci_scene_particle, only: particle_t, particle_on_floor
+  use vci_scene_particle, only: particle_t, particle_on_floor, particle_lagrangian_t, particle_lagrangian_on_floor
   use vci_example_cli
   implicit none
   type(particle_t), target :: model
+  type(particle_lagrangian_t), target :: continuous   ! with --scheme: L = m|v|^2/2 - m g y
   type(example_options_t) :: opts
   opts%h = 1.0e-2_dp; opts%t_final = 3.0_dp
   call parse_options(opts, 'particle', 'particle: a particle bouncing on the floor (defaults h = 1e-2, t-final = 3)')
-  model = particle_on_floor(1.0_dp, 9.8_dp)
-  model%analytic_hessian = opts%analytic_hessian
-  call run_example('particle', model, opts, init)
+  if (allocated(opts%scheme)) then
+    continuous = particle_lagrangian_on_floor(1.0_dp, 9.8_dp)
+    call run_example('particle', continuous, opts, init)
+  else
+    model = particle_on_floor(1.0_dp, 9.8_dp)
+    model%analytic_hessian = opts%analytic_hessian
+    call run_example('particle', model, opts, init)
+  end if
 contains
   subroutine init(integ, stat)
     type(vci_integrator_t), intent(inout) :: integ

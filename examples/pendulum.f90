@@ -3,17 +3,23 @@
 !> qdot(0) = (pi/4, (pi + 0.5) pi/4), pair q0 = q(0), q1 = q(0) + h qdot(0), 5 s.
 program pendulum
   use vci
-  use vci_scene_pendulum, only: pendulum_t, pendulum_model
+  use vci_scene_pendulum, only: pendulum_t, pendulum_model, pendulum_lagrangian_t, pendulum_lagrangian_model
   use vci_example_cli
   implicit none
   type(pendulum_t), target :: model
+  type(pendulum_lagrangian_t), target :: continuous   ! with --scheme: the same scene as L and Omega
   type(example_options_t) :: opts
   opts%h = 1.0e-3_dp; opts%t_final = 5.0_dp
   call parse_options(opts, 'pendulum', &
     'pendulum: the nonholonomic pendulum in a cylinder of the paper (defaults h = 1e-3, t-final = 5)')
-  model = pendulum_model()
-  model%analytic_hessian = opts%analytic_hessian
-  call run_example('pendulum', model, opts, init)
+  if (allocated(opts%scheme)) then
+    continuous = pendulum_lagrangian_model()
+    call run_example('pendulum', continuous, opts, init)
+  else
+    model = pendulum_model()
+    model%analytic_hessian = opts%analytic_hessian
+    call run_example('pendulum', model, opts, init)
+  end if
 contains
   subroutine init(integ, stat)
     type(vci_integrator_t), intent(inout) :: integ

@@ -1,20 +1,31 @@
 !> The driver: state, time loop, statistics, error reporting and observers around the stepper.
 !>
-!> Usage: extend vci_model_t; `call integ%create(model, h, stat)`; initialise from a pair or from
-!> (q0, p0); `call integ%integrate(nsteps, +1 or -1, stat, observer)`. On any failure the state
+!> Usage: extend vci_model_t (a discrete L_d) or vci_lagrangian_t (a continuous L; then optionally
+!> `call integ%set_scheme(VCI_SCHEME_LOBATTO, s, stat)`); `call integ%create(model, h, stat)`;
+!> initialise from a pair or from (q0, p0); `call integ%integrate(nsteps, +1 or -1, stat, observer)`.
+!> On any failure the state
 !> stays at the last accepted step, `stat` says what went wrong and `integ%message` says where
 !> (step, time) and why. Nothing here stops or prints.
 module vci_integrator
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_value, ieee_quiet_nan
   use vci_kinds, only: dp, i8
   use vci_status
+  use vci_model_base, only: vci_model_base_t
   use vci_model, only: vci_model_t
+  use vci_lagrangian, only: vci_lagrangian_t
   use vci_stepper, only: vci_stepper_t, vci_settings_t
-  use vci_step_system, only: VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN
+  use vci_scheme, only: vci_scheme_t, VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN, VCI_SCHEME_DISCRETE, &
+                        VCI_SCHEME_LEFT, VCI_SCHEME_MIDPOINT, VCI_SCHEME_LOBATTO
+  use vci_scheme_discrete, only: vci_scheme_discrete_t
+  use vci_scheme_lobatto, only: vci_scheme_lobatto_t
+  use vci_retraction, only: vci_retraction_model_t, RETRACTION_LEFT, RETRACTION_MIDPOINT
+  use vci_lobatto_rule, only: VCI_LOBATTO_MAX_STAGES
   use vci_observer, only: vci_observer_t, vci_run_info_t
   implicit none
   private
   public :: VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN
+  public :: VCI_SCHEME_DISCRETE, VCI_SCHEME_LEFT, VCI_SCHEME_MIDPOINT, VCI_SCHEME_LOBATTO, VCI_LOBATTO_MAX_STAGES
+  public :: vci_scheme_name
 
   !> Counters over the integrator's life.
   type, public :: vci_stats_t
@@ -31,7 +42,9 @@ module vci_integrator
   end type vci_checkpoint_t
 
   type, public :: vci_integrator_t
-    class(vci_model_t), pointer :: model => null()
+    class(vci_model_base_t), pointer :: model => null()   !< the user's model (discrete or continuous)
+    integer :: scheme = VCI_SCHEME_DISCRETE    !< VCI_SCHEME_*; set_scheme chooses it for a continuous model
+    integer :: stages = 0                      !< s of the lobatto scheme
     type(vci_stepper_t) :: stepper
     type(vci_settings_t) :: settings
     real(dp) :: h = 0.0_dp
@@ -47,8 +60,14 @@ module vci_integrator
     real(dp), allocatable, private :: vel(:), qn(:), pn(:), lambdan(:)
     real(dp), private :: e_arrive = 0.0_dp
     integer, private :: e_dir = 0              !< direction in which e_arrive is known (0: unknown)
+    class(vci_model_t), pointer, private :: discrete => null()        !< the user's L_d
+    class(vci_lagrangian_t), pointer, private :: lag => null()        !< the user's L
+    type(vci_retraction_model_t), pointer, private :: retraction => null()  !< owned: left/midpoint L_d
+    logical, private :: lag_hessians = .false., lag_energy = .false.
   contains
-    procedure :: create
+    procedure, private :: create_discrete, create_continuous
+    generic :: create => create_discrete, create_continuous
+    procedure :: set_scheme
     procedure :: set_tolerances
     procedure :: set_impact_energy
     procedure :: set_max_impacts
@@ -63,10 +82,63 @@ module vci_integrator
 
 contains
 
-  !> Bind a model and a step length. The model must outlive the integrator.
-  subroutine create(self, model, h, stat)
+  !> Bind a discrete model (L_d) and a step length. The model must outlive the integrator.
+  subroutine create_discrete(self, model, h, stat)
     class(vci_integrator_t), intent(inout) :: self
     class(vci_model_t), target, intent(inout) :: model
+    real(dp), intent(in) :: h
+    integer, intent(out) :: stat
+    call bind_sizes(self, model, h, stat)
+    if (stat /= VCI_OK) return
+    self%discrete => model
+    self%lag => null()
+    self%scheme = VCI_SCHEME_DISCRETE; self%stages = 0
+    call build_scheme(self, stat)
+  end subroutine create_discrete
+
+  !> Bind a continuous model (L) and a step length; the scheme is `midpoint` until set_scheme
+  !> chooses another. The model must outlive the integrator.
+  subroutine create_continuous(self, model, h, stat)
+    class(vci_integrator_t), intent(inout) :: self
+    class(vci_lagrangian_t), target, intent(inout) :: model
+    real(dp), intent(in) :: h
+    integer, intent(out) :: stat
+    real(dp), allocatable :: q(:), v(:), hq(:, :), hv(:, :), hw(:, :)
+    real(dp) :: e
+    integer :: s, ierr
+    character(len=12) :: missing
+    call bind_sizes(self, model, h, stat)
+    if (stat /= VCI_OK) return
+    self%created = .false.
+    self%discrete => null()
+    self%lag => model
+    ! which procedures the model supplies: a default (or a C adapter without the callback) answers
+    ! VCI_NOT_PROVIDED whatever its arguments; the values at these probe points are discarded
+    allocate (q(model%n), v(model%n), hq(model%n, model%n), hv(model%n, model%n), hw(model%n, model%n), stat=ierr)
+    if (ierr /= 0) then
+      self%message = 'create: out of memory'
+      call finish(self, VCI_ERR_ARGUMENT, stat); return
+    end if
+    q = 0.0_dp; v = 0.0_dp
+    missing = ''
+    s = 0; call model%lagrangian(q, v, e, s); if (s == VCI_NOT_PROVIDED) missing = 'lagrangian'
+    s = 0; call model%dl_dq(q, v, hq(:, 1), s); if (s == VCI_NOT_PROVIDED) missing = 'dl_dq'
+    s = 0; call model%dl_dv(q, v, hq(:, 1), s); if (s == VCI_NOT_PROVIDED) missing = 'dl_dv'
+    if (missing /= '') then
+      self%message = 'create: the continuous model does not supply '//trim(missing)// &
+                     ' (L, dL/dq and dL/dqdot are required)'
+      call finish(self, VCI_ERR_ARGUMENT, stat); return
+    end if
+    s = 0; call model%hessians(q, v, hq, hv, hw, s); self%lag_hessians = (s /= VCI_NOT_PROVIDED)
+    s = 0; call model%energy(q, v, e, s); self%lag_energy = (s /= VCI_NOT_PROVIDED)
+    self%scheme = VCI_SCHEME_MIDPOINT; self%stages = 1
+    call build_scheme(self, stat)
+  end subroutine create_continuous
+
+  !> Checks and state common to both kinds of model.
+  subroutine bind_sizes(self, model, h, stat)
+    class(vci_integrator_t), intent(inout) :: self
+    class(vci_model_base_t), target, intent(inout) :: model
     real(dp), intent(in) :: h
     integer, intent(out) :: stat
     self%created = .false.; self%initialized = .false.
@@ -86,11 +158,105 @@ contains
     allocate (self%q(model%n), self%p(model%n), self%lambda(model%m), self%vel(model%n), &
               self%qn(model%n), self%pn(model%n), self%lambdan(model%m))
     self%lambda = 0.0_dp; self%q = 0.0_dp; self%p = 0.0_dp; self%vel = 0.0_dp
-    call self%stepper%setup(model, self%settings)
+    stat = VCI_OK
+  end subroutine bind_sizes
+
+  !> Build the scheme object for the current model and scheme choice and hand it to the stepper.
+  subroutine build_scheme(self, stat)
+    class(vci_integrator_t), intent(inout) :: self
+    integer, intent(out) :: stat
+    class(vci_scheme_t), allocatable :: sch
+    integer :: rule
+    stat = VCI_OK
+    select case (self%scheme)
+    case (VCI_SCHEME_DISCRETE)
+      allocate (vci_scheme_discrete_t :: sch)
+      select type (sch)
+      type is (vci_scheme_discrete_t)
+        call sch%setup(self%discrete)
+      end select
+    case (VCI_SCHEME_LEFT, VCI_SCHEME_MIDPOINT)
+      rule = merge(RETRACTION_LEFT, RETRACTION_MIDPOINT, self%scheme == VCI_SCHEME_LEFT)
+      if (.not. associated(self%retraction)) allocate (self%retraction)
+      call self%retraction%bind(self%lag, rule, self%lag_hessians, self%lag_energy)
+      allocate (vci_scheme_discrete_t :: sch)
+      select type (sch)
+      type is (vci_scheme_discrete_t)
+        call sch%setup(self%retraction)
+        sch%has_hessian = self%lag_hessians
+      end select
+    case (VCI_SCHEME_LOBATTO)
+      allocate (vci_scheme_lobatto_t :: sch)
+      select type (sch)
+      type is (vci_scheme_lobatto_t)
+        call sch%setup(self%lag, self%stages, self%lag_hessians, self%lag_energy, stat)
+      end select
+    end select
+    if (stat /= VCI_OK) then
+      write (self%message, '(a,i0,a)') 'create: could not set up the lobatto scheme with s = ', self%stages, ''
+      call finish(self, VCI_ERR_ARGUMENT, stat); return
+    end if
+    call self%stepper%setup(sch, self%settings)
     self%created = .true.
+    self%initialized = .false.
     self%message = ''
     call finish(self, VCI_OK, stat)
-  end subroutine create
+  end subroutine build_scheme
+
+  !> Choose the scheme that discretises a continuous model: VCI_SCHEME_LEFT (the paper's retraction,
+  !> order 1), VCI_SCHEME_MIDPOINT (order 2, the default) or VCI_SCHEME_LOBATTO with `stages` = s in
+  !> 1..VCI_LOBATTO_MAX_STAGES (order 2s; unconstrained models only). `stages` is ignored except for
+  !> lobatto. Call after create and before initialising (the state is reset).
+  subroutine set_scheme(self, scheme, stages, stat)
+    class(vci_integrator_t), intent(inout) :: self
+    integer, intent(in) :: scheme, stages
+    integer, intent(out) :: stat
+    if (.not. self%created) then
+      self%message = 'set_scheme: create the integrator first'
+      call finish(self, VCI_ERR_STATE, stat); return
+    end if
+    if (.not. associated(self%lag)) then
+      self%message = 'set_scheme: the model is a discrete Lagrangian (vci_model_t); schemes discretise '// &
+                     'a continuous one (vci_lagrangian_t)'
+      call finish(self, VCI_ERR_ARGUMENT, stat); return
+    end if
+    select case (scheme)
+    case (VCI_SCHEME_LEFT, VCI_SCHEME_MIDPOINT)
+    case (VCI_SCHEME_LOBATTO)
+      if (stages < 1 .or. stages > VCI_LOBATTO_MAX_STAGES) then
+        write (self%message, '(a,i0,a,i0,a)') 'set_scheme: lobatto with s = ', stages, ' stages (need 1 <= s <= ', &
+          VCI_LOBATTO_MAX_STAGES, ')'
+        call finish(self, VCI_ERR_ARGUMENT, stat); return
+      end if
+      if (self%model%m > 0) then
+        write (self%message, '(a,i0,a)') 'set_scheme: lobatto does not support nonholonomic constraints (m = ', &
+          self%model%m, '); use left or midpoint'
+        call finish(self, VCI_ERR_ARGUMENT, stat); return
+      end if
+    case default
+      write (self%message, '(a,i0,a)') 'set_scheme: unknown scheme ', scheme, &
+        ' (1 = left, 2 = midpoint, 3 = lobatto)'
+      call finish(self, VCI_ERR_ARGUMENT, stat); return
+    end select
+    self%scheme = scheme
+    self%stages = merge(stages, 1, scheme == VCI_SCHEME_LOBATTO)
+    call build_scheme(self, stat)
+    if (stat /= VCI_OK) return
+    if (self%settings%impact_energy /= VCI_IMPACT_DISCRETE) self%stepper%settings = self%settings
+  end subroutine set_scheme
+
+  !> A short name of a scheme identifier ('left', 'midpoint', 'lobatto', 'discrete').
+  pure function vci_scheme_name(scheme) result(name)
+    integer, intent(in) :: scheme
+    character(len=:), allocatable :: name
+    select case (scheme)
+    case (VCI_SCHEME_DISCRETE); name = 'discrete'
+    case (VCI_SCHEME_LEFT); name = 'left'
+    case (VCI_SCHEME_MIDPOINT); name = 'midpoint'
+    case (VCI_SCHEME_LOBATTO); name = 'lobatto'
+    case default; name = 'unknown'
+    end select
+  end function vci_scheme_name
 
   !> Newton tolerances: |r_i| <= atol + rtol * (size of row i's terms); iteration cap.
   subroutine set_tolerances(self, atol, rtol, max_iterations, stat)
@@ -130,7 +296,8 @@ contains
       ! probe: the default energy answers VCI_NOT_PROVIDED whatever its arguments (q, p are zero
       ! before initialisation)
       s = 0
-      call self%model%energy(self%q, self%p, e, s)
+      ! a continuous model always has H: the Legendre inversion of dL/dqdot when it supplies none
+      if (.not. associated(self%lag)) call self%model%energy(self%q, self%p, e, s)
       if (s == VCI_NOT_PROVIDED) then
         self%message = 'set_impact_energy: the hamiltonian condition needs the model''s energy(q, p), '// &
                        'which this model does not supply'
@@ -165,12 +332,14 @@ contains
     integer, intent(out) :: stat
     call check_init(self, 'init_from_pair', t0, q0, q1, stat, q1)
     if (stat /= VCI_OK) return
-    self%stepper%sys%dir = 1
-    call self%stepper%sys%momentum_out(q0, q1, self%h, self%p, stat)
-    if (stat == VCI_OK) call self%stepper%sys%energy_of(q0, q1, self%h, self%energy, stat)
+    call self%stepper%pair_momentum(q0, q1, self%h, self%p, self%energy, stat)
     if (stat /= VCI_OK) then
-      self%message = 'init_from_pair: callback '//trim(self%stepper%sys%failed_callback)// &
-                     ' failed or returned NaN/Inf at the initial pair'
+      if (self%stepper%sys%needs_pair_solve()) then
+        self%message = 'init_from_pair: '//trim(self%stepper%cause)
+      else
+        self%message = 'init_from_pair: callback '//trim(self%stepper%sys%failed_callback)// &
+                       ' failed or returned NaN/Inf at the initial pair'
+      end if
       call finish(self, failure_of(stat), stat); return
     end if
     self%t0 = t0; self%k = 1_i8; self%t = t0 + self%h
@@ -226,9 +395,14 @@ contains
     ! optional procedures: the defaults answer VCI_NOT_PROVIDED
     allocate (hess(n, n), omega(n, max(1, self%model%m)), g(self%model%n_gaps), w(self%model%m), &
               dg(n, self%model%n_gaps), w2(self%model%n_gaps))
-    s = 0
-    call self%model%mixed_hessian(q0, v0, self%h, hess, s)
-    self%stepper%sys%has_hessian = (s /= VCI_NOT_PROVIDED)
+    if (associated(self%discrete)) then
+      s = 0
+      call self%discrete%mixed_hessian(q0, v0, self%h, hess, s)
+      select type (sch => self%stepper%sys)
+      type is (vci_scheme_discrete_t)
+        sch%has_hessian = (s /= VCI_NOT_PROVIDED)
+      end select
+    end if
     if (self%model%m > 0) then
       s = 0
       call self%model%constraint_forms(q0, omega(:, 1:self%model%m), s)
@@ -238,7 +412,7 @@ contains
         call finish(self, VCI_ERR_ARGUMENT, stat); return
       end if
       s = 0
-      call self%model%discrete_constraint(q0, q0, self%h, w, s)
+      if (associated(self%discrete)) call self%discrete%discrete_constraint(q0, q0, self%h, w, s)
       if (s == VCI_NOT_PROVIDED) then
         write (self%message, '(a,i0,a)') who//': the model has m = ', self%model%m, &
           ' constraints but does not supply discrete_constraint'

@@ -6,11 +6,10 @@ module vci_stepper
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use vci_kinds, only: dp, i8
   use vci_status
-  use vci_model, only: vci_model_t
   use vci_newton, only: vci_newton_t, vci_newton_result_t, NEWTON_MAX_ITERATIONS, NEWTON_NO_DESCENT, &
                         NEWTON_SINGULAR, NEWTON_EVALUATION
-  use vci_step_system, only: vci_step_system_t, KIND_SUBSTEP, KIND_WALL, KIND_REFLECT, KIND_IMPULSE, &
-                             VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN
+  use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_WALL, KIND_REFLECT, KIND_IMPULSE, KIND_PAIR, &
+                        VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN
   use vci_observer, only: vci_impact_t
   implicit none
   private
@@ -30,50 +29,56 @@ module vci_stepper
   end type vci_solver_stats_t
 
   type, public :: vci_stepper_t
-    type(vci_step_system_t) :: sys
+    class(vci_scheme_t), allocatable :: sys   !< owns the unknowns' layout; the stepper uses its accessors
     type(vci_newton_t) :: newton
     type(vci_settings_t) :: settings
     type(vci_solver_stats_t) :: stats
     integer :: n = 0, m = 0, ng = 0
+    integer :: nsub = 0                             !< unknowns of a regular sub-step (the scheme's)
     type(vci_impact_t), allocatable :: impacts(:)  !< impacts of the last step
     integer :: n_impacts = 0
     character(len=VCI_MSG_LEN) :: cause = ''       !< why the last step failed
     real(dp) :: last_residual = 0.0_dp              !< scaled residual of the last Newton solve
     real(dp), allocatable, private :: x(:), a(:), pa(:), b(:), qt(:), pminus(:), gb(:), ga(:), dga(:, :)
     real(dp), allocatable, private :: best_x(:), jac(:, :), rhs(:), r(:), sc(:), vin(:), pimp(:), nu(:)
-    real(dp), allocatable, private :: qs(:), gw(:), xlo(:), xhi(:), lam0(:)
+    real(dp), allocatable, private :: qs(:), gw(:), xlo(:), xhi(:), lam0(:), bt(:), zm(:)
   contains
     procedure :: setup
     procedure :: reserve_impacts
     procedure :: advance
     procedure :: arriving_energy
+    procedure :: pair_momentum
   end type vci_stepper_t
 
   real(dp), parameter :: landing_fraction = 1.0e-10_dp  ! stage 1 within this of the step's end: landed on the wall
 
 contains
 
-  subroutine setup(self, model, settings)
+  !> Take over a scheme already bound to its model (the integrator builds it) and size the workspace.
+  subroutine setup(self, scheme, settings)
     class(vci_stepper_t), intent(inout) :: self
-    class(vci_model_t), target, intent(inout) :: model
+    class(vci_scheme_t), allocatable, intent(inout) :: scheme
     type(vci_settings_t), intent(in) :: settings
     integer :: n, m, ng, nx
-    n = model%n; m = model%m; ng = model%n_gaps
+    n = scheme%n; m = scheme%m; ng = scheme%n_gaps
     self%n = n; self%m = m; self%ng = ng
     self%settings = settings
     self%stats = vci_solver_stats_t()
-    call self%sys%setup(model)
-    nx = n + m + 1
+    if (allocated(self%sys)) deallocate (self%sys)
+    call move_alloc(scheme, self%sys)
+    self%nsub = self%sys%unknowns(KIND_SUBSTEP)
+    nx = max(self%sys%unknowns(KIND_WALL), self%sys%unknowns(KIND_REFLECT), self%sys%unknowns(KIND_IMPULSE))
     call self%newton%reserve(nx)
     call apply_settings(self)
     if (allocated(self%x)) deallocate (self%x, self%a, self%pa, self%b, self%qt, self%pminus, self%gb, &
                                        self%ga, self%dga, self%best_x, self%jac, self%rhs, self%r, self%sc, &
                                        self%vin, self%pimp, self%nu, self%qs, self%gw, &
-                                       self%xlo, self%xhi, self%lam0)
+                                       self%xlo, self%xhi, self%lam0, self%bt, self%zm)
     allocate (self%x(nx), self%a(n), self%pa(n), self%b(n), self%qt(n), self%pminus(n), &
               self%gb(max(1, ng)), self%ga(max(1, ng)), self%dga(n, max(1, ng)), self%best_x(nx), &
               self%jac(nx, nx), self%rhs(nx), self%r(nx), self%sc(nx), self%vin(n), self%pimp(n), self%nu(m), &
-              self%qs(n), self%gw(max(1, ng)), self%xlo(nx), self%xhi(nx), self%lam0(m))
+              self%qs(n), self%gw(max(1, ng)), self%xlo(nx), self%xhi(nx), self%lam0(m), self%bt(n), self%zm(m))
+    self%x = 0.0_dp; self%zm = 0.0_dp
     call self%reserve_impacts(settings%max_impacts_per_step)
   end subroutine setup
 
@@ -122,8 +127,9 @@ contains
     self%cause = ''
     self%a = q; self%pa = p; tau = h; consumed = 0.0_dp
     ! the regular step, from the extrapolated guess
-    self%x(1:n) = q + real(dir, dp) * h * vel
-    if (m > 0) self%x(n + 1:n + m) = lambda
+    self%qs = q + real(dir, dp) * h * vel
+    call self%sys%put_endpoint(self%x, q, self%qs)
+    call self%sys%put_multipliers(self%x, lambda)
     call substep(self, self%a, self%pa, tau, stat)
     if (stat /= VCI_OK) return
 
@@ -131,7 +137,8 @@ contains
     last_gap = 0
     do
       if (self%ng == 0) exit
-      call self%sys%eval_gaps(self%x(1:n), self%gb(1:self%ng), stat)
+      call self%sys%get_endpoint(self%x, self%b)
+      call self%sys%eval_gaps(self%b, self%gb(1:self%ng), stat)
       if (stat /= VCI_OK) then
         call set_cause(self, 'gap evaluation'); return
       end if
@@ -142,7 +149,6 @@ contains
           ' impacts in one step (persistent contact or chatter)'
         return
       end if
-      self%b = self%x(1:n)
       call self%sys%eval_gaps(self%a, self%ga(1:self%ng), stat)
       if (stat == VCI_OK) call self%sys%eval_gap_gradients(self%a, self%dga(:, 1:self%ng), stat)
       if (stat /= VCI_OK) then
@@ -176,7 +182,8 @@ contains
           call set_cause(self, 'energy of the arriving sub-step'); return
         end if
         s1res = 0.0_dp
-        if (m > 0) self%best_x(n + 1:n + m) = self%x(n + 1:n + m)
+        call self%sys%get_multipliers(self%x, self%lam0)
+        call self%sys%put_multipliers(self%best_x, self%lam0)
       else
         ! Stage 1 on every violated wall; the first one reached (smallest alpha) is the impact.
         alpha = huge(1.0_dp)
@@ -186,17 +193,17 @@ contains
           if (stat /= VCI_OK) return
           if (alpha_j < alpha) then
             alpha = alpha_j; jstar = j
-            self%best_x(1:n + m + 1) = self%x(1:n + m + 1)
+            self%best_x(1:self%nsub + 1) = self%x(1:self%nsub + 1)
             s1res = self%last_residual
           end if
         end do
-        self%qt = self%best_x(1:n)
-        call self%sys%momentum_out(self%a, self%qt, alpha * tau, self%pminus, stat)
+        call self%sys%get_endpoint(self%best_x, self%qt)
+        call self%sys%momentum_out(self%best_x, self%a, alpha * tau, self%pminus, stat)
         if (stat == VCI_OK) then
           if (self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN) then
             call self%sys%hamiltonian(self%qt, self%pminus, e_minus, stat)
           else
-            call self%sys%energy_of(self%a, self%qt, alpha * tau, e_minus, stat)
+            call self%sys%energy_out(self%best_x, self%a, alpha * tau, e_minus, stat)
           end if
         end if
         if (stat /= VCI_OK) then
@@ -206,7 +213,7 @@ contains
         ! the next step starts on the wall and reflects there.
         if (1.0_dp - alpha <= landing_fraction) then
           self%a = self%qt; self%pa = self%pminus
-          if (m > 0) lambdan = self%best_x(n + 1:n + m)
+          call self%sys%get_multipliers(self%best_x, lambdan)
           qn = self%qt; pn = self%pminus; e_step = e_minus
           vel = real(dir, dp) * (self%qt - q) / h
           e_arrive = e_minus
@@ -229,10 +236,10 @@ contains
     end do
     if (landed) return
 
-    qn = self%x(1:n)
-    if (m > 0) lambdan = self%x(n + 1:n + m)
-    call self%sys%momentum_out(self%a, qn, tau, pn, stat)
-    if (stat == VCI_OK) call self%sys%energy_of(self%a, qn, tau, e_step, stat)
+    call self%sys%get_endpoint(self%x, qn)
+    call self%sys%get_multipliers(self%x, lambdan)
+    call self%sys%momentum_out(self%x, self%a, tau, pn, stat)
+    if (stat == VCI_OK) call self%sys%energy_out(self%x, self%a, tau, e_step, stat)
     if (stat /= VCI_OK) then
       call set_cause(self, 'momentum of the new state'); return
     end if
@@ -256,7 +263,7 @@ contains
     real(dp), intent(in) :: a(:), pa(:), tau
     integer, intent(out) :: stat
     integer :: nx
-    nx = self%n + self%m
+    nx = self%nsub
     self%sys%kind = KIND_SUBSTEP
     self%sys%a = a; self%sys%pa = pa; self%sys%tau = tau
     if (self%m > 0) then
@@ -280,7 +287,7 @@ contains
     character(len=40) :: what
     n = self%n; m = self%m
     write (what, '(a,i0,a)') 'stage 1 (reaching wall ', j, ')'
-    self%lam0(1:m) = self%x(n + 1:n + m)
+    call self%sys%get_multipliers(self%x, self%lam0)
     ! Initial guess: the first crossing along the chord a -> b, by sampling then bisection (g is cheap).
     lo = 0.0_dp; hi = 1.0_dp
     do i = 1, 8
@@ -303,10 +310,11 @@ contains
       end if
     end do
     alpha = max(hi, 1.0e-6_dp)
-    self%x(1:n) = self%a + alpha * (self%b - self%a)
+    self%qs = self%a + alpha * (self%b - self%a)
+    call self%sys%put_endpoint(self%x, self%a, self%qs)
     call solve_wall(self, j, tau, alpha, trim(what), stat)
     if (stat == VCI_OK) then
-      alpha = self%x(n + m + 1)
+      alpha = self%sys%get_extra(self%x, KIND_WALL)
       if (alpha > 0.0_dp .and. alpha <= 1.0_dp) return
     end if
     ! The chord is a poor guess when the sub-step is strongly curved (stiff forces, a second
@@ -316,7 +324,7 @@ contains
     if (stat /= VCI_OK) return
     call solve_wall(self, j, tau, alpha, trim(what), stat)
     if (stat /= VCI_OK) return
-    alpha = self%x(n + m + 1)
+    alpha = self%sys%get_extra(self%x, KIND_WALL)
     if (.not. (alpha > 0.0_dp .and. alpha <= 1.0_dp)) then
       stat = VCI_ERR_IMPACT
       write (self%cause, '(a,es10.3,a)') trim(what)//': impact fraction ', alpha, ' outside (0, 1]'
@@ -332,11 +340,13 @@ contains
     integer, intent(out) :: stat
     real(dp), parameter :: eps_frac = 1.0e-3_dp
     integer :: nx
-    nx = self%n + self%m
+    nx = self%nsub
     self%xhi(1:nx) = self%x(1:nx)
-    self%x(1:self%n) = self%a + eps_frac * (self%b - self%a)
+    self%qs = self%a + eps_frac * (self%b - self%a)
+    call self%sys%put_endpoint(self%x, self%a, self%qs)
     call substep(self, self%a, self%pa, eps_frac * tau, stat)
-    departs_into = stat == VCI_OK .and. dot_product(self%dga(:, j), self%x(1:self%n) - self%a) < 0.0_dp
+    call self%sys%get_endpoint(self%x, self%bt)
+    departs_into = stat == VCI_OK .and. dot_product(self%dga(:, j), self%bt - self%a) < 0.0_dp
     self%x(1:nx) = self%xhi(1:nx)
   end function departs_into
 
@@ -358,37 +368,39 @@ contains
     real(dp), intent(in) :: tau
     real(dp), intent(out) :: alpha
     integer, intent(out) :: stat
-    integer :: n, m, i
+    integer :: nm, i
     real(dp) :: lo, hi, mid, glo, ghi, g
-    n = self%n; m = self%m
+    nm = self%nsub
     lo = 0.0_dp; hi = 1.0_dp
     glo = self%ga(j); ghi = self%gb(j)
-    self%xlo(1:n) = self%a; self%xlo(n + 1:n + m) = self%lam0(1:m)
-    self%xhi(1:n) = self%b; self%xhi(n + 1:n + m) = self%lam0(1:m)
+    call self%sys%put_endpoint(self%xlo, self%a, self%a)
+    call self%sys%put_multipliers(self%xlo, self%lam0)
+    call self%sys%put_endpoint(self%xhi, self%a, self%b)
+    call self%sys%put_multipliers(self%xhi, self%lam0)
     do i = 1, 7                           ! the first crossing: sample from the start ...
       mid = real(i, dp) / 8.0_dp
       call trajectory_gap(self, j, tau, lo, hi, mid, g, stat)
       if (stat /= VCI_OK) return
       if (g < 0.0_dp) then
-        hi = mid; ghi = g; self%xhi(1:n + m) = self%x(1:n + m)
+        hi = mid; ghi = g; self%xhi(1:nm) = self%x(1:nm)
         exit
       end if
-      lo = mid; glo = g; self%xlo(1:n + m) = self%x(1:n + m)
+      lo = mid; glo = g; self%xlo(1:nm) = self%x(1:nm)
     end do
     do i = 1, 8                           ! ... then bisect the bracket
       mid = 0.5_dp * (lo + hi)
       call trajectory_gap(self, j, tau, lo, hi, mid, g, stat)
       if (stat /= VCI_OK) return
       if (g < 0.0_dp) then
-        hi = mid; ghi = g; self%xhi(1:n + m) = self%x(1:n + m)
+        hi = mid; ghi = g; self%xhi(1:nm) = self%x(1:nm)
       else
-        lo = mid; glo = g; self%xlo(1:n + m) = self%x(1:n + m)
+        lo = mid; glo = g; self%xlo(1:nm) = self%x(1:nm)
       end if
     end do
     glo = max(glo, 0.0_dp)                ! a start on the wall may be below it by round-off
     alpha = lo + (hi - lo) * glo / max(glo - ghi, tiny(1.0_dp))
     alpha = min(max(alpha, lo + 1.0e-3_dp * (hi - lo)), hi)
-    self%x(1:n + m) = self%xlo(1:n + m) + (alpha - lo) / (hi - lo) * (self%xhi(1:n + m) - self%xlo(1:n + m))
+    self%x(1:nm) = self%xlo(1:nm) + (alpha - lo) / (hi - lo) * (self%xhi(1:nm) - self%xlo(1:nm))
   end subroutine trajectory_bracket
 
   !> g_j at the end of the regular sub-step of length s tau (its solution left in x).
@@ -399,11 +411,12 @@ contains
     real(dp), intent(out) :: g
     integer, intent(out) :: stat
     integer :: nm
-    nm = self%n + self%m
+    nm = self%nsub
     self%x(1:nm) = self%xlo(1:nm) + (s - lo) / (hi - lo) * (self%xhi(1:nm) - self%xlo(1:nm))
     call substep(self, self%a, self%pa, s * tau, stat)
     if (stat /= VCI_OK) return
-    call self%sys%eval_gaps(self%x(1:self%n), self%gw(1:self%ng), stat)
+    call self%sys%get_endpoint(self%x, self%bt)
+    call self%sys%eval_gaps(self%bt, self%gw(1:self%ng), stat)
     if (stat /= VCI_OK) then
       call set_cause(self, 'gap evaluation'); return
     end if
@@ -417,9 +430,9 @@ contains
     real(dp), intent(in) :: tau, alpha
     character(len=*), intent(in) :: what
     integer, intent(out) :: stat
-    integer :: n, m
-    n = self%n; m = self%m
-    self%x(n + m + 1) = alpha
+    integer :: m
+    m = self%m
+    call self%sys%put_extra(self%x, KIND_WALL, alpha)
     self%sys%kind = KIND_WALL
     self%sys%a = self%a; self%sys%pa = self%pa; self%sys%tau = tau; self%sys%gap = j
     self%sys%gscale = abs(self%dga(:, j))
@@ -429,7 +442,7 @@ contains
         call set_cause(self, 'constraint forms'); return
       end if
     end if
-    call run_newton(self, n + m + 1, what, stat)
+    call run_newton(self, self%sys%unknowns(KIND_WALL), what, stat)
   end subroutine solve_wall
 
   !> Stage 2 on wall j from (qt, p_minus) over tau2: q_next, lambda, impulse mu. Newton starts from
@@ -442,7 +455,7 @@ contains
     integer :: n, m, nx0, info
     real(dp) :: num, den, mu0
     character(len=40) :: what
-    n = self%n; m = self%m; nx0 = n + m
+    n = self%n; m = self%m; nx0 = self%nsub
     write (what, '(a,i0,a)') 'stage 2 (reflecting at wall ', j, ')'
     call self%sys%eval_gap_gradients(self%qt, self%dga(:, 1:self%ng), stat)
     if (stat /= VCI_OK) then
@@ -450,10 +463,12 @@ contains
     end if
     self%sys%grad = self%dga(:, j)
     ! the motion with no impulse, and its sensitivity d = d(q_next, lambda)/d mu
-    self%x(1:n) = self%qt + tau2 * self%vin
+    self%qs = self%qt + tau2 * self%vin
+    call self%sys%put_endpoint(self%x, self%qt, self%qs)
     call substep(self, self%qt, self%pminus, tau2, stat)
     if (stat /= VCI_OK) return
-    num = dot_product(self%sys%grad, self%x(1:n) - self%qt)
+    call self%sys%get_endpoint(self%x, self%bt)
+    num = dot_product(self%sys%grad, self%bt - self%qt)
     mu0 = 0.0_dp
     if (num < 0.0_dp) then
       call self%sys%residual(self%x(1:nx0), self%r(1:nx0), self%sc(1:nx0), stat)
@@ -461,10 +476,11 @@ contains
       if (stat /= VCI_OK) then
         call set_cause(self, trim(what)//' initial guess'); return
       end if
-      self%rhs(1:n) = -self%sys%grad
-      self%rhs(n + 1:nx0) = 0.0_dp
+      self%bt = -self%sys%grad
+      call self%sys%momentum_rhs(self%bt, self%rhs(1:nx0))
       call self%newton%linear_solve(nx0, self%jac, self%rhs, info)
-      den = dot_product(self%sys%grad, self%rhs(1:n))
+      call self%sys%get_endpoint(self%rhs(1:nx0), self%bt)
+      den = dot_product(self%sys%grad, self%bt)
       if (info /= 0 .or. .not. (abs(den) > 0.0_dp) .or. .not. ieee_is_finite(den)) then
         stat = VCI_ERR_IMPACT
         self%cause = trim(what)//': the motion does not depend on the impulse (singular normal direction)'
@@ -475,15 +491,15 @@ contains
     end if
     ! num >= 0: the free motion from the wall already moves into the admissible set (a graze);
     ! no impulse is needed and the sub-step stands as computed.
-    self%x(nx0 + 1) = mu0
+    call self%sys%put_extra(self%x, KIND_REFLECT, mu0)
     if (self%m > 0) self%nu = 0.0_dp
     if (mu0 /= 0.0_dp .and. self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN) then
       ! H(qt, p+) = H(qt, p-) fixes the impulse from the momenta alone (with constraints, together
       ! with the constraint impulse nu that makes the outgoing velocity admissible); the leaving
       ! sub-step is then a regular one from p- + mu grad g (Omega nu is absorbed by its multiplier).
       self%best_x(1:nx0) = self%x(1:nx0)
-      self%x(1:m) = 0.0_dp
-      self%x(m + 1) = mu0
+      self%x(1:m) = 0.0_dp                       ! the impulse system's unknowns: [nu(m), mu]
+      call self%sys%put_extra(self%x, KIND_IMPULSE, mu0)
       self%sys%kind = KIND_IMPULSE
       self%sys%a = self%qt; self%sys%pa = self%pminus; self%sys%e_minus = e_minus
       if (m > 0) then
@@ -500,13 +516,13 @@ contains
       end if
       call run_newton(self, m + 1, trim(what)//' impulse', stat)
       if (stat /= VCI_OK) return
-      mu0 = self%x(m + 1)
+      mu0 = self%sys%get_extra(self%x, KIND_IMPULSE)
       if (m > 0) self%nu = self%x(1:m)
       self%x(1:nx0) = self%best_x(1:nx0)
       self%pimp = self%pminus + mu0 * self%sys%grad
       call substep(self, self%qt, self%pimp, tau2, stat)
       if (stat /= VCI_OK) return
-      self%x(nx0 + 1) = mu0
+      call self%sys%put_extra(self%x, KIND_REFLECT, mu0)
       if (.not. reflected(self, mu0, tau2, stat)) then
         if (stat == VCI_OK) stat = VCI_ERR_IMPACT
         self%cause = trim(what)//': the reflected motion does not leave the wall'
@@ -516,9 +532,9 @@ contains
       self%sys%kind = KIND_REFLECT
       self%sys%a = self%qt; self%sys%pa = self%pminus; self%sys%tau = tau2; self%sys%gap = j
       self%sys%e_minus = e_minus
-      call run_newton(self, nx0 + 1, trim(what), stat)
+      call run_newton(self, self%sys%unknowns(KIND_REFLECT), trim(what), stat)
       if (stat /= VCI_OK) return
-      if (.not. reflected(self, self%x(nx0 + 1), tau2, stat)) then
+      if (.not. reflected(self, self%sys%get_extra(self%x, KIND_REFLECT), tau2, stat)) then
         if (stat == VCI_OK) stat = VCI_ERR_IMPACT
         self%cause = trim(what)//': the reflected motion does not leave the wall'
         return
@@ -540,14 +556,17 @@ contains
     real(dp), parameter :: eps_frac = 1.0e-3_dp
     integer :: nx
     stat = VCI_OK
-    reflected = dot_product(self%sys%grad, self%x(1:self%n) - self%qt) > 0.0_dp
+    call self%sys%get_endpoint(self%x, self%bt)
+    reflected = dot_product(self%sys%grad, self%bt - self%qt) > 0.0_dp
     if (reflected) return
-    nx = self%n + self%m + 1
+    nx = self%sys%unknowns(KIND_REFLECT)
     self%xhi(1:nx) = self%x(1:nx)
-    self%x(1:self%n) = self%qt + eps_frac * (self%x(1:self%n) - self%qt)
+    self%qs = self%qt + eps_frac * (self%bt - self%qt)
+    call self%sys%put_endpoint(self%x, self%qt, self%qs)
     self%pimp = self%pminus + mu * self%sys%grad
     call substep(self, self%qt, self%pimp, eps_frac * tau2, stat)
-    reflected = stat == VCI_OK .and. dot_product(self%sys%grad, self%x(1:self%n) - self%qt) > 0.0_dp
+    call self%sys%get_endpoint(self%x, self%bt)
+    reflected = stat == VCI_OK .and. dot_product(self%sys%grad, self%bt - self%qt) > 0.0_dp
     self%x(1:nx) = self%xhi(1:nx)
     if (.not. reflected) stat = VCI_OK
   end function reflected
@@ -559,7 +578,7 @@ contains
     integer :: n, stat
     real(dp) :: mu, e_after
     n = self%n
-    mu = self%x(n + self%m + 1)
+    mu = self%sys%get_extra(self%x, KIND_REFLECT)
     self%n_impacts = self%n_impacts + 1
     associate (imp => self%impacts(self%n_impacts))
       imp%t = t + real(dir, dp) * elapsed
@@ -576,10 +595,11 @@ contains
       if (self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN) then
         call self%sys%hamiltonian(self%qt, imp%p_after, e_after, stat)
       else
-        call self%sys%energy_of(self%qt, self%x(1:n), tau2, e_after, stat)
+        call self%sys%energy_out(self%x, self%qt, tau2, e_after, stat)
       end if
       imp%energy_after = e_after
-      imp%leave_rate = dot_product(self%sys%grad, self%x(1:n) - self%qt) / tau2
+      call self%sys%get_endpoint(self%x, self%bt)
+      imp%leave_rate = dot_product(self%sys%grad, self%bt - self%qt) / tau2
       imp%stage1_residual = s1res
       imp%stage2_residual = self%last_residual
     end associate
@@ -595,16 +615,38 @@ contains
     real(dp), intent(out) :: e
     integer, intent(out) :: stat
     integer :: nx
-    nx = self%n + self%m + 1
+    nx = self%sys%unknowns(KIND_REFLECT)
     self%best_x(1:nx) = self%x(1:nx)
     self%sys%dir = -dir
-    self%x(1:self%n) = self%a
-    if (self%m > 0) self%x(self%n + 1:self%n + self%m) = 0.0_dp
+    call self%sys%put_endpoint(self%x, self%a, self%a)
+    call self%sys%put_multipliers(self%x, self%zm)
     call substep(self, self%a, self%pa, h, stat)
-    if (stat == VCI_OK) call self%sys%energy_of(self%a, self%x(1:self%n), h, e, stat)
+    if (stat == VCI_OK) call self%sys%energy_out(self%x, self%a, h, e, stat)
     self%sys%dir = dir
     self%x(1:nx) = self%best_x(1:nx)
   end subroutine arriving_energy
+
+  !> The momentum p1 at q1 and the discrete energy of the segment from q0 to q1 of length h, forward
+  !> (the paper's initial pair). Schemes with interior stages solve for them first (KIND_PAIR).
+  subroutine pair_momentum(self, q0, q1, h, p1, e, stat)
+    class(vci_stepper_t), intent(inout) :: self
+    real(dp), intent(in) :: q0(:), q1(:), h
+    real(dp), intent(out) :: p1(:), e
+    integer, intent(out) :: stat
+    self%sys%dir = 1
+    self%cause = ''
+    call self%sys%put_endpoint(self%x, q0, q1)
+    call self%sys%put_multipliers(self%x, self%zm)
+    if (self%sys%needs_pair_solve()) then
+      self%sys%kind = KIND_PAIR
+      self%sys%a = q0; self%sys%b_target = q1; self%sys%tau = h
+      call run_newton(self, self%nsub, 'interior stages of the initial pair', stat)
+      if (stat /= VCI_OK) return
+    end if
+    call self%sys%momentum_out(self%x, q0, h, p1, stat)
+    if (stat == VCI_OK) call self%sys%energy_out(self%x, q0, h, e, stat)
+    if (stat /= VCI_OK) call set_cause(self, 'momentum of the initial pair')
+  end subroutine pair_momentum
 
   subroutine run_newton(self, nx, what, stat)
     type(vci_stepper_t), intent(inout) :: self

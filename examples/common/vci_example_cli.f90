@@ -23,6 +23,8 @@ module vci_example_cli
     integer :: impact_energy = VCI_IMPACT_DISCRETE
     real(dp) :: rtol = 1.0e-12_dp
     integer :: max_impacts = 16
+    character(len=:), allocatable :: scheme   !< --scheme: left, midpoint or lobatto (unset: the scene's default)
+    integer :: stages = 2                     !< --stages: s of lobatto
   end type example_options_t
 
   !> Prints one line per impact and a progress line on stderr; forwards everything to `next`.
@@ -48,7 +50,7 @@ module vci_example_cli
     end function c_isatty
   end interface
 
-  public :: parse_options, run_example, read_last_state
+  public :: parse_options, run_example, read_last_state, create_integrator, scheme_id
 
 #ifdef VCI_HAVE_HDF5
   character(len=*), parameter :: default_extension = '.h5'
@@ -85,9 +87,13 @@ contains
         write (output_unit, '(a)') '  --rtol R              Newton tolerance relative to term sizes (1e-12)'
         write (output_unit, '(a)') '  --max-impacts K       impacts allowed in one step (16)'
         write (output_unit, '(a)') '  --differenced-hessian let the library difference the mixed Hessian'
+        write (output_unit, '(a)') '  --scheme S            discretise the scene''s continuous L: left, midpoint or lobatto'
+        write (output_unit, '(a)') '                        (default: the scene''s hand-derived L_d, as in the paper)'
+        write (output_unit, '(a)') '  --stages s            lobatto: s stages, order 2s (2)'
         write (output_unit, '(a)') '  --quiet               print the summary only'
         stop
-      case ('--h', '--t-final', '--output', '--from', '--impact-energy', '--rtol', '--max-impacts', '--flush-every')
+      case ('--h', '--t-final', '--output', '--from', '--impact-energy', '--rtol', '--max-impacts', '--flush-every', &
+            '--scheme', '--stages')
         if (i == nargs) call die(name//': '//arg//' needs a value')
         i = i + 1
         val = get_arg(i)
@@ -99,6 +105,10 @@ contains
         case ('--from'); opts%from = val
         case ('--rtol'); opts%rtol = to_real(val, arg)
         case ('--max-impacts'); opts%max_impacts = nint(to_real(val, arg))
+        case ('--stages'); opts%stages = nint(to_real(val, arg))
+        case ('--scheme')
+          if (scheme_id(val) < 0) call die(name//': --scheme must be left, midpoint or lobatto')
+          opts%scheme = val
         case ('--impact-energy')
           select case (val)
           case ('discrete'); opts%impact_energy = VCI_IMPACT_DISCRETE
@@ -130,7 +140,7 @@ contains
   !> Create, initialise and run; print the summary. `init` is called when not starting from a file.
   subroutine run_example(name, model, opts, init)
     character(len=*), intent(in) :: name
-    class(vci_model_t), target, intent(inout) :: model
+    class(vci_model_base_t), target, intent(inout) :: model
     type(example_options_t), intent(inout) :: opts
     interface
       subroutine init(integ, stat)
@@ -211,6 +221,8 @@ contains
     e_first = integ%energy   ! NaN when starting from (q, p): no step taken yet
     write (output_unit, '(a)') 'scene: '//name//'   direction: '//trim(merge('backward', 'forward ', opts%backward))// &
       '   impact energy: '//trim(merge('hamiltonian', 'discrete   ', opts%impact_energy == VCI_IMPACT_HAMILTONIAN))
+    if (allocated(opts%scheme)) write (output_unit, '(a,i0,a)') 'scheme: '//vci_scheme_name(integ%scheme)// &
+      '   stages: ', integ%stages, ''
     write (output_unit, '(a,es10.3,a,f0.6,a,f0.6,a,i0)') 'h = ', opts%h, '   t from ', integ%t, ' to ', &
       integ%t + dir * nsteps * opts%h, '   steps: ', nsteps
     call print_state('start state', integ)
@@ -245,11 +257,19 @@ contains
   !> Create the integrator with the command line's step length and solver settings.
   subroutine create_integrator(name, model, opts, integ)
     character(len=*), intent(in) :: name
-    class(vci_model_t), target, intent(inout) :: model
+    class(vci_model_base_t), target, intent(inout) :: model
     type(example_options_t), intent(in) :: opts
     type(vci_integrator_t), intent(inout) :: integ
     integer :: stat
-    call integ%create(model, opts%h, stat)
+    select type (model)
+    class is (vci_model_t)
+      call integ%create(model, opts%h, stat)
+    class is (vci_lagrangian_t)
+      call integ%create(model, opts%h, stat)
+      if (stat == VCI_OK .and. allocated(opts%scheme)) call integ%set_scheme(scheme_id(opts%scheme), opts%stages, stat)
+    class default
+      stat = VCI_ERR_ARGUMENT
+    end select
     if (stat == VCI_OK) call integ%set_tolerances(0.0_dp, opts%rtol, 30, stat)
     if (stat == VCI_OK) call integ%set_max_impacts(opts%max_impacts, stat)
     if (stat /= VCI_OK) call die(name//': '//trim(integ%message))
@@ -259,7 +279,7 @@ contains
   !> length is the file's (taken from the file unless --h is given), else its last (t, q, p).
   subroutine start_from_h5(name, model, opts, integ, t_first, stat)
     character(len=*), intent(in) :: name
-    class(vci_model_t), target, intent(inout) :: model
+    class(vci_model_base_t), target, intent(inout) :: model
     type(example_options_t), intent(inout) :: opts
     type(vci_integrator_t), intent(inout) :: integ
     real(dp), intent(out) :: t_first
@@ -282,6 +302,17 @@ contains
 #endif
   end subroutine start_from_h5
 
+  !> VCI_SCHEME_* of a --scheme name, -1 when unknown.
+  integer function scheme_id(name)
+    character(len=*), intent(in) :: name
+    select case (name)
+    case ('left'); scheme_id = VCI_SCHEME_LEFT
+    case ('midpoint'); scheme_id = VCI_SCHEME_MIDPOINT
+    case ('lobatto'); scheme_id = VCI_SCHEME_LOBATTO
+    case default; scheme_id = -1
+    end select
+  end function scheme_id
+
   logical function is_csv(path)
     character(len=*), intent(in) :: path
     is_csv = .false.
@@ -289,7 +320,7 @@ contains
   end function is_csv
 
   logical function model_has_energy(model, integ)
-    class(vci_model_t), intent(inout) :: model
+    class(vci_model_base_t), intent(inout) :: model
     type(vci_integrator_t), intent(in) :: integ
     real(dp) :: e
     integer :: s

@@ -1,8 +1,10 @@
 !> The paper's bouncing ellipse: q = (theta, x, y), midpoint L_d with gravity, floor gap
 !> g(q) = y - phi(theta), phi = sqrt(a^2 sin^2 theta + b^2 cos^2 theta). DESIGN.md §2.
+!> `ellipse_lagrangian_t`: the same body as a continuous model, L = I θ̇²/2 + m(ẋ² + ẏ²)/2 − m g y.
 module vci_scene_ellipse
   use vci_kinds, only: dp
   use vci_model, only: vci_model_t
+  use vci_lagrangian, only: vci_lagrangian_t
   use vci_status, only: VCI_NOT_PROVIDED
   implicit none
   private
@@ -15,7 +17,14 @@ module vci_scene_ellipse
     procedure :: inertia
   end type ellipse_t
 
-  public :: ellipse_model
+  type, extends(vci_lagrangian_t), public :: ellipse_lagrangian_t
+    real(dp) :: mass = 1.0_dp, grav = 9.8_dp, a = 1.0_dp, b = 0.5_dp
+  contains
+    procedure :: lagrangian => el_lagrangian, dl_dq => el_dl_dq, dl_dv => el_dl_dv
+    procedure :: gaps => el_gaps, gap_gradients => el_gap_grads, energy => el_energy
+  end type ellipse_lagrangian_t
+
+  public :: ellipse_model, ellipse_lagrangian_model
 
 contains
 
@@ -23,6 +32,11 @@ contains
     type(ellipse_t) :: model
     model%n = 3; model%n_gaps = 1
   end function ellipse_model
+
+  function ellipse_lagrangian_model() result(model)
+    type(ellipse_lagrangian_t) :: model
+    model%n = 3; model%n_gaps = 1
+  end function ellipse_lagrangian_model
 
   pure real(dp) function inertia(self)
     class(ellipse_t), intent(in) :: self
@@ -97,4 +111,55 @@ contains
     integer, intent(inout) :: stat
     e = 0.5_dp * p(1)**2 / self%inertia() + 0.5_dp * (p(2)**2 + p(3)**2) / self%mass + self%mass * self%grav * q(3)
   end subroutine energy
+  subroutine el_lagrangian(self, q, v, l, stat)
+    class(ellipse_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: l
+    integer, intent(inout) :: stat
+    l = 0.5_dp * self%mass * (self%a**2 + self%b**2) / 4.0_dp * v(1)**2 + 0.5_dp * self%mass * (v(2)**2 + v(3)**2) &
+        - self%mass * self%grav * q(3)
+  end subroutine el_lagrangian
+
+  subroutine el_dl_dq(self, q, v, out, stat)
+    class(ellipse_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    out = [0.0_dp, 0.0_dp, -self%mass * self%grav]
+  end subroutine el_dl_dq
+
+  subroutine el_dl_dv(self, q, v, out, stat)
+    class(ellipse_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    out = [self%mass * (self%a**2 + self%b**2) / 4.0_dp * v(1), self%mass * v(2), self%mass * v(3)]
+  end subroutine el_dl_dv
+
+  subroutine el_gaps(self, q, g, stat)
+    class(ellipse_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: g(:)
+    integer, intent(inout) :: stat
+    g(1) = q(3) - sqrt(self%a**2 * sin(q(1))**2 + self%b**2 * cos(q(1))**2)
+  end subroutine el_gaps
+
+  subroutine el_gap_grads(self, q, dg, stat)
+    class(ellipse_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: dg(:, :)
+    integer, intent(inout) :: stat
+    real(dp) :: phi
+    phi = sqrt(self%a**2 * sin(q(1))**2 + self%b**2 * cos(q(1))**2)
+    dg(:, 1) = [-(self%a**2 - self%b**2) * sin(q(1)) * cos(q(1)) / phi, 0.0_dp, 1.0_dp]
+  end subroutine el_gap_grads
+
+  subroutine el_energy(self, q, p, e, stat)
+    class(ellipse_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), p(:)
+    real(dp), intent(out) :: e
+    integer, intent(inout) :: stat
+    e = 0.5_dp * p(1)**2 / (self%mass * (self%a**2 + self%b**2) / 4.0_dp) + 0.5_dp * (p(2)**2 + p(3)**2) / self%mass &
+        + self%mass * self%grav * q(3)
+  end subroutine el_energy
 end module vci_scene_ellipse

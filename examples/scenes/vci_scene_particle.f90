@@ -3,9 +3,11 @@
 !> L_d(q, v, h) = h [ m |v - q|^2 / (2 h^2) - V((q + v)/2) ],  V(q) = m g y + k/2 (y - y_rest)^2.
 !> Used for the bouncing particle (one floor), the particle in a box (four walls, g = 0) and the
 !> stiff and extreme-magnitude stability cases.
+!> `particle_lagrangian_t`: the same particle as a continuous model, L = m|v|²/2 − V(q).
 module vci_scene_particle
   use vci_kinds, only: dp
   use vci_model, only: vci_model_t
+  use vci_lagrangian, only: vci_lagrangian_t
   use vci_status, only: VCI_NOT_PROVIDED
   implicit none
   private
@@ -19,7 +21,15 @@ module vci_scene_particle
     procedure :: d1, d2, d3, mixed_hessian, gaps, gap_gradients, energy
   end type particle_t
 
-  public :: particle_on_floor, particle_in_box
+  type, extends(vci_lagrangian_t), public :: particle_lagrangian_t
+    real(dp) :: mass = 1.0_dp, grav = 9.8_dp
+    real(dp), allocatable :: normal(:, :), offset(:)
+  contains
+    procedure :: lagrangian => pl_lagrangian, dl_dq => pl_dl_dq, dl_dv => pl_dl_dv
+    procedure :: gaps => pl_gaps, gap_gradients => pl_gap_grads, energy => pl_energy
+  end type particle_lagrangian_t
+
+  public :: particle_on_floor, particle_in_box, particle_lagrangian_on_floor
 
 contains
 
@@ -43,6 +53,17 @@ contains
     model%normal = reshape([1.0_dp, 0.0_dp, -1.0_dp, 0.0_dp, 0.0_dp, 1.0_dp, 0.0_dp, -1.0_dp], [2, 4])
     model%offset = [0.0_dp, -width, 0.0_dp, -height]
   end function particle_in_box
+
+  !> The bouncing particle as a continuous model: floor y >= 0.
+  function particle_lagrangian_on_floor(mass, grav) result(model)
+    real(dp), intent(in) :: mass, grav
+    type(particle_lagrangian_t) :: model
+    model%n = 2; model%n_gaps = 1
+    model%mass = mass; model%grav = grav
+    allocate (model%normal(2, 1), model%offset(1))
+    model%normal = reshape([0.0_dp, 1.0_dp], [2, 1])
+    model%offset = [0.0_dp]
+  end function particle_lagrangian_on_floor
 
   pure real(dp) function dvdy(self, y)
     class(particle_t), intent(in) :: self
@@ -115,4 +136,51 @@ contains
     integer, intent(inout) :: stat
     e = 0.5_dp * sum(p**2) / self%mass + self%mass * self%grav * q(2) + 0.5_dp * self%k * (q(2) - self%y_rest)**2
   end subroutine energy
+  subroutine pl_lagrangian(self, q, v, l, stat)
+    class(particle_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: l
+    integer, intent(inout) :: stat
+    l = 0.5_dp * self%mass * sum(v**2) - self%mass * self%grav * q(2)
+  end subroutine pl_lagrangian
+
+  subroutine pl_dl_dq(self, q, v, out, stat)
+    class(particle_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    out = [0.0_dp, -self%mass * self%grav]
+  end subroutine pl_dl_dq
+
+  subroutine pl_dl_dv(self, q, v, out, stat)
+    class(particle_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    out = self%mass * v
+  end subroutine pl_dl_dv
+
+  subroutine pl_gaps(self, q, g, stat)
+    class(particle_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: g(:)
+    integer, intent(inout) :: stat
+    g = matmul(q, self%normal) - self%offset
+  end subroutine pl_gaps
+
+  subroutine pl_gap_grads(self, q, dg, stat)
+    class(particle_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: dg(:, :)
+    integer, intent(inout) :: stat
+    dg = self%normal
+  end subroutine pl_gap_grads
+
+  subroutine pl_energy(self, q, p, e, stat)
+    class(particle_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), p(:)
+    real(dp), intent(out) :: e
+    integer, intent(inout) :: stat
+    e = 0.5_dp * sum(p**2) / self%mass + self%mass * self%grav * q(2)
+  end subroutine pl_energy
 end module vci_scene_particle

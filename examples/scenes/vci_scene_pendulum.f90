@@ -3,9 +3,12 @@
 !> constraint form omega = f(theta) dtheta - dphi with f = pi + cos^2 theta, discrete constraint
 !> omega_d(q, v, h) = (f(theta)(v_th - th) - (v_ph - ph)) / h, and the cylinder wall
 !> g = R^2 - l^2 sin^2 theta >= 0 (DESIGN.md §2: the paper's l sin theta <= R stops binding past pi).
+!> `pendulum_lagrangian_t` is the same scene as a continuous model, L = ½ m l² (θ̇² + sin²θ φ̇²) − m g l cos θ,
+!> with Ω = f(θ) dθ − dφ: the `left` scheme turns it into the L_d above.
 module vci_scene_pendulum
   use vci_kinds, only: dp
   use vci_model, only: vci_model_t
+  use vci_lagrangian, only: vci_lagrangian_t
   use vci_status, only: VCI_NOT_PROVIDED
   implicit none
   private
@@ -19,7 +22,15 @@ module vci_scene_pendulum
     procedure :: d1, d2, d3, mixed_hessian, constraint_forms, discrete_constraint, gaps, gap_gradients, energy
   end type pendulum_t
 
-  public :: pendulum_model, pendulum_f
+  !> The continuous model (a few lines: L, its partials and Hessians, Omega, the wall, H).
+  type, extends(vci_lagrangian_t), public :: pendulum_lagrangian_t
+    real(dp) :: mass = 1.0_dp, grav = 9.8_dp, length = 2.0_dp, radius = 1.5_dp
+  contains
+    procedure :: lagrangian => pl_lagrangian, dl_dq => pl_dl_dq, dl_dv => pl_dl_dv, hessians => pl_hessians
+    procedure :: constraint_forms => pl_forms, gaps => pl_gaps, gap_gradients => pl_gap_grads, energy => pl_energy
+  end type pendulum_lagrangian_t
+
+  public :: pendulum_model, pendulum_f, pendulum_lagrangian_model
 
 contains
 
@@ -27,6 +38,11 @@ contains
     type(pendulum_t) :: model
     model%n = 2; model%m = 1; model%n_gaps = 1
   end function pendulum_model
+
+  function pendulum_lagrangian_model() result(model)
+    type(pendulum_lagrangian_t) :: model
+    model%n = 2; model%m = 1; model%n_gaps = 1
+  end function pendulum_lagrangian_model
 
   elemental real(dp) function pendulum_f(theta)
     real(dp), intent(in) :: theta
@@ -126,4 +142,82 @@ contains
     end if
     e = 0.5_dp * p(1)**2 / ml2 + 0.5_dp * p(2)**2 / (ml2 * s2) + self%mass * self%grav * self%length * cos(q(1))
   end subroutine energy
+  subroutine pl_lagrangian(self, q, v, l, stat)
+    class(pendulum_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: l
+    integer, intent(inout) :: stat
+    l = 0.5_dp * self%mass * self%length**2 * (v(1)**2 + sin(q(1))**2 * v(2)**2) &
+        - self%mass * self%grav * self%length * cos(q(1))
+  end subroutine pl_lagrangian
+
+  subroutine pl_dl_dq(self, q, v, out, stat)
+    class(pendulum_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    out(1) = self%mass * self%length**2 * sin(q(1)) * cos(q(1)) * v(2)**2 + self%mass * self%grav * self%length * sin(q(1))
+    out(2) = 0.0_dp
+  end subroutine pl_dl_dq
+
+  subroutine pl_dl_dv(self, q, v, out, stat)
+    class(pendulum_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    out(1) = self%mass * self%length**2 * v(1)
+    out(2) = self%mass * self%length**2 * sin(q(1))**2 * v(2)
+  end subroutine pl_dl_dv
+
+  subroutine pl_hessians(self, q, v, lqq, lqv, lvv, stat)
+    class(pendulum_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: lqq(:, :), lqv(:, :), lvv(:, :)
+    integer, intent(inout) :: stat
+    real(dp) :: ml2, s, c
+    ml2 = self%mass * self%length**2; s = sin(q(1)); c = cos(q(1))
+    lqq = 0.0_dp; lqv = 0.0_dp; lvv = 0.0_dp
+    lqq(1, 1) = ml2 * (c**2 - s**2) * v(2)**2 + self%mass * self%grav * self%length * c
+    lqv(1, 2) = 2.0_dp * ml2 * s * c * v(2)
+    lvv(1, 1) = ml2
+    lvv(2, 2) = ml2 * s**2
+  end subroutine pl_hessians
+
+  subroutine pl_forms(self, q, omega, stat)
+    class(pendulum_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: omega(:, :)
+    integer, intent(inout) :: stat
+    omega(:, 1) = [pendulum_f(q(1)), -1.0_dp]
+  end subroutine pl_forms
+
+  subroutine pl_gaps(self, q, g, stat)
+    class(pendulum_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: g(:)
+    integer, intent(inout) :: stat
+    g(1) = self%radius**2 - self%length**2 * sin(q(1))**2
+  end subroutine pl_gaps
+
+  subroutine pl_gap_grads(self, q, dg, stat)
+    class(pendulum_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: dg(:, :)
+    integer, intent(inout) :: stat
+    dg(:, 1) = [-2.0_dp * self%length**2 * sin(q(1)) * cos(q(1)), 0.0_dp]
+  end subroutine pl_gap_grads
+
+  !> H as for the discrete model (undefined at sin theta = 0, never reached on the wall).
+  subroutine pl_energy(self, q, p, e, stat)
+    class(pendulum_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), p(:)
+    real(dp), intent(out) :: e
+    integer, intent(inout) :: stat
+    real(dp) :: ml2, s2
+    ml2 = self%mass * self%length**2; s2 = sin(q(1))**2
+    if (sqrt(s2) <= 4.0_dp * epsilon(1.0_dp)) then
+      stat = 1; e = 0.0_dp; return
+    end if
+    e = 0.5_dp * p(1)**2 / ml2 + 0.5_dp * p(2)**2 / (ml2 * s2) + self%mass * self%grav * self%length * cos(q(1))
+  end subroutine pl_energy
 end module vci_scene_pendulum

@@ -1,0 +1,66 @@
+!> A pendulum swinging between two walls at +-1 rad (an impact oscillator with nonlinear free
+!> flight): theta'' = -(g/l) sin theta, g/l = 9.8, theta(0) = 0, theta'(0) = 4 (p0 = 4), elastic
+!> walls; 18 impacts in 10 s. A continuous model discretised by --scheme (default lobatto, --stages 4);
+!> prints the errors of the final state and of the impact times against an exact reference
+!> (quadrature of t(theta), vci_ref_pendulum_quad).
+program pendulum_walls
+  use, intrinsic :: iso_fortran_env, only: output_unit
+  use vci
+  use vci_scene_pendulum_walls, only: pendulum_walls_t, pendulum_walls_model
+  use vci_ref_pendulum_quad, only: pendulum_quad_t, pendulum_quad_state, pendulum_quad_impacts
+  use vci_example_cli
+  implicit none
+  type(pendulum_walls_t), target :: model
+  type(vci_integrator_t) :: integ
+  type(example_options_t) :: opts
+  type(pendulum_quad_t) :: ref
+  real(dp), allocatable :: times(:), found(:)
+  real(dp) :: th, om, terr
+  integer :: stat, nex, nimp, j
+  integer(i8) :: nsteps, k
+  opts%h = 5.0e-2_dp; opts%t_final = 10.0_dp
+  opts%scheme = 'lobatto'; opts%stages = 4; opts%rtol = 1.0e-15_dp
+  call parse_options(opts, 'pendulum_walls', 'pendulum_walls: a pendulum between walls at +-1 rad, against its '// &
+    'exact solution (defaults h = 5e-2, t-final = 10, --scheme lobatto --stages 4, --rtol 1e-15)')
+  model = pendulum_walls_model(.true.)
+  call create_integrator('pendulum_walls', model, opts, integ)
+  call integ%init_from_momentum(0.0_dp, [0.0_dp], [4.0_dp], stat)
+  if (stat == VCI_OK .and. opts%impact_energy /= VCI_IMPACT_DISCRETE) call integ%set_impact_energy(opts%impact_energy, stat)
+  if (stat /= VCI_OK) then
+    write (output_unit, '(a)') 'pendulum_walls: '//trim(integ%message)
+    stop 2
+  end if
+  nsteps = nint(opts%t_final / opts%h, i8)
+  ref%k = 9.8_dp; ref%theta_wall = 1.0_dp; ref%theta0 = 0.0_dp; ref%omega0 = 4.0_dp
+  call pendulum_quad_impacts(ref, real(nsteps, dp) * opts%h, times, nex)
+  allocate (found(nex + 64))
+  nimp = 0
+  do k = 1, nsteps
+    call integ%step(1, stat)
+    if (stat /= VCI_OK) exit
+    do j = 1, integ%stepper%n_impacts
+      nimp = nimp + 1
+      if (nimp <= size(found)) found(nimp) = integ%stepper%impacts(j)%t
+    end do
+  end do
+  write (output_unit, '(a,i0,a,es10.3,a,i0,a,a)') 'scheme: '//vci_scheme_name(integ%scheme)//'   stages: ', &
+    integ%stages, '   h = ', opts%h, '   steps: ', nsteps, '   impact energy: ', &
+    trim(merge('hamiltonian', 'discrete   ', opts%impact_energy == VCI_IMPACT_HAMILTONIAN))
+  if (stat /= VCI_OK) then
+    write (output_unit, '(a)') 'status: '//vci_status_name(stat)//': '//trim(integ%message)
+    stop 2
+  end if
+  call pendulum_quad_state(ref, integ%t, th, om)
+  write (output_unit, '(a,i0,a,i0)') 'impacts: ', nimp, '   exact: ', nex
+  write (output_unit, '(a,es24.16,a,es24.16)') 'end state: t = ', integ%t, '  theta = ', integ%q(1)
+  write (output_unit, '(a,es10.3,a,es10.3)') 'error against the exact solution: theta ', abs(integ%q(1) - th), &
+    '   theta'' ', abs(integ%p(1) - om)
+  if (nimp == nex) then
+    terr = 0.0_dp
+    if (nex > 0) terr = maxval(abs(found(1:nex) - times(1:nex)))
+    write (output_unit, '(a,es10.3)') 'impact times: max error ', terr
+  end if
+  write (output_unit, '(a,i0,a,i0)') 'newton: solves ', integ%stats%newton_solves, '  iterations ', &
+    integ%stats%newton_iterations
+  write (output_unit, '(a)') 'status: ok'
+end program pendulum_walls

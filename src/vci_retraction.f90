@@ -1,0 +1,194 @@
+!> The `left` and `midpoint` schemes: discrete Lagrangians in closed form built from a continuous L by
+!> a retraction (the paper's L_d = L o Psi_d), served to the discrete scheme as one more vci_model_t.
+!> With w = (v - q)/h:
+!>   left     : L_d = h L(q, w),             omega_d(q, v, h) = Omega(q)^T w            (order 1)
+!>   midpoint : L_d = h L((q + v)/2, w),     omega_d(q, v, h) = Omega((q + v)/2)^T w    (symmetric, order 2)
+!> D3 L_d = L - dL/dqdot . w, so E_d = -D3 L_d = E(point, w): the continuous energy at the segment's
+!> velocity. The mixed Hessian comes from the Hessian blocks of L (the model's, or none: the discrete
+!> scheme then differences D1). H(q, p) is the model's when it supplies one, else the Legendre
+!> inversion of dL/dqdot (vci_lagrangian).
+module vci_retraction
+  use vci_kinds, only: dp
+  use vci_status, only: VCI_OK, VCI_NOT_PROVIDED
+  use vci_model, only: vci_model_t
+  use vci_lagrangian, only: vci_lagrangian_t, vci_lagrangian_work_t, lagrangian_work_setup, &
+                            lagrangian_hessians, lagrangian_hamiltonian
+  implicit none
+  private
+
+  integer, parameter, public :: RETRACTION_LEFT = 1, RETRACTION_MIDPOINT = 2
+
+  type, extends(vci_model_t), public :: vci_retraction_model_t
+    class(vci_lagrangian_t), pointer :: lag => null()
+    integer :: rule = RETRACTION_MIDPOINT
+    logical :: has_model_energy = .false.
+    type(vci_lagrangian_work_t) :: work
+    real(dp), allocatable, private :: pt(:), w(:), lq(:), lv(:), lqq(:, :), lqv(:, :), lvv(:, :), om(:, :)
+  contains
+    procedure :: bind
+    procedure :: d1, d2, d3, mixed_hessian, constraint_forms, discrete_constraint, gaps, gap_gradients, energy
+  end type vci_retraction_model_t
+
+contains
+
+  !> Wrap lag with rule (RETRACTION_LEFT or RETRACTION_MIDPOINT); has_hessians and has_energy say
+  !> which optional procedures the model supplies (probed by the integrator).
+  subroutine bind(self, lag, rule, has_hessians, has_energy)
+    class(vci_retraction_model_t), intent(inout) :: self
+    class(vci_lagrangian_t), target, intent(inout) :: lag
+    integer, intent(in) :: rule
+    logical, intent(in) :: has_hessians, has_energy
+    integer :: n
+    self%lag => lag
+    self%rule = rule
+    self%n = lag%n; self%m = lag%m; self%n_gaps = lag%n_gaps
+    n = lag%n
+    call lagrangian_work_setup(self%work, n)
+    self%work%has_hessians = has_hessians
+    self%has_model_energy = has_energy
+    if (allocated(self%pt)) deallocate (self%pt, self%w, self%lq, self%lv, self%lqq, self%lqv, self%lvv, self%om)
+    allocate (self%pt(n), self%w(n), self%lq(n), self%lv(n), self%lqq(n, n), self%lqv(n, n), self%lvv(n, n), &
+              self%om(n, max(1, lag%m)))
+  end subroutine bind
+
+  !> The evaluation point and velocity of the segment (q, v, h).
+  subroutine point_velocity(self, q, v, h)
+    class(vci_retraction_model_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:), h
+    self%w = (v - q) / h
+    if (self%rule == RETRACTION_LEFT) then
+      self%pt = q
+    else
+      self%pt = 0.5_dp * (q + v)
+    end if
+  end subroutine point_velocity
+
+  subroutine partials(self, q, v, h, stat)
+    class(vci_retraction_model_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:), h
+    integer, intent(inout) :: stat
+    call point_velocity(self, q, v, h)
+    call self%lag%dl_dq(self%pt, self%w, self%lq, stat)
+    if (stat /= 0) return
+    call self%lag%dl_dv(self%pt, self%w, self%lv, stat)
+  end subroutine partials
+
+  !> D1 L_d: left h Lq - Lv; midpoint (h/2) Lq - Lv.
+  subroutine d1(self, q, v, h, out, stat)
+    class(vci_retraction_model_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:), h
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    call partials(self, q, v, h, stat)
+    if (self%rule == RETRACTION_LEFT) then
+      out = h * self%lq - self%lv
+    else
+      out = 0.5_dp * h * self%lq - self%lv
+    end if
+  end subroutine d1
+
+  !> D2 L_d: left Lv; midpoint (h/2) Lq + Lv.
+  subroutine d2(self, q, v, h, out, stat)
+    class(vci_retraction_model_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:), h
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    call partials(self, q, v, h, stat)
+    if (self%rule == RETRACTION_LEFT) then
+      out = self%lv
+    else
+      out = 0.5_dp * h * self%lq + self%lv
+    end if
+  end subroutine d2
+
+  !> D3 L_d = L - Lv . w (both rules).
+  subroutine d3(self, q, v, h, out, stat)
+    class(vci_retraction_model_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:), h
+    real(dp), intent(out) :: out
+    integer, intent(inout) :: stat
+    real(dp) :: l
+    call point_velocity(self, q, v, h)
+    call self%lag%dl_dv(self%pt, self%w, self%lv, stat)
+    if (stat /= 0) return
+    call self%lag%lagrangian(self%pt, self%w, l, stat)
+    out = l - dot_product(self%lv, self%w)
+  end subroutine d3
+
+  !> dD1/dv: left Lqv - Lvv/h; midpoint (h/4) Lqq + (Lqv - Lvq)/2 - Lvv/h (Lvq = Lqv^T).
+  subroutine mixed_hessian(self, q, v, h, hess, stat)
+    class(vci_retraction_model_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:), h
+    real(dp), intent(out) :: hess(:, :)
+    integer, intent(inout) :: stat
+    integer :: s
+    if (.not. self%work%has_hessians) then
+      hess = 0.0_dp
+      stat = VCI_NOT_PROVIDED; return
+    end if
+    call point_velocity(self, q, v, h)
+    call lagrangian_hessians(self%lag, self%work, self%pt, self%w, self%lqq, self%lqv, self%lvv, s)
+    if (s /= VCI_OK) then
+      stat = 1; return
+    end if
+    if (self%rule == RETRACTION_LEFT) then
+      hess = self%lqv - self%lvv / h
+    else
+      hess = 0.25_dp * h * self%lqq + 0.5_dp * (self%lqv - transpose(self%lqv)) - self%lvv / h
+    end if
+  end subroutine mixed_hessian
+
+  subroutine constraint_forms(self, q, omega, stat)
+    class(vci_retraction_model_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: omega(:, :)
+    integer, intent(inout) :: stat
+    call self%lag%constraint_forms(q, omega, stat)
+  end subroutine constraint_forms
+
+  !> omega_d(base, other, h) = Omega(point)^T (other - base)/h at the rule's point.
+  subroutine discrete_constraint(self, base, other, h, out, stat)
+    class(vci_retraction_model_t), intent(inout) :: self
+    real(dp), intent(in) :: base(:), other(:), h
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    integer :: mu
+    call point_velocity(self, base, other, h)
+    call self%lag%constraint_forms(self%pt, self%om(:, 1:self%m), stat)
+    do mu = 1, self%m
+      out(mu) = dot_product(self%om(:, mu), self%w)
+    end do
+  end subroutine discrete_constraint
+
+  subroutine gaps(self, q, g, stat)
+    class(vci_retraction_model_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: g(:)
+    integer, intent(inout) :: stat
+    call self%lag%gaps(q, g, stat)
+  end subroutine gaps
+
+  subroutine gap_gradients(self, q, dg, stat)
+    class(vci_retraction_model_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: dg(:, :)
+    integer, intent(inout) :: stat
+    call self%lag%gap_gradients(q, dg, stat)
+  end subroutine gap_gradients
+
+  !> H(q, p): the model's, else E(q, w) with dL/dqdot(q, w) = p.
+  subroutine energy(self, q, p, e, stat)
+    class(vci_retraction_model_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), p(:)
+    real(dp), intent(out) :: e
+    integer, intent(inout) :: stat
+    integer :: s
+    if (self%has_model_energy) then
+      call self%lag%energy(q, p, e, stat)
+      return
+    end if
+    self%w = 0.0_dp
+    call lagrangian_hamiltonian(self%lag, self%work, q, p, self%w, e, s)
+    if (s /= VCI_OK) stat = 1
+  end subroutine energy
+end module vci_retraction

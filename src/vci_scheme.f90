@@ -1,0 +1,401 @@
+!> A scheme: how one sub-step of the (+) or (-) method is discretised and how its unknowns are laid
+!> out. The stepper (vci_stepper) runs the algorithm of DESIGN.md §1 — regular sub-step, stage 1
+!> (reach the wall: adds alpha and g_j = 0), stage 2 (reflect: adds mu and the energy equation) — and
+!> asks the scheme for residuals, Jacobians and the quantities it needs (endpoint, multipliers, alpha,
+!> mu, outgoing momentum, energy) through the procedures below; it never indexes the unknowns itself.
+!>
+!> Families: `vci_scheme_discrete` (a user's L_d, and the `left` and `midpoint` retractions of a
+!> continuous L, which are discrete Lagrangians in closed form) and `vci_scheme_lobatto` (the Galerkin
+!> discrete Lagrangian with s + 1 Lobatto points, whose interior stage values are unknowns of the same
+!> Newton system).
+!>
+!> Contract on layouts: the unknowns of a stage-1 (KIND_WALL) or stage-2 (KIND_REFLECT) system are
+!> those of the sub-step system followed by one scalar (alpha or mu; `get_extra`/`put_extra`), so a
+!> sub-step solution is a valid start for either. KIND_PAIR has the sub-step's layout (it solves for
+!> the interior stages of a segment with both ends given). KIND_IMPULSE (the Hamiltonian impact's
+!> [nu, mu] system) is scheme-independent and implemented here.
+module vci_scheme
+  use vci_kinds, only: dp
+  use vci_status, only: VCI_OK, VCI_ERR_CALLBACK, VCI_ERR_NONFINITE
+  use vci_model_base, only: vci_model_base_t
+  use vci_newton, only: vci_system_t
+  implicit none
+  private
+
+  integer, parameter, public :: KIND_SUBSTEP = 1, KIND_WALL = 2, KIND_REFLECT = 3, KIND_IMPULSE = 4, &
+                                KIND_PAIR = 5
+  integer, parameter, public :: VCI_IMPACT_DISCRETE = 0, VCI_IMPACT_HAMILTONIAN = 1
+
+  !> Scheme identifiers (the C ABI uses the same numbers).
+  integer, parameter, public :: VCI_SCHEME_DISCRETE = 0  !< the model is a discrete L_d (vci_model_t)
+  integer, parameter, public :: VCI_SCHEME_LEFT = 1      !< L_d = h L(q, (v - q)/h), omega_d at q
+  integer, parameter, public :: VCI_SCHEME_MIDPOINT = 2  !< L_d = h L((q + v)/2, (v - q)/h), omega_d at the midpoint
+  integer, parameter, public :: VCI_SCHEME_LOBATTO = 3   !< Galerkin, s + 1 Lobatto points, order 2s
+
+  type, abstract, extends(vci_system_t), public :: vci_scheme_t
+    class(vci_model_base_t), pointer :: base => null()   !< sizes, walls, forms, H
+    integer :: n = 0, m = 0, n_gaps = 0
+    integer :: kind = KIND_SUBSTEP
+    integer :: dir = 1                   !< +1 forward, -1 backward
+    real(dp) :: tau = 0.0_dp             !< sub-step length (sub-step, stage 2); alpha * tau is stage 1's
+    integer :: gap = 0                   !< wall of stage 1 / stage 2
+    integer :: impact_energy = VCI_IMPACT_DISCRETE
+    real(dp) :: rtol = 1.0e-12_dp        !< the Newton tolerance, to express the round-off floor in its units
+    logical :: has_gap_gradients = .false.
+    real(dp), allocatable :: a(:), pa(:), omega(:, :), grad(:), gscale(:)
+    real(dp), allocatable :: b_target(:) !< KIND_PAIR: the given end of the segment
+    real(dp) :: e_minus = 0.0_dp         !< E_d of the arriving sub-step, or H(qt, p_minus)
+    character(len=32) :: failed_callback = ''   !< which callback failed in the last evaluation
+    real(dp), allocatable :: pplus(:)
+    real(dp), allocatable, private :: gp(:), gm(:), qp(:), vout(:), xsave(:), ip(:), im(:), isp(:), ism(:)
+  contains
+    procedure(unknowns_iface), deferred :: unknowns
+    procedure(rows_iface), deferred :: scheme_residual
+    procedure(jac_iface), deferred :: scheme_jacobian
+    procedure(put_endpoint_iface), deferred :: put_endpoint
+    procedure(get_vec_iface), deferred :: get_endpoint
+    procedure(put_vec_iface), deferred :: put_multipliers
+    procedure(get_vec_iface), deferred :: get_multipliers
+    procedure(momentum_rhs_iface), deferred :: momentum_rhs
+    procedure(out_vec_iface), deferred :: momentum_out
+    procedure(out_scalar_iface), deferred :: energy_out
+    procedure(hamiltonian_iface), deferred :: hamiltonian
+    procedure :: needs_pair_solve
+    procedure :: forget_jacobian
+    procedure :: setup_common
+    procedure :: extra_index
+    procedure :: get_extra
+    procedure :: put_extra
+    procedure :: residual => dispatch_residual
+    procedure :: jacobian => dispatch_jacobian
+    procedure :: admissible => wall_admissible
+    procedure :: eval_gaps
+    procedure :: eval_gap_gradients
+    procedure :: eval_forms
+    procedure :: check
+    procedure :: check_matrix
+  end type vci_scheme_t
+
+  abstract interface
+    !> Number of unknowns of a system kind.
+    pure integer function unknowns_iface(self, kind)
+      import :: vci_scheme_t
+      class(vci_scheme_t), intent(in) :: self
+      integer, intent(in) :: kind
+    end function unknowns_iface
+    subroutine rows_iface(self, x, r, scale, stat)
+      import :: vci_scheme_t, dp
+      class(vci_scheme_t), intent(inout) :: self
+      real(dp), intent(in) :: x(:)
+      real(dp), intent(out) :: r(:), scale(:)
+      integer, intent(out) :: stat
+    end subroutine rows_iface
+    subroutine jac_iface(self, x, r, jac, stat)
+      import :: vci_scheme_t, dp
+      class(vci_scheme_t), intent(inout) :: self
+      real(dp), intent(in) :: x(:), r(:)
+      real(dp), intent(inout) :: jac(:, :)
+      integer, intent(out) :: stat
+    end subroutine jac_iface
+    !> Put b as the endpoint of x (interior stage values on the chord from a); other unknowns untouched.
+    subroutine put_endpoint_iface(self, x, a, b)
+      import :: vci_scheme_t, dp
+      class(vci_scheme_t), intent(in) :: self
+      real(dp), intent(inout) :: x(:)
+      real(dp), intent(in) :: a(:), b(:)
+    end subroutine put_endpoint_iface
+    subroutine get_vec_iface(self, x, v)
+      import :: vci_scheme_t, dp
+      class(vci_scheme_t), intent(in) :: self
+      real(dp), intent(in) :: x(:)
+      real(dp), intent(out) :: v(:)
+    end subroutine get_vec_iface
+    subroutine put_vec_iface(self, x, v)
+      import :: vci_scheme_t, dp
+      class(vci_scheme_t), intent(in) :: self
+      real(dp), intent(inout) :: x(:)
+      real(dp), intent(in) :: v(:)
+    end subroutine put_vec_iface
+    !> rhs = a vector of the sub-step's size with v in the momentum rows (those carrying p_a) and 0 elsewhere.
+    subroutine momentum_rhs_iface(self, v, rhs)
+      import :: vci_scheme_t, dp
+      class(vci_scheme_t), intent(in) :: self
+      real(dp), intent(in) :: v(:)
+      real(dp), intent(out) :: rhs(:)
+    end subroutine momentum_rhs_iface
+    !> The momentum at the far end of the segment from a of length tau whose unknowns are x.
+    subroutine out_vec_iface(self, x, a, tau, p, stat)
+      import :: vci_scheme_t, dp
+      class(vci_scheme_t), intent(inout) :: self
+      real(dp), intent(in) :: x(:), a(:), tau
+      real(dp), intent(out) :: p(:)
+      integer, intent(out) :: stat
+    end subroutine out_vec_iface
+    !> The discrete energy E_d = -D3 L_d of that segment.
+    subroutine out_scalar_iface(self, x, a, tau, e, stat)
+      import :: vci_scheme_t, dp
+      class(vci_scheme_t), intent(inout) :: self
+      real(dp), intent(in) :: x(:), a(:), tau
+      real(dp), intent(out) :: e
+      integer, intent(out) :: stat
+    end subroutine out_scalar_iface
+    !> A step-independent energy H(q, p) (the hamiltonian impact condition).
+    subroutine hamiltonian_iface(self, q, p, e, stat)
+      import :: vci_scheme_t, dp
+      class(vci_scheme_t), intent(inout) :: self
+      real(dp), intent(in) :: q(:), p(:)
+      real(dp), intent(out) :: e
+      integer, intent(out) :: stat
+    end subroutine hamiltonian_iface
+  end interface
+
+  real(dp), parameter, public :: vci_fd_rel = 6.0e-6_dp   ! ~ eps**(1/3): central differences
+
+contains
+
+  !> Sizes and the workspace every scheme shares (once, before the step loop).
+  subroutine setup_common(self, base)
+    class(vci_scheme_t), intent(inout) :: self
+    class(vci_model_base_t), target, intent(inout) :: base
+    integer :: n, m, ng
+    self%base => base
+    n = base%n; m = base%m; ng = max(1, base%n_gaps)
+    self%n = n; self%m = m; self%n_gaps = base%n_gaps
+    if (allocated(self%a)) deallocate (self%a, self%pa, self%omega, self%grad, self%gscale, self%b_target, &
+                                       self%pplus, self%gp, self%gm, self%qp, self%vout, self%xsave, self%ip, &
+                                       self%im, self%isp, self%ism)
+    allocate (self%a(n), self%pa(n), self%omega(n, m), self%grad(n), self%gscale(n), self%b_target(n), &
+              self%pplus(n), self%gp(ng), self%gm(ng), self%qp(n), self%vout(n), self%xsave(m + 1), &
+              self%ip(m + 1), self%im(m + 1), self%isp(m + 1), self%ism(m + 1))
+    self%omega = 0.0_dp
+    self%a = 0.0_dp; self%pa = 0.0_dp; self%grad = 0.0_dp; self%gscale = 0.0_dp
+  end subroutine setup_common
+
+  !> Does starting from a pair (q0, q1) need a solve for interior stages? (no, for closed-form L_d)
+  pure logical function needs_pair_solve(self)
+    class(vci_scheme_t), intent(in) :: self
+    needs_pair_solve = .false.
+  end function needs_pair_solve
+
+  !> A new solve starts (schemes that size rows from the last Jacobian reset that memory here).
+  subroutine forget_jacobian(self)
+    class(vci_scheme_t), intent(inout) :: self
+  end subroutine forget_jacobian
+
+  !> Position of alpha (stage 1), mu (stage 2) or mu (impulse system) among the unknowns.
+  pure integer function extra_index(self, kind)
+    class(vci_scheme_t), intent(in) :: self
+    integer, intent(in) :: kind
+    if (kind == KIND_IMPULSE) then
+      extra_index = self%m + 1
+    else
+      extra_index = self%unknowns(KIND_SUBSTEP) + 1
+    end if
+  end function extra_index
+
+  pure real(dp) function get_extra(self, x, kind)
+    class(vci_scheme_t), intent(in) :: self
+    real(dp), intent(in) :: x(:)
+    integer, intent(in) :: kind
+    get_extra = x(self%extra_index(kind))
+  end function get_extra
+
+  pure subroutine put_extra(self, x, kind, v)
+    class(vci_scheme_t), intent(in) :: self
+    real(dp), intent(inout) :: x(:)
+    integer, intent(in) :: kind
+    real(dp), intent(in) :: v
+    x(self%extra_index(kind)) = v
+  end subroutine put_extra
+
+  subroutine dispatch_residual(self, x, r, scale, stat)
+    class(vci_scheme_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:)
+    real(dp), intent(out) :: r(:), scale(:)
+    integer, intent(out) :: stat
+    if (self%kind == KIND_IMPULSE) then
+      call impulse_rows(self, x, r, scale, stat)
+    else
+      call self%scheme_residual(x, r, scale, stat)
+    end if
+  end subroutine dispatch_residual
+
+  subroutine dispatch_jacobian(self, x, r, jac, stat)
+    class(vci_scheme_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:), r(:)
+    real(dp), intent(out) :: jac(:, :)
+    integer, intent(out) :: stat
+    jac = 0.0_dp
+    stat = VCI_OK
+    if (self%kind == KIND_IMPULSE) then
+      call impulse_jacobian(self, x, jac, stat)
+    else
+      call self%scheme_jacobian(x, r, jac, stat)
+    end if
+  end subroutine dispatch_jacobian
+
+  !> Stage 1 keeps the impact fraction inside (0, 1].
+  logical function wall_admissible(self, x)
+    class(vci_scheme_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:)
+    wall_admissible = .true.
+    if (self%kind == KIND_WALL) then
+      wall_admissible = x(size(x)) > 0.0_dp .and. x(size(x)) <= 1.0_dp
+    end if
+  end function wall_admissible
+
+  subroutine eval_gaps(self, q, g, stat)
+    class(vci_scheme_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: g(:)
+    integer, intent(out) :: stat
+    stat = 0
+    call self%base%gaps(q, g, stat)
+    call self%check(stat, g, 'gap functions')
+  end subroutine eval_gaps
+
+  !> Gradients of all gaps at q (central differences when the model does not supply them; the
+  !> difference buffers hold n_gaps values).
+  subroutine eval_gap_gradients(self, q, dg, stat)
+    class(vci_scheme_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: dg(:, :)
+    integer, intent(out) :: stat
+    integer :: i, ng
+    real(dp) :: d
+    stat = 0
+    if (self%has_gap_gradients) then
+      call self%base%gap_gradients(q, dg, stat)
+      call self%check(stat, dg(:, 1), 'gap gradients')
+      if (stat == VCI_OK .and. size(dg, 2) > 1) call self%check_matrix(stat, dg, 'gap gradients')
+      return
+    end if
+    ng = size(dg, 2)
+    self%qp = q
+    do i = 1, self%n
+      d = vci_fd_rel * max(abs(q(i)), 1.0_dp)
+      self%qp(i) = q(i) + d
+      call self%eval_gaps(self%qp, self%gp(1:ng), stat)
+      if (stat /= VCI_OK) return
+      self%qp(i) = q(i) - d
+      call self%eval_gaps(self%qp, self%gm(1:ng), stat)
+      if (stat /= VCI_OK) return
+      self%qp(i) = q(i)
+      dg(i, :) = (self%gp(1:ng) - self%gm(1:ng)) / (2.0_dp * d)
+    end do
+  end subroutine eval_gap_gradients
+
+  subroutine eval_forms(self, q, omega, stat)
+    class(vci_scheme_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: omega(:, :)
+    integer, intent(out) :: stat
+    stat = 0
+    if (self%m == 0) return
+    call self%base%constraint_forms(q, omega, stat)
+    if (stat == VCI_OK) call self%check_matrix(stat, omega, 'constraint forms')
+    if (stat /= VCI_OK .and. self%failed_callback == '') self%failed_callback = 'constraint forms'
+  end subroutine eval_forms
+
+  !> The Hamiltonian impact: energy row and, with constraints, the outgoing velocity dH/dp(qt, p+)
+  !> annihilated by the constraint forms. x = [nu(m), mu]. dH/dp by central differences: exact for
+  !> H quadratic in p.
+  subroutine impulse_rows(self, x, r, sc, stat)
+    class(vci_scheme_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:)
+    real(dp), intent(out) :: r(:), sc(:)
+    integer, intent(out) :: stat
+    integer :: m, i, mu
+    real(dp) :: hp, hplus, hminus, d, pmax, noise, pi0
+    m = self%m
+    self%pplus = self%pa + x(m + 1) * self%grad
+    if (m > 0) self%pplus = self%pplus + matmul(self%omega, x(1:m))
+    call self%hamiltonian(self%a, self%pplus, hp, stat)
+    if (stat /= VCI_OK) return
+    r(m + 1) = hp - self%e_minus
+    sc(m + 1) = abs(hp) + abs(self%e_minus)
+    if (m == 0) return
+    pmax = max(maxval(abs(self%pplus)), tiny(1.0_dp))
+    d = 1.0e-4_dp * pmax
+    do i = 1, self%n
+      pi0 = self%pplus(i)
+      self%pplus(i) = pi0 + d
+      call self%hamiltonian(self%a, self%pplus, hplus, stat)
+      if (stat /= VCI_OK) return
+      self%pplus(i) = pi0 - d
+      call self%hamiltonian(self%a, self%pplus, hminus, stat)
+      if (stat /= VCI_OK) return
+      self%pplus(i) = pi0
+      self%vout(i) = (hplus - hminus) / (2.0_dp * d)      ! outgoing velocity dH/dp
+    end do
+    noise = 4.0_dp * epsilon(1.0_dp) * abs(hp) / d      ! round-off of the difference quotients
+    do mu = 1, m
+      r(mu) = dot_product(self%omega(:, mu), self%vout)
+      sc(mu) = sum(abs(self%omega(:, mu)) * (abs(self%vout) + noise / max(self%rtol, epsilon(1.0_dp))))
+    end do
+  end subroutine impulse_rows
+
+  subroutine impulse_jacobian(self, x, jac, stat)
+    class(vci_scheme_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:)
+    real(dp), intent(out) :: jac(:, :)
+    integer, intent(out) :: stat
+    integer :: j, nx
+    real(dp) :: d, xj, pscale
+    nx = size(x)
+    pscale = max(maxval(abs(self%pa)), tiny(1.0_dp))
+    self%xsave(1:nx) = x
+    do j = 1, nx
+      xj = x(j)
+      if (j == nx) then
+        d = vci_fd_rel * max(abs(xj), pscale / max(maxval(abs(self%grad)), tiny(1.0_dp)))
+      else
+        d = vci_fd_rel * max(abs(xj), pscale / max(maxval(abs(self%omega(:, j))), tiny(1.0_dp)))
+      end if
+      self%xsave(j) = xj + d
+      call impulse_rows(self, self%xsave(1:nx), self%ip(1:nx), self%isp(1:nx), stat)
+      if (stat /= VCI_OK) return
+      self%xsave(j) = xj - d
+      call impulse_rows(self, self%xsave(1:nx), self%im(1:nx), self%ism(1:nx), stat)
+      if (stat /= VCI_OK) return
+      self%xsave(j) = xj
+      jac(1:nx, j) = (self%ip(1:nx) - self%im(1:nx)) / (2.0_dp * d)
+    end do
+  end subroutine impulse_jacobian
+
+  !> Turn a callback's return into a library status: nonzero -> VCI_ERR_CALLBACK, NaN/Inf -> NONFINITE.
+  subroutine check(self, stat, values, what)
+    class(vci_scheme_t), intent(inout) :: self
+    integer, intent(inout) :: stat
+    real(dp), intent(in) :: values(:)
+    character(len=*), intent(in) :: what
+    integer :: i
+    if (stat /= 0) then
+      stat = VCI_ERR_CALLBACK
+      self%failed_callback = what
+      return
+    end if
+    stat = VCI_OK
+    do i = 1, size(values)
+      if (.not. (abs(values(i)) <= huge(1.0_dp))) then   ! NaN or +-Inf
+        stat = VCI_ERR_NONFINITE
+        self%failed_callback = what
+        return
+      end if
+    end do
+  end subroutine check
+
+  !> check() for a matrix, without the temporary a reshape would allocate.
+  subroutine check_matrix(self, stat, values, what)
+    class(vci_scheme_t), intent(inout) :: self
+    integer, intent(inout) :: stat
+    real(dp), intent(in) :: values(:, :)
+    character(len=*), intent(in) :: what
+    integer :: j
+    call self%check(stat, values(:, 1), what)
+    do j = 2, size(values, 2)
+      if (stat /= VCI_OK) return
+      call self%check(stat, values(:, j), what)
+    end do
+  end subroutine check_matrix
+end module vci_scheme

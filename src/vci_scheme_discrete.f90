@@ -1,0 +1,362 @@
+!> The scheme of a discrete Lagrangian given in closed form (DESIGN.md §1): a user's L_d
+!> (vci_model_t), or the `left` / `midpoint` retraction of a continuous L (vci_retraction). With
+!> s = +1 (forward) or -1 (backward) and L^s(a, b, tau) = L_d(a, b, tau) for s = +1, L_d(b, a, tau)
+!> for s = -1, where a is the known and b the unknown configuration:
+!>
+!>   sub-step:  s D1 L^s(a, b, tau) + p_a - Omega(a) lambda = 0,   omega_d(a, b, tau) = 0
+!>   stage 1 :  the same with tau = alpha * tau_max, plus g_j(b) = 0          (unknown alpha)
+!>   stage 2 :  s D1 L^s(qt, b, tau) + p_minus - Omega(qt) lambda + mu grad g_j(qt) = 0,
+!>              omega_d(qt, b, tau) = 0,  E_d(qt, b, tau) = E_minus             (unknown mu)
+!>              or, for the Hamiltonian condition, H(qt, p_minus + mu grad g_j) = H(qt, p_minus).
+!>
+!> The new momentum is p_b = s D2 L^s(a, b, tau). Layout: x = [b(n), lambda(m), extra].
+module vci_scheme_discrete
+  use vci_kinds, only: dp
+  use vci_status, only: VCI_OK
+  use vci_model, only: vci_model_t
+  use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_WALL, KIND_REFLECT, KIND_IMPULSE, KIND_PAIR, &
+                        VCI_IMPACT_HAMILTONIAN, vci_fd_rel
+  implicit none
+  private
+
+  type, extends(vci_scheme_t), public :: vci_scheme_discrete_t
+    class(vci_model_t), pointer :: model => null()
+    logical :: has_hessian = .false.
+    real(dp), allocatable, private :: d1(:), hess(:, :), g(:), rp(:), rm(:), sp(:), sm(:), xp(:)
+    !> sum_j |dR_i/dx_j| |x_j| from the last Jacobian: the round-off floor of row i (positions are
+    !> often large next to their change over a step), added to each row's scale
+    real(dp), allocatable, private :: jscale(:)
+    !> |dR/dx| from the last Jacobian of the current solve (zero until the first one): with it,
+    !> sum_j |dR_i/db_j| |b_j - a_j| sizes the kinetic term M (b - a)/tau of a momentum row, which
+    !> the row's value alone does not show when it cancels the force term (a body released from
+    !> rest: p_a = 0 and D1 -> 0 at the solution, so the row would have no size at all)
+    real(dp), allocatable, private :: jabs(:, :)
+  contains
+    procedure :: setup
+    procedure :: unknowns
+    procedure :: scheme_residual => step_residual
+    procedure :: scheme_jacobian => step_jacobian
+    procedure :: put_endpoint, get_endpoint, put_multipliers, get_multipliers, momentum_rhs
+    procedure :: momentum_out, energy_out, hamiltonian
+    procedure :: forget_jacobian
+  end type vci_scheme_discrete_t
+
+contains
+
+  !> Bind to a model and size the workspace (once, before the step loop).
+  subroutine setup(self, model)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    class(vci_model_t), target, intent(inout) :: model
+    integer :: n, m, nx
+    call self%setup_common(model)
+    self%model => model
+    n = model%n; m = model%m
+    nx = n + m + 1
+    if (allocated(self%d1)) deallocate (self%d1, self%hess, self%g, self%rp, self%rm, self%sp, self%sm, &
+                                        self%xp, self%jscale, self%jabs)
+    allocate (self%d1(n), self%hess(n, n), self%g(max(1, model%n_gaps)), &
+              self%rp(nx), self%rm(nx), self%sp(nx), self%sm(nx), self%xp(nx), self%jscale(nx), &
+              self%jabs(nx, nx))
+    self%jscale = 0.0_dp
+    self%jabs = 0.0_dp
+  end subroutine setup
+
+  pure integer function unknowns(self, kind)
+    class(vci_scheme_discrete_t), intent(in) :: self
+    integer, intent(in) :: kind
+    select case (kind)
+    case (KIND_SUBSTEP, KIND_PAIR); unknowns = self%n + self%m
+    case (KIND_IMPULSE); unknowns = self%m + 1
+    case default; unknowns = self%n + self%m + 1
+    end select
+  end function unknowns
+
+  subroutine put_endpoint(self, x, a, b)
+    class(vci_scheme_discrete_t), intent(in) :: self
+    real(dp), intent(inout) :: x(:)
+    real(dp), intent(in) :: a(:), b(:)
+    x(1:self%n) = b
+  end subroutine put_endpoint
+
+  subroutine get_endpoint(self, x, v)
+    class(vci_scheme_discrete_t), intent(in) :: self
+    real(dp), intent(in) :: x(:)
+    real(dp), intent(out) :: v(:)
+    v = x(1:self%n)
+  end subroutine get_endpoint
+
+  subroutine put_multipliers(self, x, v)
+    class(vci_scheme_discrete_t), intent(in) :: self
+    real(dp), intent(inout) :: x(:)
+    real(dp), intent(in) :: v(:)
+    if (self%m > 0) x(self%n + 1:self%n + self%m) = v
+  end subroutine put_multipliers
+
+  subroutine get_multipliers(self, x, v)
+    class(vci_scheme_discrete_t), intent(in) :: self
+    real(dp), intent(in) :: x(:)
+    real(dp), intent(out) :: v(:)
+    if (self%m > 0) v = x(self%n + 1:self%n + self%m)
+  end subroutine get_multipliers
+
+  subroutine momentum_rhs(self, v, rhs)
+    class(vci_scheme_discrete_t), intent(in) :: self
+    real(dp), intent(in) :: v(:)
+    real(dp), intent(out) :: rhs(:)
+    rhs(1:self%n) = v
+    rhs(self%n + 1:) = 0.0_dp
+  end subroutine momentum_rhs
+
+  !> Sub-step length at the unknowns x.
+  pure real(dp) function step_length(self, x)
+    class(vci_scheme_discrete_t), intent(in) :: self
+    real(dp), intent(in) :: x(:)
+    step_length = self%tau
+    if (self%kind == KIND_WALL) step_length = x(self%n + self%m + 1) * self%tau
+  end function step_length
+
+  !> out = s D1 L^s(a, b, tau)  (forward: D1 L_d(a, b); backward: -D2 L_d(b, a)).
+  subroutine d1s(self, a, b, tau, out, stat)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: a(:), b(:), tau
+    real(dp), intent(out) :: out(:)
+    integer, intent(out) :: stat
+    stat = 0
+    if (self%dir > 0) then
+      call self%model%d1(a, b, tau, out, stat)
+    else
+      call self%model%d2(b, a, tau, out, stat)
+      out = -out
+    end if
+    call self%check(stat, out, 'D1/D2 of L_d')
+  end subroutine d1s
+
+  !> p_b = s D2 L^s(a, b, tau)  (forward: D2 L_d(a, b); backward: -D1 L_d(b, a)), b = endpoint of x.
+  subroutine momentum_out(self, x, a, tau, p, stat)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:), a(:), tau
+    real(dp), intent(out) :: p(:)
+    integer, intent(out) :: stat
+    stat = 0
+    if (self%dir > 0) then
+      call self%model%d2(a, x(1:self%n), tau, p, stat)
+    else
+      call self%model%d1(x(1:self%n), a, tau, p, stat)
+      p = -p
+    end if
+    call self%check(stat, p, 'D1/D2 of L_d')
+  end subroutine momentum_out
+
+  !> Discrete energy E_d = -D3 L_d of the segment between a and the endpoint of x (both directions).
+  subroutine energy_out(self, x, a, tau, e, stat)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:), a(:), tau
+    real(dp), intent(out) :: e
+    integer, intent(out) :: stat
+    real(dp) :: tmp(1)
+    stat = 0
+    if (self%dir > 0) then
+      call self%model%d3(a, x(1:self%n), tau, e, stat)
+    else
+      call self%model%d3(x(1:self%n), a, tau, e, stat)
+    end if
+    e = -e
+    tmp(1) = e
+    call self%check(stat, tmp, 'D3 of L_d')
+  end subroutine energy_out
+
+  subroutine hamiltonian(self, q, p, e, stat)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), p(:)
+    real(dp), intent(out) :: e
+    integer, intent(out) :: stat
+    real(dp) :: tmp(1)
+    stat = 0
+    call self%model%energy(q, p, e, stat)
+    tmp(1) = e
+    call self%check(stat, tmp, 'energy H(q,p)')
+  end subroutine hamiltonian
+
+  !> Residual rows; with `momentum_rows` false only the constraint and last rows are evaluated
+  !> (used to difference those rows when the momentum block comes from the analytic Hessian).
+  subroutine rows(self, x, r, sc, momentum_rows, stat)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:)
+    real(dp), intent(out) :: r(:), sc(:)
+    logical, intent(in) :: momentum_rows
+    integer, intent(out) :: stat
+    integer :: n, m, mu, last, i
+    real(dp) :: tau, e, hp, ol, ols
+    n = self%n; m = self%m; last = n + m + 1
+    tau = step_length(self, x)
+    stat = VCI_OK
+    if (momentum_rows) then
+      call d1s(self, self%a, x(1:n), tau, self%d1, stat)
+      if (stat /= VCI_OK) return
+      r(1:n) = self%d1 + self%pa
+      sc(1:n) = abs(self%d1) + abs(self%pa)
+      if (m > 0) then
+        ! - Omega lambda and its size, as explicit loops: matmul here allocated temporaries per call
+        do i = 1, n
+          ol = 0.0_dp; ols = 0.0_dp
+          do mu = 1, m
+            ol = ol + self%omega(i, mu) * x(n + mu)
+            ols = ols + abs(self%omega(i, mu)) * abs(x(n + mu))
+          end do
+          r(i) = r(i) - ol
+          sc(i) = sc(i) + ols
+        end do
+      end if
+      if (self%kind == KIND_REFLECT) then
+        r(1:n) = r(1:n) + x(last) * self%grad
+        sc(1:n) = sc(1:n) + abs(x(last) * self%grad)
+      end if
+    end if
+    if (m > 0) then
+      stat = 0
+      call self%model%discrete_constraint(self%a, x(1:n), tau, r(n + 1:n + m), stat)
+      call self%check(stat, r(n + 1:n + m), 'discrete constraint')
+      if (stat /= VCI_OK) return
+      do mu = 1, m
+        sc(n + mu) = abs(r(n + mu)) + sum(abs(self%omega(:, mu)) * abs(x(1:n) - self%a)) / tau
+      end do
+    end if
+    select case (self%kind)
+    case (KIND_WALL)
+      call self%eval_gaps(x(1:n), self%g(1:self%n_gaps), stat)
+      if (stat /= VCI_OK) return
+      r(last) = self%g(self%gap)
+      ! g's size: its value, its terms (grad g . q) and its change over the sub-step
+      sc(last) = abs(r(last)) + sum(self%gscale * (abs(x(1:n)) + abs(x(1:n) - self%a)))
+    case (KIND_REFLECT)
+      if (self%impact_energy == VCI_IMPACT_HAMILTONIAN) then
+        self%pplus = self%pa + x(last) * self%grad
+        call self%hamiltonian(self%a, self%pplus, hp, stat)
+        if (stat /= VCI_OK) return
+        r(last) = hp - self%e_minus
+        sc(last) = abs(hp) + abs(self%e_minus)
+      else
+        call self%energy_out(x, self%a, tau, e, stat)
+        if (stat /= VCI_OK) return
+        r(last) = e - self%e_minus
+        sc(last) = abs(e) + abs(self%e_minus)
+      end if
+      sc(last) = sc(last) + sum(abs(self%pa) * abs(x(1:n) - self%a)) / tau
+    end select
+  end subroutine rows
+
+  subroutine step_residual(self, x, r, scale, stat)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:)
+    real(dp), intent(out) :: r(:), scale(:)
+    integer, intent(out) :: stat
+    integer :: j
+    call rows(self, x, r, scale, .true., stat)
+    ! size of the kinetic terms of the momentum rows, from the current solve's Jacobian
+    if (stat == VCI_OK) then
+      do j = 1, self%n
+        scale(1:self%n) = scale(1:self%n) + self%jabs(1:self%n, j) * abs(x(j) - self%a(j))
+      end do
+    end if
+    ! round-off floor of each row: a few ulps of sum_j |dR_i/dx_j| |x_j|, in units of rtol
+    if (stat == VCI_OK) scale = scale + (8.0_dp * epsilon(1.0_dp) / max(self%rtol, epsilon(1.0_dp))) * &
+                                self%jscale(1:size(x))
+  end subroutine step_residual
+
+  !> Jacobian: the momentum block from the model's mixed Hessian when it has one, multiplier and
+  !> impulse columns analytically, everything else by central differences.
+  subroutine step_jacobian(self, x, r, jac, stat)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:), r(:)
+    real(dp), intent(inout) :: jac(:, :)
+    integer, intent(out) :: stat
+    integer :: n, m, nx, j, last
+    real(dp) :: tau, d, hp, hm
+    n = self%n; m = self%m; nx = self%unknowns(self%kind); last = n + m + 1
+    stat = VCI_OK
+    tau = step_length(self, x)
+    ! columns of b
+    if (self%has_hessian) then
+      if (self%dir > 0) then
+        call self%model%mixed_hessian(self%a, x(1:n), tau, self%hess, stat)
+        call self%check_matrix(stat, self%hess, 'mixed Hessian')
+        if (stat /= VCI_OK) return
+        jac(1:n, 1:n) = self%hess
+      else
+        call self%model%mixed_hessian(x(1:n), self%a, tau, self%hess, stat)
+        call self%check_matrix(stat, self%hess, 'mixed Hessian')
+        if (stat /= VCI_OK) return
+        jac(1:n, 1:n) = -transpose(self%hess)
+      end if
+      if (nx > n) then
+        do j = 1, n
+          call fd_column(self, x, j, fd_step(x(j), x(j) - self%a(j)), .false., jac(:, j), stat)
+          if (stat /= VCI_OK) return
+        end do
+      end if
+    else
+      do j = 1, n
+        call fd_column(self, x, j, fd_step(x(j), x(j) - self%a(j)), .true., jac(:, j), stat)
+        if (stat /= VCI_OK) return
+      end do
+    end if
+    ! multiplier columns: d/d lambda of -Omega(a) lambda
+    if (m > 0) jac(1:n, n + 1:n + m) = -self%omega
+    select case (self%kind)
+    case (KIND_WALL)       ! alpha enters through the sub-step length
+      d = vci_fd_rel * x(last)
+      call fd_column(self, x, last, d, .true., jac(:, last), stat)
+    case (KIND_REFLECT)    ! mu enters linearly in the momentum rows
+      jac(1:n, last) = self%grad
+      if (self%impact_energy == VCI_IMPACT_HAMILTONIAN) then
+        d = vci_fd_rel * max(abs(x(last)), sqrt(sum(self%pa**2)) / max(sqrt(sum(self%grad**2)), tiny(1.0_dp)))
+        self%pplus = self%pa + (x(last) + d) * self%grad
+        call self%hamiltonian(self%a, self%pplus, hp, stat)
+        if (stat /= VCI_OK) return
+        self%pplus = self%pa + (x(last) - d) * self%grad
+        call self%hamiltonian(self%a, self%pplus, hm, stat)
+        if (stat /= VCI_OK) return
+        jac(last, last) = (hp - hm) / (2.0_dp * d)
+      end if
+    end select
+    do j = 1, nx
+      self%jscale(j) = sum(abs(jac(j, 1:nx)) * abs(x(1:nx)))
+    end do
+    self%jabs(1:nx, 1:nx) = abs(jac(1:nx, 1:nx))
+  end subroutine step_jacobian
+
+  !> A new solve starts: its Jacobian is not known yet (see jabs).
+  subroutine forget_jacobian(self)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    self%jabs = 0.0_dp
+  end subroutine forget_jacobian
+
+  pure real(dp) function fd_step(xj, motion)
+    real(dp), intent(in) :: xj, motion
+    fd_step = vci_fd_rel * max(abs(xj), abs(motion))
+    if (fd_step == 0.0_dp) fd_step = vci_fd_rel
+  end function fd_step
+
+  !> Central difference of the residual along unknown j (all rows, or only the non-momentum rows).
+  subroutine fd_column(self, x, j, d, all_rows, col, stat)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:)
+    integer, intent(in) :: j
+    real(dp), intent(in) :: d
+    logical, intent(in) :: all_rows
+    real(dp), intent(inout) :: col(:)
+    integer, intent(out) :: stat
+    integer :: nx, first
+    nx = size(x)
+    first = 1
+    if (.not. all_rows) first = self%n + 1
+    self%xp(1:nx) = x
+    self%xp(j) = x(j) + d
+    call rows(self, self%xp(1:nx), self%rp(1:nx), self%sp(1:nx), all_rows, stat)
+    if (stat /= VCI_OK) return
+    self%xp(j) = x(j) - d
+    call rows(self, self%xp(1:nx), self%rm(1:nx), self%sm(1:nx), all_rows, stat)
+    if (stat /= VCI_OK) return
+    col(first:nx) = (self%rp(first:nx) - self%rm(first:nx)) / (2.0_dp * d)
+  end subroutine fd_column
+end module vci_scheme_discrete

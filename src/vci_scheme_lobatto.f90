@@ -1,0 +1,371 @@
+!> The Galerkin (Lobatto) scheme of a continuous Lagrangian, order 2s (Marsden & West 2001, §2.6;
+!> the variational form of Lobatto IIIA-IIIB). On a segment of length tau from the known point a, q is
+!> the polynomial of degree s through control points y_0 = a, y_1, ..., y_s (the new point) at the
+!> Lobatto nodes c_i; its velocity at node i is dir W_i with W_i = (1/tau) sum_j D_ij y_j (dir = +1
+!> forward, -1 backward: the nodes are symmetric, so the backward segment is the forward one read
+!> from its other end), and
+!>
+!>   L_d = tau sum_i b_i L(y_i, dir W_i),
+!>   F_j = dL_d/dy_j = tau b_j dL/dq(y_j, V_j) + dir sum_i b_i D_ij dL/dqdot(y_i, V_i).
+!>
+!> Sub-step: p_a + dir F_0 = 0 (n momentum rows), F_j = 0 for j = 1..s-1 (interior rows); the new
+!> momentum is p_b = dir F_s. Stage 1 adds alpha (tau = alpha tau_max) and g_j(y_s) = 0; stage 2 adds
+!> mu (+ mu grad g in the momentum rows) and E_d = E_minus, where the discrete energy is
+!> E_d = -dL_d/dtau = sum_i b_i E(y_i, V_i) (the interior points are stationary, so only the explicit
+!> tau-dependence counts; checked against a difference quotient in test/core/test_schemes.pf).
+!> Unknowns: x = [y_1, ..., y_s (n each), extra]; the interior stages are unknowns of the same Newton
+!> system as the new point. Constraints (m > 0) are not supported by this scheme.
+!> The Jacobian is analytic from the Hessian blocks of L at the nodes (the model's or differenced):
+!>   dF_j/dy_k = tau b_j Lqq_j d_jk + dir b_j D_jk Lqv_j + dir b_k D_kj Lqv_k^T + (1/tau) sum_i b_i D_ij D_ik Lvv_i.
+module vci_scheme_lobatto
+  use vci_kinds, only: dp
+  use vci_status, only: VCI_OK, VCI_ERR_CALLBACK, VCI_ERR_NONFINITE
+  use vci_lagrangian, only: vci_lagrangian_t, vci_lagrangian_work_t, lagrangian_work_setup, &
+                            lagrangian_hessians, lagrangian_hamiltonian
+  use vci_lobatto_rule, only: vci_lobatto_rule_t, lobatto_rule
+  use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_WALL, KIND_REFLECT, KIND_IMPULSE, KIND_PAIR
+  implicit none
+  private
+
+  type, extends(vci_scheme_t), public :: vci_scheme_lobatto_t
+    class(vci_lagrangian_t), pointer :: lag => null()
+    type(vci_lobatto_rule_t) :: rule
+    integer :: s = 0
+    logical :: has_model_energy = .false.
+    type(vci_lagrangian_work_t) :: work
+    real(dp), allocatable, private :: y(:, :), v(:, :), lq(:, :), lv(:, :), lval(:), f(:, :), fs(:, :)
+    real(dp), allocatable, private :: hqq(:, :, :), hqv(:, :, :), hvv(:, :, :), g(:), dg(:, :), tmp(:)
+    real(dp), allocatable, private :: jscale(:)
+  contains
+    procedure :: setup
+    procedure :: unknowns
+    procedure :: scheme_residual
+    procedure :: scheme_jacobian
+    procedure :: put_endpoint, get_endpoint, put_multipliers, get_multipliers, momentum_rhs
+    procedure :: momentum_out, energy_out, hamiltonian
+    procedure :: needs_pair_solve
+    procedure :: forget_jacobian
+  end type vci_scheme_lobatto_t
+
+contains
+
+  !> Bind lag with s stages (1 <= s <= VCI_LOBATTO_MAX_STAGES); stat /= 0 for s out of range.
+  subroutine setup(self, lag, s, has_hessians, has_energy, stat)
+    class(vci_scheme_lobatto_t), intent(inout) :: self
+    class(vci_lagrangian_t), target, intent(inout) :: lag
+    integer, intent(in) :: s
+    logical, intent(in) :: has_hessians, has_energy
+    integer, intent(out) :: stat
+    integer :: n, nx
+    call lobatto_rule(s, self%rule, stat)
+    if (stat /= 0) return
+    call self%setup_common(lag)
+    self%lag => lag
+    self%s = s
+    n = lag%n
+    call lagrangian_work_setup(self%work, n)
+    self%work%has_hessians = has_hessians
+    self%has_model_energy = has_energy
+    nx = s * n + lag%m + 1
+    if (allocated(self%y)) deallocate (self%y, self%v, self%lq, self%lv, self%lval, self%f, self%fs, self%hqq, &
+                                       self%hqv, self%hvv, self%g, self%dg, self%tmp, self%jscale)
+    allocate (self%y(n, 0:s), self%v(n, 0:s), self%lq(n, 0:s), self%lv(n, 0:s), self%lval(0:s), self%f(n, 0:s), &
+              self%fs(n, 0:s), self%hqq(n, n, 0:s), self%hqv(n, n, 0:s), self%hvv(n, n, 0:s), &
+              self%g(max(1, lag%n_gaps)), self%dg(n, max(1, lag%n_gaps)), self%tmp(n), self%jscale(nx), stat=stat)
+    if (stat /= 0) return
+    self%jscale = 0.0_dp
+  end subroutine setup
+
+  !> A new solve starts: the round-off floor of the last Jacobian (another segment length, perhaps
+  !> much shorter) must not size this solve's first residual, or the line search compares merits
+  !> taken with different floors.
+  subroutine forget_jacobian(self)
+    class(vci_scheme_lobatto_t), intent(inout) :: self
+    self%jscale = 0.0_dp
+  end subroutine forget_jacobian
+
+  pure logical function needs_pair_solve(self)
+    class(vci_scheme_lobatto_t), intent(in) :: self
+    needs_pair_solve = self%s > 1
+  end function needs_pair_solve
+
+  pure integer function unknowns(self, kind)
+    class(vci_scheme_lobatto_t), intent(in) :: self
+    integer, intent(in) :: kind
+    select case (kind)
+    case (KIND_SUBSTEP, KIND_PAIR); unknowns = self%s * self%n + self%m
+    case (KIND_IMPULSE); unknowns = self%m + 1
+    case default; unknowns = self%s * self%n + self%m + 1
+    end select
+  end function unknowns
+
+  subroutine put_endpoint(self, x, a, b)
+    class(vci_scheme_lobatto_t), intent(in) :: self
+    real(dp), intent(inout) :: x(:)
+    real(dp), intent(in) :: a(:), b(:)
+    integer :: i, n
+    n = self%n
+    do i = 1, self%s - 1
+      x((i - 1) * n + 1:i * n) = a + self%rule%c(i) * (b - a)
+    end do
+    x((self%s - 1) * n + 1:self%s * n) = b
+  end subroutine put_endpoint
+
+  subroutine get_endpoint(self, x, v)
+    class(vci_scheme_lobatto_t), intent(in) :: self
+    real(dp), intent(in) :: x(:)
+    real(dp), intent(out) :: v(:)
+    v = x((self%s - 1) * self%n + 1:self%s * self%n)
+  end subroutine get_endpoint
+
+  subroutine put_multipliers(self, x, v)
+    class(vci_scheme_lobatto_t), intent(in) :: self
+    real(dp), intent(inout) :: x(:)
+    real(dp), intent(in) :: v(:)
+    if (self%m > 0) x(self%s * self%n + 1:self%s * self%n + self%m) = v
+  end subroutine put_multipliers
+
+  subroutine get_multipliers(self, x, v)
+    class(vci_scheme_lobatto_t), intent(in) :: self
+    real(dp), intent(in) :: x(:)
+    real(dp), intent(out) :: v(:)
+    if (self%m > 0) v = x(self%s * self%n + 1:self%s * self%n + self%m)
+  end subroutine get_multipliers
+
+  subroutine momentum_rhs(self, v, rhs)
+    class(vci_scheme_lobatto_t), intent(in) :: self
+    real(dp), intent(in) :: v(:)
+    real(dp), intent(out) :: rhs(:)
+    rhs(1:self%n) = v
+    rhs(self%n + 1:) = 0.0_dp
+  end subroutine momentum_rhs
+
+  !> Stage values, velocities and the partials of L at the nodes of the segment (a, x, tau);
+  !> f(:, j) = F_j and fs(:, j) the size of its terms. With `values`, L at the nodes too.
+  subroutine evaluate(self, x, a, tau, values, stat)
+    class(vci_scheme_lobatto_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:), a(:), tau
+    logical, intent(in) :: values
+    integer, intent(out) :: stat
+    integer :: i, j, n, s
+    real(dp) :: dsign, w
+    n = self%n; s = self%s
+    dsign = real(self%dir, dp)
+    self%y(:, 0) = a
+    do i = 1, s
+      self%y(:, i) = x((i - 1) * n + 1:i * n)
+    end do
+    ! V_i = (dir/tau) sum_j D_ij (y_j - a) (the rows of D sum to 0): differences from the known point
+    ! keep the round-off of large positions out of the velocities
+    do i = 0, s
+      self%v(:, i) = 0.0_dp
+      do j = 1, s
+        self%v(:, i) = self%v(:, i) + self%rule%d(i, j) * (self%y(:, j) - a)
+      end do
+      self%v(:, i) = (dsign / tau) * self%v(:, i)
+    end do
+    do i = 0, s
+      stat = 0
+      call self%lag%dl_dq(self%y(:, i), self%v(:, i), self%lq(:, i), stat)
+      call self%check(stat, self%lq(:, i), 'dL/dq')
+      if (stat /= VCI_OK) return
+      call self%lag%dl_dv(self%y(:, i), self%v(:, i), self%lv(:, i), stat)
+      call self%check(stat, self%lv(:, i), 'dL/dqdot')
+      if (stat /= VCI_OK) return
+      if (values) then
+        call self%lag%lagrangian(self%y(:, i), self%v(:, i), self%lval(i), stat)
+        call self%check(stat, self%lval(i:i), 'L')
+        if (stat /= VCI_OK) return
+      end if
+    end do
+    do j = 0, s
+      self%f(:, j) = tau * self%rule%b(j) * self%lq(:, j)
+      self%fs(:, j) = abs(self%f(:, j))
+      do i = 0, s
+        w = dsign * self%rule%b(i) * self%rule%d(i, j)
+        self%f(:, j) = self%f(:, j) + w * self%lv(:, i)
+        self%fs(:, j) = self%fs(:, j) + abs(w) * abs(self%lv(:, i))
+      end do
+    end do
+    stat = VCI_OK
+  end subroutine evaluate
+
+  pure real(dp) function step_length(self, x)
+    class(vci_scheme_lobatto_t), intent(in) :: self
+    real(dp), intent(in) :: x(:)
+    step_length = self%tau
+    if (self%kind == KIND_WALL) step_length = x(self%s * self%n + self%m + 1) * self%tau
+  end function step_length
+
+  subroutine scheme_residual(self, x, r, scale, stat)
+    class(vci_scheme_lobatto_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:)
+    real(dp), intent(out) :: r(:), scale(:)
+    integer, intent(out) :: stat
+    integer :: n, s, j, last
+    real(dp) :: tau, e, dsign
+    n = self%n; s = self%s; last = s * n + self%m + 1
+    dsign = real(self%dir, dp)
+    tau = step_length(self, x)
+    call evaluate(self, x, self%a, tau, self%kind == KIND_REFLECT, stat)
+    if (stat /= VCI_OK) return
+    if (self%kind == KIND_PAIR) then
+      r(1:n) = self%y(:, s) - self%b_target
+      scale(1:n) = abs(self%y(:, s)) + abs(self%b_target)
+    else
+      r(1:n) = self%pa + dsign * self%f(:, 0)
+      scale(1:n) = abs(self%pa) + self%fs(:, 0)
+      if (self%kind == KIND_REFLECT) then
+        r(1:n) = r(1:n) + x(last) * self%grad
+        scale(1:n) = scale(1:n) + abs(x(last) * self%grad)
+      end if
+    end if
+    do j = 1, s - 1
+      r(j * n + 1:(j + 1) * n) = self%f(:, j)
+      scale(j * n + 1:(j + 1) * n) = self%fs(:, j)
+    end do
+    select case (self%kind)
+    case (KIND_WALL)
+      call self%eval_gaps(self%y(:, s), self%g(1:self%n_gaps), stat)
+      if (stat /= VCI_OK) return
+      r(last) = self%g(self%gap)
+      scale(last) = abs(r(last)) + sum(self%gscale * (abs(self%y(:, s)) + abs(self%y(:, s) - self%a)))
+    case (KIND_REFLECT)
+      e = 0.0_dp
+      do j = 0, s
+        e = e + self%rule%b(j) * (dot_product(self%lv(:, j), self%v(:, j)) - self%lval(j))
+      end do
+      r(last) = e - self%e_minus
+      scale(last) = abs(e) + abs(self%e_minus) + sum(abs(self%pa) * abs(self%y(:, s) - self%a)) / tau
+    end select
+    ! round-off floor of each row, in units of rtol: the rounding of summing its 2(s + 1) terms, and
+    ! a few ulps of sum_j |dR_i/dx_j| |x_j| (positions large next to their change over the segment)
+    scale(1:size(x)) = scale(1:size(x)) * (1.0_dp + real(4 * (s + 1), dp) * epsilon(1.0_dp) / &
+                       max(self%rtol, epsilon(1.0_dp))) + (8.0_dp * epsilon(1.0_dp) / &
+                       max(self%rtol, epsilon(1.0_dp))) * self%jscale(1:size(x))
+  end subroutine scheme_residual
+
+  !> Analytic Jacobian from the Hessian blocks at the nodes (evaluate() at x was the last residual).
+  subroutine scheme_jacobian(self, x, r, jac, stat)
+    class(vci_scheme_lobatto_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:), r(:)
+    real(dp), intent(inout) :: jac(:, :)
+    integer, intent(out) :: stat
+    integer :: n, s, i, j, k, last, nx, r0, c0, a1
+    real(dp) :: tau, dsign, rs, wgt
+    n = self%n; s = self%s; last = s * n + self%m + 1
+    nx = self%unknowns(self%kind)
+    dsign = real(self%dir, dp)
+    tau = step_length(self, x)
+    call evaluate(self, x, self%a, tau, .false., stat)
+    if (stat /= VCI_OK) return
+    do i = 0, s
+      call lagrangian_hessians(self%lag, self%work, self%y(:, i), self%v(:, i), self%hqq(:, :, i), &
+                               self%hqv(:, :, i), self%hvv(:, :, i), stat)
+      if (stat /= VCI_OK) then
+        self%failed_callback = 'Hessian blocks of L'
+        return
+      end if
+    end do
+    ! rows j = 0..s-1 (row 0 is the momentum block, times dir), columns k = 1..s
+    do j = 0, s - 1
+      r0 = j * n
+      rs = 1.0_dp
+      if (j == 0) rs = dsign
+      if (j == 0 .and. self%kind == KIND_PAIR) cycle
+      do k = 1, s
+        c0 = (k - 1) * n
+        associate (blk => jac(r0 + 1:r0 + n, c0 + 1:c0 + n))
+          if (j == k) blk = blk + rs * tau * self%rule%b(j) * self%hqq(:, :, j)
+          blk = blk + rs * dsign * self%rule%b(j) * self%rule%d(j, k) * self%hqv(:, :, j)
+          blk = blk + rs * dsign * self%rule%b(k) * self%rule%d(k, j) * transpose(self%hqv(:, :, k))
+          do i = 0, s
+            wgt = self%rule%b(i) * self%rule%d(i, j) * self%rule%d(i, k) / tau
+            if (wgt /= 0.0_dp) blk = blk + rs * wgt * self%hvv(:, :, i)
+          end do
+        end associate
+      end do
+    end do
+    if (self%kind == KIND_PAIR) then
+      do a1 = 1, n
+        jac(a1, (s - 1) * n + a1) = 1.0_dp
+      end do
+    end if
+    select case (self%kind)
+    case (KIND_WALL)
+      ! alpha enters through tau: dF_j/dtau = b_j Lq_j - b_j Lqv_j V_j - (dir/tau) sum_i b_i D_ij Lvv_i V_i
+      do j = 0, s - 1
+        rs = 1.0_dp
+        if (j == 0) rs = dsign
+        self%tmp = self%rule%b(j) * (self%lq(:, j) - matmul(self%hqv(:, :, j), self%v(:, j)))
+        do i = 0, s
+          self%tmp = self%tmp - (dsign / tau) * self%rule%b(i) * self%rule%d(i, j) * &
+                     matmul(self%hvv(:, :, i), self%v(:, i))
+        end do
+        jac(j * n + 1:(j + 1) * n, last) = rs * self%tau * self%tmp
+      end do
+      call self%eval_gap_gradients(self%y(:, s), self%dg(:, 1:self%n_gaps), stat)
+      if (stat /= VCI_OK) return
+      jac(last, (s - 1) * n + 1:s * n) = self%dg(:, self%gap)
+    case (KIND_REFLECT)
+      jac(1:n, last) = self%grad
+      ! dE_d/dy_k = b_k (Lqv_k V_k - Lq_k) + (dir/tau) sum_i b_i D_ik Lvv_i V_i
+      do k = 1, s
+        self%tmp = self%rule%b(k) * (matmul(self%hqv(:, :, k), self%v(:, k)) - self%lq(:, k))
+        do i = 0, s
+          self%tmp = self%tmp + (dsign / tau) * self%rule%b(i) * self%rule%d(i, k) * &
+                     matmul(self%hvv(:, :, i), self%v(:, i))
+        end do
+        jac(last, (k - 1) * n + 1:k * n) = self%tmp
+      end do
+    end select
+    do j = 1, nx
+      self%jscale(j) = sum(abs(jac(j, 1:nx)) * abs(x(1:nx)))
+    end do
+  end subroutine scheme_jacobian
+
+  !> The new momentum p_b = dir F_s.
+  subroutine momentum_out(self, x, a, tau, p, stat)
+    class(vci_scheme_lobatto_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:), a(:), tau
+    real(dp), intent(out) :: p(:)
+    integer, intent(out) :: stat
+    call evaluate(self, x, a, tau, .false., stat)
+    if (stat /= VCI_OK) return
+    p = real(self%dir, dp) * self%f(:, self%s)
+  end subroutine momentum_out
+
+  !> E_d = sum_i b_i E(y_i, V_i).
+  subroutine energy_out(self, x, a, tau, e, stat)
+    class(vci_scheme_lobatto_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:), a(:), tau
+    real(dp), intent(out) :: e
+    integer, intent(out) :: stat
+    integer :: j
+    e = 0.0_dp
+    call evaluate(self, x, a, tau, .true., stat)
+    if (stat /= VCI_OK) return
+    do j = 0, self%s
+      e = e + self%rule%b(j) * (dot_product(self%lv(:, j), self%v(:, j)) - self%lval(j))
+    end do
+  end subroutine energy_out
+
+  !> H(q, p): the model's, else the Legendre inversion of dL/dqdot.
+  subroutine hamiltonian(self, q, p, e, stat)
+    class(vci_scheme_lobatto_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), p(:)
+    real(dp), intent(out) :: e
+    integer, intent(out) :: stat
+    real(dp) :: t1(1)
+    if (self%has_model_energy) then
+      stat = 0
+      call self%base%energy(q, p, e, stat)
+      t1(1) = e
+      call self%check(stat, t1, 'energy H(q,p)')
+      return
+    end if
+    self%tmp = 0.0_dp
+    call lagrangian_hamiltonian(self%lag, self%work, q, p, self%tmp, e, stat)
+    if (stat /= VCI_OK) self%failed_callback = 'Legendre inversion for H(q,p)'
+  end subroutine hamiltonian
+end module vci_scheme_lobatto
