@@ -20,7 +20,8 @@ import re
 import sys
 
 # Assertions provided by cmake/pfunit_lite/funit.f90 (keep in sync with it and docs).
-# All of them exist in pFUnit 4 with the same argument order and keyword names.
+# All of them exist in pFUnit 4, with the same argument order and the keywords tolerance=
+# and message=.
 ASSERTIONS = [
     "assertEqual", "assertTrue", "assertFalse",
     "assertLessThan", "assertLessThanOrEqual",
