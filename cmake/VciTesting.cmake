@@ -16,6 +16,18 @@
 
 option(VCI_USE_PFUNIT "Use an installed pFUnit 4 for the .pf test suites if found" ON)
 
+# Debian's interpreter when present, for pfunit_lite's converter and for pFUnit's own
+# preprocessor (PFUNIT_PARSER uses Python_EXECUTABLE): another python3 first on PATH
+# (pyenv shims, virtual environments) may not run in every environment.
+if(EXISTS /usr/bin/python3)
+  if(NOT DEFINED Python3_EXECUTABLE)
+    set(Python3_EXECUTABLE /usr/bin/python3)
+  endif()
+  if(NOT DEFINED Python_EXECUTABLE)
+    set(Python_EXECUTABLE /usr/bin/python3)
+  endif()
+endif()
+
 if(VCI_USE_PFUNIT AND NOT DEFINED PFUNIT_FOUND)
   find_package(PFUNIT QUIET)
 endif()
@@ -33,6 +45,12 @@ endif()
 
 # Captured now: inside the function CMAKE_CURRENT_LIST_DIR is the caller's.
 set(_VCI_PFUNIT_LITE_DIR "${CMAKE_CURRENT_LIST_DIR}/pfunit_lite")
+
+# Both backends compile a suite with gfortran's free-form limit of 132 columns, a longer line
+# being an error (the compiler's defaults, restated so that a -ffree-line-length-none in
+# CMAKE_Fortran_FLAGS cannot hide a line that a default pFUnit build would reject).
+set(VCI_PF_SUITE_OPTIONS
+  $<$<Fortran_COMPILER_ID:GNU>:-ffree-line-length-132 -Werror=line-truncation>)
 
 get_property(_vci_testing_reported GLOBAL PROPERTY _VCI_TESTING_REPORTED)
 if(NOT _vci_testing_reported)
@@ -78,11 +96,7 @@ function(vci_add_pf_suite)
       OTHER_SOURCES ${arg_EXTRA_SOURCES}
       LINK_LIBRARIES ${arg_LINK})
   else()
-    # Debian's interpreter when present: another python3 first on PATH (pyenv shims, virtual
-    # environments) may not run in every environment; the converter needs only the standard library
-    if(NOT DEFINED Python3_EXECUTABLE AND EXISTS /usr/bin/python3)
-      set(Python3_EXECUTABLE /usr/bin/python3)
-    endif()
+    # the converter needs only Python's standard library
     find_package(Python3 COMPONENTS Interpreter REQUIRED)
     _vci_add_funit_lite_library()
     set(converter "${_VCI_PFUNIT_LITE_DIR}/pf2f90.py")
@@ -110,10 +124,6 @@ function(vci_add_pf_suite)
       COMMENT "pf2f90: driver for ${name}"
       VERBATIM)
 
-    # Expanded macros are longer than the .pf lines they come from.
-    set_property(SOURCE ${generated} APPEND PROPERTY COMPILE_OPTIONS
-      $<$<Fortran_COMPILER_ID:GNU>:-ffree-line-length-none>)
-
     add_executable(${name} ${generated} "${driver}" ${arg_EXTRA_SOURCES})
     # Own module directory per suite: test modules of different suites may
     # share names without clobbering each other's .mod files.
@@ -124,6 +134,7 @@ function(vci_add_pf_suite)
     target_link_libraries(${name} PRIVATE vci_funit_lite ${arg_LINK})
     add_test(NAME ${name} COMMAND ${name})
   endif()
+  target_compile_options(${name} PRIVATE ${VCI_PF_SUITE_OPTIONS})
 
   if(arg_LABELS)
     set_tests_properties(${name} PROPERTIES LABELS "${arg_LABELS}")

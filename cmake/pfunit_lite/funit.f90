@@ -50,8 +50,9 @@ module funit
     module procedure rel_equal_real, rel_equal_real_1d
   end interface assertRelativelyEqual
 
+  ! pFUnit 4 has scalar versions only.
   interface assertIsFinite
-    module procedure finite_real, finite_real_1d
+    module procedure finite_real
   end interface assertIsFinite
 
   ! State of the test being run (reset by funit_run) and of the whole program.
@@ -274,6 +275,7 @@ contains
   ! -------------------------------------------------- assertRelativelyEqual
   ! Passes if |expected - actual| <= tolerance * |expected|.  A non-finite
   ! expected value only matches itself (otherwise Inf <= tol*Inf would pass).
+  ! A zero expected value fails, as in pFUnit ("zero denominator").
 
   elemental logical function rel_within(e, a, tol)
     real(real64), intent(in) :: e, a, tol
@@ -284,6 +286,10 @@ contains
   subroutine rel_equal_real(expected, actual, tolerance, message, location)
     real(real64), intent(in) :: expected, actual, tolerance
     character(len=*), intent(in), optional :: message, location
+    if (within(expected, 0.0_real64, 0.0_real64)) then
+      call fail('assertRelativelyEqual', 'zero denominator (expected = 0)', message, location)
+      return
+    end if
     if (.not. rel_within(expected, actual, tolerance)) call fail('assertRelativelyEqual', &
          'expected <' // r2s(expected) // '> but found <' // r2s(actual) // &
          '>, relative difference > tolerance ' // r2s(tolerance), message, location)
@@ -294,6 +300,10 @@ contains
     character(len=*), intent(in), optional :: message, location
     integer :: i
     if (.not. same_size(size(expected), size(actual), 'assertRelativelyEqual', message, location)) return
+    if (any(within(expected, 0.0_real64, 0.0_real64))) then
+      call fail('assertRelativelyEqual', 'zero denominator (an expected element = 0)', message, location)
+      return
+    end if
     do i = 1, size(actual)
       if (.not. rel_within(expected(i), actual(i), tolerance)) then
         call fail('assertRelativelyEqual', 'at index ' // i2s(i) // ' expected <' // &
@@ -312,19 +322,6 @@ contains
     if (.not. ieee_is_finite(x)) call fail('assertIsFinite', '<' // r2s(x) // &
          '> is not finite', message, location)
   end subroutine finite_real
-
-  subroutine finite_real_1d(x, message, location)
-    real(real64), intent(in) :: x(:)
-    character(len=*), intent(in), optional :: message, location
-    integer :: i
-    do i = 1, size(x)
-      if (.not. ieee_is_finite(x(i))) then
-        call fail('assertIsFinite', 'at index ' // i2s(i) // ' <' // r2s(x(i)) // &
-             '> is not finite', message, location)
-        return
-      end if
-    end do
-  end subroutine finite_real_1d
 
   ! ------------------------------------------------------------ test runner
 
