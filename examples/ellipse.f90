@@ -23,7 +23,7 @@ contains
     type(vci_integrator_t), intent(inout) :: integ
     integer, intent(out) :: stat
     real(dp) :: q0(3), qd(3), h
-    h = integ%h
+    h = integ%step_length()
     q0 = [acos(-1.0_dp) / 2.0_dp, 0.0_dp, 3.5_dp]
     qd = [-3.0_dp, 2.0_dp, 0.0_dp]
     ! the pair brackets t = 0 by half a step: q(-h/2), q(h/2) to second order

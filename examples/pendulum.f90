@@ -28,6 +28,6 @@ contains
     pi = acos(-1.0_dp)
     q0 = [0.75_dp * pi, 0.0_dp]
     qd = [pi / 4.0_dp, (pi + 0.5_dp) * pi / 4.0_dp]
-    call integ%init_from_pair(0.0_dp, q0, q0 + integ%h * qd, stat)
+    call integ%init_from_pair(0.0_dp, q0, q0 + integ%step_length() * qd, stat)
   end subroutine init
 end program pendulum

@@ -9,7 +9,6 @@ module vci_scene_pendulum
   use vci_kinds, only: dp
   use vci_model, only: vci_model_t
   use vci_lagrangian, only: vci_lagrangian_t
-  use vci_status, only: VCI_NOT_PROVIDED
   implicit none
   private
 
@@ -87,7 +86,7 @@ contains
     integer, intent(inout) :: stat
     real(dp) :: ml2, s, c
     if (.not. self%analytic_hessian) then
-      stat = VCI_NOT_PROVIDED; return
+      call self%not_provided(stat); return
     end if
     ml2 = self%mass * self%length**2; s = sin(q(1)); c = cos(q(1))
     hess(1, 1) = -ml2 / h
