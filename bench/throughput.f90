@@ -147,7 +147,7 @@ program throughput
 
 contains
 
-  !> The examples' default set-ups (examples/*.f90, DESIGN.md §2).
+  !> The examples' default set-ups (examples/*.f90, docs/DESIGN.md §8).
   subroutine setup_scenes()
     real(dp) :: qd2(2), qd3(3), q2(2), q3(3)
     integer :: k

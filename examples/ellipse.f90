@@ -1,4 +1,4 @@
-!> The paper's bouncing ellipse (DESIGN.md §2): m = 1, g = 9.8, a = 1, b = 0.5, h = 1e-2,
+!> The paper's bouncing ellipse (docs/DESIGN.md §8): m = 1, g = 9.8, a = 1, b = 0.5, h = 1e-2,
 !> q(0) = (pi/2, 0, 3.5), qdot(0) = (-3, 2, 0), initial pair q(0) -/+ (h/2) qdot(0), 2 s.
 program ellipse
   use vci

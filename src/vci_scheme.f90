@@ -1,5 +1,5 @@
 !> A scheme: how one sub-step of the (+) or (-) method is discretised and how its unknowns are laid
-!> out. The stepper (vci_stepper) runs the algorithm of DESIGN.md §1 — regular sub-step, stage 1
+!> out. The stepper (vci_stepper) runs the algorithm of docs/DESIGN.md §1-2 — regular sub-step, stage 1
 !> (reach the wall: adds alpha and g_j = 0), stage 2 (reflect: adds mu and the energy equation) — and
 !> asks the scheme for residuals, Jacobians and the quantities it needs (endpoint, multipliers, alpha,
 !> mu, outgoing momentum, energy) through the procedures below; it never indexes the unknowns itself.

@@ -1,4 +1,4 @@
-!> The scheme of a discrete Lagrangian given in closed form (DESIGN.md §1): a user's L_d
+!> The scheme of a discrete Lagrangian given in closed form (docs/DESIGN.md §1, §3): a user's L_d
 !> (vci_model_t), or the `left` / `midpoint` retraction of a continuous L (vci_retraction). With
 !> s = +1 (forward) or -1 (backward) and L^s(a, b, tau) = L_d(a, b, tau) for s = +1, L_d(b, a, tau)
 !> for s = -1, where a is the known and b the unknown configuration:

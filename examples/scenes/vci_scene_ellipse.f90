@@ -1,5 +1,5 @@
 !> The paper's bouncing ellipse: q = (theta, x, y), midpoint L_d with gravity, floor gap
-!> g(q) = y - phi(theta), phi = sqrt(a^2 sin^2 theta + b^2 cos^2 theta). DESIGN.md §2.
+!> g(q) = y - phi(theta), phi = sqrt(a^2 sin^2 theta + b^2 cos^2 theta). docs/DESIGN.md §8.
 !> `ellipse_lagrangian_t`: the same body as a continuous model, L = I θ̇²/2 + m(ẋ² + ẏ²)/2 − m g y.
 module vci_scene_ellipse
   use vci_kinds, only: dp

@@ -2,7 +2,7 @@
 !> L_d(q, v, h) = m l^2/(2h) ((v_th - th)^2 + (v_ph - ph)^2 sin^2 th) - h m g l cos th (anchored at q),
 !> constraint form omega = f(theta) dtheta - dphi with f = pi + cos^2 theta, discrete constraint
 !> omega_d(q, v, h) = (f(theta)(v_th - th) - (v_ph - ph)) / h, and the cylinder wall
-!> g = R^2 - l^2 sin^2 theta >= 0 (DESIGN.md §2: the paper's l sin theta <= R stops binding past pi).
+!> g = R^2 - l^2 sin^2 theta >= 0 (docs/DESIGN.md §8: the paper's l sin theta <= R stops binding past pi).
 !> `pendulum_lagrangian_t` is the same scene as a continuous model, L = ½ m l² (θ̇² + sin²θ φ̇²) − m g l cos θ,
 !> with Ω = f(θ) dθ − dφ: the `left` scheme turns it into the L_d above.
 module vci_scene_pendulum

@@ -340,7 +340,7 @@ contains
     dh_rel = s%max_dh / s%h0
   end subroutine step_size_case
 
-  !> The paper's ellipse (DESIGN.md §2), h = 1e-2, nsteps steps. Returns the run and, for each
+  !> The paper's ellipse (docs/DESIGN.md §8), h = 1e-2, nsteps steps. Returns the run and, for each
   !> impact i (up to size(e_after)), H just after it minus H0: since free flight conserves H
   !> exactly for this L_d, these are the cumulative energy changes made by the impacts.
   subroutine ellipse_long_case(nsteps, mode, s, e_after, n_e, nonfinite_steps)
