@@ -734,7 +734,8 @@ contains
     impact_count = self%n_impacts
   end function impact_count
 
-  !> Impact i (1 .. impact_count()) of the last step.
+  !> Impact i (1 .. impact_count()) of the last step. Assign the result (`imp = integ%impact(i)`):
+  !> `associate (imp => integ%impact(i))` crashed in free() with gfortran 12 (test/stability, seen once).
   function impact(self, i) result(imp)
     class(vci_integrator_t), intent(in) :: self
     integer, intent(in) :: i
