@@ -1,4 +1,4 @@
-!> Hand-specialised loops for the paper's three scenes, written from DESIGN.md §1–2 without the
+!> Hand-specialised loops for the paper's three scenes, written from docs/DESIGN.md §1–2 without the
 !> library: no model type, no callbacks, no generic Newton, no LAPACK. They are the yardstick of
 !> bench/throughput.f90 (issue 2, item 9) and must follow the same trajectories as the library
 !> (the same discrete equations, solved to round-off), so that the timing compares equal work.

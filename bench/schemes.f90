@@ -92,7 +92,7 @@ program bench_schemes
       call integ%integrate(nsteps, 1, stat)
       call system_clock(c1)
       if (stat /= VCI_OK) then
-        write (*, '(a)') trim(integ%message); stop 1
+        write (*, '(a)') integ%message(); stop 1
       end if
       t = 1.0e9_dp * real(c1 - c0, dp) / real(rate, dp) / real(nsteps, dp)
       if (ic == 0) tmid = t

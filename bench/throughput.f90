@@ -147,7 +147,7 @@ program throughput
 
 contains
 
-  !> The examples' default set-ups (examples/*.f90, DESIGN.md §2).
+  !> The examples' default set-ups (examples/*.f90, docs/DESIGN.md §8).
   subroutine setup_scenes()
     real(dp) :: qd2(2), qd3(3), q2(2), q3(3)
     integer :: k
@@ -234,8 +234,8 @@ contains
       do j = 1, nimp
         dt = max(dt, abs(log%t(j) - hres%t_impact(j)))
       end do
-      dq = max(maxval(abs(integ(is, k)%q - qh) / max(1.0_dp, abs(qh))), &
-               maxval(abs(integ(is, k)%p - ph) / max(1.0_dp, abs(ph))))
+      dq = max(maxval(abs(integ(is, k)%configuration() - qh) / max(1.0_dp, abs(qh))), &
+               maxval(abs(integ(is, k)%momentum() - ph) / max(1.0_dp, abs(ph))))
       ok = ok .and. dt <= 1.0e-10_dp .and. dq <= 1.0e-9_dp
       all_ok = all_ok .and. ok
       write (line, '(a," | ",a," | ",i0," / ",i0," | ",es8.1," | ",es8.1," | ",a)') trim(scene_name(is)), &
@@ -269,7 +269,8 @@ contains
       do e = 1, neps
         call lib_run(is, iv, stat)
         call must(stat, 'library run')
-        checksum = checksum + integ(is, iv)%q(1)
+        q(1:n) = integ(is, iv)%configuration()
+        checksum = checksum + q(1)
       end do
     end if
     seconds = now() - t_start
@@ -293,6 +294,7 @@ contains
     integer, intent(in) :: is, iv
     integer(int64) :: before
     type(hand_result_t) :: hres
+    type(vci_stats_t) :: stats
     real(dp) :: q(3), p(3)
     integer :: n
     n = size(sc(is)%q0)
@@ -300,9 +302,11 @@ contains
       call hand_run(is, q(1:n), p(1:n), hres)
       newton_count = real(hres%newton_iterations, dp) / real(sc(is)%nsteps, dp)
     else
-      before = integ(is, iv)%stats%newton_iterations
+      stats = integ(is, iv)%statistics()
+      before = stats%newton_iterations
       call lib_run(is, iv, stat)
-      newton_count = real(integ(is, iv)%stats%newton_iterations - before, dp) / real(sc(is)%nsteps, dp)
+      stats = integ(is, iv)%statistics()
+      newton_count = real(stats%newton_iterations - before, dp) / real(sc(is)%nsteps, dp)
     end if
   end function newton_count
 

@@ -14,7 +14,10 @@
 # Deliberately no include_guard(): including it again (e.g. from a
 # subdirectory) must re-set the variables in that scope; everything is idempotent.
 
-option(VCI_USE_PFUNIT "Use an installed pFUnit 4 for the .pf test suites if found" ON)
+# VCI_USE_PFUNIT is a top-level option (docs/BUILD.md); ON when this file is used on its own.
+if(NOT DEFINED VCI_USE_PFUNIT)
+  set(VCI_USE_PFUNIT ON)
+endif()
 
 # Debian's interpreter when present, for pfunit_lite's converter and for pFUnit's own
 # preprocessor (PFUNIT_PARSER uses Python_EXECUTABLE): another python3 first on PATH

@@ -1,4 +1,4 @@
-!> The paper's bouncing ellipse (DESIGN.md §2): m = 1, g = 9.8, a = 1, b = 0.5, h = 1e-2,
+!> The paper's bouncing ellipse (docs/DESIGN.md §8): m = 1, g = 9.8, a = 1, b = 0.5, h = 1e-2,
 !> q(0) = (pi/2, 0, 3.5), qdot(0) = (-3, 2, 0), initial pair q(0) -/+ (h/2) qdot(0), 2 s.
 program ellipse
   use vci
@@ -23,7 +23,7 @@ contains
     type(vci_integrator_t), intent(inout) :: integ
     integer, intent(out) :: stat
     real(dp) :: q0(3), qd(3), h
-    h = integ%h
+    h = integ%step_length()
     q0 = [acos(-1.0_dp) / 2.0_dp, 0.0_dp, 3.5_dp]
     qd = [-3.0_dp, 2.0_dp, 0.0_dp]
     ! the pair brackets t = 0 by half a step: q(-h/2), q(h/2) to second order

@@ -23,7 +23,7 @@ contains
     type(vci_integrator_t), intent(inout) :: integ
     integer, intent(out) :: stat
     real(dp) :: q0(2), qd(2), h
-    h = integ%h
+    h = integ%step_length()
     q0 = [0.0_dp, 1.0_dp]; qd = [1.0_dp, 0.0_dp]
     call integ%init_from_pair(-0.5_dp * h, q0 - 0.5_dp * h * qd, q0 + 0.5_dp * h * qd, stat)
   end subroutine init

@@ -1,4 +1,4 @@
-!> The paper's nonholonomic spherical pendulum in a cylinder (DESIGN.md §2): m = 1, g = 9.8,
+!> The paper's nonholonomic spherical pendulum in a cylinder (docs/DESIGN.md §8): m = 1, g = 9.8,
 !> l = 2, R = 1.5, f = pi + cos^2 theta, h = 1e-3, q(0) = (0.75 pi, 0),
 !> qdot(0) = (pi/4, (pi + 0.5) pi/4), pair q0 = q(0), q1 = q(0) + h qdot(0), 5 s.
 program pendulum
@@ -28,6 +28,6 @@ contains
     pi = acos(-1.0_dp)
     q0 = [0.75_dp * pi, 0.0_dp]
     qd = [pi / 4.0_dp, (pi + 0.5_dp) * pi / 4.0_dp]
-    call integ%init_from_pair(0.0_dp, q0, q0 + integ%h * qd, stat)
+    call integ%init_from_pair(0.0_dp, q0, q0 + integ%step_length() * qd, stat)
   end subroutine init
 end program pendulum

@@ -16,6 +16,9 @@ program pendulum_walls
   type(pendulum_quad_t) :: ref
   real(dp), allocatable :: times(:), found(:)
   real(dp) :: th, om, terr
+  real(dp), allocatable :: q(:), p(:)
+  type(vci_impact_t) :: imp
+  type(vci_stats_t) :: stats
   integer :: stat, nex, nimp, j
   integer(i8) :: nsteps, k
   opts%h = 5.0e-2_dp; opts%t_final = 10.0_dp
@@ -27,7 +30,7 @@ program pendulum_walls
   call integ%init_from_momentum(0.0_dp, [0.0_dp], [4.0_dp], stat)
   if (stat == VCI_OK .and. opts%impact_energy /= VCI_IMPACT_DISCRETE) call integ%set_impact_energy(opts%impact_energy, stat)
   if (stat /= VCI_OK) then
-    write (output_unit, '(a)') 'pendulum_walls: '//trim(integ%message)
+    write (output_unit, '(a)') 'pendulum_walls: '//integ%message()
     stop 2
   end if
   nsteps = nint(opts%t_final / opts%h, i8)
@@ -38,29 +41,32 @@ program pendulum_walls
   do k = 1, nsteps
     call integ%step(1, stat)
     if (stat /= VCI_OK) exit
-    do j = 1, integ%stepper%n_impacts
+    do j = 1, integ%impact_count()
       nimp = nimp + 1
-      if (nimp <= size(found)) found(nimp) = integ%stepper%impacts(j)%t
+      imp = integ%impact(j)
+      if (nimp <= size(found)) found(nimp) = imp%t
     end do
   end do
-  write (output_unit, '(a,i0,a,es10.3,a,i0,a,a)') 'scheme: '//vci_scheme_name(integ%scheme)//'   stages: ', &
-    integ%stages, '   h = ', opts%h, '   steps: ', nsteps, '   impact energy: ', &
+  write (output_unit, '(a,i0,a,es10.3,a,i0,a,a)') 'scheme: '//vci_scheme_name(integ%scheme())//'   stages: ', &
+    integ%stages(), '   h = ', opts%h, '   steps: ', nsteps, '   impact energy: ', &
     trim(merge('hamiltonian', 'discrete   ', opts%impact_energy == VCI_IMPACT_HAMILTONIAN))
   if (stat /= VCI_OK) then
-    write (output_unit, '(a)') 'status: '//vci_status_name(stat)//': '//trim(integ%message)
+    write (output_unit, '(a)') 'status: '//vci_status_name(stat)//': '//integ%message()
     stop 2
   end if
-  call pendulum_quad_state(ref, integ%t, th, om)
+  call pendulum_quad_state(ref, integ%time(), th, om)
   write (output_unit, '(a,i0,a,i0)') 'impacts: ', nimp, '   exact: ', nex
-  write (output_unit, '(a,es24.16,a,es24.16)') 'end state: t = ', integ%t, '  theta = ', integ%q(1)
-  write (output_unit, '(a,es10.3,a,es10.3)') 'error against the exact solution: theta ', abs(integ%q(1) - th), &
-    '   theta'' ', abs(integ%p(1) - om)
+  q = integ%configuration(); p = integ%momentum()
+  write (output_unit, '(a,es24.16,a,es24.16)') 'end state: t = ', integ%time(), '  theta = ', q(1)
+  write (output_unit, '(a,es10.3,a,es10.3)') 'error against the exact solution: theta ', abs(q(1) - th), &
+    '   theta'' ', abs(p(1) - om)
   if (nimp == nex) then
     terr = 0.0_dp
     if (nex > 0) terr = maxval(abs(found(1:nex) - times(1:nex)))
     write (output_unit, '(a,es10.3)') 'impact times: max error ', terr
   end if
-  write (output_unit, '(a,i0,a,i0)') 'newton: solves ', integ%stats%newton_solves, '  iterations ', &
-    integ%stats%newton_iterations
+  stats = integ%statistics()
+  write (output_unit, '(a,i0,a,i0)') 'newton: solves ', stats%newton_solves, '  iterations ', &
+    stats%newton_iterations
   write (output_unit, '(a)') 'status: ok'
 end program pendulum_walls

@@ -6,7 +6,8 @@ module vci
   use vci_model, only: vci_model_t
   use vci_lagrangian, only: vci_lagrangian_t
   use vci_observer, only: vci_observer_t, vci_run_info_t, vci_impact_t
-  use vci_integrator, only: vci_integrator_t, vci_stats_t, vci_checkpoint_t, VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN, &
+  use vci_checkpoint, only: vci_checkpoint_t, VCI_CHECKPOINT_VERSION
+  use vci_integrator, only: vci_integrator_t, vci_stats_t, vci_settings_t, VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN, &
                             VCI_SCHEME_DISCRETE, VCI_SCHEME_LEFT, VCI_SCHEME_MIDPOINT, VCI_SCHEME_LOBATTO, &
                             VCI_LOBATTO_MAX_STAGES, vci_scheme_name
   use vci_newton, only: vci_newton_t, vci_newton_result_t, vci_system_t, NEWTON_CONVERGED, &

@@ -17,7 +17,7 @@ module vci_capi
   use vci_status
   use vci_model, only: vci_model_t
   use vci_observer, only: vci_observer_t, vci_run_info_t, vci_impact_t
-  use vci_integrator, only: vci_integrator_t, VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN
+  use vci_integrator, only: vci_integrator_t, vci_stats_t, VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN
   use vci, only: VCI_VERSION_NUMBER
 #ifdef VCI_HAVE_HDF5
   use vci_hdf5_output, only: vci_hdf5_writer_t
@@ -236,8 +236,7 @@ contains
     type(c_integrator_t), intent(inout) :: ip
     integer, intent(in) :: status
     character(len=*), intent(in) :: message
-    ip%integ%status = status
-    ip%integ%message = message
+    call ip%integ%report_failure(status, message)
     fail = status
   end function fail
 
@@ -250,23 +249,23 @@ contains
     type(c_integrator_t), intent(inout) :: ip
     integer, intent(in) :: stat
     character(len=32) :: rc
+    character(len=VCI_MSG_LEN) :: msg
     status = stat
+    msg = ip%integ%message()
     if ((stat == VCI_ERR_CALLBACK .or. stat == VCI_ERR_NEWTON) .and. ip%model%last_rc /= 0) then
       write (rc, '(i0)') ip%model%last_rc
-      ip%integ%message = trim(ip%integ%message)//' (the C callback '//trim(ip%model%last_failed)// &
-                         ' returned '//trim(rc)//')'
+      msg = trim(msg)//' (the C callback '//trim(ip%model%last_failed)//' returned '//trim(rc)//')'
       status = VCI_ERR_CALLBACK
     else if ((stat == VCI_ERR_NONFINITE .or. stat == VCI_ERR_NEWTON) .and. ip%model%last_nonfinite /= '') then
-      ip%integ%message = trim(ip%integ%message)//' (the C callback '//trim(ip%model%last_nonfinite)// &
-                         ' returned NaN or Inf)'
+      msg = trim(msg)//' (the C callback '//trim(ip%model%last_nonfinite)//' returned NaN or Inf)'
       status = VCI_ERR_NONFINITE
     else if (stat == VCI_ERR_IO .and. ip%obs%impact_rc /= 0) then
       write (rc, '(i0)') ip%obs%impact_rc
-      write (ip%integ%message, '(a,es14.7,a)') 'impact callback returned '//trim(rc)//' at the impact at t = ', &
+      write (msg, '(a,es14.7,a)') 'impact callback returned '//trim(rc)//' at the impact at t = ', &
         ip%obs%impact_t, '; the step containing it was accepted, the state is after it'
       status = VCI_ERR_CALLBACK
     end if
-    ip%integ%status = status
+    call ip%integ%report_failure(status, msg)
     ip%obs%impact_rc = 0
   end function after_call
 
@@ -282,7 +281,7 @@ contains
 
   ! ---------------------------------------------------------------------------------------------
   ! the C model: each procedure presets nothing (stat arrives as 0) and maps any nonzero C return
-  ! to 1, so that a C callback can never be mistaken for "not provided" (VCI_NOT_PROVIDED)
+  ! to 1; an absent callback answers "not provided" on its own channel (not_provided)
 
   !> Record a callback's outcome: nonzero rc becomes stat = 1; NaN/Inf outputs are remembered, so
   !> that a failure the Newton line search absorbed (it backtracks from failing trial points) can
@@ -342,7 +341,7 @@ contains
     integer, intent(inout) :: stat
     procedure(c_ld_grad_fn), pointer :: f
     if (.not. c_associated(self%cb%mixed_hessian)) then
-      hess = 0.0_dp; stat = VCI_NOT_PROVIDED; return
+      hess = 0.0_dp; call self%not_provided(stat); return
     end if
     call c_f_procpointer(self%cb%mixed_hessian, f)
     call note(self, f(self%n, q, v, h, hess, self%user), 'mixed_hessian', all(ieee_is_finite(hess)), stat)
@@ -355,7 +354,7 @@ contains
     integer, intent(inout) :: stat
     procedure(c_forms_fn), pointer :: f
     if (.not. c_associated(self%cb%constraint_forms)) then
-      omega = 0.0_dp; stat = VCI_NOT_PROVIDED; return
+      omega = 0.0_dp; call self%not_provided(stat); return
     end if
     call c_f_procpointer(self%cb%constraint_forms, f)
     call note(self, f(self%n, self%m, q, omega, self%user), 'constraint_forms', all(ieee_is_finite(omega)), stat)
@@ -368,7 +367,7 @@ contains
     integer, intent(inout) :: stat
     procedure(c_dconstraint_fn), pointer :: f
     if (.not. c_associated(self%cb%discrete_constraint)) then
-      out = 0.0_dp; stat = VCI_NOT_PROVIDED; return
+      out = 0.0_dp; call self%not_provided(stat); return
     end if
     call c_f_procpointer(self%cb%discrete_constraint, f)
     call note(self, f(self%n, self%m, base, other, h, out, self%user), 'discrete_constraint', &
@@ -382,7 +381,7 @@ contains
     integer, intent(inout) :: stat
     procedure(c_forms_fn), pointer :: f
     if (.not. c_associated(self%cb%gaps)) then
-      g = 0.0_dp; stat = VCI_NOT_PROVIDED; return
+      g = 0.0_dp; call self%not_provided(stat); return
     end if
     call c_f_procpointer(self%cb%gaps, f)
     call note(self, f(self%n, self%n_gaps, q, g, self%user), 'gaps', all(ieee_is_finite(g)), stat)
@@ -395,7 +394,7 @@ contains
     integer, intent(inout) :: stat
     procedure(c_forms_fn), pointer :: f
     if (.not. c_associated(self%cb%gap_gradients)) then
-      dg = 0.0_dp; stat = VCI_NOT_PROVIDED; return
+      dg = 0.0_dp; call self%not_provided(stat); return
     end if
     call c_f_procpointer(self%cb%gap_gradients, f)
     call note(self, f(self%n, self%n_gaps, q, dg, self%user), 'gap_gradients', all(ieee_is_finite(dg)), stat)
@@ -409,7 +408,7 @@ contains
     procedure(c_energy_fn), pointer :: f
     real(c_double) :: tmp(1)
     if (.not. c_associated(self%cb%energy)) then
-      e = 0.0_dp; stat = VCI_NOT_PROVIDED; return
+      e = 0.0_dp; call self%not_provided(stat); return
     end if
     tmp = 0.0_dp
     call c_f_procpointer(self%cb%energy, f)
@@ -470,7 +469,7 @@ contains
     stat = 0
     if (.not. allocated(ip%obs%output)) return
     ! also when no step was written: the writer then just closes its file
-    call ip%obs%output%on_finish(ip%integ%status, trim(ip%integ%message), stat)
+    call ip%obs%output%on_finish(ip%integ%status(), ip%integ%message(), stat)
     deallocate (ip%obs%output)
     ip%obs%started = .false.
     if (stat /= 0) stat = VCI_ERR_IO
@@ -571,12 +570,10 @@ contains
     allocate (ip)
     call ip%integ%create(mp, real(h, dp), stat)
     if (stat /= VCI_OK) then
-      global_message = 'vci_integrator_create: '//trim(ip%integ%message)
+      global_message = 'vci_integrator_create: '//ip%integ%message()
       deallocate (ip)
       vci_integrator_create = stat; return
     end if
-    ! defined values before any init: set_impact_energy probes the energy callback at (q, p)
-    ip%integ%q = 0.0_dp; ip%integ%p = 0.0_dp
     ip%model => mp
     mp%refs = mp%refs + 1
     out = c_loc(ip)
@@ -653,7 +650,7 @@ contains
       vci_init_from_pair = stat; return
     end if
     if (.not. (c_array(q0, ip%model%n, a) .and. c_array(q1, ip%model%n, b))) then
-      ip%integ%initialized = .false.
+      call ip%integ%forget_state()
       vci_init_from_pair = fail(ip, VCI_ERR_ARGUMENT, 'vci_init_from_pair: q0 or q1 is NULL'); return
     end if
     call ip%integ%init_from_pair(real(t0, dp), a, b, stat)
@@ -672,7 +669,7 @@ contains
       vci_init_from_momentum = stat; return
     end if
     if (.not. (c_array(q0, ip%model%n, a) .and. c_array(p0, ip%model%n, b))) then
-      ip%integ%initialized = .false.
+      call ip%integ%forget_state()
       vci_init_from_momentum = fail(ip, VCI_ERR_ARGUMENT, 'vci_init_from_momentum: q0 or p0 is NULL'); return
     end if
     call ip%integ%init_from_momentum(real(t0, dp), a, b, stat)
@@ -690,9 +687,9 @@ contains
       vci_step = stat; return
     end if
     ! a single step has no on_start of its own: the output's run starts with the first step
-    if (allocated(ip%obs%output) .and. .not. ip%obs%started .and. ip%integ%initialized .and. abs(direction) == 1) then
+    if (allocated(ip%obs%output) .and. .not. ip%obs%started .and. ip%integ%is_initialized() .and. abs(direction) == 1) then
       ostat = 0
-      call ip%obs%on_start(ip%integ%run_info(int(direction)), ip%integ%q, ip%integ%p, ostat)
+      call ip%obs%on_start(ip%integ%run_info(int(direction)), ip%integ%configuration(), ip%integ%momentum(), ostat)
       if (ostat /= 0) then
         vci_step = fail(ip, VCI_ERR_IO, 'vci_step: the output could not start the run'); return
       end if
@@ -724,7 +721,7 @@ contains
     integer, intent(out) :: stat
     call get_integ(integ, who, ip, stat)
     if (stat /= VCI_OK) return
-    if (.not. ip%integ%initialized) stat = fail(ip, VCI_ERR_STATE, who//': the integrator has no state yet '// &
+    if (.not. ip%integ%is_initialized()) stat = fail(ip, VCI_ERR_STATE, who//': the integrator has no state yet '// &
                                                 '(call vci_init_from_pair or vci_init_from_momentum)')
   end subroutine get_ready
 
@@ -738,10 +735,10 @@ contains
     vci_get_state = stat
     if (stat /= VCI_OK) return
     if (c_associated(t)) then
-      call c_f_pointer(t, tt); tt = ip%integ%t
+      call c_f_pointer(t, tt); tt = ip%integ%time()
     end if
-    if (c_array(q, ip%model%n, a)) a = ip%integ%q
-    if (c_array(p, ip%model%n, a)) a = ip%integ%p
+    if (c_array(q, ip%model%n, a)) a = ip%integ%configuration()
+    if (c_array(p, ip%model%n, a)) a = ip%integ%momentum()
   end function vci_get_state
 
   !> int vci_get_multipliers(vci_integrator integ, double *lambda /* [m] */)
@@ -757,7 +754,7 @@ contains
     if (.not. c_array(lambda, ip%model%m, a)) then
       vci_get_multipliers = fail(ip, VCI_ERR_ARGUMENT, 'vci_get_multipliers: lambda is NULL'); return
     end if
-    a = ip%integ%lambda
+    a = ip%integ%multipliers()
   end function vci_get_multipliers
 
   !> int vci_get_energy(vci_integrator integ, double *energy): E_d of the last step.
@@ -773,7 +770,7 @@ contains
       vci_get_energy = fail(ip, VCI_ERR_ARGUMENT, 'vci_get_energy: energy is NULL'); return
     end if
     call c_f_pointer(energy, e)
-    e = ip%integ%energy
+    e = ip%integ%energy()
   end function vci_get_energy
 
   !> int vci_get_index(vci_integrator integ, long *k): index of the current state (t = t0 + k h).
@@ -789,20 +786,22 @@ contains
       vci_get_index = fail(ip, VCI_ERR_ARGUMENT, 'vci_get_index: k is NULL'); return
     end if
     call c_f_pointer(k, kk)
-    kk = int(ip%integ%k, c_long)
+    kk = int(ip%integ%step_index(), c_long)
   end function vci_get_index
 
   !> int vci_get_stats(vci_integrator integ, long *steps, long *impacts, long *newton_iterations)
   integer(c_int) function vci_get_stats(integ, steps, impacts, newton_iterations) bind(C, name='vci_get_stats')
     type(c_ptr), value :: integ, steps, impacts, newton_iterations
     type(c_integrator_t), pointer :: ip
+    type(vci_stats_t) :: stats
     integer :: stat
     call get_integ(integ, 'vci_get_stats', ip, stat)
     vci_get_stats = stat
     if (stat /= VCI_OK) return
-    call put_long(steps, ip%integ%stats%steps)
-    call put_long(impacts, ip%integ%stats%impacts)
-    call put_long(newton_iterations, ip%integ%stats%newton_iterations)
+    stats = ip%integ%statistics()
+    call put_long(steps, stats%steps)
+    call put_long(impacts, stats%impacts)
+    call put_long(newton_iterations, stats%newton_iterations)
   contains
     subroutine put_long(p, v)
       type(c_ptr), intent(in) :: p
@@ -867,7 +866,7 @@ contains
       call move_alloc(w, ip%obs%output)
     end block
     ip%obs%started = .false.
-    ip%integ%status = VCI_OK; ip%integ%message = ''
+    call ip%integ%report_failure(VCI_OK, '')
     vci_open_output = VCI_OK
 #else
     vci_open_output = fail(ip, VCI_ERR_IO, 'vci_open_output: cannot write '//fpath// &
@@ -909,7 +908,7 @@ contains
       vci_last_error = VCI_ERR_ARGUMENT
     else
       call c_f_pointer(integ, ip)
-      msg = ip%integ%message
+      msg = ip%integ%message()
     end if
     call c_f_pointer(buffer, out, [size])
     nc = min(len_trim(msg), size - 1)

@@ -1,6 +1,8 @@
 !> An observer that writes a run as CSV: one row per state (step, t, q, p, lambda, E_d) in FILE and
 !> one row per impact in FILE.impacts.csv. Full precision (17 significant digits), so a run can be
-!> restarted or reversed from its last row. Replaced by the HDF5 observer when that is built.
+!> continued or reversed from its last row like init_from_momentum; it stores no checkpoint
+!> (keeps_checkpoints is false), so such a continuation is not bit for bit. Replaced by the HDF5
+!> observer when that is built.
 module vci_csv_output
   use vci_kinds, only: dp, i8
   use vci_status, only: VCI_OK, VCI_ERR_IO, VCI_MSG_LEN
@@ -20,11 +22,18 @@ module vci_csv_output
     procedure :: on_step => csv_step
     procedure :: on_impact => csv_impact
     procedure :: on_finish => csv_finish
+    procedure :: keeps_checkpoints => csv_keeps_checkpoints
   end type vci_csv_writer_t
 
   character(len=*), parameter :: realfmt = 'es25.17e3'
 
 contains
+
+  !> No: CSV holds the state, not the solver memory a bitwise restart needs (vci_checkpoint).
+  pure logical function csv_keeps_checkpoints(self)
+    class(vci_csv_writer_t), intent(in) :: self
+    csv_keeps_checkpoints = .false.
+  end function csv_keeps_checkpoints
 
   !> Open FILE (and FILE.impacts.csv) for writing; stat = VCI_ERR_IO with a message if impossible.
   subroutine csv_open(self, path, stat)

@@ -18,7 +18,8 @@ module vci_hdf5_output
   use vci_kinds, only: dp, i8
   use vci_status, only: VCI_OK, VCI_ERR_IO, VCI_MSG_LEN
   use vci_observer, only: vci_observer_t, vci_run_info_t, vci_impact_t
-  use vci_integrator, only: vci_integrator_t, vci_checkpoint_t
+  use vci_integrator, only: vci_integrator_t
+  use vci_checkpoint, only: vci_checkpoint_t, vci_checkpoint_from_state, VCI_CHECKPOINT_VERSION
   implicit none
   private
 
@@ -499,15 +500,13 @@ contains
     if (err /= 0) call fail(self, 'H5Fflush failed (disk full?)', stat)
   end subroutine flush_file
 
-  !> /checkpoint/record: the integrator's state and solver memory at the file's last row, as one
-  !> float64 vector [row, k, t0, h, energy, e_arrive, e_dir, q(n), p(n), vel(n), lambda(m)] written
-  !> in one piece, so a kill cannot leave half of it.
+  !> /checkpoint/record: the file's last row followed by the checkpoint's record (vci_checkpoint:
+  !> to_record), as one float64 vector written in one piece, so a kill cannot leave half of it.
   subroutine put_checkpoint(self, cp, stat)
     type(vci_hdf5_writer_t), intent(inout) :: self
     type(vci_checkpoint_t), intent(in) :: cp
     integer, intent(inout) :: stat
-    call put_vector(self, self%g_cp, 'record', [real(self%rows - 1, dp), real(cp%k, dp), cp%t0, cp%h, cp%energy, &
-                    cp%e_arrive, real(cp%e_dir, dp), cp%q, cp%p, cp%vel, cp%lambda], stat)
+    call put_vector(self, self%g_cp, 'record', [real(self%rows - 1, dp), cp%to_record()], stat)
   end subroutine put_checkpoint
 
   !> The state a restart from PATH starts with, as a checkpoint for `integ%restore`. With a
@@ -522,7 +521,7 @@ contains
     real(dp), intent(out), optional :: t_first
     integer, intent(out), optional :: direction
     type(vci_hdf5_writer_t) :: r   ! reuses the writer's helpers for reading
-    integer :: err, n
+    integer :: err, n, s
     logical :: ex, use_cp
     real(dp), allocatable :: rec(:)
     real(dp) :: buf(1)
@@ -553,33 +552,27 @@ contains
       allocate (rec(7 + 3 * n + r%m), row(n, 1))
       call get_vector(r, r%g_cp, 'record', rec, stat)
       if (stat == VCI_OK) use_cp = nint(rec(1), i8) == r%rows - 1
+      if (use_cp) call cp%from_record(rec(2:), n, r%m, VCI_CHECKPOINT_VERSION, s)
+      if (use_cp) use_cp = s == VCI_OK
       if (use_cp) call read_rows(r, r%d_q, n, r%rows - 1, row, stat)
-      if (use_cp .and. stat == VCI_OK) use_cp = all(row(:, 1) == rec(8:7 + n))
+      if (use_cp .and. stat == VCI_OK) use_cp = all(row(:, 1) == cp%q)
       if (use_cp) call read_rows(r, r%d_p, n, r%rows - 1, row, stat)
-      if (use_cp .and. stat == VCI_OK) use_cp = all(row(:, 1) == rec(8 + n:7 + 2 * n))
+      if (use_cp .and. stat == VCI_OK) use_cp = all(row(:, 1) == cp%p)
       deallocate (row)
       if (stat /= VCI_OK) then   ! an unreadable checkpoint: fall back to the last row
         stat = VCI_OK; use_cp = .false.
       end if
     end if
-    if (use_cp) then
-      cp%k = nint(rec(2), i8); cp%t0 = rec(3); cp%h = rec(4); cp%energy = rec(5); cp%e_arrive = rec(6)
-      cp%e_dir = nint(rec(7))
-      cp%q = rec(8:7 + n); cp%p = rec(8 + n:7 + 2 * n); cp%vel = rec(8 + 2 * n:7 + 3 * n)
-      cp%lambda = rec(8 + 3 * n:)
-    else if (stat == VCI_OK) then
-      allocate (cp%q(r%n), cp%p(r%n), cp%vel(r%n), cp%lambda(r%m), row(max(r%n, r%m, 1), 1))
+    if (.not. use_cp .and. stat == VCI_OK) then
+      allocate (row(max(r%n, r%m, 1), 3))
       call read_rows(r, r%d_t, 0, r%rows - 1, buf, stat)
-      cp%t0 = buf(1); cp%k = 0; cp%h = r%h
-      call read_rows(r, r%d_q, r%n, r%rows - 1, row(1:r%n, :), stat); cp%q = row(1:r%n, 1)
-      call read_rows(r, r%d_p, r%n, r%rows - 1, row(1:r%n, :), stat); cp%p = row(1:r%n, 1)
-      cp%lambda = 0.0_dp; cp%vel = 0.0_dp; cp%e_dir = 0
-      cp%e_arrive = ieee_value(1.0_dp, ieee_quiet_nan)
-      cp%energy = ieee_value(1.0_dp, ieee_quiet_nan)
+      call read_rows(r, r%d_q, r%n, r%rows - 1, row(1:r%n, 1:1), stat)
+      call read_rows(r, r%d_p, r%n, r%rows - 1, row(1:r%n, 2:2), stat)
+      row(1:r%m, 3) = 0.0_dp
+      if (r%steps > 0 .and. r%m > 0) call read_rows(r, r%d_l, r%m, r%steps - 1, row(1:r%m, 3:3), stat)
+      cp = vci_checkpoint_from_state(buf(1), r%h, row(1:r%n, 1), row(1:r%n, 2), row(1:r%m, 3))
       if (r%steps > 0) then
-        call read_rows(r, r%d_e, 0, r%steps - 1, buf, stat); cp%energy = buf(1)
-        if (r%m > 0) call read_rows(r, r%d_l, r%m, r%steps - 1, row(1:r%m, :), stat)
-        if (r%m > 0) cp%lambda = row(1:r%m, 1)
+        call read_rows(r, r%d_e, 0, r%steps - 1, buf, stat); cp%step_energy = buf(1)
       end if
     end if
     call w_close(r)

@@ -1,11 +1,13 @@
-!> The driver: state, time loop, statistics, error reporting and observers around the stepper.
+!> The driver: state, time grid, statistics, error reporting and observers around the stepper
+!> (docs/DESIGN.md §4). Its state is private and read through procedures.
 !>
 !> Usage: extend vci_model_t (a discrete L_d) or vci_lagrangian_t (a continuous L; then optionally
 !> `call integ%set_scheme(VCI_SCHEME_LOBATTO, s, stat)`); `call integ%create(model, h, stat)`;
 !> initialise from a pair or from (q0, p0); `call integ%integrate(nsteps, +1 or -1, stat, observer)`.
-!> On any failure the state
-!> stays at the last accepted step, `stat` says what went wrong and `integ%message` says where
-!> (step, time) and why. Nothing here stops or prints.
+!> Read the state with `time()`, `configuration()`, `momentum()`, `multipliers()`, `energy()`,
+!> the impacts of the last step with `impact_count()` and `impact(i)`, the counters with
+!> `statistics()`. On any failure the state stays at the last accepted step, `stat` says what went
+!> wrong and `message()` says where (step, time) and why. Nothing here stops or prints.
 module vci_integrator
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_value, ieee_quiet_nan
   use vci_kinds, only: dp, i8
@@ -13,57 +15,55 @@ module vci_integrator
   use vci_model_base, only: vci_model_base_t
   use vci_model, only: vci_model_t
   use vci_lagrangian, only: vci_lagrangian_t
-  use vci_stepper, only: vci_stepper_t, vci_settings_t
+  use vci_stepper, only: vci_stepper_t, vci_settings_t, vci_solver_stats_t
   use vci_scheme, only: vci_scheme_t, VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN, VCI_SCHEME_DISCRETE, &
                         VCI_SCHEME_LEFT, VCI_SCHEME_MIDPOINT, VCI_SCHEME_LOBATTO
   use vci_scheme_discrete, only: vci_scheme_discrete_t
   use vci_scheme_lobatto, only: vci_scheme_lobatto_t
   use vci_retraction, only: vci_retraction_model_t, RETRACTION_LEFT, RETRACTION_MIDPOINT
   use vci_lobatto_rule, only: VCI_LOBATTO_MAX_STAGES
-  use vci_observer, only: vci_observer_t, vci_run_info_t
+  use vci_checkpoint, only: vci_checkpoint_t
+  use vci_observer, only: vci_observer_t, vci_run_info_t, vci_impact_t
   implicit none
   private
   public :: VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN
   public :: VCI_SCHEME_DISCRETE, VCI_SCHEME_LEFT, VCI_SCHEME_MIDPOINT, VCI_SCHEME_LOBATTO, VCI_LOBATTO_MAX_STAGES
-  public :: vci_scheme_name
+  public :: vci_scheme_name, vci_settings_t
 
   !> Counters over the integrator's life.
   type, public :: vci_stats_t
     integer(i8) :: steps = 0, impacts = 0, newton_solves = 0, newton_iterations = 0, fallbacks = 0
   end type vci_stats_t
 
-  !> Everything needed to continue a run bit for bit: the state plus the solver's memory
-  !> (velocity used for initial guesses, energy of the arriving sub-step).
-  type, public :: vci_checkpoint_t
-    real(dp) :: t0 = 0.0_dp, h = 0.0_dp, energy = 0.0_dp, e_arrive = 0.0_dp
-    integer(i8) :: k = 0_i8
-    integer :: e_dir = 0
-    real(dp), allocatable :: q(:), p(:), lambda(:), vel(:)
-  end type vci_checkpoint_t
-
   type, public :: vci_integrator_t
+    private
     class(vci_model_base_t), pointer :: model => null()   !< the user's model (discrete or continuous)
-    integer :: scheme = VCI_SCHEME_DISCRETE    !< VCI_SCHEME_*; set_scheme chooses it for a continuous model
-    integer :: stages = 0                      !< s of the lobatto scheme
-    type(vci_stepper_t) :: stepper
-    type(vci_settings_t) :: settings
-    real(dp) :: h = 0.0_dp
-    real(dp) :: t = 0.0_dp                     !< time of the current state
-    integer(i8) :: k = 0_i8                    !< index of the current state (t = t0 + k h)
-    real(dp) :: t0 = 0.0_dp                    !< time of index 0, so t = t0 + k h without drift
-    real(dp), allocatable :: q(:), p(:), lambda(:)
-    real(dp) :: energy = 0.0_dp                !< E_d of the last step (of its last sub-step)
-    integer :: status = VCI_OK                 !< status of the last call
-    character(len=VCI_MSG_LEN) :: message = '' !< what went wrong in the last call, naming step and time
-    type(vci_stats_t) :: stats
+    class(vci_model_t), pointer :: discrete => null()       !< the user's L_d, or
+    class(vci_lagrangian_t), pointer :: lag => null()       !< the user's L
+    type(vci_retraction_model_t), pointer :: retraction => null()  !< owned: the left/midpoint L_d of lag
+    logical :: lag_hessians = .false., lag_energy = .false.  !< optional procedures lag supplies
+    integer :: scheme_id = VCI_SCHEME_DISCRETE  !< VCI_SCHEME_*; set_scheme chooses it for a continuous model
+    integer :: n_stages = 0                     !< s of the lobatto scheme
+    type(vci_stepper_t) :: stepper              !< holds the scheme and the one settings object
     logical :: created = .false., initialized = .false.
-    real(dp), allocatable, private :: vel(:), qn(:), pn(:), lambdan(:)
-    real(dp), private :: e_arrive = 0.0_dp
-    integer, private :: e_dir = 0              !< direction in which e_arrive is known (0: unknown)
-    class(vci_model_t), pointer, private :: discrete => null()        !< the user's L_d
-    class(vci_lagrangian_t), pointer, private :: lag => null()        !< the user's L
-    type(vci_retraction_model_t), pointer, private :: retraction => null()  !< owned: left/midpoint L_d
-    logical, private :: lag_hessians = .false., lag_energy = .false.
+    ! the state: t = t0 + k h without drift
+    real(dp) :: h = 0.0_dp
+    real(dp) :: t0 = 0.0_dp
+    integer(i8) :: k = 0_i8
+    real(dp), allocatable :: q(:), p(:), lambda(:)
+    real(dp) :: step_energy = 0.0_dp            !< E_d of the last step (of its last sub-step)
+    ! solver memory carried from step to step (part of a checkpoint)
+    real(dp), allocatable :: velocity(:)        !< forward-time velocity of the last sub-step: Newton's first guess
+    real(dp) :: arriving_energy = 0.0_dp        !< E_d of the sub-step that arrived at q
+    integer :: arriving_direction = 0           !< direction in which arriving_energy is known (0: unknown)
+    ! the step being taken, and what it found
+    real(dp), allocatable :: q_next(:), p_next(:), lambda_next(:)
+    type(vci_impact_t), allocatable :: impacts(:)   !< impacts of the last step, 1:n_impacts
+    integer :: n_impacts = 0
+    ! outcome
+    integer :: last_status = VCI_OK             !< status of the last call
+    character(len=VCI_MSG_LEN) :: last_message = ''  !< what went wrong in the last call, naming step and time
+    integer(i8) :: steps_taken = 0_i8, impacts_found = 0_i8
   contains
     procedure, private :: create_discrete, create_continuous
     generic :: create => create_discrete, create_continuous
@@ -78,6 +78,28 @@ module vci_integrator
     procedure :: run_info
     procedure :: checkpoint
     procedure :: restore
+    ! reading the state and the outcome
+    procedure :: time => current_time
+    procedure :: step_index
+    procedure :: step_length
+    procedure :: configuration
+    procedure :: momentum
+    procedure :: multipliers
+    procedure :: energy
+    procedure :: impact_count
+    procedure :: impact
+    procedure :: statistics
+    procedure :: status
+    procedure :: message
+    procedure :: settings
+    procedure :: scheme
+    procedure :: stages
+    procedure :: is_initialized
+    procedure :: n_coordinates
+    procedure :: n_constraints
+    ! for the boundary layers (C ABI, legacy entry), which detect failures of their own
+    procedure :: report_failure
+    procedure :: forget_state
   end type vci_integrator_t
 
 contains
@@ -92,7 +114,7 @@ contains
     if (stat /= VCI_OK) return
     self%discrete => model
     self%lag => null()
-    self%scheme = VCI_SCHEME_DISCRETE; self%stages = 0
+    self%scheme_id = VCI_SCHEME_DISCRETE; self%n_stages = 0
     call build_scheme(self, stat)
   end subroutine create_discrete
 
@@ -112,26 +134,30 @@ contains
     self%created = .false.
     self%discrete => null()
     self%lag => model
-    ! which procedures the model supplies: a default (or a C adapter without the callback) answers
-    ! VCI_NOT_PROVIDED whatever its arguments; the values at these probe points are discarded
+    ! which procedures the model supplies (the values at these probe points are discarded)
     allocate (q(model%n), v(model%n), hq(model%n, model%n), hv(model%n, model%n), hw(model%n, model%n), stat=ierr)
     if (ierr /= 0) then
-      self%message = 'create: out of memory'
+      self%last_message = 'create: out of memory'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
     q = 0.0_dp; v = 0.0_dp
     missing = ''
-    s = 0; call model%lagrangian(q, v, e, s); if (s == VCI_NOT_PROVIDED) missing = 'lagrangian'
-    s = 0; call model%dl_dq(q, v, hq(:, 1), s); if (s == VCI_NOT_PROVIDED) missing = 'dl_dq'
-    s = 0; call model%dl_dv(q, v, hq(:, 1), s); if (s == VCI_NOT_PROVIDED) missing = 'dl_dv'
+    call model%clear_not_provided(); s = 0; call model%lagrangian(q, v, e, s)
+    if (model%answered_not_provided()) missing = 'lagrangian'
+    call model%clear_not_provided(); s = 0; call model%dl_dq(q, v, hq(:, 1), s)
+    if (model%answered_not_provided()) missing = 'dl_dq'
+    call model%clear_not_provided(); s = 0; call model%dl_dv(q, v, hq(:, 1), s)
+    if (model%answered_not_provided()) missing = 'dl_dv'
     if (missing /= '') then
-      self%message = 'create: the continuous model does not supply '//trim(missing)// &
+      self%last_message = 'create: the continuous model does not supply '//trim(missing)// &
                      ' (L, dL/dq and dL/dqdot are required)'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
-    s = 0; call model%hessians(q, v, hq, hv, hw, s); self%lag_hessians = (s /= VCI_NOT_PROVIDED)
-    s = 0; call model%energy(q, v, e, s); self%lag_energy = (s /= VCI_NOT_PROVIDED)
-    self%scheme = VCI_SCHEME_MIDPOINT; self%stages = 1
+    call model%clear_not_provided(); s = 0; call model%hessians(q, v, hq, hv, hw, s)
+    self%lag_hessians = .not. model%answered_not_provided()
+    call model%clear_not_provided(); s = 0; call model%energy(q, v, e, s)
+    self%lag_energy = .not. model%answered_not_provided()
+    self%scheme_id = VCI_SCHEME_MIDPOINT; self%n_stages = 1
     call build_scheme(self, stat)
   end subroutine create_continuous
 
@@ -142,22 +168,23 @@ contains
     real(dp), intent(in) :: h
     integer, intent(out) :: stat
     self%created = .false.; self%initialized = .false.
-    self%stats = vci_stats_t()
+    self%steps_taken = 0_i8; self%impacts_found = 0_i8; self%n_impacts = 0
     if (model%n < 1 .or. model%m < 0 .or. model%m > model%n .or. model%n_gaps < 0) then
-      write (self%message, '(a,3(i0,a))') 'create: model sizes invalid (n = ', model%n, ', m = ', model%m, &
+      write (self%last_message, '(a,3(i0,a))') 'create: model sizes invalid (n = ', model%n, ', m = ', model%m, &
         ', n_gaps = ', model%n_gaps, '; need n >= 1, 0 <= m <= n, n_gaps >= 0)'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
     if (.not. (ieee_is_finite(h) .and. h > 0.0_dp)) then
-      write (self%message, '(a,es12.4,a)') 'create: step length h = ', h, ' must be positive and finite'
+      write (self%last_message, '(a,es12.4,a)') 'create: step length h = ', h, ' must be positive and finite'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
     self%model => model
     self%h = h
-    if (allocated(self%q)) deallocate (self%q, self%p, self%lambda, self%vel, self%qn, self%pn, self%lambdan)
-    allocate (self%q(model%n), self%p(model%n), self%lambda(model%m), self%vel(model%n), &
-              self%qn(model%n), self%pn(model%n), self%lambdan(model%m))
-    self%lambda = 0.0_dp; self%q = 0.0_dp; self%p = 0.0_dp; self%vel = 0.0_dp
+    if (allocated(self%q)) deallocate (self%q, self%p, self%lambda, self%velocity, self%q_next, self%p_next, &
+                                       self%lambda_next)
+    allocate (self%q(model%n), self%p(model%n), self%lambda(model%m), self%velocity(model%n), &
+              self%q_next(model%n), self%p_next(model%n), self%lambda_next(model%m))
+    self%lambda = 0.0_dp; self%q = 0.0_dp; self%p = 0.0_dp; self%velocity = 0.0_dp
     stat = VCI_OK
   end subroutine bind_sizes
 
@@ -167,8 +194,9 @@ contains
     integer, intent(out) :: stat
     class(vci_scheme_t), allocatable :: sch
     integer :: rule
+    type(vci_settings_t) :: settings
     stat = VCI_OK
-    select case (self%scheme)
+    select case (self%scheme_id)
     case (VCI_SCHEME_DISCRETE)
       allocate (vci_scheme_discrete_t :: sch)
       select type (sch)
@@ -176,7 +204,7 @@ contains
         call sch%setup(self%discrete)
       end select
     case (VCI_SCHEME_LEFT, VCI_SCHEME_MIDPOINT)
-      rule = merge(RETRACTION_LEFT, RETRACTION_MIDPOINT, self%scheme == VCI_SCHEME_LEFT)
+      rule = merge(RETRACTION_LEFT, RETRACTION_MIDPOINT, self%scheme_id == VCI_SCHEME_LEFT)
       if (.not. associated(self%retraction)) allocate (self%retraction)
       call self%retraction%bind(self%lag, rule, self%lag_hessians, self%lag_energy)
       allocate (vci_scheme_discrete_t :: sch)
@@ -189,17 +217,19 @@ contains
       allocate (vci_scheme_lobatto_t :: sch)
       select type (sch)
       type is (vci_scheme_lobatto_t)
-        call sch%setup(self%lag, self%stages, self%lag_hessians, self%lag_energy, stat)
+        call sch%setup(self%lag, self%n_stages, self%lag_hessians, self%lag_energy, stat)
       end select
     end select
     if (stat /= VCI_OK) then
-      write (self%message, '(a,i0,a)') 'create: could not set up the lobatto scheme with s = ', self%stages, ''
+      write (self%last_message, '(a,i0,a)') 'create: could not set up the lobatto scheme with s = ', self%n_stages, ''
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
-    call self%stepper%setup(sch, self%settings)
+    call self%stepper%setup(sch)
+    settings = self%stepper%current_settings()
+    call reserve_impacts(self, settings%max_impacts_per_step)
     self%created = .true.
     self%initialized = .false.
-    self%message = ''
+    self%last_message = ''
     call finish(self, VCI_OK, stat)
   end subroutine build_scheme
 
@@ -212,11 +242,11 @@ contains
     integer, intent(in) :: scheme, stages
     integer, intent(out) :: stat
     if (.not. self%created) then
-      self%message = 'set_scheme: create the integrator first'
+      self%last_message = 'set_scheme: create the integrator first'
       call finish(self, VCI_ERR_STATE, stat); return
     end if
     if (.not. associated(self%lag)) then
-      self%message = 'set_scheme: the model is a discrete Lagrangian (vci_model_t); schemes discretise '// &
+      self%last_message = 'set_scheme: the model is a discrete Lagrangian (vci_model_t); schemes discretise '// &
                      'a continuous one (vci_lagrangian_t)'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
@@ -224,25 +254,23 @@ contains
     case (VCI_SCHEME_LEFT, VCI_SCHEME_MIDPOINT)
     case (VCI_SCHEME_LOBATTO)
       if (stages < 1 .or. stages > VCI_LOBATTO_MAX_STAGES) then
-        write (self%message, '(a,i0,a,i0,a)') 'set_scheme: lobatto with s = ', stages, ' stages (need 1 <= s <= ', &
+        write (self%last_message, '(a,i0,a,i0,a)') 'set_scheme: lobatto with s = ', stages, ' stages (need 1 <= s <= ', &
           VCI_LOBATTO_MAX_STAGES, ')'
         call finish(self, VCI_ERR_ARGUMENT, stat); return
       end if
       if (self%model%m > 0) then
-        write (self%message, '(a,i0,a)') 'set_scheme: lobatto does not support nonholonomic constraints (m = ', &
+        write (self%last_message, '(a,i0,a)') 'set_scheme: lobatto does not support nonholonomic constraints (m = ', &
           self%model%m, '); use left or midpoint'
         call finish(self, VCI_ERR_ARGUMENT, stat); return
       end if
     case default
-      write (self%message, '(a,i0,a)') 'set_scheme: unknown scheme ', scheme, &
+      write (self%last_message, '(a,i0,a)') 'set_scheme: unknown scheme ', scheme, &
         ' (1 = left, 2 = midpoint, 3 = lobatto)'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end select
-    self%scheme = scheme
-    self%stages = merge(stages, 1, scheme == VCI_SCHEME_LOBATTO)
+    self%scheme_id = scheme
+    self%n_stages = merge(stages, 1, scheme == VCI_SCHEME_LOBATTO)
     call build_scheme(self, stat)
-    if (stat /= VCI_OK) return
-    if (self%settings%impact_energy /= VCI_IMPACT_DISCRETE) self%stepper%settings = self%settings
   end subroutine set_scheme
 
   !> A short name of a scheme identifier ('left', 'midpoint', 'lobatto', 'discrete').
@@ -264,14 +292,16 @@ contains
     real(dp), intent(in) :: atol, rtol
     integer, intent(in) :: max_iterations
     integer, intent(out) :: stat
+    type(vci_settings_t) :: settings
     if (.not. (ieee_is_finite(atol) .and. atol >= 0.0_dp .and. ieee_is_finite(rtol) .and. rtol >= 0.0_dp &
                .and. atol + rtol > 0.0_dp .and. max_iterations >= 1)) then
-      write (self%message, '(a,es10.3,a,es10.3,a,i0,a)') 'set_tolerances: atol = ', atol, ', rtol = ', rtol, &
+      write (self%last_message, '(a,es10.3,a,es10.3,a,i0,a)') 'set_tolerances: atol = ', atol, ', rtol = ', rtol, &
         ', max_iterations = ', max_iterations, ' (need atol, rtol >= 0, not both 0, max_iterations >= 1)'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
-    self%settings%atol = atol; self%settings%rtol = rtol; self%settings%max_iterations = max_iterations
-    self%stepper%settings = self%settings
+    settings = self%stepper%current_settings()
+    settings%atol = atol; settings%rtol = rtol; settings%max_iterations = max_iterations
+    call self%stepper%configure(settings)
     call finish(self, VCI_OK, stat)
   end subroutine set_tolerances
 
@@ -283,29 +313,32 @@ contains
     integer, intent(out) :: stat
     real(dp) :: e
     integer :: s
+    type(vci_settings_t) :: settings
     if (mode /= VCI_IMPACT_DISCRETE .and. mode /= VCI_IMPACT_HAMILTONIAN) then
-      write (self%message, '(a,i0,a)') 'set_impact_energy: unknown mode ', mode, &
+      write (self%last_message, '(a,i0,a)') 'set_impact_energy: unknown mode ', mode, &
         ' (0 = discrete, 1 = hamiltonian)'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
     if (mode == VCI_IMPACT_HAMILTONIAN) then
       if (.not. self%created) then
-        self%message = 'set_impact_energy: create the integrator first'
+        self%last_message = 'set_impact_energy: create the integrator first'
         call finish(self, VCI_ERR_STATE, stat); return
       end if
-      ! probe: the default energy answers VCI_NOT_PROVIDED whatever its arguments (q, p are zero
-      ! before initialisation)
-      s = 0
       ! a continuous model always has H: the Legendre inversion of dL/dqdot when it supplies none
-      if (.not. associated(self%lag)) call self%model%energy(self%q, self%p, e, s)
-      if (s == VCI_NOT_PROVIDED) then
-        self%message = 'set_impact_energy: the hamiltonian condition needs the model''s energy(q, p), '// &
+      ! (the probe's values are discarded; q, p are zero before initialisation)
+      if (.not. associated(self%lag)) then
+        call self%model%clear_not_provided(); s = 0
+        call self%model%energy(self%q, self%p, e, s)
+      end if
+      if (.not. associated(self%lag) .and. self%model%answered_not_provided()) then
+        self%last_message = 'set_impact_energy: the hamiltonian condition needs the model''s energy(q, p), '// &
                        'which this model does not supply'
         call finish(self, VCI_ERR_ARGUMENT, stat); return
       end if
     end if
-    self%settings%impact_energy = mode
-    self%stepper%settings = self%settings
+    settings = self%stepper%current_settings()
+    settings%impact_energy = mode
+    call self%stepper%configure(settings)
     call finish(self, VCI_OK, stat)
   end subroutine set_impact_energy
 
@@ -314,13 +347,15 @@ contains
     class(vci_integrator_t), intent(inout) :: self
     integer, intent(in) :: max_impacts
     integer, intent(out) :: stat
+    type(vci_settings_t) :: settings
     if (max_impacts < 1) then
-      write (self%message, '(a,i0,a)') 'set_max_impacts: ', max_impacts, ' (need >= 1)'
+      write (self%last_message, '(a,i0,a)') 'set_max_impacts: ', max_impacts, ' (need >= 1)'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
-    self%settings%max_impacts_per_step = max_impacts
-    if (self%created) call self%stepper%reserve_impacts(max_impacts)
-    self%stepper%settings = self%settings
+    settings = self%stepper%current_settings()
+    settings%max_impacts_per_step = max_impacts
+    call self%stepper%configure(settings)
+    if (self%created) call reserve_impacts(self, max_impacts)
     call finish(self, VCI_OK, stat)
   end subroutine set_max_impacts
 
@@ -332,21 +367,16 @@ contains
     integer, intent(out) :: stat
     call check_init(self, 'init_from_pair', t0, q0, q1, stat, q1)
     if (stat /= VCI_OK) return
-    call self%stepper%pair_momentum(q0, q1, self%h, self%p, self%energy, stat)
+    call self%stepper%pair_momentum(q0, q1, self%h, self%p, self%step_energy, stat)
     if (stat /= VCI_OK) then
-      if (self%stepper%sys%needs_pair_solve()) then
-        self%message = 'init_from_pair: '//trim(self%stepper%cause)
-      else
-        self%message = 'init_from_pair: callback '//trim(self%stepper%sys%failed_callback)// &
-                       ' failed or returned NaN/Inf at the initial pair'
-      end if
-      call finish(self, failure_of(stat), stat); return
+      self%last_message = 'init_from_pair: '//self%stepper%failure_cause()
+      call keep_failure(self, stat); return
     end if
-    self%t0 = t0; self%k = 1_i8; self%t = t0 + self%h
+    self%t0 = t0; self%k = 1_i8
     self%q = q1
     self%lambda = 0.0_dp
-    self%vel = (q1 - q0) / self%h
-    self%e_arrive = self%energy; self%e_dir = 1
+    self%velocity = (q1 - q0) / self%h
+    self%arriving_energy = self%step_energy; self%arriving_direction = 1
     self%initialized = .true.
     call finish(self, VCI_OK, stat)
   end subroutine init_from_pair
@@ -358,12 +388,12 @@ contains
     integer, intent(out) :: stat
     call check_init(self, 'init_from_momentum', t0, q0, p0, stat)
     if (stat /= VCI_OK) return
-    self%t0 = t0; self%t = t0; self%k = 0_i8
+    self%t0 = t0; self%k = 0_i8
     self%q = q0; self%p = p0
     self%lambda = 0.0_dp
-    self%vel = 0.0_dp
-    self%energy = ieee_value(1.0_dp, ieee_quiet_nan)
-    self%e_dir = 0
+    self%velocity = 0.0_dp
+    self%step_energy = ieee_value(1.0_dp, ieee_quiet_nan)
+    self%arriving_direction = 0
     self%initialized = .true.
     call finish(self, VCI_OK, stat)
   end subroutine init_from_momentum
@@ -379,132 +409,129 @@ contains
     real(dp), allocatable :: g(:), omega(:, :), hess(:, :), w(:), dg(:, :), w2(:)
     self%initialized = .false.
     if (.not. self%created) then
-      self%message = who//': create the integrator first'
+      self%last_message = who//': create the integrator first'
       call finish(self, VCI_ERR_STATE, stat); return
     end if
     n = self%model%n
     if (size(q0) /= n .or. size(v0) /= n) then
-      write (self%message, '(a,3(i0,a))') who//': arrays of size ', size(q0), ' and ', size(v0), &
+      write (self%last_message, '(a,3(i0,a))') who//': arrays of size ', size(q0), ' and ', size(v0), &
         ' given, model has n = ', n, ''
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
     if (.not. (ieee_is_finite(t0) .and. all(ieee_is_finite(q0)) .and. all(ieee_is_finite(v0)))) then
-      self%message = who//': initial data contain NaN or Inf'
+      self%last_message = who//': initial data contain NaN or Inf'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
-    ! optional procedures: the defaults answer VCI_NOT_PROVIDED
+    ! optional procedures: each is probed once (vci_model_base: not_provided)
     allocate (hess(n, n), omega(n, max(1, self%model%m)), g(self%model%n_gaps), w(self%model%m), &
               dg(n, self%model%n_gaps), w2(self%model%n_gaps))
     if (associated(self%discrete)) then
-      s = 0
+      call self%model%clear_not_provided(); s = 0
       call self%discrete%mixed_hessian(q0, v0, self%h, hess, s)
-      select type (sch => self%stepper%sys)
-      type is (vci_scheme_discrete_t)
-        sch%has_hessian = (s /= VCI_NOT_PROVIDED)
-      end select
+      call self%stepper%use_model_derivatives(mixed_hessian=.not. self%model%answered_not_provided())
     end if
     if (self%model%m > 0) then
-      s = 0
+      call self%model%clear_not_provided(); s = 0
       call self%model%constraint_forms(q0, omega(:, 1:self%model%m), s)
-      if (s == VCI_NOT_PROVIDED) then
-        write (self%message, '(a,i0,a)') who//': the model has m = ', self%model%m, &
+      if (self%model%answered_not_provided()) then
+        write (self%last_message, '(a,i0,a)') who//': the model has m = ', self%model%m, &
           ' constraints but does not supply constraint_forms'
         call finish(self, VCI_ERR_ARGUMENT, stat); return
       end if
-      s = 0
+      call self%model%clear_not_provided(); s = 0
       if (associated(self%discrete)) call self%discrete%discrete_constraint(q0, q0, self%h, w, s)
-      if (s == VCI_NOT_PROVIDED) then
-        write (self%message, '(a,i0,a)') who//': the model has m = ', self%model%m, &
+      if (self%model%answered_not_provided()) then
+        write (self%last_message, '(a,i0,a)') who//': the model has m = ', self%model%m, &
           ' constraints but does not supply discrete_constraint'
         call finish(self, VCI_ERR_ARGUMENT, stat); return
       end if
     end if
     if (self%model%n_gaps > 0) then
-      s = 0
+      call self%model%clear_not_provided(); s = 0
       call self%model%gaps(q0, g, s)
-      if (s == VCI_NOT_PROVIDED) then
-        write (self%message, '(a,i0,a)') who//': the model has n_gaps = ', self%model%n_gaps, &
+      if (self%model%answered_not_provided()) then
+        write (self%last_message, '(a,i0,a)') who//': the model has n_gaps = ', self%model%n_gaps, &
           ' walls but does not supply gaps'
         call finish(self, VCI_ERR_ARGUMENT, stat); return
       end if
       if (s /= 0 .or. .not. all(ieee_is_finite(g))) then
-        self%message = who//': callback gaps failed or returned NaN/Inf at the initial configuration'
+        self%last_message = who//': callback gaps failed or returned NaN/Inf at the initial configuration'
         call finish(self, VCI_ERR_CALLBACK, stat); return
       end if
       if (present(q1)) then
         s = 0
         call self%model%gaps(q1, w2, s)
         if (s /= 0 .or. .not. all(ieee_is_finite(w2))) then
-          self%message = who//': callback gaps failed or returned NaN/Inf at the second configuration'
+          self%last_message = who//': callback gaps failed or returned NaN/Inf at the second configuration'
           call finish(self, VCI_ERR_CALLBACK, stat); return
         end if
         g = min(g, w2)
       end if
       do j = 1, self%model%n_gaps
         if (g(j) < 0.0_dp) then
-          write (self%message, '(a,i0,a,es12.4,a)') who//': initial configuration outside the admissible set (g_', &
+          write (self%last_message, '(a,i0,a,es12.4,a)') who//': initial configuration outside the admissible set (g_', &
             j, ' = ', g(j), ' < 0)'
           call finish(self, VCI_ERR_INADMISSIBLE, stat); return
         end if
       end do
-      s = 0
+      call self%model%clear_not_provided(); s = 0
       call self%model%gap_gradients(q0, dg, s)
-      self%stepper%sys%has_gap_gradients = (s /= VCI_NOT_PROVIDED)
+      call self%stepper%use_model_derivatives(gap_gradients=.not. self%model%answered_not_provided())
     end if
     stat = VCI_OK
   end subroutine check_init
 
-  !> One step in direction +1 (forward, (+) scheme) or -1 (backward, (-) scheme). Impacts of the
-  !> step are in self%stepper%impacts(1:self%stepper%n_impacts) afterwards.
+  !> One step in direction +1 (forward, (+) scheme) or -1 (backward, (-) scheme). The impacts of
+  !> the step are `impact(1)` .. `impact(impact_count())` afterwards.
   subroutine step(self, direction, stat, observer)
     class(vci_integrator_t), intent(inout) :: self
     integer, intent(in) :: direction
     integer, intent(out) :: stat
     class(vci_observer_t), intent(inout), optional :: observer
     integer :: i, ostat
+    real(dp) :: t
     character(len=16) :: dname
     if (.not. self%initialized) then
-      self%message = 'step: initialise the integrator first (init_from_pair or init_from_momentum)'
+      self%last_message = 'step: initialise the integrator first (init_from_pair or init_from_momentum)'
       call finish(self, VCI_ERR_STATE, stat); return
     end if
     if (direction /= 1 .and. direction /= -1) then
-      write (self%message, '(a,i0,a)') 'step: direction ', direction, ' (need +1 or -1)'
+      write (self%last_message, '(a,i0,a)') 'step: direction ', direction, ' (need +1 or -1)'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
-    if (self%e_dir /= direction) self%e_arrive = ieee_value(1.0_dp, ieee_quiet_nan)
-    call self%stepper%advance(direction, self%h, self%t, self%q, self%p, self%lambda, self%vel, &
-                              self%e_arrive, self%qn, self%pn, self%lambdan, self%energy, stat)
-    self%stats%newton_solves = self%stepper%stats%newton_solves
-    self%stats%newton_iterations = self%stepper%stats%newton_iterations
-    self%stats%fallbacks = self%stepper%stats%fallbacks
+    t = self%time()
+    if (self%arriving_direction /= direction) self%arriving_energy = ieee_value(1.0_dp, ieee_quiet_nan)
+    call self%stepper%advance(direction, self%h, t, self%q, self%p, self%lambda, self%velocity, &
+                              self%arriving_energy, self%q_next, self%p_next, self%lambda_next, self%step_energy, &
+                              self%impacts, self%n_impacts, stat)
     if (stat /= VCI_OK) then
       dname = 'forward'
       if (direction < 0) dname = 'backward'
-      write (self%message, '(a,i0,a,es14.7,a)') 'step from index ', self%k, ' (t = ', self%t, ', '// &
-        trim(dname)//'): '//trim(self%stepper%cause)
-      self%e_dir = 0
-      call finish(self, failure_of(stat), stat); return
+      write (self%last_message, '(a,i0,a,es14.7,a)') 'step from index ', self%k, ' (t = ', t, ', '// &
+        trim(dname)//'): '//self%stepper%failure_cause()
+      self%arriving_direction = 0
+      call keep_failure(self, stat); return
     end if
-    self%e_dir = direction
-    do i = 1, self%stepper%n_impacts
-      self%stepper%impacts(i)%step = self%k
+    self%arriving_direction = direction
+    do i = 1, self%n_impacts
+      self%impacts(i)%step = self%k
     end do
-    self%q = self%qn; self%p = self%pn
-    if (self%model%m > 0) self%lambda = self%lambdan
+    self%q = self%q_next; self%p = self%p_next
+    if (self%model%m > 0) self%lambda = self%lambda_next
     self%k = self%k + direction
-    self%t = self%t0 + real(self%k, dp) * self%h
-    self%stats%steps = self%stats%steps + 1
-    self%stats%impacts = self%stats%impacts + self%stepper%n_impacts
+    t = self%time()
+    self%steps_taken = self%steps_taken + 1
+    self%impacts_found = self%impacts_found + self%n_impacts
     stat = VCI_OK
     if (present(observer)) then
       ostat = 0
-      do i = 1, self%stepper%n_impacts
-        call observer%on_impact(self%stepper%impacts(i), ostat)
+      do i = 1, self%n_impacts
+        call observer%on_impact(self%impacts(i), ostat)
       end do
-      if (ostat == 0) call observer%on_step(self%k, self%t, self%q, self%p, self%lambda, self%energy, ostat)
+      if (ostat == 0) call observer%on_step(self%k, t, self%q, self%p, self%lambda, self%step_energy, ostat)
       if (ostat /= 0) then
-        write (self%message, '(a,i0,a,es14.7,a)') 'observer failed after step to index ', self%k, &
-          ' (t = ', self%t, ')'
+        write (self%last_message, '(a,i0,a,es14.7,a)') 'observer failed after step to index ', self%k, &
+          ' (t = ', t, ')'
         call finish(self, VCI_ERR_IO, stat); return
       end if
     end if
@@ -522,22 +549,22 @@ contains
     integer(i8) :: i
     integer :: ostat
     if (nsteps < 0) then
-      write (self%message, '(a,i0,a)') 'integrate: nsteps = ', nsteps, ' (need >= 0)'
+      write (self%last_message, '(a,i0,a)') 'integrate: nsteps = ', nsteps, ' (need >= 0)'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
     if (.not. self%initialized) then
-      self%message = 'integrate: initialise the integrator first (init_from_pair or init_from_momentum)'
+      self%last_message = 'integrate: initialise the integrator first (init_from_pair or init_from_momentum)'
       call finish(self, VCI_ERR_STATE, stat); return
     end if
     if (direction /= 1 .and. direction /= -1) then
-      write (self%message, '(a,i0,a)') 'integrate: direction ', direction, ' (need +1 or -1)'
+      write (self%last_message, '(a,i0,a)') 'integrate: direction ', direction, ' (need +1 or -1)'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
     if (present(observer)) then
       ostat = 0
       call observer%on_start(self%run_info(direction), self%q, self%p, ostat)
       if (ostat /= 0) then
-        self%message = 'integrate: observer failed at the start of the run'
+        self%last_message = 'integrate: observer failed at the start of the run'
         call finish(self, VCI_ERR_IO, stat); return
       end if
     end if
@@ -548,22 +575,26 @@ contains
     end do
     if (present(observer)) then
       ostat = 0
-      call observer%on_finish(stat, trim(self%message), ostat)
+      call observer%on_finish(stat, trim(self%last_message), ostat)
       if (ostat /= 0 .and. stat == VCI_OK) then
-        self%message = 'integrate: observer failed at the end of the run'
+        self%last_message = 'integrate: observer failed at the end of the run'
         call finish(self, VCI_ERR_IO, stat); return
       end if
     end if
-    self%status = stat
+    self%last_status = stat
   end subroutine integrate
 
   !> The current state and solver memory, for restarts that continue bit for bit.
   function checkpoint(self) result(cp)
     class(vci_integrator_t), intent(in) :: self
     type(vci_checkpoint_t) :: cp
-    cp%t0 = self%t0; cp%h = self%h; cp%energy = self%energy; cp%e_arrive = self%e_arrive
-    cp%k = self%k; cp%e_dir = self%e_dir
-    cp%q = self%q; cp%p = self%p; cp%lambda = self%lambda; cp%vel = self%vel
+    cp%t0 = self%t0; cp%h = self%h; cp%step = self%k
+    allocate (cp%q, source=self%q)
+    allocate (cp%p, source=self%p)
+    allocate (cp%lambda, source=self%lambda)
+    allocate (cp%velocity, source=self%velocity)
+    cp%step_energy = self%step_energy
+    cp%arriving_energy = self%arriving_energy; cp%arriving_direction = self%arriving_direction
   end function checkpoint
 
   !> Continue from a checkpoint taken with the same model and step length.
@@ -572,23 +603,23 @@ contains
     type(vci_checkpoint_t), intent(in) :: cp
     integer, intent(out) :: stat
     if (.not. self%created) then
-      self%message = 'restore: create the integrator first'
+      self%last_message = 'restore: create the integrator first'
       call finish(self, VCI_ERR_STATE, stat); return
     end if
-    if (.not. allocated(cp%q)) then
-      self%message = 'restore: empty checkpoint'
+    if (.not. (allocated(cp%q) .and. allocated(cp%p) .and. allocated(cp%lambda) .and. allocated(cp%velocity))) then
+      self%last_message = 'restore: empty checkpoint'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
     if (size(cp%q) /= self%model%n .or. size(cp%lambda) /= self%model%m .or. cp%h /= self%h) then
-      self%message = 'restore: checkpoint does not match this model or step length'
+      self%last_message = 'restore: checkpoint does not match this model or step length'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
     call check_init(self, 'restore', cp%t0, cp%q, cp%p, stat)
     if (stat /= VCI_OK) return
-    self%t0 = cp%t0; self%energy = cp%energy; self%e_arrive = cp%e_arrive
-    self%k = cp%k; self%e_dir = cp%e_dir
-    self%q = cp%q; self%p = cp%p; self%lambda = cp%lambda; self%vel = cp%vel
-    self%t = self%t0 + real(self%k, dp) * self%h
+    self%t0 = cp%t0; self%k = cp%step
+    self%q = cp%q; self%p = cp%p; self%lambda = cp%lambda; self%velocity = cp%velocity
+    self%step_energy = cp%step_energy
+    self%arriving_energy = cp%arriving_energy; self%arriving_direction = cp%arriving_direction
     self%initialized = .true.
     call finish(self, VCI_OK, stat)
   end subroutine restore
@@ -598,22 +629,181 @@ contains
     class(vci_integrator_t), intent(in) :: self
     integer, intent(in) :: direction
     type(vci_run_info_t) :: info
+    type(vci_settings_t) :: settings
+    settings = self%stepper%current_settings()
     info%n = self%model%n; info%m = self%model%m; info%n_gaps = self%model%n_gaps
-    info%direction = direction; info%h = self%h; info%t0 = self%t; info%step0 = self%k
-    info%impact_energy = self%settings%impact_energy
+    info%direction = direction; info%h = self%h; info%t0 = self%time(); info%step0 = self%k
+    info%impact_energy = settings%impact_energy
   end function run_info
 
-  pure integer function failure_of(stat)
+  !> Room for the impact records of one step (the bound on impacts per step).
+  subroutine reserve_impacts(self, max_impacts)
+    class(vci_integrator_t), intent(inout) :: self
+    integer, intent(in) :: max_impacts
+    integer :: i, n
+    n = self%model%n
+    if (allocated(self%impacts)) deallocate (self%impacts)
+    allocate (self%impacts(max(1, max_impacts)))
+    do i = 1, size(self%impacts)
+      allocate (self%impacts(i)%q(n), self%impacts(i)%p_before(n), self%impacts(i)%p_after(n), &
+                self%impacts(i)%grad_g(n))
+    end do
+    self%n_impacts = 0
+  end subroutine reserve_impacts
+
+  !> A failure detected by a boundary layer on a call into this integrator (a NULL array, a
+  !> callback's return code): it becomes the status and message read back by status()/message().
+  subroutine report_failure(self, status, message)
+    class(vci_integrator_t), intent(inout) :: self
+    integer, intent(in) :: status
+    character(len=*), intent(in) :: message
+    self%last_status = status
+    self%last_message = message
+  end subroutine report_failure
+
+  !> The state is no longer valid (an initialisation that failed before reaching this integrator).
+  subroutine forget_state(self)
+    class(vci_integrator_t), intent(inout) :: self
+    self%initialized = .false.
+  end subroutine forget_state
+
+  ! ---------------------------------------------------------------------------------------------
+  ! Reading the state and the outcome
+
+  !> Sizes of the bound model: n (configuration) and m (constraints); 0 before create.
+  pure integer function n_coordinates(self)
+    class(vci_integrator_t), intent(in) :: self
+    n_coordinates = 0
+    if (associated(self%model)) n_coordinates = self%model%n
+  end function n_coordinates
+
+  pure integer function n_constraints(self)
+    class(vci_integrator_t), intent(in) :: self
+    n_constraints = 0
+    if (associated(self%model)) n_constraints = self%model%m
+  end function n_constraints
+
+  !> Time of the current state, t0 + k h.
+  pure real(dp) function current_time(self)
+    class(vci_integrator_t), intent(in) :: self
+    current_time = self%t0 + real(self%k, dp) * self%h
+  end function current_time
+
+  !> Index k of the current state.
+  pure integer(i8) function step_index(self)
+    class(vci_integrator_t), intent(in) :: self
+    step_index = self%k
+  end function step_index
+
+  pure real(dp) function step_length(self)
+    class(vci_integrator_t), intent(in) :: self
+    step_length = self%h
+  end function step_length
+
+  !> q of the current state (size n).
+  pure function configuration(self) result(q)
+    class(vci_integrator_t), intent(in) :: self
+    real(dp), allocatable :: q(:)
+    q = self%q
+  end function configuration
+
+  !> p of the current state (size n).
+  pure function momentum(self) result(p)
+    class(vci_integrator_t), intent(in) :: self
+    real(dp), allocatable :: p(:)
+    p = self%p
+  end function momentum
+
+  !> The multipliers lambda of the last step (size m).
+  pure function multipliers(self) result(lambda)
+    class(vci_integrator_t), intent(in) :: self
+    real(dp), allocatable :: lambda(:)
+    lambda = self%lambda
+  end function multipliers
+
+  !> E_d of the last step (of its last sub-step when it had impacts); NaN before the first step
+  !> from (q, p).
+  pure real(dp) function energy(self)
+    class(vci_integrator_t), intent(in) :: self
+    energy = self%step_energy
+  end function energy
+
+  !> Number of impacts of the last step.
+  pure integer function impact_count(self)
+    class(vci_integrator_t), intent(in) :: self
+    impact_count = self%n_impacts
+  end function impact_count
+
+  !> Impact i (1 .. impact_count()) of the last step. Assign the result (`imp = integ%impact(i)`):
+  !> `associate (imp => integ%impact(i))` crashed in free() with gfortran 12 (test/stability, seen once).
+  function impact(self, i) result(imp)
+    class(vci_integrator_t), intent(in) :: self
+    integer, intent(in) :: i
+    type(vci_impact_t) :: imp
+    if (i >= 1 .and. i <= self%n_impacts) imp = self%impacts(i)
+  end function impact
+
+  !> Counters over the integrator's life (since create).
+  pure function statistics(self) result(stats)
+    class(vci_integrator_t), intent(in) :: self
+    type(vci_stats_t) :: stats
+    type(vci_solver_stats_t) :: solver
+    solver = self%stepper%solver_stats()
+    stats%steps = self%steps_taken; stats%impacts = self%impacts_found
+    stats%newton_solves = solver%newton_solves; stats%newton_iterations = solver%newton_iterations
+    stats%fallbacks = solver%fallbacks
+  end function statistics
+
+  !> Status of the last call (VCI_OK or a VCI_ERR_*).
+  pure integer function status(self)
+    class(vci_integrator_t), intent(in) :: self
+    status = self%last_status
+  end function status
+
+  !> What went wrong in the last call, naming the step, the time and the cause ('' after success).
+  pure function message(self) result(msg)
+    class(vci_integrator_t), intent(in) :: self
+    character(len=:), allocatable :: msg
+    msg = trim(self%last_message)
+  end function message
+
+  !> The settings in force (tolerances, impact bound, impact condition).
+  pure function settings(self) result(s)
+    class(vci_integrator_t), intent(in) :: self
+    type(vci_settings_t) :: s
+    s = self%stepper%current_settings()
+  end function settings
+
+  !> The scheme (VCI_SCHEME_*) and its number of stages.
+  pure integer function scheme(self)
+    class(vci_integrator_t), intent(in) :: self
+    scheme = self%scheme_id
+  end function scheme
+
+  pure integer function stages(self)
+    class(vci_integrator_t), intent(in) :: self
+    stages = self%n_stages
+  end function stages
+
+  !> Has the integrator a state to step from (after init_from_pair, init_from_momentum or restore)?
+  pure logical function is_initialized(self)
+    class(vci_integrator_t), intent(in) :: self
+    is_initialized = self%initialized
+  end function is_initialized
+
+  !> A failure reported by a lower layer: keep its status.
+  subroutine keep_failure(self, stat)
+    class(vci_integrator_t), intent(inout) :: self
     integer, intent(in) :: stat
-    failure_of = stat
-  end function failure_of
+    self%last_status = stat
+  end subroutine keep_failure
 
   subroutine finish(self, status, stat)
     class(vci_integrator_t), intent(inout) :: self
     integer, intent(in) :: status
     integer, intent(out) :: stat
-    self%status = status
-    if (status == VCI_OK) self%message = ''
+    self%last_status = status
+    if (status == VCI_OK) self%last_message = ''
     stat = status
   end subroutine finish
 end module vci_integrator

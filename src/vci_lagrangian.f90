@@ -6,12 +6,12 @@
 !> differences the Hessian blocks when they are absent.
 !>
 !> Required: lagrangian (the value of L), dl_dq, dl_dv. A C or legacy adapter that lacks one of them
-!> answers VCI_NOT_PROVIDED; the integrator then refuses the model with VCI_ERR_ARGUMENT.
+!> answers "not provided" (`not_provided`); the integrator then refuses the model with VCI_ERR_ARGUMENT.
 !> Callbacks receive `stat` preset to 0 and set it nonzero to report failure.
 module vci_lagrangian
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use vci_kinds, only: dp
-  use vci_status, only: VCI_OK, VCI_NOT_PROVIDED, VCI_ERR_CALLBACK, VCI_ERR_NONFINITE, VCI_ERR_NEWTON
+  use vci_status, only: VCI_OK, VCI_ERR_CALLBACK, VCI_ERR_NONFINITE, VCI_ERR_NEWTON
   use vci_model_base, only: vci_model_base_t
   use vci_lapack, only: dgetrf, dgetrs
   implicit none
@@ -62,7 +62,7 @@ contains
     real(dp), intent(out) :: lqq(:, :), lqv(:, :), lvv(:, :)
     integer, intent(inout) :: stat
     lqq = 0.0_dp; lqv = 0.0_dp; lvv = 0.0_dp
-    stat = VCI_NOT_PROVIDED
+    call self%not_provided(stat)
   end subroutine not_provided_hessians
 
   subroutine lagrangian_work_setup(work, n)

@@ -164,7 +164,7 @@ contains
     real(dp), intent(out) :: hess(:, :)
     integer, intent(inout) :: stat
     if (iand(self%iopt, IOPT_HESSIAN) == 0) then
-      hess = 0.0_dp; stat = VCI_NOT_PROVIDED; return
+      hess = 0.0_dp; call self%not_provided(stat); return
     end if
     call call_task(self, TASK_HESSIAN, q, v, h, hess, stat)
   end subroutine lm_hessian
@@ -199,7 +199,7 @@ contains
     real(dp), intent(out) :: dg(:, :)
     integer, intent(inout) :: stat
     if (iand(self%iopt, IOPT_GAP_GRADS) == 0) then
-      dg = 0.0_dp; stat = VCI_NOT_PROVIDED; return
+      dg = 0.0_dp; call self%not_provided(stat); return
     end if
     call call_task(self, TASK_GAP_GRADS, q, q, 0.0_dp, dg, stat)
   end subroutine lm_gap_grads
@@ -211,7 +211,7 @@ contains
     integer, intent(inout) :: stat
     real(dp) :: tmp(1)
     if (iand(self%iopt, IOPT_ENERGY) == 0) then
-      e = 0.0_dp; stat = VCI_NOT_PROVIDED; return
+      e = 0.0_dp; call self%not_provided(stat); return
     end if
     tmp = 0.0_dp
     call call_task(self, TASK_ENERGY, q, p, 0.0_dp, tmp, stat)
@@ -259,7 +259,7 @@ contains
     slots(i)%model%rpar = rpar; slots(i)%model%ipar = ipar
     call slots(i)%integ%create(slots(i)%model, h, stat)
     if (stat /= VCI_OK) then
-      global_message = 'VCINEW: '//trim(slots(i)%integ%message)
+      global_message = 'VCINEW: '//slots(i)%integ%message()
       deallocate (slots(i)%model, slots(i)%integ)
       if (all(slots%id == 0)) deallocate (slots)
       return
@@ -302,9 +302,8 @@ contains
     associate (md => slots(i)%model, integ => slots(i)%integ)
       if ((stat == VCI_ERR_CALLBACK .or. stat == VCI_ERR_NEWTON) .and. md%last_ierr /= 0) then
         write (what, '(a,i0,a,i0,a)') ' (MODEL returned IERR = ', md%last_ierr, ' for TASK = ', md%last_task, ')'
-        integ%message = trim(integ%message)//trim(what)
         stat = VCI_ERR_CALLBACK
-        integ%status = stat
+        call integ%report_failure(stat, integ%message()//trim(what))
       end if
     end associate
   end subroutine legacy_after
@@ -336,8 +335,8 @@ contains
     nimp = log%count
     k = min(nimp, size(timp))
     timp(1:k) = log%times(1:k)
-    if (integ%initialized) then
-      t = integ%t; q = integ%q; p = integ%p
+    if (integ%is_initialized()) then
+      t = integ%time(); q = integ%configuration(); p = integ%momentum()
     end if
   end subroutine legacy_advance
 
@@ -349,7 +348,7 @@ contains
     msg = global_message
     i = 0
     if (ih > 0 .and. allocated(slots)) i = findloc(slots%id, ih, dim=1)
-    if (i > 0) msg = slots(i)%integ%message
+    if (i > 0) msg = slots(i)%integ%message()
   end function legacy_message
 end module vci_legacy
 
@@ -413,7 +412,7 @@ subroutine vciinp(ih, t0, q0, q1, istat)
   type(vci_integrator_t), pointer :: integ
   call legacy_get(ih, 'VCIINP', integ, istat)
   if (istat /= VCI_OK) return
-  call integ%init_from_pair(t0, q0(1:integ%model%n), q1(1:integ%model%n), istat)
+  call integ%init_from_pair(t0, q0(1:integ%n_coordinates()), q1(1:integ%n_coordinates()), istat)
   call legacy_after(ih, istat)
 end subroutine vciinp
 
@@ -430,7 +429,7 @@ subroutine vciinm(ih, t0, q0, p0, istat)
   type(vci_integrator_t), pointer :: integ
   call legacy_get(ih, 'VCIINM', integ, istat)
   if (istat /= VCI_OK) return
-  call integ%init_from_momentum(t0, q0(1:integ%model%n), p0(1:integ%model%n), istat)
+  call integ%init_from_momentum(t0, q0(1:integ%n_coordinates()), p0(1:integ%n_coordinates()), istat)
   call legacy_after(ih, istat)
 end subroutine vciinm
 
@@ -446,14 +445,17 @@ subroutine vciadv(ih, nsteps, idir, t, q, p, nimp, timp, ltimp, istat)
   real(dp), intent(inout) :: t, q(*), p(*), timp(*)
   integer, intent(out) :: nimp, istat
   type(vci_integrator_t), pointer :: integ
+  character(len=64) :: msg
+  integer :: n
   nimp = 0
   call legacy_get(ih, 'VCIADV', integ, istat)
   if (istat /= VCI_OK) return
   if (ltimp < 0) then
-    write (integ%message, '(a,i0,a)') 'VCIADV: LTIMP = ', ltimp, ' (need >= 0)'
-    integ%status = VCI_ERR_ARGUMENT; istat = VCI_ERR_ARGUMENT; return
+    write (msg, '(a,i0,a)') 'VCIADV: LTIMP = ', ltimp, ' (need >= 0)'
+    call integ%report_failure(VCI_ERR_ARGUMENT, msg); istat = VCI_ERR_ARGUMENT; return
   end if
-  call legacy_advance(integ, nsteps, idir, t, q(1:integ%model%n), p(1:integ%model%n), nimp, timp(1:ltimp), istat)
+  n = integ%n_coordinates()
+  call legacy_advance(integ, nsteps, idir, t, q(1:n), p(1:n), nimp, timp(1:ltimp), istat)
   call legacy_after(ih, istat)
 end subroutine vciadv
 

@@ -3,7 +3,7 @@
 !> who knows the continuous L(q, qdot) instead extends `vci_lagrangian_t` and picks a scheme.)
 !>
 !> Required: d1, d2, d3 (partials of L_d). Everything else has a default that tells the library
-!> "not provided" (status VCI_NOT_PROVIDED); the library then either does without it (m = 0:
+!> "not provided" (`call self%not_provided(stat)`, vci_model_base); the library then either does without it (m = 0:
 !> no multipliers; n_gaps = 0: no impact detection) or differences it (mixed Hessian, gap gradients).
 !> Sizes, constraint forms, gaps and energy come from `vci_model_base_t`.
 !>
@@ -11,7 +11,6 @@
 !> the step with VCI_ERR_CALLBACK. Never stop the program from a callback.
 module vci_model
   use vci_kinds, only: dp
-  use vci_status, only: VCI_NOT_PROVIDED
   use vci_model_base, only: vci_model_base_t
   implicit none
   private
@@ -51,7 +50,7 @@ contains
     real(dp), intent(out) :: hess(:, :)
     integer, intent(inout) :: stat
     hess = 0.0_dp
-    stat = VCI_NOT_PROVIDED
+    call self%not_provided(stat)
   end subroutine not_provided_hessian
 
   !> The discrete constraint omega_d(base, other, h) in R^m; the (+) scheme imposes
@@ -62,6 +61,6 @@ contains
     real(dp), intent(out) :: out(:)
     integer, intent(inout) :: stat
     out = 0.0_dp
-    stat = VCI_NOT_PROVIDED
+    call self%not_provided(stat)
   end subroutine not_provided_dconstraint
 end module vci_model

@@ -3,12 +3,14 @@
 !> L_d) and `vci_lagrangian_t` (a continuous Lagrangian L) both extend it, so the stepper treats walls,
 !> constraints and the Hamiltonian impact condition the same way whichever the user wrote.
 !>
-!> The optional procedures answer VCI_NOT_PROVIDED until overridden; the library then does without
-!> them (m = 0, n_gaps = 0) or differences them (gap gradients). Every procedure receives `stat`
-!> preset to 0; a callback sets it nonzero to report failure and never stops the program.
+!> The optional procedures answer "not provided" until overridden, on a channel of their own: they
+!> call `self%not_provided(stat)`, which marks the model; the library probes an optional procedure
+!> once (`clear_not_provided`, call, `answered_not_provided`) and then does without it (m = 0,
+!> n_gaps = 0) or differences it (gap gradients). `stat` only ever means success (0) or failure
+!> (nonzero), so a model that reports failure with any value, -1 included, is read as failing.
+!> Every procedure receives `stat` preset to 0 and never stops the program.
 module vci_model_base
   use vci_kinds, only: dp
-  use vci_status, only: VCI_NOT_PROVIDED
   implicit none
   private
 
@@ -16,7 +18,11 @@ module vci_model_base
     integer :: n = 0        !< configuration dimension
     integer :: m = 0        !< number of constraint one-forms (0: unconstrained)
     integer :: n_gaps = 0   !< number of gap functions g_j(q) >= 0 bounding the admissible set
+    logical, private :: declined = .false.   !< an optional procedure answered "not provided"
   contains
+    procedure, non_overridable :: not_provided
+    procedure, non_overridable :: clear_not_provided
+    procedure, non_overridable :: answered_not_provided
     procedure :: constraint_forms => not_provided_forms
     procedure :: gaps => not_provided_gaps
     procedure :: gap_gradients => not_provided_gap_grads
@@ -25,6 +31,28 @@ module vci_model_base
 
 contains
 
+  !> Called by an optional procedure the model does not supply (the defaults below, or an adapter
+  !> whose callback is absent) instead of computing: marks the answer as "not provided" and sets
+  !> stat to a failure, so that a call the library did not probe first can never pass for a value.
+  subroutine not_provided(self, stat)
+    class(vci_model_base_t), intent(inout) :: self
+    integer, intent(inout) :: stat
+    self%declined = .true.
+    stat = 1
+  end subroutine not_provided
+
+  !> Start a probe: forget any earlier "not provided".
+  subroutine clear_not_provided(self)
+    class(vci_model_base_t), intent(inout) :: self
+    self%declined = .false.
+  end subroutine clear_not_provided
+
+  !> Did a procedure called since clear_not_provided answer "not provided"?
+  pure logical function answered_not_provided(self)
+    class(vci_model_base_t), intent(in) :: self
+    answered_not_provided = self%declined
+  end function answered_not_provided
+
   !> omega(:, mu) = components of the one-form omega^mu at q (n x m).
   subroutine not_provided_forms(self, q, omega, stat)
     class(vci_model_base_t), intent(inout) :: self
@@ -32,7 +60,7 @@ contains
     real(dp), intent(out) :: omega(:, :)
     integer, intent(inout) :: stat
     omega = 0.0_dp
-    stat = VCI_NOT_PROVIDED
+    call self%not_provided(stat)
   end subroutine not_provided_forms
 
   !> Gap functions g(j) = g_j(q); the admissible set is {q : g_j(q) >= 0 for all j}.
@@ -42,7 +70,7 @@ contains
     real(dp), intent(out) :: g(:)
     integer, intent(inout) :: stat
     g = 0.0_dp
-    stat = VCI_NOT_PROVIDED
+    call self%not_provided(stat)
   end subroutine not_provided_gaps
 
   !> dg(:, j) = gradient of g_j at q (n x n_gaps).
@@ -52,7 +80,7 @@ contains
     real(dp), intent(out) :: dg(:, :)
     integer, intent(inout) :: stat
     dg = 0.0_dp
-    stat = VCI_NOT_PROVIDED
+    call self%not_provided(stat)
   end subroutine not_provided_gap_grads
 
   !> A step-independent energy H(q, p), normally the Hamiltonian; needed only for the
@@ -63,6 +91,6 @@ contains
     real(dp), intent(out) :: e
     integer, intent(inout) :: stat
     e = 0.0_dp
-    stat = VCI_NOT_PROVIDED
+    call self%not_provided(stat)
   end subroutine not_provided_energy
 end module vci_model_base

@@ -40,6 +40,7 @@ module vci_observer
     procedure :: on_step => default_on_step
     procedure :: on_impact => default_on_impact
     procedure :: on_finish => default_on_finish
+    procedure :: keeps_checkpoints => default_keeps_checkpoints
   end type vci_observer_t
 
 contains
@@ -67,6 +68,13 @@ contains
     type(vci_impact_t), intent(in) :: impact
     integer, intent(inout) :: stat
   end subroutine default_on_impact
+
+  !> Does this observer store checkpoints (vci_checkpoint), so that a run continues from its output
+  !> bit for bit? No, unless an output says so.
+  pure logical function default_keeps_checkpoints(self)
+    class(vci_observer_t), intent(in) :: self
+    default_keeps_checkpoints = .false.
+  end function default_keeps_checkpoints
 
   !> The run ended with `status` (VCI_OK or an error) and its message.
   subroutine default_on_finish(self, status, message, stat)

@@ -9,7 +9,7 @@
 !> inversion of dL/dqdot (vci_lagrangian).
 module vci_retraction
   use vci_kinds, only: dp
-  use vci_status, only: VCI_OK, VCI_NOT_PROVIDED
+  use vci_status, only: VCI_OK
   use vci_model, only: vci_model_t
   use vci_lagrangian, only: vci_lagrangian_t, vci_lagrangian_work_t, lagrangian_work_setup, &
                             lagrangian_hessians, lagrangian_hamiltonian
@@ -124,7 +124,7 @@ contains
     integer :: s
     if (.not. self%work%has_hessians) then
       hess = 0.0_dp
-      stat = VCI_NOT_PROVIDED; return
+      call self%not_provided(stat); return
     end if
     call point_velocity(self, q, v, h)
     call lagrangian_hessians(self%lag, self%work, self%pt, self%w, self%lqq, self%lqv, self%lvv, s)

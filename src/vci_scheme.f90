@@ -1,5 +1,5 @@
 !> A scheme: how one sub-step of the (+) or (-) method is discretised and how its unknowns are laid
-!> out. The stepper (vci_stepper) runs the algorithm of DESIGN.md §1 — regular sub-step, stage 1
+!> out. The stepper (vci_stepper) runs the algorithm of docs/DESIGN.md §1-2 — regular sub-step, stage 1
 !> (reach the wall: adds alpha and g_j = 0), stage 2 (reflect: adds mu and the energy equation) — and
 !> asks the scheme for residuals, Jacobians and the quantities it needs (endpoint, multipliers, alpha,
 !> mu, outgoing momentum, energy) through the procedures below; it never indexes the unknowns itself.
@@ -9,7 +9,7 @@
 !> discrete Lagrangian with s + 1 Lobatto points, whose interior stage values are unknowns of the same
 !> Newton system).
 !>
-!> Contract on layouts: the unknowns of a stage-1 (KIND_WALL) or stage-2 (KIND_REFLECT) system are
+!> Contract on layouts: the unknowns of a stage-1 (KIND_STAGE1) or stage-2 (KIND_STAGE2) system are
 !> those of the sub-step system followed by one scalar (alpha or mu; `get_extra`/`put_extra`), so a
 !> sub-step solution is a valid start for either. KIND_PAIR has the sub-step's layout (it solves for
 !> the interior stages of a segment with both ends given). KIND_IMPULSE (the Hamiltonian impact's
@@ -22,7 +22,7 @@ module vci_scheme
   implicit none
   private
 
-  integer, parameter, public :: KIND_SUBSTEP = 1, KIND_WALL = 2, KIND_REFLECT = 3, KIND_IMPULSE = 4, &
+  integer, parameter, public :: KIND_SUBSTEP = 1, KIND_STAGE1 = 2, KIND_STAGE2 = 3, KIND_IMPULSE = 4, &
                                 KIND_PAIR = 5
   integer, parameter, public :: VCI_IMPACT_DISCRETE = 0, VCI_IMPACT_HAMILTONIAN = 1
 
@@ -239,7 +239,7 @@ contains
     class(vci_scheme_t), intent(inout) :: self
     real(dp), intent(in) :: x(:)
     wall_admissible = .true.
-    if (self%kind == KIND_WALL) then
+    if (self%kind == KIND_STAGE1) then
       wall_admissible = x(size(x)) > 0.0_dp .and. x(size(x)) <= 1.0_dp
     end if
   end function wall_admissible

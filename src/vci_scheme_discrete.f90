@@ -1,4 +1,4 @@
-!> The scheme of a discrete Lagrangian given in closed form (DESIGN.md §1): a user's L_d
+!> The scheme of a discrete Lagrangian given in closed form (docs/DESIGN.md §1, §3): a user's L_d
 !> (vci_model_t), or the `left` / `midpoint` retraction of a continuous L (vci_retraction). With
 !> s = +1 (forward) or -1 (backward) and L^s(a, b, tau) = L_d(a, b, tau) for s = +1, L_d(b, a, tau)
 !> for s = -1, where a is the known and b the unknown configuration:
@@ -14,7 +14,7 @@ module vci_scheme_discrete
   use vci_kinds, only: dp
   use vci_status, only: VCI_OK
   use vci_model, only: vci_model_t
-  use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_WALL, KIND_REFLECT, KIND_IMPULSE, KIND_PAIR, &
+  use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_STAGE1, KIND_STAGE2, KIND_IMPULSE, KIND_PAIR, &
                         VCI_IMPACT_HAMILTONIAN, vci_fd_rel
   implicit none
   private
@@ -112,7 +112,7 @@ contains
     class(vci_scheme_discrete_t), intent(in) :: self
     real(dp), intent(in) :: x(:)
     step_length = self%tau
-    if (self%kind == KIND_WALL) step_length = x(self%n + self%m + 1) * self%tau
+    if (self%kind == KIND_STAGE1) step_length = x(self%n + self%m + 1) * self%tau
   end function step_length
 
   !> out = s D1 L^s(a, b, tau)  (forward: D1 L_d(a, b); backward: -D2 L_d(b, a)).
@@ -207,7 +207,7 @@ contains
           sc(i) = sc(i) + ols
         end do
       end if
-      if (self%kind == KIND_REFLECT) then
+      if (self%kind == KIND_STAGE2) then
         r(1:n) = r(1:n) + x(last) * self%grad
         sc(1:n) = sc(1:n) + abs(x(last) * self%grad)
       end if
@@ -222,13 +222,13 @@ contains
       end do
     end if
     select case (self%kind)
-    case (KIND_WALL)
+    case (KIND_STAGE1)
       call self%eval_gaps(x(1:n), self%g(1:self%n_gaps), stat)
       if (stat /= VCI_OK) return
       r(last) = self%g(self%gap)
       ! g's size: its value, its terms (grad g . q) and its change over the sub-step
       sc(last) = abs(r(last)) + sum(self%gscale * (abs(x(1:n)) + abs(x(1:n) - self%a)))
-    case (KIND_REFLECT)
+    case (KIND_STAGE2)
       if (self%impact_energy == VCI_IMPACT_HAMILTONIAN) then
         self%pplus = self%pa + x(last) * self%grad
         call self%hamiltonian(self%a, self%pplus, hp, stat)
@@ -303,10 +303,10 @@ contains
     ! multiplier columns: d/d lambda of -Omega(a) lambda
     if (m > 0) jac(1:n, n + 1:n + m) = -self%omega
     select case (self%kind)
-    case (KIND_WALL)       ! alpha enters through the sub-step length
+    case (KIND_STAGE1)       ! alpha enters through the sub-step length
       d = vci_fd_rel * x(last)
       call fd_column(self, x, last, d, .true., jac(:, last), stat)
-    case (KIND_REFLECT)    ! mu enters linearly in the momentum rows
+    case (KIND_STAGE2)    ! mu enters linearly in the momentum rows
       jac(1:n, last) = self%grad
       if (self%impact_energy == VCI_IMPACT_HAMILTONIAN) then
         d = vci_fd_rel * max(abs(x(last)), sqrt(sum(self%pa**2)) / max(sqrt(sum(self%grad**2)), tiny(1.0_dp)))

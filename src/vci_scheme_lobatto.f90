@@ -23,7 +23,7 @@ module vci_scheme_lobatto
   use vci_lagrangian, only: vci_lagrangian_t, vci_lagrangian_work_t, lagrangian_work_setup, &
                             lagrangian_hessians, lagrangian_hamiltonian
   use vci_lobatto_rule, only: vci_lobatto_rule_t, lobatto_rule
-  use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_WALL, KIND_REFLECT, KIND_IMPULSE, KIND_PAIR
+  use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_STAGE1, KIND_STAGE2, KIND_IMPULSE, KIND_PAIR
   implicit none
   private
 
@@ -194,7 +194,7 @@ contains
     class(vci_scheme_lobatto_t), intent(in) :: self
     real(dp), intent(in) :: x(:)
     step_length = self%tau
-    if (self%kind == KIND_WALL) step_length = x(self%s * self%n + self%m + 1) * self%tau
+    if (self%kind == KIND_STAGE1) step_length = x(self%s * self%n + self%m + 1) * self%tau
   end function step_length
 
   subroutine scheme_residual(self, x, r, scale, stat)
@@ -207,7 +207,7 @@ contains
     n = self%n; s = self%s; last = s * n + self%m + 1
     dsign = real(self%dir, dp)
     tau = step_length(self, x)
-    call evaluate(self, x, self%a, tau, self%kind == KIND_REFLECT, stat)
+    call evaluate(self, x, self%a, tau, self%kind == KIND_STAGE2, stat)
     if (stat /= VCI_OK) return
     if (self%kind == KIND_PAIR) then
       r(1:n) = self%y(:, s) - self%b_target
@@ -215,7 +215,7 @@ contains
     else
       r(1:n) = self%pa + dsign * self%f(:, 0)
       scale(1:n) = abs(self%pa) + self%fs(:, 0)
-      if (self%kind == KIND_REFLECT) then
+      if (self%kind == KIND_STAGE2) then
         r(1:n) = r(1:n) + x(last) * self%grad
         scale(1:n) = scale(1:n) + abs(x(last) * self%grad)
       end if
@@ -225,12 +225,12 @@ contains
       scale(j * n + 1:(j + 1) * n) = self%fs(:, j)
     end do
     select case (self%kind)
-    case (KIND_WALL)
+    case (KIND_STAGE1)
       call self%eval_gaps(self%y(:, s), self%g(1:self%n_gaps), stat)
       if (stat /= VCI_OK) return
       r(last) = self%g(self%gap)
       scale(last) = abs(r(last)) + sum(self%gscale * (abs(self%y(:, s)) + abs(self%y(:, s) - self%a)))
-    case (KIND_REFLECT)
+    case (KIND_STAGE2)
       e = 0.0_dp
       do j = 0, s
         e = e + self%rule%b(j) * (dot_product(self%lv(:, j), self%v(:, j)) - self%lval(j))
@@ -292,7 +292,7 @@ contains
       end do
     end if
     select case (self%kind)
-    case (KIND_WALL)
+    case (KIND_STAGE1)
       ! alpha enters through tau: dF_j/dtau = b_j Lq_j - b_j Lqv_j V_j - (dir/tau) sum_i b_i D_ij Lvv_i V_i
       do j = 0, s - 1
         rs = 1.0_dp
@@ -307,7 +307,7 @@ contains
       call self%eval_gap_gradients(self%y(:, s), self%dg(:, 1:self%n_gaps), stat)
       if (stat /= VCI_OK) return
       jac(last, (s - 1) * n + 1:s * n) = self%dg(:, self%gap)
-    case (KIND_REFLECT)
+    case (KIND_STAGE2)
       jac(1:n, last) = self%grad
       ! dE_d/dy_k = b_k (Lqv_k V_k - Lq_k) + (dir/tau) sum_i b_i D_ik Lvv_i V_i
       do k = 1, s

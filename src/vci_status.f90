@@ -14,9 +14,6 @@ module vci_status
   integer, parameter, public :: VCI_ERR_IO = 8                !< output could not be written
   integer, parameter, public :: VCI_ERR_STATE = 9             !< call out of order (e.g. step before init)
 
-  !> Returned by the default (not overridden) optional model procedures. Never escapes the library.
-  integer, parameter, public :: VCI_NOT_PROVIDED = -1
-
   !> Longest message kept by the library.
   integer, parameter, public :: VCI_MSG_LEN = 512
 

@@ -1,4 +1,4 @@
-/* The paper's bouncing ellipse and nonholonomic pendulum as vci callbacks (DESIGN.md section 2),
+/* The paper's bouncing ellipse and nonholonomic pendulum as vci callbacks (docs/DESIGN.md section 8),
  * the same Lagrangians as the Fortran scene modules in examples/scenes. Header-only, shared by the C examples and the C
  * API tests. */
 #ifndef VCI_C_SCENES_H

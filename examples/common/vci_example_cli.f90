@@ -160,6 +160,7 @@ contains
     real(dp) :: t_first, t_last, t_target, h0, h1, e_first
     real(dp), allocatable :: q(:), p(:)
     logical :: has_h
+    type(vci_stats_t) :: stats
 
     dir = merge(-1, 1, opts%backward)
     if (allocated(opts%from)) then
@@ -177,17 +178,17 @@ contains
       call create_integrator(name, model, opts, integ)
       call init(integ, stat)
     end if
-    if (stat /= VCI_OK) call die(name//': '//trim(integ%message))
+    if (stat /= VCI_OK) call die(name//': '//integ%message())
     if (opts%impact_energy /= VCI_IMPACT_DISCRETE) then
       call integ%set_impact_energy(opts%impact_energy, stat)
-      if (stat /= VCI_OK) call die(name//': '//trim(integ%message))
+      if (stat /= VCI_OK) call die(name//': '//integ%message())
     end if
 
     ! how far: to --t-final, or (backward from a file) back to that run's first state
     t_target = opts%t_final
     if (opts%backward .and. allocated(opts%from) .and. .not. opts%t_final_given) t_target = t_first
     if (opts%backward .and. .not. allocated(opts%from) .and. .not. opts%t_final_given) t_target = -opts%t_final
-    nsteps = max(0_i8, ceiling(real(dir, dp) * (t_target - integ%t) / opts%h - 1.0e-9_dp, i8))
+    nsteps = max(0_i8, ceiling(real(dir, dp) * (t_target - integ%time()) / opts%h - 1.0e-9_dp, i8))
 
     if (.not. opts%no_output) then
       if (opts%append .and. .not. allocated(opts%output)) opts%output = opts%from
@@ -217,38 +218,39 @@ contains
     summary%progress = c_isatty(2_c_int) == 1
 
     has_h = model_has_energy(model, integ)
-    if (has_h) call model%energy(integ%q, integ%p, h0, stat)
-    e_first = integ%energy   ! NaN when starting from (q, p): no step taken yet
+    if (has_h) call model%energy(integ%configuration(), integ%momentum(), h0, stat)
+    e_first = integ%energy()   ! NaN when starting from (q, p): no step taken yet
     write (output_unit, '(a)') 'scene: '//name//'   direction: '//trim(merge('backward', 'forward ', opts%backward))// &
       '   impact energy: '//trim(merge('hamiltonian', 'discrete   ', opts%impact_energy == VCI_IMPACT_HAMILTONIAN))
-    if (allocated(opts%scheme)) write (output_unit, '(a,i0,a)') 'scheme: '//vci_scheme_name(integ%scheme)// &
-      '   stages: ', integ%stages, ''
-    write (output_unit, '(a,es10.3,a,f0.6,a,f0.6,a,i0)') 'h = ', opts%h, '   t from ', integ%t, ' to ', &
-      integ%t + dir * nsteps * opts%h, '   steps: ', nsteps
+    if (allocated(opts%scheme)) write (output_unit, '(a,i0,a)') 'scheme: '//vci_scheme_name(integ%scheme())// &
+      '   stages: ', integ%stages(), ''
+    write (output_unit, '(a,es10.3,a,f0.6,a,f0.6,a,i0)') 'h = ', opts%h, '   t from ', integ%time(), ' to ', &
+      integ%time() + dir * nsteps * opts%h, '   steps: ', nsteps
     call print_state('start state', integ)
     call system_clock(c0, rate)
     call integ%integrate(nsteps, dir, stat, summary)
     call system_clock(c1)
-    write (output_unit, '(a,i0)') 'impacts: ', integ%stats%impacts
-    write (output_unit, '(a,i0,a,es11.4)') 'steps: ', integ%stats%steps, '   t = ', integ%t
+    stats = integ%statistics()
+    write (output_unit, '(a,i0)') 'impacts: ', stats%impacts
+    write (output_unit, '(a,i0,a,es11.4)') 'steps: ', stats%steps, '   t = ', integ%time()
     if (e_first == e_first) then
-      write (output_unit, '(a,es23.15,a,es23.15,a,es10.3)') 'energy E_d: start ', e_first, '  end ', integ%energy, &
-        '  change ', integ%energy - e_first
+      write (output_unit, '(a,es23.15,a,es23.15,a,es10.3)') 'energy E_d: start ', e_first, '  end ', integ%energy(), &
+        '  change ', integ%energy() - e_first
     else
-      write (output_unit, '(a,es23.15,a)') 'energy E_d: end ', integ%energy, '  (start from (q, p): no step yet)'
+      write (output_unit, '(a,es23.15,a)') 'energy E_d: end ', integ%energy(), '  (start from (q, p): no step yet)'
     end if
     if (has_h) then
-      call model%energy(integ%q, integ%p, h1, stat)
+      call model%energy(integ%configuration(), integ%momentum(), h1, stat)
       write (output_unit, '(a,es23.15,a,es23.15,a,es10.3)') 'energy H(q,p): start ', h0, '  end ', h1, &
         '  change ', h1 - h0
     end if
-    write (output_unit, '(a,i0,a,i0,a,i0)') 'newton: solves ', integ%stats%newton_solves, '  iterations ', &
-      integ%stats%newton_iterations, '  least-squares fallbacks ', integ%stats%fallbacks
+    write (output_unit, '(a,i0,a,i0,a,i0)') 'newton: solves ', stats%newton_solves, '  iterations ', &
+      stats%newton_iterations, '  least-squares fallbacks ', stats%fallbacks
     write (output_unit, '(a,f0.4,a)') 'wall time: ', real(c1 - c0, dp) / real(rate, dp), ' s'
     call print_state('end state', integ)
     if (.not. opts%no_output) write (output_unit, '(a)') 'output: '//opts%output
-    if (integ%status /= VCI_OK) then
-      write (output_unit, '(a)') 'status: '//vci_status_name(integ%status)//': '//trim(integ%message)
+    if (integ%status() /= VCI_OK) then
+      write (output_unit, '(a)') 'status: '//vci_status_name(integ%status())//': '//integ%message()
       stop 2
     end if
     write (output_unit, '(a)') 'status: ok'
@@ -272,7 +274,7 @@ contains
     end select
     if (stat == VCI_OK) call integ%set_tolerances(0.0_dp, opts%rtol, 30, stat)
     if (stat == VCI_OK) call integ%set_max_impacts(opts%max_impacts, stat)
-    if (stat /= VCI_OK) call die(name//': '//trim(integ%message))
+    if (stat /= VCI_OK) call die(name//': '//integ%message())
   end subroutine create_integrator
 
   !> Start from the last state of an .h5 file: its checkpoint (bitwise continuation) when the step
@@ -294,7 +296,7 @@ contains
     if (cp%h == opts%h) then
       call integ%restore(cp, stat)
     else
-      call integ%init_from_momentum(cp%t0 + real(cp%k, dp) * cp%h, cp%q, cp%p, stat)
+      call integ%init_from_momentum(cp%time(), cp%q, cp%p, stat)
     end if
 #else
     t_first = 0.0_dp; stat = VCI_ERR_IO
@@ -325,15 +327,15 @@ contains
     real(dp) :: e
     integer :: s
     s = 0
-    call model%energy(integ%q, integ%p, e, s)
+    call model%energy(integ%configuration(), integ%momentum(), e, s)
     model_has_energy = (s == 0)
   end function model_has_energy
 
   subroutine print_state(what, integ)
     character(len=*), intent(in) :: what
     type(vci_integrator_t), intent(in) :: integ
-    write (output_unit, '(a,es24.16,a,*(es24.16))') what//': t = ', integ%t, '  q =', integ%q
-    write (output_unit, '(a,*(es24.16))') repeat(' ', len(what) + 2)//'p =', integ%p
+    write (output_unit, '(a,es24.16,a,*(es24.16))') what//': t = ', integ%time(), '  q =', integ%configuration()
+    write (output_unit, '(a,*(es24.16))') repeat(' ', len(what) + 2)//'p =', integ%momentum()
   end subroutine print_state
 
   !> The first time and the last (t, q, p) of a trajectory file written by the CSV observer.

@@ -1,11 +1,10 @@
 !> The paper's bouncing ellipse: q = (theta, x, y), midpoint L_d with gravity, floor gap
-!> g(q) = y - phi(theta), phi = sqrt(a^2 sin^2 theta + b^2 cos^2 theta). DESIGN.md §2.
+!> g(q) = y - phi(theta), phi = sqrt(a^2 sin^2 theta + b^2 cos^2 theta). docs/DESIGN.md §8.
 !> `ellipse_lagrangian_t`: the same body as a continuous model, L = I θ̇²/2 + m(ẋ² + ẏ²)/2 − m g y.
 module vci_scene_ellipse
   use vci_kinds, only: dp
   use vci_model, only: vci_model_t
   use vci_lagrangian, only: vci_lagrangian_t
-  use vci_status, only: VCI_NOT_PROVIDED
   implicit none
   private
 
@@ -78,7 +77,7 @@ contains
     real(dp), intent(out) :: hess(:, :)
     integer, intent(inout) :: stat
     if (.not. self%analytic_hessian) then
-      stat = VCI_NOT_PROVIDED; return
+      call self%not_provided(stat); return
     end if
     hess = 0.0_dp
     hess(1, 1) = -self%inertia() / h

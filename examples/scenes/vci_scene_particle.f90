@@ -8,7 +8,6 @@ module vci_scene_particle
   use vci_kinds, only: dp
   use vci_model, only: vci_model_t
   use vci_lagrangian, only: vci_lagrangian_t
-  use vci_status, only: VCI_NOT_PROVIDED
   implicit none
   private
 
@@ -106,7 +105,7 @@ contains
     real(dp), intent(out) :: hess(:, :)
     integer, intent(inout) :: stat
     if (.not. self%analytic_hessian) then   ! let the library difference it (tests and benchmarks)
-      stat = VCI_NOT_PROVIDED; return
+      call self%not_provided(stat); return
     end if
     hess = 0.0_dp
     hess(1, 1) = -self%mass / h

@@ -2,14 +2,13 @@
 !> L_d(q, v, h) = m l^2/(2h) ((v_th - th)^2 + (v_ph - ph)^2 sin^2 th) - h m g l cos th (anchored at q),
 !> constraint form omega = f(theta) dtheta - dphi with f = pi + cos^2 theta, discrete constraint
 !> omega_d(q, v, h) = (f(theta)(v_th - th) - (v_ph - ph)) / h, and the cylinder wall
-!> g = R^2 - l^2 sin^2 theta >= 0 (DESIGN.md §2: the paper's l sin theta <= R stops binding past pi).
+!> g = R^2 - l^2 sin^2 theta >= 0 (docs/DESIGN.md §8: the paper's l sin theta <= R stops binding past pi).
 !> `pendulum_lagrangian_t` is the same scene as a continuous model, L = ½ m l² (θ̇² + sin²θ φ̇²) − m g l cos θ,
 !> with Ω = f(θ) dθ − dφ: the `left` scheme turns it into the L_d above.
 module vci_scene_pendulum
   use vci_kinds, only: dp
   use vci_model, only: vci_model_t
   use vci_lagrangian, only: vci_lagrangian_t
-  use vci_status, only: VCI_NOT_PROVIDED
   implicit none
   private
 
@@ -87,7 +86,7 @@ contains
     integer, intent(inout) :: stat
     real(dp) :: ml2, s, c
     if (.not. self%analytic_hessian) then
-      stat = VCI_NOT_PROVIDED; return
+      call self%not_provided(stat); return
     end if
     ml2 = self%mass * self%length**2; s = sin(q(1)); c = cos(q(1))
     hess(1, 1) = -ml2 / h

@@ -62,7 +62,9 @@ contains
     call integ%set_impact_energy(mode, stat)
     call integ%init_from_momentum(0.0_dp, [0.0_dp, 1.0_dp], [mass * v, 0.0_dp], stat)
     call run_steps(integ, model, nsteps, s)
-    state = [integ%q(1), integ%q(2), integ%p(1) / (mass * v), integ%p(2) / (mass * v)]
+    associate (q_ => integ%configuration(), p_ => integ%momentum())
+      state = [q_(1), q_(2), p_(1) / (mass * v), p_(2) / (mass * v)]
+    end associate
     s%impact_t(1:s%kept) = s%impact_t(1:s%kept) * v
   end subroutine magnitude_case
 
@@ -83,7 +85,9 @@ contains
     call integ%set_impact_energy(mode, stat)
     call integ%init_from_momentum(0.0_dp, [0.0_dp, vn * t_star], [1.0_dp, -vn], stat)
     call run_steps(integ, model, 20_i8, s)
-    vn_after = integ%p(2); vt_after = integ%p(1)
+    associate (p_ => integ%momentum())
+      vn_after = p_(2); vt_after = p_(1)
+    end associate
   end subroutine graze_line_case
 
   !> Gravity 9.8, ceiling y <= 1 (normal (0, -1)); a parabola whose apex is at height 1 + depth at
@@ -126,10 +130,12 @@ contains
     call integ%init_from_momentum(0.0_dp, [0.0_dp, y0], [0.5_dp, 0.0_dp], stat)
     call run_steps(integ, model, 24_i8, s)
     ! exact: bounces at t*, 3 t*, ... ; between them y = y0 - g (t - t* - k 2 t*)^2 / 2 shifted
-    t = integ%t
+    t = integ%time()
     period = 2.0_dp * t_star
     y_exact = y0 - 0.5_dp * g * (modulo(t - t_star, period) - t_star)**2
-    y_err = integ%q(2) - y_exact
+    associate (q_ => integ%configuration())
+      y_err = q_(2) - y_exact
+    end associate
   end subroutine alpha_case
 
   !> No gravity, unit box; from (c, c) with velocity (-1, -1) into the corner (0, 0) at t = c.
@@ -148,7 +154,7 @@ contains
     call integ%set_impact_energy(mode, stat)
     call integ%init_from_momentum(0.0_dp, [c, c], [-1.0_dp, -1.0_dp], stat)
     call run_steps(integ, model, 12_i8, s)
-    err = max(maxval(abs(integ%q - (integ%t - c))), maxval(abs(integ%p - 1.0_dp)))
+    err = max(maxval(abs(integ%configuration() - (integ%time() - c))), maxval(abs(integ%momentum() - 1.0_dp)))
   end subroutine corner_case
 
   !> No gravity; walls y >= 0 and y <= d, the particle starting at (0, d/2) with velocity (1, v):
@@ -174,8 +180,10 @@ contains
     call integ%set_max_impacts(max_impacts, stat)
     call integ%init_from_momentum(0.0_dp, [0.0_dp, 0.5_dp * d], [1.0_dp, v], stat)
     call run_steps(integ, model, 10_i8, s)
-    u = modulo(0.5_dp * d + v * integ%t, 2.0_dp * d)   ! unfolded coordinate, folded into [0, d]
-    err = abs(integ%q(2) - merge(u, 2.0_dp * d - u, u <= d)) / d
+    u = modulo(0.5_dp * d + v * integ%time(), 2.0_dp * d)   ! unfolded coordinate, folded into [0, d]
+    associate (q_ => integ%configuration())
+      err = abs(q_(2) - merge(u, 2.0_dp * d - u, u <= d)) / d
+    end associate
   end subroutine close_walls_case
 
   !> At rest on the floor (0, 0) under gravity 9.8 with tangential speed vx, h = 1e-2, nsteps.
@@ -235,14 +243,18 @@ contains
     call integ%create(model, h, stat)
     call integ%set_impact_energy(mode, stat)
     call integ%init_from_pair(0.0_dp, q0, q0 + h * qd, stat)
-    min_sin = abs(sin(integ%q(1)))
+    associate (q_ => integ%configuration())
+      min_sin = abs(sin(q_(1)))
+    end associate
     ! step in chunks to watch sin(theta) on the grid
     s%status = VCI_OK
     do k = 1, nsteps
       call run_steps(integ, model, 1_i8, part)
       call merge_summary(s, part, k == 1)
       if (part%status /= VCI_OK) exit
-      min_sin = min(min_sin, abs(sin(integ%q(1))))
+      associate (q_ => integ%configuration())
+        min_sin = min(min_sin, abs(sin(q_(1))))
+      end associate
     end do
   end subroutine pendulum_case
 
@@ -295,8 +307,12 @@ contains
       call run_steps(integ, model, 1_i8, part)
       call merge_summary(s, part, k == 1)
       if (part%status /= VCI_OK) exit
-      max_zx = max(max_zx, abs(integ%q(3) - integ%q(1)))
-      max_z = max(max_z, abs(integ%q(3)))
+      associate (q_ => integ%configuration())
+        max_zx = max(max_zx, abs(q_(3) - q_(1)))
+      end associate
+      associate (q_ => integ%configuration())
+        max_z = max(max_z, abs(q_(3)))
+      end associate
     end do
   end subroutine massless_case
 
@@ -324,7 +340,7 @@ contains
     dh_rel = s%max_dh / s%h0
   end subroutine step_size_case
 
-  !> The paper's ellipse (DESIGN.md §2), h = 1e-2, nsteps steps. Returns the run and, for each
+  !> The paper's ellipse (docs/DESIGN.md §8), h = 1e-2, nsteps steps. Returns the run and, for each
   !> impact i (up to size(e_after)), H just after it minus H0: since free flight conserves H
   !> exactly for this L_d, these are the cumulative energy changes made by the impacts.
   subroutine ellipse_long_case(nsteps, mode, s, e_after, n_e, nonfinite_steps)
@@ -338,6 +354,7 @@ contains
     type(vci_integrator_t) :: integ
     real(dp), parameter :: h = 1.0e-2_dp
     real(dp) :: q0(3), qd(3), e, e0
+    type(vci_stats_t) :: stats
     integer :: stat
     integer(i8) :: k, c0, c1, rate
     logical :: ok
@@ -347,36 +364,37 @@ contains
     call integ%create(model, h, stat)
     call integ%set_impact_energy(mode, stat)
     call integ%init_from_pair(0.0_dp, q0 - 0.5_dp * h * qd, q0 + 0.5_dp * h * qd, stat)
-    call energy_of_model(model, integ%q, integ%p, e0, ok)
+    call energy_of_model(model, integ%configuration(), integ%momentum(), e0, ok)
     s%h0 = e0
     n_e = 0; nonfinite_steps = 0
     call system_clock(c0, rate)
     do k = 1, nsteps
       call integ%step(1, stat)
       if (stat /= VCI_OK) then
-        s%status = stat; s%message = integ%message; exit
+        s%status = stat; s%message = integ%message(); exit
       end if
       s%steps = k
-      if (.not. (all(ieee_is_finite(integ%q)) .and. all(ieee_is_finite(integ%p)))) &
+      if (.not. (all(ieee_is_finite(integ%configuration())) .and. all(ieee_is_finite(integ%momentum())))) &
         nonfinite_steps = nonfinite_steps + 1
-      if (integ%stepper%n_impacts > 0) then
-        call energy_of_model(model, integ%q, integ%p, e, ok)
+      if (integ%impact_count() > 0) then
+        call energy_of_model(model, integ%configuration(), integ%momentum(), e, ok)
         s%max_dh = max(s%max_dh, abs(e - e0))
         if (n_e < size(e_after)) then
           n_e = n_e + 1; e_after(n_e) = e - e0
         end if
-        s%max_impacts_step = max(s%max_impacts_step, integ%stepper%n_impacts)
+        s%max_impacts_step = max(s%max_impacts_step, integ%impact_count())
       end if
     end do
     call system_clock(c1)
     s%seconds = real(c1 - c0, dp) / real(rate, dp)
-    call energy_of_model(model, integ%q, integ%p, e, ok)
+    call energy_of_model(model, integ%configuration(), integ%momentum(), e, ok)
     s%max_dh = max(s%max_dh, abs(e - e0))
     s%finite = (nonfinite_steps == 0) .and. ieee_is_finite(e)
-    s%impacts = integ%stats%impacts
-    s%solves = integ%stats%newton_solves
-    s%iterations = integ%stats%newton_iterations
-    s%fallbacks = integ%stats%fallbacks
+    stats = integ%statistics()
+    s%impacts = stats%impacts
+    s%solves = stats%newton_solves
+    s%iterations = stats%newton_iterations
+    s%fallbacks = stats%fallbacks
   end subroutine ellipse_long_case
 
   !> Growth law of a cumulative sequence e(1:n) (the energy after each impact): for lags

@@ -4,7 +4,7 @@
 !> q = (x, y, z); L_d(q, v, h) = h [ m |(v_xy - q_xy)/h|^2 / 2 - m g (q_y + v_y)/2 ]: z carries no
 !> kinetic energy. With `tied` the nonholonomic form omega = dz - dx (discrete: ((v_z - q_z) -
 !> (v_x - q_x))/h = 0) makes z follow x and the augmented Newton matrix regular (the situation of the
-!> pendulum at theta = pi, DESIGN.md §2); without it z is undetermined and the matrix is singular.
+!> pendulum at theta = pi, docs/DESIGN.md §8); without it z is undetermined and the matrix is singular.
 !> Floor y >= 0.
 module vci_stab_models
   use vci_kinds, only: dp

@@ -63,46 +63,48 @@ contains
     real(dp) :: e, eb, ea
     real(dp), allocatable :: g(:)
     logical :: ok, have_h0, oka, okb
+    type(vci_stats_t) :: stats
+    type(vci_impact_t) :: imp
 
     call init_summary(s)
     allocate (g(max(1, model%n_gaps)))
     have_h0 = .false.
-    call energy_of_model(model, integ%q, integ%p, e, ok)
+    call energy_of_model(model, integ%configuration(), integ%momentum(), e, ok)
     if (ok) then
       s%h0 = e; have_h0 = .true.
     end if
     call system_clock(c0, rate)
     do k = 1, nsteps
-      it0 = integ%stats%newton_iterations
+      stats = integ%statistics(); it0 = stats%newton_iterations
       call integ%step(1, stat)
-      s%max_iterations_step = max(s%max_iterations_step, int(integ%stats%newton_iterations - it0))
+      stats = integ%statistics()
+      s%max_iterations_step = max(s%max_iterations_step, int(stats%newton_iterations - it0))
       if (stat /= VCI_OK) then
-        s%status = stat; s%message = integ%message
+        s%status = stat; s%message = integ%message()
         exit
       end if
       s%steps = k
-      s%max_impacts_step = max(s%max_impacts_step, integ%stepper%n_impacts)
-      do i = 1, integ%stepper%n_impacts
-        associate (imp => integ%stepper%impacts(i))
-          s%worst_stage_residual = max(s%worst_stage_residual, imp%stage1_residual, imp%stage2_residual)
-          if (s%kept < max_kept) then
-            s%kept = s%kept + 1
-            s%impact_t(s%kept) = imp%t; s%impact_alpha(s%kept) = imp%alpha; s%impact_wall(s%kept) = imp%gap
-            call energy_of_model(model, imp%q, imp%p_before, eb, okb)
-            call energy_of_model(model, imp%q, imp%p_after, ea, oka)
-            if (oka .and. okb) s%impact_dh(s%kept) = ea - eb
-          end if
-        end associate
+      s%max_impacts_step = max(s%max_impacts_step, integ%impact_count())
+      do i = 1, integ%impact_count()
+        imp = integ%impact(i)
+        s%worst_stage_residual = max(s%worst_stage_residual, imp%stage1_residual, imp%stage2_residual)
+        if (s%kept < max_kept) then
+          s%kept = s%kept + 1
+          s%impact_t(s%kept) = imp%t; s%impact_alpha(s%kept) = imp%alpha; s%impact_wall(s%kept) = imp%gap
+          call energy_of_model(model, imp%q, imp%p_before, eb, okb)
+          call energy_of_model(model, imp%q, imp%p_after, ea, oka)
+          if (oka .and. okb) s%impact_dh(s%kept) = ea - eb
+        end if
       end do
-      if (.not. (all(ieee_is_finite(integ%q)) .and. all(ieee_is_finite(integ%p)))) s%finite = .false.
-      s%max_abs_q = max(s%max_abs_q, maxval(abs(integ%q)))
-      s%max_abs_p = max(s%max_abs_p, maxval(abs(integ%p)))
+      if (.not. (all(ieee_is_finite(integ%configuration())) .and. all(ieee_is_finite(integ%momentum())))) s%finite = .false.
+      s%max_abs_q = max(s%max_abs_q, maxval(abs(integ%configuration())))
+      s%max_abs_p = max(s%max_abs_p, maxval(abs(integ%momentum())))
       if (model%n_gaps > 0) then
         st = 0
-        call model%gaps(integ%q, g, st)
+        call model%gaps(integ%configuration(), g, st)
         s%min_gap = min(s%min_gap, minval(g))
       end if
-      call energy_of_model(model, integ%q, integ%p, e, ok)
+      call energy_of_model(model, integ%configuration(), integ%momentum(), e, ok)
       if (ok) then
         if (.not. have_h0) then
           s%h0 = e; have_h0 = .true.
@@ -112,9 +114,10 @@ contains
     end do
     call system_clock(c1)
     s%seconds = real(c1 - c0, dp) / real(rate, dp)
-    s%impacts = integ%stats%impacts
-    s%solves = integ%stats%newton_solves
-    s%iterations = integ%stats%newton_iterations
-    s%fallbacks = integ%stats%fallbacks
+    stats = integ%statistics()
+    s%impacts = stats%impacts
+    s%solves = stats%newton_solves
+    s%iterations = stats%newton_iterations
+    s%fallbacks = stats%fallbacks
   end subroutine run_steps
 end module vci_stab_run

@@ -1,4 +1,4 @@
-!> Exact event-driven reference for the bouncing ellipse (DESIGN.md §2): q = (θ, x, y), free flight
+!> Exact event-driven reference for the bouncing ellipse (docs/DESIGN.md §8): q = (θ, x, y), free flight
 !> under gravity, floor gap g(q) = y − φ(θ) with φ(θ) = sqrt(a² sin²θ + b² cos²θ), frictionless
 !> elastic impacts. Independent of the vci library.
 !>

@@ -1,4 +1,4 @@
-!> High-accuracy reference for the pendulum in a cylinder (DESIGN.md §2): q = (θ, φ),
+!> High-accuracy reference for the pendulum in a cylinder (docs/DESIGN.md §8): q = (θ, φ),
 !> L = ½mℓ²(θ̇² + φ̇² sin²θ) − m g ℓ cos θ, constraint φ̇ = f(θ) θ̇ with f = π + cos²θ, wall gap
 !> R² − ℓ² sin²θ >= 0. Independent of the vci library.
 !>
@@ -64,7 +64,7 @@ contains
   !> φ̇ at t_final is f(theta)*thetadot. A start on the wall moving out bounces at t = 0 (not
   !> listed). Walls are detected by the gap's sign at the grid points (spacing par%step): a turn
   !> that only grazes the wall between two of them is not seen. With the default step the
-  !> impact times of the paper's run agree with quadrature to 1e-13 over 100 s (DESIGN.md §2
+  !> impact times of the paper's run agree with quadrature to 1e-13 over 100 s (docs/DESIGN.md §8
   !> scene; tools/reference/references.py). On a nonzero status the outputs hold the state
   !> reached so far.
   subroutine pendulum_exact(par, theta0, thetadot0, phi0, t_final, theta, phi, thetadot, &

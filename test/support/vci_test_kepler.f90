@@ -53,7 +53,7 @@ contains
     real(dp) :: r
     integer :: i
     if (.not. self%analytic_hessians) then
-      stat = VCI_NOT_PROVIDED; return
+      call self%not_provided(stat); return
     end if
     r = norm2(q)
     do i = 1, 2

@@ -66,7 +66,7 @@ mkdir -p "$(dirname "$OUT")"
   echo "- libvci: ${libvci:-static}; LAPACK/BLAS: ${lapack:-unknown}"
   echo "- commit: $(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)$(git -C "$ROOT" diff --quiet HEAD 2>/dev/null || echo ' (with uncommitted changes)')"
   echo
-  echo "Scenes as in the examples (DESIGN.md §2): particle h = 1e-2 over 3 s, ellipse h = 1e-2 over"
+  echo "Scenes as in the examples (docs/DESIGN.md §8): particle h = 1e-2 over 3 s, ellipse h = 1e-2 over"
   echo "2 s, pendulum h = 1e-3 over 5 s; each episode starts again from the initial pair. Variants:"
   echo "the library with the model's analytic mixed Hessian, the library differencing it, and the"
   echo "hand loop of bench/hand_loops.f90 (closed-form free flight and impacts for the particle and"

@@ -16,7 +16,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-# The ellipse of the paper (DESIGN.md 2): semi-axes a (along angle theta) and b, floor y = 0.
+# The ellipse of the paper (docs/DESIGN.md 8): semi-axes a (along angle theta) and b, floor y = 0.
 A, B = 1.0, 0.5
 
 

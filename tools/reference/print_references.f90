@@ -1,4 +1,4 @@
-!> Prints the reference solutions of the three scenes (DESIGN.md §2) with self-checks.
+!> Prints the reference solutions of the three scenes (docs/DESIGN.md §8) with self-checks.
 !>   print_references          human-readable summary
 !>   print_references times    one "name count value ..." line per series, read by
 !>                             tools/reference/references.py

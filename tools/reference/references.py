@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Independent cross-checks of the Fortran reference solutions (test/support/vci_ref_*.f90).
 
-Scenes and parameters: DESIGN.md section 2. Three independent computations:
+Scenes and parameters: docs/DESIGN.md section 8. Three independent computations:
 
 * scipy solve_ivp (DOP853, rtol = atol = 1e-12) with terminal events and the impact map applied
   between restarts, for the ellipse and for the pendulum. The pendulum is integrated here as the

@@ -74,7 +74,7 @@ contains
       mu = -2.0_c_double * dot_product(n, y(4:6)) / dot_product(n, minv * n)
       y(4:6) = y(4:6) + mu * minv * n
     case default
-      y(3:4) = -y(3:4)   ! the velocity on the constraint that keeps the energy (DESIGN.md §2)
+      y(3:4) = -y(3:4)   ! the velocity on the constraint that keeps the energy (docs/DESIGN.md §8)
     end select
   end subroutine scene_impact
 

@@ -142,7 +142,7 @@ def full_table(rows, scene):
 
 def order_fit(rows, scene, method):
     """Least-squares slope of log(final error) against log(h) over 1e-4 <= h <= 2e-2: eight step
-    sizes over two decades (DESIGN.md §2), above the small-h floor discussed in the reading."""
+    sizes over two decades (docs/DESIGN.md §8), above the small-h floor discussed in the reading."""
     pts = [(math.log(r["param"]), math.log(r["err_final"])) for r in rows
            if r["scene"] == scene and r["method"] == method and r["status"] == 0
            and 1e-4 * (1 - 1e-9) <= r["param"] and r["err_final"] > 0]
@@ -263,7 +263,7 @@ def main(outdir, root):
     w(f"Last run: {meta['date']} on {meta['nproc']} cores ({meta['cpu']}); the whole command took "
       f"**{meta['elapsed_s'] / 60:.1f} min**; vci at commit {meta.get('commit', '?')}. Versions: {meta['versions']}.\n")
     w("## What is measured\n")
-    w("- **Scenes** (DESIGN.md §2, the paper's set-ups): the particle bouncing on the floor "
+    w("- **Scenes** (docs/DESIGN.md §8, the paper's set-ups): the particle bouncing on the floor "
       "(y0 = 1, ẋ = 1, T = 3 s, 3 impacts), the ellipse (T = 3 s, 3 impacts — it is chaotic, so only "
       "over a horizon where every method's impact sequence still follows the exact one), the "
       "nonholonomic pendulum in the cylinder (T = 5 s, 3 impacts).\n"

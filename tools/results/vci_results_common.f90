@@ -1,4 +1,4 @@
-!> Shared by the results drivers (vci and CVODE): the three scenes' set-ups (DESIGN.md §2), their
+!> Shared by the results drivers (vci and CVODE): the three scenes' set-ups (docs/DESIGN.md §8), their
 !> independent references (test/support/vci_ref_*.f90), the error measures and the timers.
 !>
 !> Error measures, the same for every method:
@@ -22,7 +22,7 @@ module vci_results_common
   character(len=8), parameter, public :: scene_names(3) = [character(len=8) :: 'particle', 'ellipse', 'pendulum']
 
   !> Horizons: particle and pendulum as in the examples; the ellipse is chaotic, so only as far as
-  !> the coarsest step's impact sequence still follows the exact one (DESIGN.md §2).
+  !> the coarsest step's impact sequence still follows the exact one (docs/DESIGN.md §8).
   real(rk), parameter, public :: t_final(3) = [3.0_rk, 3.0_rk, 5.0_rk]
 
   ! physical parameters (the paper's)

@@ -200,18 +200,18 @@ contains
     rec%e0 = exact_energy0(scene)
     allocate (rec%times(64), rec%sample_t(1), rec%sample_e(1))
     if (stat == VCI_OK) then
-      e = energy_at(rec, integ%q, integ%p)
+      e = energy_at(rec, integ%configuration(), integ%momentum())
       rec%emax = abs(e - rec%e0)
       call integ%integrate(nsteps, 1, stat, rec)
     end if
     if (stat /= VCI_OK) then
-      write (error_unit, '(a,es9.2,a)') trim(scene_names(scene))//' h = ', h, ': '//trim(integ%message)
+      write (error_unit, '(a,es9.2,a)') trim(scene_names(scene))//' h = ', h, ': '//integ%message()
       write (unit, '(a,",",a,",",es10.3,",",10(a,","),i0)') trim(scene_names(scene)), trim(mode_name(impact_mode)), &
         h, ('nan', r = 1, 10), stat
       return
     end if
-    call reference_at(scene, integ%t, qref, qdref, tref, rstat)
-    err_final = maxval(abs(integ%q - qref))
+    call reference_at(scene, integ%time(), qref, qdref, tref, rstat)
+    err_final = maxval(abs(integ%configuration() - qref))
     err_impact = impact_time_error(tref, rec%times, rec%n_impacts)
 
     ! timed repeats: more of them for short runs
@@ -304,11 +304,11 @@ contains
       rec%model => model
       allocate (rec%times(64), rec%sample_t(1), rec%sample_e(1))
       call integ%integrate(steps_to(SCENE_PENDULUM, hs(i), t_final(SCENE_PENDULUM)), 1, stat, rec)
-      if (stat /= VCI_OK .or. rec%n_impacts /= size(tref) .or. abs(integ%t - t_final(SCENE_PENDULUM)) > 1.0e-9_dp) then
+      if (stat /= VCI_OK .or. rec%n_impacts /= size(tref) .or. abs(integ%time() - t_final(SCENE_PENDULUM)) > 1.0e-9_dp) then
         write (error_unit, '(a,es10.3)') 'richardson: run failed or impact count differs at h = ', hs(i)
         stop 1
       end if
-      q(:, i) = integ%q
+      q(:, i) = integ%configuration()
       ti(:, i) = rec%times(1:3)
     end do
     open (newunit=unit, file=path, status='replace', action='write')
@@ -350,12 +350,12 @@ contains
       allocate (rec%times(1024), rec%sample_t(1024), rec%sample_e(1024))
       call start(SCENE_ELLIPSE, model, h, modes(imode), integ, stat)
       ! drift from the run's own first state (the initial pair's O(h^2) energy offset is not drift)
-      rec%e0 = energy_at(rec, integ%q, integ%p)
+      rec%e0 = energy_at(rec, integ%configuration(), integ%momentum())
       call integ%integrate(nsteps - 1_i8, 1, stat, rec)
-      if (stat /= VCI_OK) write (error_unit, '(a)') 'long run: '//trim(integ%message)
+      if (stat /= VCI_OK) write (error_unit, '(a)') 'long run: '//integ%message()
       write (sunit, '(a,",",es10.3,",",es12.5,",",es12.5,",",es12.5,",",es12.5,",",i0,",",es14.7,",",i0)') &
         trim(mode_name(modes(imode))), h, median(walls), median(cpus), rec%emax, rec%sample_e(rec%n_samples), &
-        rec%n_impacts, integ%t, stat
+        rec%n_impacts, integ%time(), stat
       open (newunit=unit, file=dir//'/long_'//trim(mode_name(modes(imode)))//'.csv', status='replace', action='write')
       write (unit, '(a)') 't,energy_error'
       do i = 1, rec%n_samples

@@ -1,0 +1,93 @@
+!> The checkpoint: everything the driver needs to continue a run bit for bit (docs/DESIGN.md §5),
+!> as a type of its own with named fields and a version, so that any output can store it and read it
+!> back without knowing the driver. The driver produces it (`integ%checkpoint()`) and consumes it
+!> (`integ%restore(cp, stat)`); an output that can restart stores `to_record()` and rebuilds it with
+!> `from_record`, the only place that knows the order of the fields in the flat record.
+module vci_checkpoint
+  use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
+  use vci_kinds, only: dp, i8
+  use vci_status, only: VCI_OK, VCI_ERR_ARGUMENT
+  implicit none
+  private
+
+  !> Layout version of the checkpoint (bumped whenever a field is added, removed or reordered).
+  integer, parameter, public :: VCI_CHECKPOINT_VERSION = 1
+
+  !> Scalars at the head of the record: step, t0, h, step_energy, arriving_energy, arriving_direction.
+  integer, parameter :: head = 6
+
+  type, public :: vci_checkpoint_t
+    integer :: version = VCI_CHECKPOINT_VERSION
+    real(dp) :: t0 = 0.0_dp                 !< time of index 0: t = t0 + step * h without drift
+    real(dp) :: h = 0.0_dp                  !< step length the run used (a restore must match it)
+    integer(i8) :: step = 0_i8              !< index of the state
+    real(dp), allocatable :: q(:), p(:)     !< configuration and momentum
+    real(dp), allocatable :: lambda(:)      !< multipliers of the last step (size m)
+    real(dp), allocatable :: velocity(:)    !< forward-time velocity of the last sub-step: Newton's first guess
+    real(dp) :: step_energy = 0.0_dp        !< E_d of the last step (NaN before the first)
+    real(dp) :: arriving_energy = 0.0_dp    !< E_d of the sub-step that arrived at q (a start on a wall needs it)
+    integer :: arriving_direction = 0       !< direction in which arriving_energy is known (0: unknown)
+  contains
+    procedure :: to_record
+    procedure :: from_record
+    procedure :: time
+  end type vci_checkpoint_t
+
+  public :: vci_checkpoint_record_size, vci_checkpoint_from_state
+
+contains
+
+  !> Length of the flat record of a model with n coordinates and m constraints.
+  pure integer function vci_checkpoint_record_size(n, m)
+    integer, intent(in) :: n, m
+    vci_checkpoint_record_size = head + 3 * n + m
+  end function vci_checkpoint_record_size
+
+  !> The time of the checkpoint's state.
+  pure real(dp) function time(self)
+    class(vci_checkpoint_t), intent(in) :: self
+    time = self%t0 + real(self%step, dp) * self%h
+  end function time
+
+  !> The checkpoint as one float64 vector [step, t0, h, step_energy, arriving_energy,
+  !> arriving_direction, q(n), p(n), velocity(n), lambda(m)] (integers are exact in float64), so that
+  !> an output writes it in one piece. The version is stored beside it by the output.
+  pure function to_record(self) result(rec)
+    class(vci_checkpoint_t), intent(in) :: self
+    real(dp), allocatable :: rec(:)
+    rec = [real(self%step, dp), self%t0, self%h, self%step_energy, self%arriving_energy, &
+           real(self%arriving_direction, dp), self%q, self%p, self%velocity, self%lambda]
+  end function to_record
+
+  !> Rebuild from a record of `version` written by to_record for sizes n, m.
+  subroutine from_record(self, rec, n, m, version, stat)
+    class(vci_checkpoint_t), intent(inout) :: self
+    real(dp), intent(in) :: rec(:)
+    integer, intent(in) :: n, m, version
+    integer, intent(out) :: stat
+    stat = VCI_ERR_ARGUMENT
+    if (version /= VCI_CHECKPOINT_VERSION .or. size(rec) /= vci_checkpoint_record_size(n, m)) return
+    self%version = version
+    self%step = nint(rec(1), i8); self%t0 = rec(2); self%h = rec(3)
+    self%step_energy = rec(4); self%arriving_energy = rec(5); self%arriving_direction = nint(rec(6))
+    self%q = rec(head + 1:head + n)
+    self%p = rec(head + n + 1:head + 2 * n)
+    self%velocity = rec(head + 2 * n + 1:head + 3 * n)
+    self%lambda = rec(head + 3 * n + 1:head + 3 * n + m)
+    stat = VCI_OK
+  end subroutine from_record
+
+  !> A checkpoint that knows only a state (t, q, p, lambda) and the step length, as read from an
+  !> output that stores no checkpoint: index 0 at t, no solver memory (like init_from_momentum).
+  function vci_checkpoint_from_state(t, h, q, p, lambda) result(cp)
+    real(dp), intent(in) :: t, h, q(:), p(:), lambda(:)
+    type(vci_checkpoint_t) :: cp
+    cp%t0 = t; cp%h = h; cp%step = 0_i8
+    cp%q = q; cp%p = p; cp%lambda = lambda
+    allocate (cp%velocity(size(q)))
+    cp%velocity = 0.0_dp
+    cp%arriving_direction = 0
+    cp%arriving_energy = ieee_value(1.0_dp, ieee_quiet_nan)
+    cp%step_energy = ieee_value(1.0_dp, ieee_quiet_nan)
+  end function vci_checkpoint_from_state
+end module vci_checkpoint
