@@ -22,7 +22,7 @@ module vci_ensemble_h5
   use vci_status, only: VCI_OK, VCI_ERR_IO, VCI_ERR_ARGUMENT, VCI_MSG_LEN
   use vci_ensemble, only: vci_ensemble_config_t, vci_ensemble_table_t, vci_ensemble_results_t, &
                           vci_ensemble_samples, vci_ensemble_results_alloc, vci_ensemble_size, &
-                          VCI_MEMBER_NOT_RUN, VCI_START_PAIR
+                          VCI_MEMBER_NOT_RUN, VCI_START_PAIR, VCI_START_MOMENTUM
   implicit none
   private
 
@@ -108,6 +108,9 @@ contains
     call h5pcreate_f(H5P_FILE_ACCESS_F, fapl, err)
 #ifdef VCI_HAVE_MPI
     if (err == 0) call h5pset_fapl_mpio_f(fapl, comm%MPI_VAL, MPI_INFO_NULL%MPI_VAL, err)
+#else
+    ! no data sieving: each block of members goes to the file when written, not when a buffer fills
+    if (err == 0) call h5pset_sieve_buf_size_f(fapl, 0_size_t, err)
 #endif
     if (err == 0) then
       if (replace) then
@@ -285,15 +288,18 @@ contains
   end subroutine f_close
 
   !> Read a whole ensemble file (any number of ranks wrote it) into `results` (all members) and,
-  !> optionally, its table. Serial: call it from one process.
-  subroutine vci_ensemble_read(path, results, stat, message, table)
+  !> optionally, its table and the configuration it was run with (threads and chunk as recorded).
+  !> Serial: call it from one process.
+  subroutine vci_ensemble_read(path, results, stat, message, table, config)
     character(len=*), intent(in) :: path
     type(vci_ensemble_results_t), intent(out), target :: results
     integer, intent(out) :: stat
     character(len=*), intent(out), optional :: message
     type(vci_ensemble_table_t), intent(out), optional, target :: table
+    type(vci_ensemble_config_t), intent(out), optional :: config
     type(vci_ensemble_file_t) :: f
     type(vci_ensemble_config_t) :: cfg
+    character(len=:), allocatable :: text
     integer(hid_t) :: fapl
     integer :: err, e2, nm, j
     integer(i8) :: stride, nsteps
@@ -319,8 +325,18 @@ contains
     call get_attr_int(f, 'impact_cap', cfg%impact_cap, stat)
     call get_attr_i8(f, 'stride', stride, stat)
     call get_attr_i8(f, 'nsteps', nsteps, stat)
+    call get_attr_real(f, 'h', cfg%h, stat)
+    call get_attr_int(f, 'direction', cfg%direction, stat)
+    call get_attr_int(f, 'impact_energy', cfg%impact_energy, stat)
+    call get_attr_int(f, 'threads', cfg%threads, stat)
+    call get_attr_int(f, 'chunk', cfg%chunk, stat)
+    call get_attr_str(f, 'start_kind', text, stat)
+    if (text /= 'pair') cfg%start_kind = VCI_START_MOMENTUM
+    call get_attr_str(f, 'name', text, stat)
+    cfg%name = text
     f%n_members = nm
     cfg%stride = stride; cfg%nsteps = nsteps
+    if (present(config)) config = cfg
     f%impact_cap = cfg%impact_cap
     f%samples = vci_ensemble_samples(cfg)
     if (stat == VCI_OK) call vci_ensemble_results_alloc(results, cfg, f%n, 1, nm, stat, msg)
@@ -524,7 +540,9 @@ contains
     integer(hid_t) :: stype
     integer :: err, e2
     if (stat /= VCI_OK) return
-    buf = text
+    ! null-padded like the dataset's type: readers see the message without trailing blanks
+    buf = repeat(achar(0), VCI_ENSEMBLE_MESSAGE_LEN)
+    buf(1:min(len_trim(text), VCI_ENSEMBLE_MESSAGE_LEN)) = text
     call string_type(stype, err)
     if (err == 0) call put_raw(self, D_MESSAGE, stype, c_loc(buf), [1], member, 1, stat)
     call h5tclose_f(stype, e2)
@@ -696,6 +714,48 @@ contains
     call h5aclose_f(attr, e2)
     if (err /= 0) call fail(self, 'attribute '//name//' missing or unreadable', stat)
   end subroutine get_attr_int
+
+  subroutine get_attr_real(self, name, v, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    character(len=*), intent(in) :: name
+    real(dp), intent(out) :: v
+    integer, intent(inout) :: stat
+    integer(hid_t) :: attr
+    integer :: err, e2
+    v = 0.0_dp
+    if (stat /= VCI_OK) return
+    call h5aopen_f(self%file, name, attr, err)
+    if (err == 0) call h5aread_f(attr, H5T_NATIVE_DOUBLE, v, [1_hsize_t], err)
+    call h5aclose_f(attr, e2)
+    if (err /= 0) call fail(self, 'attribute '//name//' missing or unreadable', stat)
+  end subroutine get_attr_real
+
+  subroutine get_attr_str(self, name, v, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    character(len=*), intent(in) :: name
+    character(len=:), allocatable, intent(out) :: v
+    integer, intent(inout) :: stat
+    integer(hid_t) :: attr, ftype
+    integer(size_t) :: sz
+    integer :: err, e2, k
+    v = ''
+    if (stat /= VCI_OK) return
+    call h5aopen_f(self%file, name, attr, err)
+    if (err == 0) call h5aget_type_f(attr, ftype, err)
+    if (err == 0) call h5tget_size_f(ftype, sz, err)
+    if (err == 0) then
+      deallocate (v)
+      allocate (character(len=sz) :: v)
+      call h5aread_f(attr, ftype, v, [1_hsize_t], err)
+      call h5tclose_f(ftype, e2)
+    end if
+    call h5aclose_f(attr, e2)
+    if (err /= 0) then
+      call fail(self, 'attribute '//name//' missing or unreadable', stat); return
+    end if
+    k = index(v, achar(0))
+    if (k > 0) v = v(1:k - 1)
+  end subroutine get_attr_str
 
   subroutine get_attr_i8(self, name, v, stat)
     type(vci_ensemble_file_t), intent(inout) :: self

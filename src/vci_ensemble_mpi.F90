@@ -56,7 +56,8 @@ contains
     type(MPI_Comm), intent(in), optional :: comm
     type(MPI_Comm) :: com
     type(MPI_Win) :: win
-    integer :: ierr, flag
+    integer :: ierr
+    logical :: flag
     integer :: sums(2), stats(2)
 #endif
     type(vci_ensemble_file_t) :: file
