@@ -3,6 +3,7 @@
 
   check_files.py same FILE...     every file has the documented layout, is complete, and all hold
                                   bitwise the same /members (whatever ranks, threads, chunks wrote them)
+                                  and, when there is one, the same /analysis (ellipse_ensemble's)
   check_files.py done FILE        print how many members the file holds (status != -1); 0 if unreadable
   check_files.py killed FILE      a killed run's file: opens, not complete, holds some members, and
                                   every member it holds has all its datasets written
@@ -68,7 +69,12 @@ def same(paths):
                 fail(f"{path}: not complete")
             if np.any(f["members/status"][:] < 0):
                 fail(f"{path}: members not run")
-            data = {k: f["members"][k][()].tobytes() for k in names}
+            data = {"members/" + k: f["members"][k][()].tobytes() for k in names}
+            if "analysis" in f:  # the example's own numbers, compared as well
+                for k, d in f["analysis"].items():
+                    data["analysis/" + k] = d[()].tobytes()
+                for k, v in f["analysis"].attrs.items():
+                    data["analysis@" + k] = np.asarray(v).tobytes()
             ranks = sorted(set(f["run/rank"][:].tolist()))
             print(f"{path}: {f.attrs['n_members']} members, ranks {ranks} (of {f.attrs['ranks']}), "
                   f"threads {f.attrs['threads']}, chunk {f.attrs['chunk']}, failed {f.attrs['members_failed']}")
@@ -77,10 +83,12 @@ def same(paths):
         if ref is None:
             ref, ref_path = data, path
         else:
-            for k in names:
+            if sorted(data) != sorted(ref):
+                fail(f"{ref_path} and {path} hold different datasets")
+            for k in ref:
                 if data[k] != ref[k]:
-                    fail(f"/members/{k} differs bitwise between {ref_path} and {path}")
-    print(f"{len(paths)} files: identical /members")
+                    fail(f"/{k} differs bitwise between {ref_path} and {path}")
+    print(f"{len(paths)} files: identical " + ", ".join(sorted({"/" + k.split("/")[0].split("@")[0] for k in ref})))
 
 
 def done(path):
