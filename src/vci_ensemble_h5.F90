@@ -31,6 +31,9 @@ module vci_ensemble_h5
   !> Characters kept of a failed member's message (`/members/message`).
   integer, parameter, public :: VCI_ENSEMBLE_MESSAGE_LEN = 256
 
+  ! the leading dimensions of a dataset with one value per member: none
+  integer, parameter :: per_member(0) = [integer ::]
+
   ! datasets, in the order of docs/ENSEMBLES.md
   integer, parameter :: D_STATUS = 1, D_MESSAGE = 2, D_T0 = 3, D_Q0 = 4, D_V0 = 5, D_PARAMS = 6, &
                         D_T = 7, D_Q = 8, D_P = 9, D_STEPS = 10, D_IMPACTS = 11, D_NEWTON = 12, &
@@ -211,7 +214,7 @@ contains
     integer, intent(out) :: stat
     stat = VCI_OK
     if (count < 1) return
-    call put_f64(self, D_T0, table%t0(first:first + count - 1), [1], first, count, stat)
+    call put_f64(self, D_T0, table%t0(first:first + count - 1), per_member, first, count, stat)
     call put_f64(self, D_Q0, table%q0(:, first:first + count - 1), [self%n], first, count, stat)
     call put_f64(self, D_V0, table%v0(:, first:first + count - 1), [self%n], first, count, stat)
     if (self%n_params > 0) &
@@ -238,7 +241,7 @@ contains
       if (results%status(j) /= VCI_OK .and. results%status(j) /= VCI_MEMBER_NOT_RUN) &
         call put_message(self, f + j - 1, results%message(j), stat)
     end do
-    call put_f64(self, D_T, results%t, [1], f, c, stat)
+    call put_f64(self, D_T, results%t, per_member, f, c, stat)
     call put_f64(self, D_Q, results%q, [n], f, c, stat)
     call put_f64(self, D_P, results%p, [n], f, c, stat)
     call put_i64(self, D_STEPS, results%steps, f, c, stat)
@@ -248,22 +251,22 @@ contains
       call put_f64(self, D_IMPT, results%impact_t, [self%impact_cap], f, c, stat)
       call put_i32(self, D_IMPGAP, results%impact_gap, [self%impact_cap], f, c, stat)
     end if
-    call put_i32(self, D_EKIND, results%energy_kind, [1], f, c, stat)
-    call put_f64(self, D_E0, results%energy_start, [1], f, c, stat)
-    call put_f64(self, D_E1, results%energy_end, [1], f, c, stat)
-    call put_f64(self, D_DE, results%energy_change, [1], f, c, stat)
+    call put_i32(self, D_EKIND, results%energy_kind, per_member, f, c, stat)
+    call put_f64(self, D_E0, results%energy_start, per_member, f, c, stat)
+    call put_f64(self, D_E1, results%energy_end, per_member, f, c, stat)
+    call put_f64(self, D_DE, results%energy_change, per_member, f, c, stat)
     if (self%samples > 0) then
-      call put_i32(self, D_TRCOUNT, results%traj_count, [1], f, c, stat)
+      call put_i32(self, D_TRCOUNT, results%traj_count, per_member, f, c, stat)
       call put_f64(self, D_TRT, results%traj_t, [self%samples], f, c, stat)
       call put_f64(self, D_TRQ, results%traj_q, [n, self%samples], f, c, stat)
       call put_f64(self, D_TRP, results%traj_p, [n, self%samples], f, c, stat)
     end if
     allocate (ranks(c))
     ranks = rank
-    call put_i32(self, D_RANK, ranks, [1], f, c, stat)
-    call put_i32(self, D_THREAD, results%thread, [1], f, c, stat)
-    call put_f64(self, D_SECONDS, results%seconds, [1], f, c, stat)
-    call put_i32(self, D_STATUS, results%status, [1], f, c, stat)
+    call put_i32(self, D_RANK, ranks, per_member, f, c, stat)
+    call put_i32(self, D_THREAD, results%thread, per_member, f, c, stat)
+    call put_f64(self, D_SECONDS, results%seconds, per_member, f, c, stat)
+    call put_i32(self, D_STATUS, results%status, per_member, f, c, stat)
   end subroutine f_write_results
 
   !> Record how many members ran and failed, mark the file complete when all ran, and close it.
@@ -465,7 +468,8 @@ contains
     if (err == 0) call h5tset_strpad_f(stype, H5T_STR_NULLPAD_F, err)
   end subroutine string_type
 
-  !> Select members first .. first + count - 1 of dataset `which` (leading dimensions `lead`, whole).
+  !> Select members first .. first + count - 1 of dataset `which` (leading dimensions `lead`, whole;
+  !> none for a dataset of one value per member).
   subroutine select_members(self, which, lead, first, count, fspace, mspace, err)
     type(vci_ensemble_file_t), intent(inout) :: self
     integer, intent(in) :: which, lead(:), first, count
@@ -474,13 +478,8 @@ contains
     integer(hsize_t) :: offset(size(lead) + 1), cnt(size(lead) + 1)
     integer :: r
     r = size(lead) + 1
-    if (size(lead) == 1 .and. lead(1) == 1) then
-      r = 1
-      offset(1) = int(first - 1, hsize_t); cnt(1) = int(count, hsize_t)
-    else
-      offset(1:r - 1) = 0; cnt(1:r - 1) = int(lead, hsize_t)
-      offset(r) = int(first - 1, hsize_t); cnt(r) = int(count, hsize_t)
-    end if
+    offset(1:r - 1) = 0; cnt(1:r - 1) = int(lead, hsize_t)
+    offset(r) = int(first - 1, hsize_t); cnt(r) = int(count, hsize_t)
     mspace = -1
     call h5dget_space_f(self%d(which), fspace, err)
     if (err == 0) call h5sselect_hyperslab_f(fspace, H5S_SELECT_SET_F, offset(1:r), cnt(1:r), err)
@@ -528,7 +527,7 @@ contains
     integer(i8), intent(in), target :: buf(:)
     integer, intent(in) :: first, count
     integer, intent(inout) :: stat
-    call put_raw(self, which, h5kind_to_type(i8, H5_INTEGER_KIND), c_loc(buf), [1], first, count, stat)
+    call put_raw(self, which, h5kind_to_type(i8, H5_INTEGER_KIND), c_loc(buf), per_member, first, count, stat)
   end subroutine put_i64
 
   subroutine put_message(self, member, text, stat)
@@ -544,7 +543,7 @@ contains
     buf = repeat(achar(0), VCI_ENSEMBLE_MESSAGE_LEN)
     buf(1:min(len_trim(text), VCI_ENSEMBLE_MESSAGE_LEN)) = text
     call string_type(stype, err)
-    if (err == 0) call put_raw(self, D_MESSAGE, stype, c_loc(buf), [1], member, 1, stat)
+    if (err == 0) call put_raw(self, D_MESSAGE, stype, c_loc(buf), per_member, member, 1, stat)
     call h5tclose_f(stype, e2)
   end subroutine put_message
 

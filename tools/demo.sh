@@ -2,7 +2,8 @@
 # The demo: build vci, run the paper's ellipse and pendulum, and draw the paper's four figures.
 #   bash tools/demo.sh
 # On a fresh Debian 12 run as root it first installs what is missing (apt-get). Leaves the runs'
-# .h5 files, fig1..fig4 PNGs and the ellipse ensemble's plot in demo-output/ (next to build/, in the repository root).
+# .h5 files, fig1..fig4 PNGs and the ellipse ensemble's plot in demo-output/ (next to build/, in the
+# repository root).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
