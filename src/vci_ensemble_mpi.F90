@@ -3,9 +3,10 @@
 !> file together through parallel HDF5; built without MPI the same loop runs in one process.
 !>
 !> Load balance is dynamic (self-scheduling): a shared counter on rank 0, advanced with
-!> MPI_Fetch_and_op (passive-target one-sided communication), hands out blocks of `chunk`
-!> consecutive members to whichever rank asks next; each rank's OpenMP threads run the block
-!> (dynamic schedule) and the rank writes it to the file at once (independent I/O) and asks again.
+!> MPI_Fetch_and_op (passive-target one-sided communication), hands out blocks of consecutive
+!> members to whichever rank asks next — `chunk` of them, or (chunk = 0) blocks that shrink as the
+!> members run out (guided self-scheduling); each rank's OpenMP threads run the block (dynamic
+!> schedule) and the rank writes it to the file at once (independent I/O) and asks again.
 !> Impact-rich members cost more than others, so a fixed split would leave ranks idle.
 !>
 !> Results do not depend on the number of ranks, threads, or on the chunk: each member is run by
@@ -63,7 +64,7 @@ contains
     type(vci_ensemble_file_t) :: file
     type(vci_ensemble_results_t) :: res
     character(len=VCI_MSG_LEN) :: msg
-    integer :: rank, nranks, nt, chunk, n_members, first, cnt, i, s, run, failed, share0, share1
+    integer :: rank, nranks, nt, chunk, n_members, first, cnt, i, s, run, failed, share0, share1, take, taken
     integer(i8) :: next_local
 
     rank = 0; nranks = 1
@@ -101,9 +102,9 @@ contains
     n_members = vci_ensemble_size(table)
     nt = max(1, config%threads)
     !$ if (config%threads <= 0) nt = omp_get_max_threads()
+    ! the chunk recorded in the file: the fixed one, or the largest automatic one
     chunk = config%chunk
-    ! automatic: at least one member per thread, at most 16, and some 16 claims per rank
-    if (chunk <= 0) chunk = max(nt, min(16 * nt, n_members / (16 * nranks)))
+    if (chunk <= 0) chunk = max_auto_chunk(nt)
 
 #ifdef VCI_HAVE_MPI
     call file%create(path, config, table, nranks, nt, chunk, stat, overwrite, com)
@@ -129,15 +130,18 @@ contains
     call counter_open(com, rank, win)
 #endif
     next_local = 0
+    taken = 0
     do
+      take = claim_size(config%chunk, nt, nranks, n_members - taken)
 #ifdef VCI_HAVE_MPI
-      first = int(counter_take(win, chunk)) + 1
+      first = int(counter_take(win, take)) + 1
 #else
       first = int(next_local) + 1
-      next_local = next_local + chunk
+      next_local = next_local + take
 #endif
       if (first > n_members) exit
-      cnt = min(chunk, n_members - first + 1)
+      taken = first - 1 + take          ! members handed out, as far as this rank knows
+      cnt = min(take, n_members - first + 1)
       call vci_ensemble_results_alloc(res, config, size(table%q0, 1), first, cnt, stat, msg)
       if (stat /= VCI_OK) exit
       !$omp parallel do num_threads(nt) schedule(dynamic, 1) default(none) &
@@ -175,6 +179,25 @@ contains
     if (present(members_failed)) members_failed = failed
     if (present(message)) message = msg
   end subroutine vci_ensemble_run_file
+
+  !> Largest automatic claim: 64 members per thread (bounds a block's memory and makes its writes
+  !> worth their cost; the parallel loop's barrier comes once a block).
+  pure integer function max_auto_chunk(nt)
+    integer, intent(in) :: nt
+    max_auto_chunk = 64 * nt
+  end function max_auto_chunk
+
+  !> Members to claim next: `fixed` when given, else guided self-scheduling: a quarter of an even
+  !> share of what remains, between one member per thread and max_auto_chunk, so that claims are
+  !> large while much remains (few barriers and writes) and small at the end (ranks finish together).
+  pure integer function claim_size(fixed, nt, nranks, remaining) result(take)
+    integer, intent(in) :: fixed, nt, nranks, remaining
+    if (fixed > 0) then
+      take = fixed
+    else
+      take = max(nt, min(max_auto_chunk(nt), remaining / (4 * nranks)))
+    end if
+  end function claim_size
 
 #ifdef VCI_HAVE_MPI
   !> Make a status and its message the same on every rank: the worst (largest) status and the
