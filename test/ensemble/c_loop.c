@@ -1,5 +1,5 @@
-/* The C ensemble loop of docs/ENSEMBLES.md ("From C"), as written there: blocks of members whose
- * handles are created and destroyed on one thread and integrated on OpenMP threads. Members are the
+/* The C ensemble loop of docs/ENSEMBLES.md ("From C"), included from the page itself: blocks of
+ * members whose handles are created and destroyed on one thread and integrated on OpenMP threads. Members are the
  * paper's ellipse with its start moved by 1e-12 ... 1e-2; prints every member's status and final
  * state in hexadecimal, so that runs on 1 and 2 threads can be compared bit for bit.
  * Usage: ens_c_loop [n_members] */
@@ -10,8 +10,8 @@
 #include "scenes.h"
 
 int main(int argc, char **argv) {
-  int n_members = argc > 1 ? atoi(argv[1]) : 23, n = 3, ngaps = 1;
-  long nsteps = 1000;
+  int n_members = argc > 1 ? atoi(argv[1]) : 600, n = 3, ngaps = 1;   /* several blocks of 256 */
+  long nsteps = 300;
   double h = 1e-2;
   ellipse_params par = ellipse_default;
   vci_callbacks cb = ellipse_callbacks();
@@ -31,31 +31,10 @@ int main(int argc, char **argv) {
   }
   q0[3 * 3 + 2] = q1[3 * 3 + 2] = 0.1;         /* member 3 starts below the floor: it must fail alone */
 
-  /* ---- the loop of docs/ENSEMBLES.md ---- */
-  enum { B = 5 };                       /* members per block */
-  vci_model model[B]; vci_integrator integ[B]; int st[B];
-  for (int b0 = 0; b0 < n_members; b0 += B) {
-    int nb = n_members - b0 < B ? n_members - b0 : B;
-    for (int j = 0; j < nb; j++) {        /* one thread: handles */
-      model[j] = NULL; integ[j] = NULL;
-      st[j] = vci_model_create(&model[j], n, 0, ngaps, &cb, &user[b0 + j]);
-      if (!st[j]) st[j] = vci_integrator_create(&integ[j], model[j], h);
-    }
-    #pragma omp parallel for schedule(dynamic, 1)
-    for (int j = 0; j < nb; j++) {        /* threads: each its own integrator */
-      int i = b0 + j;
-      if (!integ[j]) continue;            /* a NULL handle here would write the library-wide message */
-      if (!st[j]) st[j] = vci_init_from_pair(integ[j], t0[i], &q0[n * i], &q1[n * i]);
-      if (!st[j]) st[j] = vci_integrate(integ[j], nsteps, +1);
-      vci_get_state(integ[j], &t[i], &q[n * i], &p[n * i]);   /* the last accepted state */
-    }
-    for (int j = 0; j < nb; j++) {        /* one thread: statuses, messages, handles */
-      status[b0 + j] = st[j];
-      if (st[j]) vci_last_error(integ[j], msg[b0 + j], sizeof msg[0]);
-      vci_integrator_destroy(&integ[j]); vci_model_destroy(&model[j]);
-    }
+  {
+  /* the loop of docs/ENSEMBLES.md, "From C", extracted from the page at configure time */
+#include "ensembles_c_loop.inc"
   }
-  /* ---- end of the loop ---- */
 
   int failed = 0;
   for (int i = 0; i < n_members; i++) {
