@@ -1,8 +1,8 @@
 #!/bin/bash
 # Ensemble scaling on this machine: the ellipse_ensemble workload (MEMBERS perturbations of the
 # paper's ellipse over T seconds, h = 1e-2, impact times kept, no trajectories) on 1 and 2 ranks and
-# 1 and 2 OpenMP threads, with the file written through (parallel) HDF5; each configuration REPEAT
-# times, the fastest kept. Writes docs/bench/ensemble_scaling.md and its section of docs/RESULTS.md.
+# 1 and 2 OpenMP threads, with the file written through (parallel) HDF5; every configuration REPEAT
+# times (interleaved), the fastest kept. Writes docs/bench/ensemble_scaling.md and its section of docs/RESULTS.md.
 #   bash bench/ensemble/run_scaling.sh [MEMBERS=10000] [T=10] [REPEAT=3]
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -28,9 +28,10 @@ configs=(
   "r2t1_block|2|1|--chunk $half"
 )
 uptime > "$work/load_before.txt"
-for c in "${configs[@]}"; do
-  IFS='|' read -r name np nt extra <<< "$c"
-  for i in $(seq 1 "$repeat"); do
+# repetitions outermost: a change of the machine's load then touches every configuration alike
+for i in $(seq 1 "$repeat"); do
+  for c in "${configs[@]}"; do
+    IFS='|' read -r name np nt extra <<< "$c"
     out="$work/$name.h5"
     if [ "$np" = 1 ]; then
       OMP_NUM_THREADS=$nt "$exe" "${common[@]}" --threads "$nt" --output "$out" $extra > "$work/$name.$i.log"
