@@ -53,6 +53,15 @@ program ellipse_ensemble
 #ifndef VCI_HAVE_HDF5
   no_output = .true.      ! built without HDF5: the numbers are printed, no file is written
 #endif
+#ifndef VCI_HAVE_MPI
+  ! started by mpirun but built without MPI: every process would run the whole ensemble into the
+  ! same file
+  if (launched_by_mpirun()) then
+    write (error_unit, '(a)') 'ellipse_ensemble: this build has no MPI, and mpirun started several copies; '// &
+      'use the MPI build (cmake --preset mpi && cmake --build --preset mpi: build-mpi/bin/ellipse_ensemble)'
+    call finish(2)
+  end if
+#endif
 
   ! the table: member 1 unperturbed, member i >= 2 moved by sizes(i) along a fixed direction of its own
   allocate (sizes(n_members), table%t0(n_members), table%q0(3, n_members), table%v0(3, n_members))
@@ -293,6 +302,20 @@ contains
     end if
   end subroutine parse_arguments
 
+  !> Whether an MPI launcher started this process as one of several (OpenMPI's mpirun, MPICH's).
+  logical function launched_by_mpirun()
+    character(len=32) :: v
+    integer :: k, nproc, ios, st
+    character(len=*), parameter :: names(2) = [character(len=21) :: 'OMPI_COMM_WORLD_SIZE', 'PMI_SIZE']
+    launched_by_mpirun = .false.
+    do k = 1, size(names)
+      call get_environment_variable(trim(names(k)), v, status=st)
+      if (st /= 0) cycle
+      read (v, *, iostat=ios) nproc
+      if (ios == 0 .and. nproc > 1) launched_by_mpirun = .true.
+    end do
+  end function launched_by_mpirun
+
   real(dp) function real_arg(k)
     integer, intent(in) :: k
     character(len=128) :: v
@@ -312,7 +335,7 @@ contains
     if (code /= 0 .and. code /= 2) call MPI_Abort(MPI_COMM_WORLD, code, e)
     call MPI_Finalize(e)
 #endif
-    if (code /= 0) error stop code
+    if (code /= 0) stop code
     stop
   end subroutine finish
 end program ellipse_ensemble

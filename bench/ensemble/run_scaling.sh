@@ -33,13 +33,16 @@ for i in $(seq 1 "$repeat"); do
   for c in "${configs[@]}"; do
     IFS='|' read -r name np nt extra <<< "$c"
     out="$work/$name.h5"
+    # CPU seconds (user + system, every rank) beside the wall time the program reports
+    TIMEFORMAT='%U %S'
     if [ "$np" = 1 ]; then
-      OMP_NUM_THREADS=$nt "$exe" "${common[@]}" --threads "$nt" --output "$out" $extra > "$work/$name.$i.log"
+      { time OMP_NUM_THREADS=$nt "$exe" "${common[@]}" --threads "$nt" --output "$out" $extra \
+          > "$work/$name.$i.log" ; } 2> "$work/$name.$i.cpu"
     else
-      OMP_NUM_THREADS=$nt "${mpirun[@]}" -np "$np" "$exe" "${common[@]}" --threads "$nt" --output "$out" $extra \
-        > "$work/$name.$i.log"
+      { time OMP_NUM_THREADS=$nt "${mpirun[@]}" -np "$np" "$exe" "${common[@]}" --threads "$nt" --output "$out" \
+          $extra > "$work/$name.$i.log" ; } 2> "$work/$name.$i.cpu"
     fi
-    echo "$name run $i: $(grep '^wall time' "$work/$name.$i.log")"
+    echo "$name run $i: $(grep '^wall time' "$work/$name.$i.log"), cpu (user sys) $(cat "$work/$name.$i.cpu")"
   done
 done
 uptime > "$work/load_after.txt"

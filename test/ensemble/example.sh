@@ -21,6 +21,8 @@ else
   OMP_NUM_THREADS=1 "$exe" "${args[@]}" --output "$work/two.h5" > "$work/two.log"
 fi
 "$py" "$here/check_files.py" same "$work/one.h5" "$work/two.h5"
+h5dump -H "$work/two.h5" > "$work/h5dump.txt" || { echo "FAIL: h5dump cannot read the file"; exit 1; }
+grep -q 'DATASET "status"' "$work/h5dump.txt" || { echo "FAIL: h5dump shows no /members/status"; exit 1; }
 # the printed numbers are the same too (all but the wall time and the file name)
 diff <(grep -v -e '^wall time' -e '^file:' -e ' rank(s)' "$work/one.log") \
      <(grep -v -e '^wall time' -e '^file:' -e ' rank(s)' "$work/two.log")
