@@ -114,7 +114,11 @@ def killed(path):
             fail("a member with a status lacks its final state")
         if np.any(~np.isnan(f["members/t"][:][~held])):
             print("note: members without a status have data (written, status not yet)")
-        print(f"{path}: killed run holds {held.sum()} of {st.size} members, readable with h5py")
+        ranks = sorted(set(f["run/rank"][:][held].tolist()))
+        if f.attrs["ranks"] > 1 and len(ranks) < 2:
+            fail(f"{f.attrs['ranks']} ranks, but only rank(s) {ranks} wrote members: not distributed")
+        print(f"{path}: killed run holds {held.sum()} of {st.size} members (written by ranks {ranks}), "
+              "readable with h5py")
 
 
 if __name__ == "__main__":
