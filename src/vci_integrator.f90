@@ -761,10 +761,13 @@ contains
   end function status
 
   !> What went wrong in the last call, naming the step, the time and the cause ('' after success).
+  !> (A result of specification-expression length, not a deferred-length one: gfortran 12 keeps the
+  !> length of a deferred-length result in a static variable per call site, which races when
+  !> integrators on different threads ask for their messages.)
   pure function message(self) result(msg)
     class(vci_integrator_t), intent(in) :: self
-    character(len=:), allocatable :: msg
-    msg = trim(self%last_message)
+    character(len=len_trim(self%last_message)) :: msg
+    msg = self%last_message
   end function message
 
   !> The settings in force (tolerances, impact bound, impact condition).

@@ -2,7 +2,8 @@
 # The demo: build vci, run the paper's ellipse and pendulum, and draw the paper's four figures.
 #   bash tools/demo.sh
 # On a fresh Debian 12 run as root it first installs what is missing (apt-get). Leaves the runs'
-# .h5 files and fig1..fig4 PNGs in demo-output/ (next to build/, in the repository root).
+# .h5 files, fig1..fig4 PNGs and the ellipse ensemble's plot in demo-output/ (next to build/, in the
+# repository root).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -30,6 +31,10 @@ echo "== pendulum, 100 s, h = 1e-4 (Fig. 4)"
 echo
 echo "== figures"
 /usr/bin/python3 tools/plots/plot_figures.py "$out"
+echo
+echo "== ellipse ensemble: 121 perturbations of the start, 30 s (docs/ENSEMBLES.md)"
+"$bin/ellipse_ensemble" --quiet --output "$out/ellipse_ensemble.h5"
+/usr/bin/python3 tools/ensemble/plot_ensemble.py "$out/ellipse_ensemble.h5" "$out/ellipse_ensemble.png"
 echo
 echo "demo done: $(cd "$out" && pwd)"
 ls -l "$out"

@@ -6,3 +6,8 @@ bash tools/install-deps.sh
 cmake --preset default
 cmake --build --preset default
 ctest --preset default
+# Ensembles over MPI ranks with parallel HDF5: a second, lean build (only what the tests labelled
+# `mpi` need; build-mpi/) and those tests, run with mpirun --oversubscribe -np 2 (docs/ENSEMBLES.md)
+cmake --preset mpi
+cmake --build --preset mpi
+ctest --preset mpi

@@ -1,0 +1,341 @@
+!> An ensemble of the paper's bouncing ellipse: N perturbations of its start, of sizes from 1e-14 to
+!> 1e-2, over T seconds. For each member: when its impact sequence leaves the unperturbed one (the
+!> first impact whose time differs from the unperturbed run's by more than --tol, or that one run
+!> has and the other has not); over the ensemble: the distribution of impact counts, and the
+!> largest Lyapunov exponent from how that divergence time grows as the perturbation shrinks
+!> (t_div = ln(tol / size) / lambda + const, fitted over sizes well below tol).
+!>
+!> Built with MPI, `mpirun -np 2 build/bin/ellipse_ensemble` spreads the members over the ranks and
+!> all write one HDF5 file (parallel HDF5); without mpirun, or built without MPI, one process does
+!> the same (OpenMP threads either way). The file holds the ensemble (docs/ENSEMBLES.md) and an
+!> /analysis group with the numbers printed here; tools/ensemble/plot_ensemble.py draws them.
+program ellipse_ensemble
+  use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
+  use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_is_nan
+#ifdef VCI_HAVE_MPI
+  use mpi_f08
+#endif
+  use vci
+  use vci_ensemble
+#ifdef VCI_HAVE_HDF5
+  use hdf5
+  use vci_ensemble_h5, only: vci_ensemble_read
+  use vci_ensemble_mpi, only: vci_ensemble_run_file
+#endif
+  use vci_scene_ellipse, only: ellipse_model
+  implicit none
+
+  real(dp), parameter :: pi = acos(-1.0_dp)
+  real(dp), parameter :: q_start(3) = [pi / 2.0_dp, 0.0_dp, 3.5_dp], qdot_start(3) = [-3.0_dp, 2.0_dp, 0.0_dp]
+  integer :: n_members = 121, rank = 0, nranks = 1, stat, i, n_failed
+  real(dp) :: h = 1.0e-2_dp, t_final = 30.0_dp, min_size = 1.0e-14_dp, max_size = 1.0e-2_dp, tol = 1.0e-2_dp
+  integer :: stride = 10, threads = 0, chunk = 0, impact_cap = 256
+  logical :: quiet = .false., no_output = .false.
+  character(len=:), allocatable :: output
+  type(vci_prototype_factory_t) :: factory
+  type(vci_ensemble_config_t) :: cfg
+  type(vci_ensemble_table_t) :: table
+  type(vci_ensemble_results_t) :: res
+  character(len=VCI_MSG_LEN) :: msg
+  real(dp), allocatable :: sizes(:), t_div(:)
+  integer, allocatable :: k_div(:)
+  real(dp) :: lambda, lambda_err, seconds
+  integer :: n_fit
+  integer(i8) :: c0, c1, rate
+#ifdef VCI_HAVE_MPI
+  integer :: provided, ierr
+  call MPI_Init_thread(MPI_THREAD_FUNNELED, provided, ierr)
+  call MPI_Comm_rank(MPI_COMM_WORLD, rank, ierr)
+  call MPI_Comm_size(MPI_COMM_WORLD, nranks, ierr)
+#endif
+  output = 'ellipse_ensemble.h5'
+  call parse_arguments()
+#ifndef VCI_HAVE_HDF5
+  no_output = .true.      ! built without HDF5: the numbers are printed, no file is written
+#endif
+#ifndef VCI_HAVE_MPI
+  ! started by mpirun but built without MPI: every process would run the whole ensemble into the
+  ! same file
+  if (launched_by_mpirun()) then
+    write (error_unit, '(a)') 'ellipse_ensemble: this build has no MPI, and mpirun started several copies; '// &
+      'use the MPI build (cmake --preset mpi && cmake --build --preset mpi: build-mpi/bin/ellipse_ensemble)'
+    call finish(2)
+  end if
+#endif
+
+  ! the table: member 1 unperturbed, member i >= 2 moved by sizes(i) along a fixed direction of its own
+  allocate (sizes(n_members), table%t0(n_members), table%q0(3, n_members), table%v0(3, n_members))
+  do i = 1, n_members
+    sizes(i) = 0.0_dp
+    if (i >= 2) sizes(i) = min_size * (max_size / min_size)**(real(i - 2, dp) / real(max(n_members - 2, 1), dp))
+    call start_pair(i, sizes(i), table%t0(i), table%q0(:, i), table%v0(:, i))
+  end do
+  allocate (factory%prototype, source=ellipse_model())
+  cfg%h = h
+  cfg%nsteps = int(nint((t_final - (table%t0(1) + h)) / h), i8)
+  cfg%stride = stride; cfg%threads = threads; cfg%chunk = chunk; cfg%impact_cap = impact_cap
+  cfg%name = 'ellipse_ensemble: perturbations of the paper''s bouncing ellipse'
+
+  ! wall time of the ensemble itself (with the file: creating, running, writing, closing it)
+  call system_clock(c0, rate)
+#ifdef VCI_HAVE_HDF5
+  if (no_output) then
+    if (rank == 0) call vci_ensemble_run(factory, cfg, table, res, stat, msg)
+    call system_clock(c1)
+  else
+    call vci_ensemble_run_file(factory, cfg, table, output, stat, msg, overwrite=.true., members_failed=n_failed)
+    call system_clock(c1)
+    if (stat == VCI_OK .and. rank == 0) call vci_ensemble_read(output, res, stat, msg)
+  end if
+#else
+  call vci_ensemble_run(factory, cfg, table, res, stat, msg)
+  call system_clock(c1)
+#endif
+  seconds = real(c1 - c0, dp) / real(rate, dp)
+  if (stat /= VCI_OK) then
+    write (error_unit, '(a,i0,a)') 'ellipse_ensemble (rank ', rank, '): '//trim(msg)
+    call finish(1)
+  end if
+
+  if (rank == 0) then
+    call analyse()
+    call report()
+#ifdef VCI_HAVE_HDF5
+    if (.not. no_output) call write_analysis(output)
+#endif
+  end if
+  call finish(0)
+
+contains
+
+  !> The examples' midpoint pair around the start (q(0), qdot(0)) moved by `size` along member i's
+  !> direction: 6 components of a Weyl sequence (fractional parts of i sqrt(p), p prime), normalised.
+  subroutine start_pair(i, size, t0, q0, q1)
+    integer, intent(in) :: i
+    real(dp), intent(in) :: size
+    real(dp), intent(out) :: t0, q0(3), q1(3)
+    real(dp), parameter :: roots(6) = sqrt([2.0_dp, 3.0_dp, 5.0_dp, 7.0_dp, 11.0_dp, 13.0_dp])
+    real(dp) :: u(6), x(3), xd(3)
+    u = 2.0_dp * (real(i, dp) * roots - aint(real(i, dp) * roots)) - 1.0_dp
+    u = u / norm2(u)
+    x = q_start + size * u(1:3)
+    xd = qdot_start + size * u(4:6)
+    t0 = -0.5_dp * h
+    q0 = x - 0.5_dp * h * xd
+    q1 = x + 0.5_dp * h * xd
+  end subroutine start_pair
+
+  !> Divergence of each member's impact sequence from member 1's, and the Lyapunov fit.
+  subroutine analyse()
+    integer :: j, k, kmax
+    real(dp) :: nan, x(n_members), y(n_members), xm, ym
+    nan = ieee_value(1.0_dp, ieee_quiet_nan)
+    allocate (t_div(n_members), k_div(n_members))
+    t_div = nan; k_div = 0
+    do j = 2, n_members
+      if (res%status(j) /= VCI_OK) cycle
+      kmax = int(min(max(res%impacts(j), res%impacts(1)), int(impact_cap, i8)))
+      do k = 1, kmax
+        if (k > res%impacts(1) .or. k > res%impacts(j)) then
+          ! one run has an impact the other has not: they part at the earlier of the two
+          t_div(j) = min(res%impact_t(k, 1), res%impact_t(k, j))
+          if (ieee_is_nan(t_div(j))) t_div(j) = max(res%impact_t(k, 1), res%impact_t(k, j))
+        else if (abs(res%impact_t(k, j) - res%impact_t(k, 1)) > tol) then
+          t_div(j) = min(res%impact_t(k, j), res%impact_t(k, 1))
+        end if
+        if (.not. ieee_is_nan(t_div(j))) then
+          k_div(j) = k; exit
+        end if
+      end do
+    end do
+    ! t_div against ln(1/size), over members that parted and whose size is well below tol
+    n_fit = 0
+    do j = 2, n_members
+      if (ieee_is_nan(t_div(j)) .or. sizes(j) > 1.0e-2_dp * tol) cycle
+      n_fit = n_fit + 1
+      x(n_fit) = log(1.0_dp / sizes(j)); y(n_fit) = t_div(j)
+    end do
+    lambda = nan; lambda_err = nan
+    if (n_fit >= 3) then
+      xm = sum(x(1:n_fit)) / n_fit; ym = sum(y(1:n_fit)) / n_fit
+      associate (sxx => sum((x(1:n_fit) - xm)**2), sxy => sum((x(1:n_fit) - xm) * (y(1:n_fit) - ym)))
+        ! slope s = 1 / lambda; its standard error carried over to lambda
+        lambda = sxx / sxy
+        lambda_err = lambda**2 * sqrt(sum((y(1:n_fit) - ym - sxy / sxx * (x(1:n_fit) - xm))**2) / &
+                                      real(n_fit - 2, dp) / sxx)
+      end associate
+    end if
+  end subroutine analyse
+
+  subroutine report()
+    integer :: j, kmin, kmax, k
+    integer(i8), allocatable :: counts(:)
+    write (output_unit, '(a,i0,a,i0,a,es8.1,a,es8.1,a,f0.2,a,es8.1)') 'ellipse ensemble: ', n_members, &
+      ' members on ', nranks, ' rank(s); perturbation sizes ', min_size, ' .. ', max_size, '; T = ', t_final, &
+      ' s; h = ', h
+    write (output_unit, '(a,i0,a,i0)') 'members failed: ', count(res%status /= VCI_OK), ' of ', n_members
+    write (output_unit, '(a,i0,a)') 'unperturbed run: ', res%impacts(1), ' impacts'
+    if (.not. quiet) then
+      write (output_unit, '(a)') '  member      size  impacts  leaves the unperturbed sequence at'
+      do j = 1, n_members
+        if (ieee_is_nan(t_div(j))) then
+          write (output_unit, '(i8,es10.2,i9,a)') j, sizes(j), res%impacts(j), '  (never within T)'
+        else
+          write (output_unit, '(i8,es10.2,i9,a,i0,a,f9.4,a)') j, sizes(j), res%impacts(j), '  impact ', &
+            k_div(j), ', t = ', t_div(j), ' s'
+        end if
+      end do
+    end if
+    kmin = int(minval(res%impacts, res%status == VCI_OK)); kmax = int(maxval(res%impacts, res%status == VCI_OK))
+    allocate (counts(kmin:kmax))
+    do k = kmin, kmax
+      counts(k) = count(res%impacts == k .and. res%status == VCI_OK)
+    end do
+    write (output_unit, '(a)') 'impact counts (count: members):'
+    write (output_unit, '(8(2x,i4,a,i5))') (k, ':', counts(k), k=kmin, kmax)
+    write (output_unit, '(a,i0,a,i0)') 'members whose impact sequence left the unperturbed one within T: ', &
+      count(.not. ieee_is_nan(t_div)), ' of ', n_members - 1
+    if (ieee_is_nan(lambda)) then
+      write (output_unit, '(a)') 'largest Lyapunov exponent: too few members parted within T to fit'
+    else
+      write (output_unit, '(a,f8.4,a,f7.4,a,i0,a,es8.1,a)') 'largest Lyapunov exponent: ', lambda, ' +- ', &
+        lambda_err, ' 1/s (fit of the divergence time over ', n_fit, ' members of size <= ', 1.0e-2_dp * tol, ')'
+    end if
+    write (output_unit, '(a,f8.3,a)') 'wall time: ', seconds, ' s'
+    if (.not. no_output) write (output_unit, '(a)') 'file: '//output
+  end subroutine report
+
+#ifdef VCI_HAVE_HDF5
+  !> /analysis: perturbation size, divergence time and impact index per member; lambda and the
+  !> tolerance as attributes (written by one process after the ensemble file is closed).
+  subroutine write_analysis(path)
+    character(len=*), intent(in) :: path
+    integer(hid_t) :: file, g, space, dset, attr
+    integer :: err
+    call h5open_f(err)
+    call h5fopen_f(path, H5F_ACC_RDWR_F, file, err)
+    if (err /= 0) then
+      write (error_unit, '(a)') 'ellipse_ensemble: cannot reopen '//path//' for /analysis'; call finish(1)
+    end if
+    call h5gcreate_f(file, 'analysis', g, err)
+    call h5screate_simple_f(1, [int(n_members, hsize_t)], space, err)
+    call h5dcreate_f(g, 'size', H5T_IEEE_F64LE, space, dset, err)
+    call h5dwrite_f(dset, H5T_NATIVE_DOUBLE, sizes, [int(n_members, hsize_t)], err)
+    call h5dclose_f(dset, err)
+    call h5dcreate_f(g, 'divergence_time', H5T_IEEE_F64LE, space, dset, err)
+    call h5dwrite_f(dset, H5T_NATIVE_DOUBLE, t_div, [int(n_members, hsize_t)], err)
+    call h5dclose_f(dset, err)
+    call h5dcreate_f(g, 'divergence_impact', H5T_STD_I32LE, space, dset, err)
+    call h5dwrite_f(dset, H5T_NATIVE_INTEGER, k_div, [int(n_members, hsize_t)], err)
+    call h5dclose_f(dset, err)
+    call h5sclose_f(space, err)
+    call h5screate_f(H5S_SCALAR_F, space, err)
+    call h5acreate_f(g, 'lyapunov', H5T_IEEE_F64LE, space, attr, err)
+    call h5awrite_f(attr, H5T_NATIVE_DOUBLE, lambda, [1_hsize_t], err)
+    call h5aclose_f(attr, err)
+    call h5acreate_f(g, 'lyapunov_stderr', H5T_IEEE_F64LE, space, attr, err)
+    call h5awrite_f(attr, H5T_NATIVE_DOUBLE, lambda_err, [1_hsize_t], err)
+    call h5aclose_f(attr, err)
+    call h5acreate_f(g, 'tolerance', H5T_IEEE_F64LE, space, attr, err)
+    call h5awrite_f(attr, H5T_NATIVE_DOUBLE, tol, [1_hsize_t], err)
+    call h5aclose_f(attr, err)
+    call h5acreate_f(g, 'fit_members', H5T_STD_I32LE, space, attr, err)
+    call h5awrite_f(attr, H5T_NATIVE_INTEGER, n_fit, [1_hsize_t], err)
+    call h5aclose_f(attr, err)
+    call h5sclose_f(space, err)
+    call h5gclose_f(g, err)
+    call h5fclose_f(file, err)
+    if (err /= 0) then
+      write (error_unit, '(a)') 'ellipse_ensemble: writing /analysis failed'; call finish(1)
+    end if
+  end subroutine write_analysis
+#endif
+
+  subroutine parse_arguments()
+    integer :: k, n
+    character(len=512) :: arg
+    n = command_argument_count()
+    k = 1
+    do while (k <= n)
+      call get_command_argument(k, arg)
+      select case (arg)
+      case ('--help', '-h')
+        if (rank == 0) then
+          write (output_unit, '(a)') 'ellipse_ensemble: perturbations of the paper''s bouncing ellipse'
+          write (output_unit, '(a)') '  --members N         members, the first unperturbed (121)'
+          write (output_unit, '(a)') '  --t-final T         seconds (30)'
+          write (output_unit, '(a)') '  --h H               step length (1e-2)'
+          write (output_unit, '(a)') '  --min-size S, --max-size S   perturbation sizes, log-spaced (1e-14, 1e-2)'
+          write (output_unit, '(a)') '  --tol TAU           impact-time difference that counts as leaving (1e-2 s)'
+          write (output_unit, '(a)') '  --stride K          keep every K-th state in the file (10; 0: none)'
+          write (output_unit, '(a)') '  --impact-cap K      impact times kept per member (256)'
+          write (output_unit, '(a)') '  --threads T, --chunk C   OpenMP threads (OMP_NUM_THREADS), members per claim'
+          write (output_unit, '(a)') '  --output FILE       the ensemble file (ellipse_ensemble.h5); --no-output'
+          write (output_unit, '(a)') '  --quiet             no per-member table'
+        end if
+        call finish(0)
+      case ('--members'); n_members = int(real_arg(k)); k = k + 1
+      case ('--t-final'); t_final = real_arg(k); k = k + 1
+      case ('--h'); h = real_arg(k); k = k + 1
+      case ('--min-size'); min_size = real_arg(k); k = k + 1
+      case ('--max-size'); max_size = real_arg(k); k = k + 1
+      case ('--tol'); tol = real_arg(k); k = k + 1
+      case ('--stride'); stride = int(real_arg(k)); k = k + 1
+      case ('--impact-cap'); impact_cap = int(real_arg(k)); k = k + 1
+      case ('--threads'); threads = int(real_arg(k)); k = k + 1
+      case ('--chunk'); chunk = int(real_arg(k)); k = k + 1
+      case ('--output')
+        call get_command_argument(k + 1, arg); output = trim(arg); k = k + 1
+      case ('--no-output'); no_output = .true.
+      case ('--quiet'); quiet = .true.
+      case default
+        if (rank == 0) write (error_unit, '(a)') 'ellipse_ensemble: unknown argument '//trim(arg)//' (see --help)'
+        call finish(2)
+      end select
+      k = k + 1
+    end do
+    if (n_members < 2 .or. .not. (h > 0.0_dp .and. t_final > h .and. min_size > 0.0_dp .and. &
+        max_size >= min_size .and. tol > 0.0_dp) .or. stride < 0 .or. impact_cap < 1) then
+      if (rank == 0) write (error_unit, '(a)') 'ellipse_ensemble: need members >= 2, h > 0, t-final > h, '// &
+        '0 < min-size <= max-size, tol > 0, stride >= 0, impact-cap >= 1'
+      call finish(2)
+    end if
+  end subroutine parse_arguments
+
+  !> Whether an MPI launcher started this process as one of several (OpenMPI's mpirun, MPICH's).
+  logical function launched_by_mpirun()
+    character(len=32) :: v
+    integer :: k, nproc, ios, st
+    character(len=*), parameter :: names(2) = [character(len=21) :: 'OMPI_COMM_WORLD_SIZE', 'PMI_SIZE']
+    launched_by_mpirun = .false.
+    do k = 1, size(names)
+      call get_environment_variable(trim(names(k)), v, status=st)
+      if (st /= 0) cycle
+      read (v, *, iostat=ios) nproc
+      if (ios == 0 .and. nproc > 1) launched_by_mpirun = .true.
+    end do
+  end function launched_by_mpirun
+
+  real(dp) function real_arg(k)
+    integer, intent(in) :: k
+    character(len=128) :: v
+    integer :: ios
+    call get_command_argument(k + 1, v)
+    read (v, *, iostat=ios) real_arg
+    if (ios /= 0) then
+      if (rank == 0) write (error_unit, '(a)') 'ellipse_ensemble: not a number: '//trim(v)
+      call finish(2)
+    end if
+  end function real_arg
+
+  subroutine finish(code)
+    integer, intent(in) :: code
+#ifdef VCI_HAVE_MPI
+    integer :: e
+    if (code /= 0 .and. code /= 2) call MPI_Abort(MPI_COMM_WORLD, code, e)
+    call MPI_Finalize(e)
+#endif
+    if (code /= 0) stop code
+    stop
+  end subroutine finish
+end program ellipse_ensemble

@@ -1,0 +1,773 @@
+!> The ensemble file: one HDF5 file for all members, in a fixed layout (docs/ENSEMBLES.md), written
+!> by one process or, built with MPI (VCI_HAVE_MPI), by all ranks at once through parallel HDF5.
+!>
+!> Every dataset is indexed by member (the slowest index; h5py shape (N, ...)) and allocated in full
+!> when the file is created, with fill values that mean "not run" (status -1, NaN, 0). Afterwards only
+!> raw data are written, one block of consecutive members at a time, each rank its own blocks
+!> (independent I/O): the file's metadata never change until it is closed, and the members'
+!> status is written last, so a killed run leaves a file that opens and holds every member whose
+!> status is not -1.
+!>
+!> create, write_table (with each rank's share), and close are collective under MPI; write_results is
+!> independent. Nothing here stops or prints (HDF5's own error printing is switched off); failures
+!> give VCI_ERR_IO and a message naming the file.
+module vci_ensemble_h5
+  use, intrinsic :: iso_c_binding, only: c_ptr, c_loc, c_null_ptr
+  use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
+  use hdf5
+#ifdef VCI_HAVE_MPI
+  use mpi_f08, only: MPI_Comm, MPI_INFO_NULL
+#endif
+  use vci_kinds, only: dp, i8
+  use vci_status, only: VCI_OK, VCI_ERR_IO, VCI_ERR_ARGUMENT, VCI_MSG_LEN
+  use vci_ensemble, only: vci_ensemble_config_t, vci_ensemble_table_t, vci_ensemble_results_t, &
+                          vci_ensemble_samples, vci_ensemble_results_alloc, vci_ensemble_size, &
+                          VCI_MEMBER_NOT_RUN, VCI_START_PAIR, VCI_START_MOMENTUM
+  implicit none
+  private
+
+  !> Root attribute `format_version` of the layout written here.
+  integer, parameter, public :: VCI_ENSEMBLE_FORMAT_VERSION = 1
+  !> Characters kept of a failed member's message (`/members/message`).
+  integer, parameter, public :: VCI_ENSEMBLE_MESSAGE_LEN = 256
+
+  ! the leading dimensions of a dataset with one value per member: none
+  integer, parameter :: per_member(0) = [integer ::]
+
+  ! datasets, in the order of docs/ENSEMBLES.md
+  integer, parameter :: D_STATUS = 1, D_MESSAGE = 2, D_T0 = 3, D_Q0 = 4, D_V0 = 5, D_PARAMS = 6, &
+                        D_T = 7, D_Q = 8, D_P = 9, D_STEPS = 10, D_IMPACTS = 11, D_NEWTON = 12, &
+                        D_IMPT = 13, D_IMPGAP = 14, D_EKIND = 15, D_E0 = 16, D_E1 = 17, D_DE = 18, &
+                        D_TRCOUNT = 19, D_TRT = 20, D_TRQ = 21, D_TRP = 22, D_RANK = 23, D_THREAD = 24, &
+                        D_SECONDS = 25, N_DSETS = 25
+  character(len=*), parameter :: names(N_DSETS) = [character(len=32) :: &
+    'members/status', 'members/message', 'members/t0', 'members/q0', 'members/v0', 'members/params', &
+    'members/t', 'members/q', 'members/p', 'members/steps', 'members/impacts', 'members/newton_iterations', &
+    'members/impact_t', 'members/impact_gap', 'members/energy_kind', 'members/energy_start', &
+    'members/energy_end', 'members/energy_change', 'members/trajectory/count', 'members/trajectory/t', &
+    'members/trajectory/q', 'members/trajectory/p', 'run/rank', 'run/thread', 'run/seconds']
+
+  !> An ensemble file being written.
+  type, public :: vci_ensemble_file_t
+    character(len=VCI_MSG_LEN) :: message = ''   !< what went wrong, naming the file
+    character(len=:), allocatable :: path
+    logical :: is_open = .false.
+    integer :: n_members = 0, n = 0, n_params = 0, impact_cap = 0, samples = 0
+    integer(hid_t), private :: file = -1
+    integer(hid_t), private :: d(N_DSETS) = -1
+  contains
+    procedure :: create => f_create
+    procedure :: write_table => f_write_table
+    procedure :: write_results => f_write_results
+    procedure :: close => f_close
+  end type vci_ensemble_file_t
+
+  public :: vci_ensemble_read
+
+contains
+
+  !> Create PATH for the ensemble of `config` and `table` (every dataset allocated, "not run").
+  !> An existing file is kept (VCI_ERR_IO) unless `overwrite`. `ranks` and `threads` are recorded as
+  !> attributes. Under MPI, pass the communicator: collective over it.
+#ifdef VCI_HAVE_MPI
+  subroutine f_create(self, path, config, table, ranks, threads, chunk, stat, overwrite, comm)
+#else
+  subroutine f_create(self, path, config, table, ranks, threads, chunk, stat, overwrite)
+#endif
+    class(vci_ensemble_file_t), intent(inout) :: self
+    character(len=*), intent(in) :: path
+    type(vci_ensemble_config_t), intent(in) :: config
+    type(vci_ensemble_table_t), intent(in) :: table
+    integer, intent(in) :: ranks, threads, chunk
+    integer, intent(out) :: stat
+    logical, intent(in), optional :: overwrite
+#ifdef VCI_HAVE_MPI
+    type(MPI_Comm), intent(in) :: comm
+#endif
+    integer(hid_t) :: fapl, g
+    integer :: err, e2, nm
+    logical :: replace
+    character(len=16) :: start_kind
+
+    stat = VCI_OK
+    self%message = ''
+    self%path = path
+    if (self%is_open) call f_close(self, 0, 0, e2)
+    nm = vci_ensemble_size(table)
+    self%n_members = nm; self%n = size(table%q0, 1)
+    self%n_params = 0
+    if (allocated(table%params)) self%n_params = size(table%params, 1)
+    self%impact_cap = config%impact_cap
+    self%samples = vci_ensemble_samples(config)
+    self%d = -1
+    replace = .false.
+    if (present(overwrite)) replace = overwrite
+
+    call h5open_f(err)
+    if (err == 0) call h5eset_auto_f(0, err)   ! the library never prints
+    if (err /= 0) then
+      call fail(self, 'the HDF5 library could not be initialised', stat); return
+    end if
+    call h5pcreate_f(H5P_FILE_ACCESS_F, fapl, err)
+#ifdef VCI_HAVE_MPI
+    if (err == 0) call h5pset_fapl_mpio_f(fapl, comm%MPI_VAL, MPI_INFO_NULL%MPI_VAL, err)
+#else
+    ! no data sieving: each block of members goes to the file when written, not when a buffer fills
+    if (err == 0) call h5pset_sieve_buf_size_f(fapl, 0_size_t, err)
+#endif
+    if (err == 0) then
+      if (replace) then
+        call h5fcreate_f(path, H5F_ACC_TRUNC_F, self%file, err, access_prp=fapl)
+      else
+        call h5fcreate_f(path, H5F_ACC_EXCL_F, self%file, err, access_prp=fapl)
+      end if
+    end if
+    call h5pclose_f(fapl, e2)
+    if (err /= 0) then
+      if (replace) then
+        call fail(self, 'cannot create the file', stat)
+      else
+        call fail(self, 'cannot create the file (an existing file is kept; ask to overwrite it)', stat)
+      end if
+      return
+    end if
+    self%is_open = .true.
+
+    call h5gcreate_f(self%file, 'members', g, err)
+    call h5gclose_f(g, e2)
+    if (err == 0 .and. self%samples > 0) then
+      call h5gcreate_f(self%file, 'members/trajectory', g, err)
+      call h5gclose_f(g, e2)
+    end if
+    if (err == 0) call h5gcreate_f(self%file, 'run', g, err)
+    call h5gclose_f(g, e2)
+    if (err /= 0) then
+      call fail(self, 'cannot create the groups', stat); return
+    end if
+
+    call new_dset(self, D_STATUS, H5T_STD_I32LE, [nm], stat, fill_int=VCI_MEMBER_NOT_RUN)
+    call new_string_dset(self, D_MESSAGE, nm, stat)
+    call new_dset(self, D_T0, H5T_IEEE_F64LE, [nm], stat)
+    call new_dset(self, D_Q0, H5T_IEEE_F64LE, [self%n, nm], stat)
+    call new_dset(self, D_V0, H5T_IEEE_F64LE, [self%n, nm], stat)
+    if (self%n_params > 0) call new_dset(self, D_PARAMS, H5T_IEEE_F64LE, [self%n_params, nm], stat)
+    call new_dset(self, D_T, H5T_IEEE_F64LE, [nm], stat, fill_nan=.true.)
+    call new_dset(self, D_Q, H5T_IEEE_F64LE, [self%n, nm], stat, fill_nan=.true.)
+    call new_dset(self, D_P, H5T_IEEE_F64LE, [self%n, nm], stat, fill_nan=.true.)
+    call new_dset(self, D_STEPS, H5T_STD_I64LE, [nm], stat)
+    call new_dset(self, D_IMPACTS, H5T_STD_I64LE, [nm], stat)
+    call new_dset(self, D_NEWTON, H5T_STD_I64LE, [nm], stat)
+    if (self%impact_cap > 0) then
+      call new_dset(self, D_IMPT, H5T_IEEE_F64LE, [self%impact_cap, nm], stat, fill_nan=.true.)
+      call new_dset(self, D_IMPGAP, H5T_STD_I32LE, [self%impact_cap, nm], stat)
+    end if
+    call new_dset(self, D_EKIND, H5T_STD_I32LE, [nm], stat)
+    call new_dset(self, D_E0, H5T_IEEE_F64LE, [nm], stat, fill_nan=.true.)
+    call new_dset(self, D_E1, H5T_IEEE_F64LE, [nm], stat, fill_nan=.true.)
+    call new_dset(self, D_DE, H5T_IEEE_F64LE, [nm], stat, fill_nan=.true.)
+    if (self%samples > 0) then
+      call new_dset(self, D_TRCOUNT, H5T_STD_I32LE, [nm], stat)
+      call new_dset(self, D_TRT, H5T_IEEE_F64LE, [self%samples, nm], stat, fill_nan=.true.)
+      call new_dset(self, D_TRQ, H5T_IEEE_F64LE, [self%n, self%samples, nm], stat, fill_nan=.true.)
+      call new_dset(self, D_TRP, H5T_IEEE_F64LE, [self%n, self%samples, nm], stat, fill_nan=.true.)
+    end if
+    call new_dset(self, D_RANK, H5T_STD_I32LE, [nm], stat, fill_int=-1)
+    call new_dset(self, D_THREAD, H5T_STD_I32LE, [nm], stat, fill_int=-1)
+    call new_dset(self, D_SECONDS, H5T_IEEE_F64LE, [nm], stat, fill_nan=.true.)
+    if (stat /= VCI_OK) return
+
+    start_kind = 'pair'
+    if (config%start_kind /= VCI_START_PAIR) start_kind = 'momentum'
+    call put_attr_str(self, 'format', 'vci-ensemble', stat)
+    call put_attr_int(self, 'format_version', VCI_ENSEMBLE_FORMAT_VERSION, stat)
+    call put_attr_str(self, 'vci_version', VCI_VERSION_STRING, stat)
+    call put_attr_str(self, 'name', trim(config%name), stat)
+    call put_attr_int(self, 'n_members', nm, stat)
+    call put_attr_int(self, 'n', self%n, stat)
+    call put_attr_int(self, 'n_params', self%n_params, stat)
+    call put_attr_real(self, 'h', config%h, stat)
+    call put_attr_i8(self, 'nsteps', config%nsteps, stat)
+    call put_attr_int(self, 'direction', config%direction, stat)
+    call put_attr_str(self, 'start_kind', trim(start_kind), stat)
+    call put_attr_int(self, 'impact_energy', config%impact_energy, stat)
+    call put_attr_int(self, 'impact_cap', config%impact_cap, stat)
+    call put_attr_i8(self, 'stride', config%stride, stat)
+    call put_attr_int(self, 'samples', self%samples, stat)
+    call put_attr_int(self, 'message_length', VCI_ENSEMBLE_MESSAGE_LEN, stat)
+    call put_attr_int(self, 'ranks', ranks, stat)
+    call put_attr_int(self, 'threads', threads, stat)
+    call put_attr_int(self, 'chunk', chunk, stat)
+    call put_attr_int(self, 'complete', 0, stat)
+    call put_attr_int(self, 'members_run', 0, stat)
+    call put_attr_int(self, 'members_failed', 0, stat)
+    if (stat /= VCI_OK) return
+    ! metadata on disk now: from here on only raw data are written until close
+    call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
+    if (err /= 0) call fail(self, 'cannot flush the new file', stat)
+  end subroutine f_create
+
+  !> Write the starts and parameters of members first .. first + count - 1 (each rank its share).
+  subroutine f_write_table(self, table, first, count, stat)
+    class(vci_ensemble_file_t), intent(inout) :: self
+    type(vci_ensemble_table_t), intent(in), target :: table
+    integer, intent(in) :: first, count
+    integer, intent(out) :: stat
+    stat = VCI_OK
+    if (count < 1) return
+    call put_f64(self, D_T0, table%t0(first:first + count - 1), per_member, first, count, stat)
+    call put_f64(self, D_Q0, table%q0(:, first:first + count - 1), [self%n], first, count, stat)
+    call put_f64(self, D_V0, table%v0(:, first:first + count - 1), [self%n], first, count, stat)
+    if (self%n_params > 0) &
+      call put_f64(self, D_PARAMS, table%params(:, first:first + count - 1), [self%n_params], first, count, stat)
+  end subroutine f_write_table
+
+  !> Write a block of results (members results%first .. results%first + count - 1), run by `rank`.
+  !> Statuses last: a member is in the file once its status is.
+  subroutine f_write_results(self, results, rank, stat)
+    class(vci_ensemble_file_t), intent(inout) :: self
+    type(vci_ensemble_results_t), intent(in) :: results
+    integer, intent(in) :: rank
+    integer, intent(out) :: stat
+    integer :: f, c, j, n
+    integer, allocatable :: ranks(:)
+    stat = VCI_OK
+    f = results%first; c = results%count; n = self%n
+    if (c < 1) return
+    if (f < 1 .or. f + c - 1 > self%n_members .or. results%n /= n .or. results%impact_cap /= self%impact_cap &
+        .or. results%samples /= self%samples) then
+      call fail(self, 'results do not match the file''s ensemble', stat, VCI_ERR_ARGUMENT); return
+    end if
+    do j = 1, c
+      if (results%status(j) /= VCI_OK .and. results%status(j) /= VCI_MEMBER_NOT_RUN) &
+        call put_message(self, f + j - 1, results%message(j), stat)
+    end do
+    call put_f64(self, D_T, results%t, per_member, f, c, stat)
+    call put_f64(self, D_Q, results%q, [n], f, c, stat)
+    call put_f64(self, D_P, results%p, [n], f, c, stat)
+    call put_i64(self, D_STEPS, results%steps, f, c, stat)
+    call put_i64(self, D_IMPACTS, results%impacts, f, c, stat)
+    call put_i64(self, D_NEWTON, results%newton_iterations, f, c, stat)
+    if (self%impact_cap > 0) then
+      call put_f64(self, D_IMPT, results%impact_t, [self%impact_cap], f, c, stat)
+      call put_i32(self, D_IMPGAP, results%impact_gap, [self%impact_cap], f, c, stat)
+    end if
+    call put_i32(self, D_EKIND, results%energy_kind, per_member, f, c, stat)
+    call put_f64(self, D_E0, results%energy_start, per_member, f, c, stat)
+    call put_f64(self, D_E1, results%energy_end, per_member, f, c, stat)
+    call put_f64(self, D_DE, results%energy_change, per_member, f, c, stat)
+    if (self%samples > 0) then
+      call put_i32(self, D_TRCOUNT, results%traj_count, per_member, f, c, stat)
+      call put_f64(self, D_TRT, results%traj_t, [self%samples], f, c, stat)
+      call put_f64(self, D_TRQ, results%traj_q, [n, self%samples], f, c, stat)
+      call put_f64(self, D_TRP, results%traj_p, [n, self%samples], f, c, stat)
+    end if
+    allocate (ranks(c))
+    ranks = rank
+    call put_i32(self, D_RANK, ranks, per_member, f, c, stat)
+    call put_i32(self, D_THREAD, results%thread, per_member, f, c, stat)
+    call put_f64(self, D_SECONDS, results%seconds, per_member, f, c, stat)
+    call put_i32(self, D_STATUS, results%status, per_member, f, c, stat)
+  end subroutine f_write_results
+
+  !> Record how many members ran and failed, mark the file complete when all ran, and close it.
+  !> Collective under MPI (every rank passes the same totals).
+  subroutine f_close(self, members_run, members_failed, stat)
+    class(vci_ensemble_file_t), intent(inout) :: self
+    integer, intent(in) :: members_run, members_failed
+    integer, intent(out) :: stat
+    integer :: i, err
+    stat = VCI_OK
+    if (.not. self%is_open) return
+    call put_attr_int(self, 'members_run', members_run, stat)
+    call put_attr_int(self, 'members_failed', members_failed, stat)
+    call put_attr_int(self, 'complete', merge(1, 0, members_run == self%n_members), stat)
+    do i = 1, N_DSETS
+      if (self%d(i) >= 0) call h5dclose_f(self%d(i), err)
+      self%d(i) = -1
+    end do
+    call h5fclose_f(self%file, err)
+    if (err /= 0 .and. stat == VCI_OK) call fail(self, 'cannot close the file', stat)
+    self%is_open = .false.
+  end subroutine f_close
+
+  !> Read a whole ensemble file (any number of ranks wrote it) into `results` (all members) and,
+  !> optionally, its table and the configuration it was run with (threads and chunk as recorded).
+  !> Serial: call it from one process.
+  subroutine vci_ensemble_read(path, results, stat, message, table, config)
+    character(len=*), intent(in) :: path
+    type(vci_ensemble_results_t), intent(out), target :: results
+    integer, intent(out) :: stat
+    character(len=*), intent(out), optional :: message
+    type(vci_ensemble_table_t), intent(out), optional, target :: table
+    type(vci_ensemble_config_t), intent(out), optional :: config
+    type(vci_ensemble_file_t) :: f
+    type(vci_ensemble_config_t) :: cfg
+    character(len=:), allocatable :: text
+    integer(hid_t) :: fapl
+    integer :: err, e2, nm, j
+    integer(i8) :: stride, nsteps
+    character(len=VCI_MSG_LEN) :: msg
+
+    stat = VCI_OK
+    f%path = path
+    if (present(message)) message = ''
+    call h5open_f(err)
+    if (err == 0) call h5eset_auto_f(0, err)
+    call h5pcreate_f(H5P_FILE_ACCESS_F, fapl, err)
+    if (err == 0) call h5fopen_f(path, H5F_ACC_RDONLY_F, f%file, err, access_prp=fapl)
+    call h5pclose_f(fapl, e2)
+    if (err /= 0) then
+      call fail(f, 'cannot open the file', stat)
+      if (present(message)) message = f%message
+      return
+    end if
+    f%is_open = .true.
+    call get_attr_int(f, 'n_members', nm, stat)
+    call get_attr_int(f, 'n', f%n, stat)
+    call get_attr_int(f, 'n_params', f%n_params, stat)
+    call get_attr_int(f, 'impact_cap', cfg%impact_cap, stat)
+    call get_attr_i8(f, 'stride', stride, stat)
+    call get_attr_i8(f, 'nsteps', nsteps, stat)
+    call get_attr_real(f, 'h', cfg%h, stat)
+    call get_attr_int(f, 'direction', cfg%direction, stat)
+    call get_attr_int(f, 'impact_energy', cfg%impact_energy, stat)
+    call get_attr_int(f, 'threads', cfg%threads, stat)
+    call get_attr_int(f, 'chunk', cfg%chunk, stat)
+    call get_attr_str(f, 'start_kind', text, stat)
+    if (text /= 'pair') cfg%start_kind = VCI_START_MOMENTUM
+    call get_attr_str(f, 'name', text, stat)
+    cfg%name = text
+    f%n_members = nm
+    cfg%stride = stride; cfg%nsteps = nsteps
+    if (present(config)) config = cfg
+    f%impact_cap = cfg%impact_cap
+    f%samples = vci_ensemble_samples(cfg)
+    if (stat == VCI_OK) call vci_ensemble_results_alloc(results, cfg, f%n, 1, nm, stat, msg)
+    if (stat /= VCI_OK) then
+      if (f%message == '') call fail(f, msg, stat)
+    end if
+    do j = 1, N_DSETS
+      if (stat /= VCI_OK) exit
+      if (j == D_PARAMS .and. f%n_params == 0) cycle
+      if ((j == D_IMPT .or. j == D_IMPGAP) .and. f%impact_cap == 0) cycle
+      if (j >= D_TRCOUNT .and. j <= D_TRP .and. f%samples == 0) cycle
+      call h5dopen_f(f%file, trim(names(j)), f%d(j), err)
+      if (err /= 0) call fail(f, 'dataset /'//trim(names(j))//' missing', stat)
+    end do
+    if (stat == VCI_OK) then
+      call get_i32(f, D_STATUS, results%status, stat)
+      call get_messages(f, results%message, stat)
+      call get_f64(f, D_T, c_loc(results%t), stat)
+      call get_f64(f, D_Q, c_loc(results%q), stat)
+      call get_f64(f, D_P, c_loc(results%p), stat)
+      call get_i64(f, D_STEPS, results%steps, stat)
+      call get_i64(f, D_IMPACTS, results%impacts, stat)
+      call get_i64(f, D_NEWTON, results%newton_iterations, stat)
+      if (f%impact_cap > 0) then
+        call get_f64(f, D_IMPT, c_loc(results%impact_t), stat)
+        call get_i32(f, D_IMPGAP, results%impact_gap, stat)
+      end if
+      call get_i32(f, D_EKIND, results%energy_kind, stat)
+      call get_f64(f, D_E0, c_loc(results%energy_start), stat)
+      call get_f64(f, D_E1, c_loc(results%energy_end), stat)
+      call get_f64(f, D_DE, c_loc(results%energy_change), stat)
+      if (f%samples > 0) then
+        call get_i32(f, D_TRCOUNT, results%traj_count, stat)
+        call get_f64(f, D_TRT, c_loc(results%traj_t), stat)
+        call get_f64(f, D_TRQ, c_loc(results%traj_q), stat)
+        call get_f64(f, D_TRP, c_loc(results%traj_p), stat)
+      end if
+      call get_i32(f, D_THREAD, results%thread, stat)
+      call get_f64(f, D_SECONDS, c_loc(results%seconds), stat)
+    end if
+    if (stat == VCI_OK .and. present(table)) then
+      allocate (table%t0(nm), table%q0(f%n, nm), table%v0(f%n, nm), stat=err)
+      if (err == 0 .and. f%n_params > 0) allocate (table%params(f%n_params, nm), stat=err)
+      if (err /= 0) then
+        call fail(f, 'out of memory for the table', stat)
+      else
+        call get_f64(f, D_T0, c_loc(table%t0), stat)
+        call get_f64(f, D_Q0, c_loc(table%q0), stat)
+        call get_f64(f, D_V0, c_loc(table%v0), stat)
+        if (f%n_params > 0) call get_f64(f, D_PARAMS, c_loc(table%params), stat)
+      end if
+    end if
+    do j = 1, N_DSETS
+      if (f%d(j) >= 0) call h5dclose_f(f%d(j), e2)
+    end do
+    call h5fclose_f(f%file, e2)
+    if (present(message)) message = f%message
+  end subroutine vci_ensemble_read
+
+  ! --- helpers ---
+
+  subroutine fail(self, cause, stat, status)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    character(len=*), intent(in) :: cause
+    integer, intent(inout) :: stat
+    integer, intent(in), optional :: status
+    if (stat /= VCI_OK) return     ! keep the first cause
+    stat = VCI_ERR_IO
+    if (present(status)) stat = status
+    self%message = 'ensemble file '//self%path//': '//cause
+  end subroutine fail
+
+  !> A dataset of Fortran shape `dims` (the member index last), allocated now; fill NaN or an integer.
+  subroutine new_dset(self, which, ftype, dims, stat, fill_nan, fill_int)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    integer, intent(in) :: which
+    integer(hid_t), intent(in) :: ftype
+    integer, intent(in) :: dims(:)
+    integer, intent(inout) :: stat
+    logical, intent(in), optional :: fill_nan
+    integer, intent(in), optional :: fill_int
+    integer(hid_t) :: space, dcpl
+    integer :: err, e2
+    real(dp), target :: fnan
+    integer, target :: fint
+    if (stat /= VCI_OK) return
+    call h5screate_simple_f(size(dims), int(dims, hsize_t), space, err)
+    if (err == 0) call h5pcreate_f(H5P_DATASET_CREATE_F, dcpl, err)
+    ! space allocated now (parallel HDF5 requires it): later writes never touch metadata
+    if (err == 0) call h5pset_alloc_time_f(dcpl, H5D_ALLOC_TIME_EARLY_F, err)
+    if (err == 0 .and. present(fill_nan)) then
+      fnan = ieee_value(1.0_dp, ieee_quiet_nan)
+      call h5pset_fill_value_f(dcpl, H5T_NATIVE_DOUBLE, c_loc(fnan), err)
+    end if
+    if (err == 0 .and. present(fill_int)) then
+      fint = fill_int
+      call h5pset_fill_value_f(dcpl, H5T_NATIVE_INTEGER, c_loc(fint), err)
+    end if
+    if (err == 0) call h5dcreate_f(self%file, trim(names(which)), ftype, space, self%d(which), err, dcpl_id=dcpl)
+    call h5pclose_f(dcpl, e2)
+    call h5sclose_f(space, e2)
+    if (err /= 0) call fail(self, 'cannot create dataset /'//trim(names(which)), stat)
+  end subroutine new_dset
+
+  subroutine new_string_dset(self, which, nm, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    integer, intent(in) :: which, nm
+    integer, intent(inout) :: stat
+    integer(hid_t) :: stype
+    integer :: err, e2
+    if (stat /= VCI_OK) return
+    call string_type(stype, err)
+    if (err /= 0) then
+      call fail(self, 'cannot make a string type', stat); return
+    end if
+    ! no fill value written: members that did not fail keep the file's zero bytes (an empty string)
+    call new_dset(self, which, stype, [nm], stat)
+    call h5tclose_f(stype, e2)
+  end subroutine new_string_dset
+
+  subroutine string_type(stype, err)
+    integer(hid_t), intent(out) :: stype
+    integer, intent(out) :: err
+    call h5tcopy_f(H5T_FORTRAN_S1, stype, err)
+    if (err == 0) call h5tset_size_f(stype, int(VCI_ENSEMBLE_MESSAGE_LEN, size_t), err)
+    if (err == 0) call h5tset_strpad_f(stype, H5T_STR_NULLPAD_F, err)
+  end subroutine string_type
+
+  !> Select members first .. first + count - 1 of dataset `which` (leading dimensions `lead`, whole;
+  !> none for a dataset of one value per member).
+  subroutine select_members(self, which, lead, first, count, fspace, mspace, err)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    integer, intent(in) :: which, lead(:), first, count
+    integer(hid_t), intent(out) :: fspace, mspace
+    integer, intent(out) :: err
+    integer(hsize_t) :: offset(size(lead) + 1), cnt(size(lead) + 1)
+    integer :: r
+    r = size(lead) + 1
+    offset(1:r - 1) = 0; cnt(1:r - 1) = int(lead, hsize_t)
+    offset(r) = int(first - 1, hsize_t); cnt(r) = int(count, hsize_t)
+    mspace = -1
+    call h5dget_space_f(self%d(which), fspace, err)
+    if (err == 0) call h5sselect_hyperslab_f(fspace, H5S_SELECT_SET_F, offset(1:r), cnt(1:r), err)
+    if (err == 0) call h5screate_simple_f(r, cnt(1:r), mspace, err)
+  end subroutine select_members
+
+  subroutine put_raw(self, which, mtype, buf, lead, first, count, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    integer, intent(in) :: which
+    integer(hid_t), intent(in) :: mtype
+    type(c_ptr), intent(in) :: buf
+    integer, intent(in) :: lead(:), first, count
+    integer, intent(inout) :: stat
+    integer(hid_t) :: fspace, mspace
+    integer :: err, e2
+    if (stat /= VCI_OK) return
+    call select_members(self, which, lead, first, count, fspace, mspace, err)
+    if (err == 0) call h5dwrite_f(self%d(which), mtype, buf, err, mspace, fspace)
+    if (mspace >= 0) call h5sclose_f(mspace, e2)
+    call h5sclose_f(fspace, e2)
+    if (err /= 0) call fail(self, 'cannot write /'//trim(names(which)), stat)
+  end subroutine put_raw
+
+  subroutine put_f64(self, which, buf, lead, first, count, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    integer, intent(in) :: which
+    real(dp), intent(in), target, contiguous :: buf(..)
+    integer, intent(in) :: lead(:), first, count
+    integer, intent(inout) :: stat
+    call put_raw(self, which, H5T_NATIVE_DOUBLE, c_loc(buf), lead, first, count, stat)
+  end subroutine put_f64
+
+  subroutine put_i32(self, which, buf, lead, first, count, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    integer, intent(in) :: which
+    integer, intent(in), target, contiguous :: buf(..)
+    integer, intent(in) :: lead(:), first, count
+    integer, intent(inout) :: stat
+    call put_raw(self, which, H5T_NATIVE_INTEGER, c_loc(buf), lead, first, count, stat)
+  end subroutine put_i32
+
+  subroutine put_i64(self, which, buf, first, count, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    integer, intent(in) :: which
+    integer(i8), intent(in), target :: buf(:)
+    integer, intent(in) :: first, count
+    integer, intent(inout) :: stat
+    call put_raw(self, which, h5kind_to_type(i8, H5_INTEGER_KIND), c_loc(buf), per_member, first, count, stat)
+  end subroutine put_i64
+
+  subroutine put_message(self, member, text, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    integer, intent(in) :: member
+    character(len=*), intent(in) :: text
+    integer, intent(inout) :: stat
+    character(len=VCI_ENSEMBLE_MESSAGE_LEN), target :: buf
+    integer(hid_t) :: stype
+    integer :: err, e2
+    if (stat /= VCI_OK) return
+    ! null-padded like the dataset's type: readers see the message without trailing blanks
+    buf = repeat(achar(0), VCI_ENSEMBLE_MESSAGE_LEN)
+    buf(1:min(len_trim(text), VCI_ENSEMBLE_MESSAGE_LEN)) = text
+    call string_type(stype, err)
+    if (err == 0) call put_raw(self, D_MESSAGE, stype, c_loc(buf), per_member, member, 1, stat)
+    call h5tclose_f(stype, e2)
+  end subroutine put_message
+
+  subroutine get_raw(self, which, mtype, buf, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    integer, intent(in) :: which
+    integer(hid_t), intent(in) :: mtype
+    type(c_ptr), intent(in) :: buf
+    integer, intent(inout) :: stat
+    type(c_ptr) :: p
+    integer :: err
+    if (stat /= VCI_OK) return
+    p = buf      ! HDF5's pointer interface takes the pointer intent(inout)
+    call h5dread_f(self%d(which), mtype, p, err)
+    if (err /= 0) call fail(self, 'cannot read /'//trim(names(which)), stat)
+  end subroutine get_raw
+
+  subroutine get_f64(self, which, buf, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    integer, intent(in) :: which
+    type(c_ptr), intent(in) :: buf
+    integer, intent(inout) :: stat
+    call get_raw(self, which, H5T_NATIVE_DOUBLE, buf, stat)
+  end subroutine get_f64
+
+  subroutine get_i32(self, which, buf, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    integer, intent(in) :: which
+    integer, intent(inout), target, contiguous :: buf(..)
+    integer, intent(inout) :: stat
+    call get_raw(self, which, H5T_NATIVE_INTEGER, c_loc(buf), stat)
+  end subroutine get_i32
+
+  subroutine get_i64(self, which, buf, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    integer, intent(in) :: which
+    integer(i8), intent(inout), target :: buf(:)
+    integer, intent(inout) :: stat
+    call get_raw(self, which, h5kind_to_type(i8, H5_INTEGER_KIND), c_loc(buf), stat)
+  end subroutine get_i64
+
+  subroutine get_messages(self, msgs, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    character(len=*), intent(inout) :: msgs(:)
+    integer, intent(inout) :: stat
+    character(len=VCI_ENSEMBLE_MESSAGE_LEN), allocatable, target :: buf(:)
+    integer(hid_t) :: stype
+    integer :: err, e2, j, k
+    if (stat /= VCI_OK) return
+    allocate (buf(size(msgs)), stat=err)
+    if (err == 0) call string_type(stype, err)
+    if (err /= 0) then
+      call fail(self, 'cannot read /'//trim(names(D_MESSAGE)), stat); return
+    end if
+    call get_raw(self, D_MESSAGE, stype, c_loc(buf), stat)
+    call h5tclose_f(stype, e2)
+    do j = 1, size(msgs)
+      k = index(buf(j), achar(0))
+      if (k > 0) buf(j)(k:) = ' '
+      msgs(j) = buf(j)
+    end do
+  end subroutine get_messages
+
+  ! --- root attributes (collective under MPI: every rank writes the same value) ---
+
+  subroutine new_attr(self, name, ftype, attr, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    character(len=*), intent(in) :: name
+    integer(hid_t), intent(in) :: ftype
+    integer(hid_t), intent(out) :: attr
+    integer, intent(inout) :: stat
+    integer(hid_t) :: space
+    integer :: err, e2
+    logical :: ex
+    attr = -1
+    if (stat /= VCI_OK) return
+    call h5aexists_f(self%file, name, ex, err)
+    if (err == 0 .and. ex) then
+      call h5aopen_f(self%file, name, attr, err)
+    else if (err == 0) then
+      call h5screate_f(H5S_SCALAR_F, space, err)
+      if (err == 0) call h5acreate_f(self%file, name, ftype, space, attr, err)
+      call h5sclose_f(space, e2)
+    end if
+    if (err /= 0) call fail(self, 'cannot write attribute '//name, stat)
+  end subroutine new_attr
+
+  subroutine put_attr_int(self, name, v, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    character(len=*), intent(in) :: name
+    integer, intent(in) :: v
+    integer, intent(inout) :: stat
+    integer(hid_t) :: attr
+    integer :: err, e2
+    call new_attr(self, name, H5T_STD_I32LE, attr, stat)
+    if (stat /= VCI_OK) return
+    call h5awrite_f(attr, H5T_NATIVE_INTEGER, v, [1_hsize_t], err)
+    call h5aclose_f(attr, e2)
+    if (err /= 0) call fail(self, 'cannot write attribute '//name, stat)
+  end subroutine put_attr_int
+
+  subroutine put_attr_i8(self, name, v, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    character(len=*), intent(in) :: name
+    integer(i8), intent(in) :: v
+    integer, intent(inout) :: stat
+    integer(hid_t) :: attr
+    integer :: err, e2
+    call new_attr(self, name, H5T_STD_I64LE, attr, stat)
+    if (stat /= VCI_OK) return
+    call h5awrite_f(attr, h5kind_to_type(i8, H5_INTEGER_KIND), v, [1_hsize_t], err)
+    call h5aclose_f(attr, e2)
+    if (err /= 0) call fail(self, 'cannot write attribute '//name, stat)
+  end subroutine put_attr_i8
+
+  subroutine put_attr_real(self, name, v, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    character(len=*), intent(in) :: name
+    real(dp), intent(in) :: v
+    integer, intent(inout) :: stat
+    integer(hid_t) :: attr
+    integer :: err, e2
+    call new_attr(self, name, H5T_IEEE_F64LE, attr, stat)
+    if (stat /= VCI_OK) return
+    call h5awrite_f(attr, H5T_NATIVE_DOUBLE, v, [1_hsize_t], err)
+    call h5aclose_f(attr, e2)
+    if (err /= 0) call fail(self, 'cannot write attribute '//name, stat)
+  end subroutine put_attr_real
+
+  !> A fixed-length, null-padded string (h5py: numpy.bytes_); written once, at creation.
+  subroutine put_attr_str(self, name, v, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    character(len=*), intent(in) :: name, v
+    integer, intent(inout) :: stat
+    integer(hid_t) :: attr, stype
+    integer :: err, e2
+    character(len=max(1, len(v))) :: buf
+    if (stat /= VCI_OK) return
+    buf = v
+    if (len(v) == 0) buf = achar(0)
+    call h5tcopy_f(H5T_FORTRAN_S1, stype, err)
+    if (err == 0) call h5tset_size_f(stype, int(len(buf), size_t), err)
+    if (err == 0) call h5tset_strpad_f(stype, H5T_STR_NULLPAD_F, err)
+    if (err /= 0) then
+      call fail(self, 'cannot make a string type', stat); return
+    end if
+    call new_attr(self, name, stype, attr, stat)
+    if (stat == VCI_OK) then
+      call h5awrite_f(attr, stype, buf, [1_hsize_t], err)
+      call h5aclose_f(attr, e2)
+      if (err /= 0) call fail(self, 'cannot write attribute '//name, stat)
+    end if
+    call h5tclose_f(stype, e2)
+  end subroutine put_attr_str
+
+  subroutine get_attr_int(self, name, v, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    character(len=*), intent(in) :: name
+    integer, intent(out) :: v
+    integer, intent(inout) :: stat
+    integer(hid_t) :: attr
+    integer :: err, e2
+    v = 0
+    if (stat /= VCI_OK) return
+    call h5aopen_f(self%file, name, attr, err)
+    if (err == 0) call h5aread_f(attr, H5T_NATIVE_INTEGER, v, [1_hsize_t], err)
+    call h5aclose_f(attr, e2)
+    if (err /= 0) call fail(self, 'attribute '//name//' missing or unreadable', stat)
+  end subroutine get_attr_int
+
+  subroutine get_attr_real(self, name, v, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    character(len=*), intent(in) :: name
+    real(dp), intent(out) :: v
+    integer, intent(inout) :: stat
+    integer(hid_t) :: attr
+    integer :: err, e2
+    v = 0.0_dp
+    if (stat /= VCI_OK) return
+    call h5aopen_f(self%file, name, attr, err)
+    if (err == 0) call h5aread_f(attr, H5T_NATIVE_DOUBLE, v, [1_hsize_t], err)
+    call h5aclose_f(attr, e2)
+    if (err /= 0) call fail(self, 'attribute '//name//' missing or unreadable', stat)
+  end subroutine get_attr_real
+
+  subroutine get_attr_str(self, name, v, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    character(len=*), intent(in) :: name
+    character(len=:), allocatable, intent(out) :: v
+    integer, intent(inout) :: stat
+    integer(hid_t) :: attr, ftype
+    integer(size_t) :: sz
+    integer :: err, e2, k
+    v = ''
+    if (stat /= VCI_OK) return
+    call h5aopen_f(self%file, name, attr, err)
+    if (err == 0) call h5aget_type_f(attr, ftype, err)
+    if (err == 0) call h5tget_size_f(ftype, sz, err)
+    if (err == 0) then
+      deallocate (v)
+      allocate (character(len=sz) :: v)
+      call h5aread_f(attr, ftype, v, [1_hsize_t], err)
+      call h5tclose_f(ftype, e2)
+    end if
+    call h5aclose_f(attr, e2)
+    if (err /= 0) then
+      call fail(self, 'attribute '//name//' missing or unreadable', stat); return
+    end if
+    k = index(v, achar(0))
+    if (k > 0) v = v(1:k - 1)
+  end subroutine get_attr_str
+
+  subroutine get_attr_i8(self, name, v, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    character(len=*), intent(in) :: name
+    integer(i8), intent(out) :: v
+    integer, intent(inout) :: stat
+    integer(hid_t) :: attr
+    integer :: err, e2
+    v = 0
+    if (stat /= VCI_OK) return
+    call h5aopen_f(self%file, name, attr, err)
+    if (err == 0) call h5aread_f(attr, h5kind_to_type(i8, H5_INTEGER_KIND), v, [1_hsize_t], err)
+    call h5aclose_f(attr, e2)
+    if (err /= 0) call fail(self, 'attribute '//name//' missing or unreadable', stat)
+  end subroutine get_attr_i8
+end module vci_ensemble_h5
