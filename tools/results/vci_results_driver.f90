@@ -423,7 +423,7 @@ contains
     close (unit)
   end subroutine richardson
 
-  !> Long run of the ellipse (10^5 s) or the walled pendulum (6e4 s), >= 10^5 impacts, both impact
+  !> Long run of the ellipse (1.1e5 s) or the walled pendulum (6e4 s), >= 10^5 impacts, both impact
   !> conditions, from the exact start at h = 1e-2: |E - E0| over time (largest of each window
   !> of 10 s), and the run's CPU time with the recording observer (the peers' long runs also
   !> evaluate the energy at every step).
@@ -439,7 +439,7 @@ contains
     integer :: iv, stat, unit, sunit, i, scene
     character(len=64) :: name
     select case (scene_name)
-    case ('ellipse'); scene = SCENE_ELLIPSE; t_end = 1.0e5_dp
+    case ('ellipse'); scene = SCENE_ELLIPSE; t_end = 1.1e5_dp
     case ('pendulum_walls'); scene = SCENE_PWALLS; t_end = 6.0e4_dp
     case default
       write (error_unit, '(a)') 'long: scene must be ellipse or pendulum_walls'
