@@ -82,7 +82,9 @@ def rhs_pendulum_walls(t, y):
 
 
 def fpu_stretches(x):
-    return np.diff(np.concatenate(([0.0], x, [0.0])), axis=0)
+    """Stretches r_0..r_n of x (n values, or n x k columns of states)."""
+    z = np.zeros((1,) + x.shape[1:])
+    return np.diff(np.concatenate((z, x, z)), axis=0)
 
 
 def rhs_fpu(t, y):
