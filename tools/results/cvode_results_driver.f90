@@ -346,8 +346,8 @@ contains
             if (r >= 5 .and. sum(walls(1:r)) > 0.2_c_double) exit
           end do
           if (res%status /= 0) then
-            write (unit, '(a,",",a,",",es10.3,",",10(a,","),i0)') trim(scene_names(scene)), trim(name), tol, &
-              ('nan', r = 1, 10), res%status
+            write (unit, '(a,",",a,",",es10.3,",",9(a,","),i0)') trim(scene_names(scene)), trim(name), tol, &
+              ('nan', r = 1, 9), res%status
             cycle
           end if
           err_final = maxval(abs(res%y(1:nq) - qref))

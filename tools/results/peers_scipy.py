@@ -221,7 +221,7 @@ def sweep(ref_path, out_path):
                     tol = 10.0 ** -k
                     (yf, times, chunks, steps, ok), wall, cpu, reps = timed(scene, method, tol)
                     if not ok:
-                        w.writerow([scene, "scipy-" + method.lower(), f"{tol:.3e}"] + ["nan"] * 10 + [1])
+                        w.writerow([scene, "scipy-" + method.lower(), f"{tol:.3e}"] + ["nan"] * 9 + [1])
                         continue
                     err_final = float(np.max(np.abs(yf[:nq] - qref)))
                     err_energy = max(float(np.max(np.abs(energy(scene, c) - e0))) for c in chunks)

@@ -271,8 +271,8 @@ contains
     if (stat /= VCI_OK) then
       write (error_unit, '(a,es9.2,a)') trim(scene_names(scene))//' '//trim(var%label)//' h = ', h, &
         ': '//trim(integ%message)
-      write (unit, '(a,",",a,",",es10.3,",",10(a,","),i0)') trim(scene_names(scene)), trim(var%label), &
-        h, ('nan', r = 1, 10), stat
+      write (unit, '(a,",",a,",",es10.3,",",9(a,","),i0)') trim(scene_names(scene)), trim(var%label), &
+        h, ('nan', r = 1, 9), stat
       return
     end if
     ! every method is compared at the same time T (integ%t is T up to rounding of k h)
