@@ -1,10 +1,11 @@
-!> The peer SUNDIALS CVODE (Fortran 2003 interface) on the three scenes: the ODE of each scene in
-!> first-order form, root finding on the gap (decreasing crossings only), and at each root the
-!> elastic impact map followed by CVodeReInit. Two variants a user would pick: Adams with the
+!> The peer SUNDIALS CVODE (Fortran 2003 interface) on the results scenes: the ODE of each scene in
+!> first-order form, root finding on the gaps (decreasing crossings only; the walled pendulum has
+!> two, the FPU chain 2n), and at each root the elastic impact map followed by CVodeReInit. Two variants a user would pick: Adams with the
 !> fixed-point iteration (non-stiff) and BDF with Newton and a dense difference-quotient Jacobian.
 !>
 !>   cvode_results_driver sweep FILE          tolerance sweep rtol = atol = 1e-3 .. 1e-12 -> CSV
-!>   cvode_results_driver long DIR RTOL       ellipse over 10^4 s, |E - E0| over time
+!>   cvode_results_driver long SCENE DIR RTOL  ellipse (1.1e5 s) or walled pendulum (6e4 s),
+!>                                             >= 10^5 impacts: |E - E0| over time
 !>
 !> Timing and error measures as in vci_results_driver (see vci_results_common); the energy is
 !> evaluated at every internal step, inside the timed loop (cheap next to a step).
@@ -19,8 +20,22 @@ contains
 
   integer function state_size(sc)
     integer, intent(in) :: sc
-    state_size = merge(6, 4, sc == SCENE_ELLIPSE)
+    select case (sc)
+    case (SCENE_ELLIPSE); state_size = 6
+    case (SCENE_PWALLS); state_size = 2
+    case (SCENE_FPU); state_size = 2 * fpu_n
+    case default; state_size = 4
+    end select
   end function state_size
+
+  integer function n_roots(sc)
+    integer, intent(in) :: sc
+    select case (sc)
+    case (SCENE_PWALLS); n_roots = 2
+    case (SCENE_FPU); n_roots = 2 * fpu_n
+    case default; n_roots = 1
+    end select
+  end function n_roots
 
   !> Right-hand side of the scene's first-order system, state (q, qdot).
   subroutine scene_rhs(sc, y, f)
@@ -28,7 +43,17 @@ contains
     real(c_double), intent(in) :: y(:)
     real(c_double), intent(out) :: f(:)
     real(c_double) :: s, c, ff, dff, ml2, r1, r2
+    real(c_double) :: r(0:fpu_n), fr(0:fpu_n)
+    integer :: n
     select case (sc)
+    case (SCENE_PWALLS)
+      f = [y(2), -(grav / pw_l) * sin(y(1))]
+    case (SCENE_FPU)
+      n = fpu_n
+      r(0) = y(1); r(1:n - 1) = y(2:n) - y(1:n - 1); r(n) = -y(n)
+      fr = r + fpu_beta * r**3
+      f(1:n) = y(n + 1:2 * n)
+      f(n + 1:2 * n) = fr(1:n) - fr(0:n - 1)
     case (SCENE_PARTICLE)
       f = [y(3), y(4), 0.0_c_double, -grav]
     case (SCENE_ELLIPSE)
@@ -46,25 +71,40 @@ contains
     end select
   end subroutine scene_rhs
 
-  real(c_double) function scene_gap(sc, y)
+  subroutine scene_gaps(sc, y, g)
     integer, intent(in) :: sc
     real(c_double), intent(in) :: y(:)
+    real(c_double), intent(out) :: g(:)
     select case (sc)
     case (SCENE_PARTICLE)
-      scene_gap = y(2)
+      g(1) = y(2)
     case (SCENE_ELLIPSE)
-      scene_gap = y(3) - sqrt(ell_a**2 * sin(y(1))**2 + ell_b**2 * cos(y(1))**2)
+      g(1) = y(3) - sqrt(ell_a**2 * sin(y(1))**2 + ell_b**2 * cos(y(1))**2)
+    case (SCENE_PWALLS)
+      g(1) = pw_wall - y(1); g(2) = y(1) + pw_wall
+    case (SCENE_FPU)
+      g(1:fpu_n) = fpu_w - y(1:fpu_n); g(fpu_n + 1:) = fpu_w + y(1:fpu_n)
     case default
-      scene_gap = pend_r**2 - pend_l**2 * sin(y(1))**2
+      g(1) = pend_r**2 - pend_l**2 * sin(y(1))**2
     end select
-  end function scene_gap
+  end subroutine scene_gaps
 
-  !> Elastic frictionless impact map.
-  subroutine scene_impact(sc, y)
+  !> Elastic frictionless impact map; found(j) /= 0 for the gaps that closed.
+  subroutine scene_impact(sc, y, found)
     integer, intent(in) :: sc
     real(c_double), intent(inout) :: y(:)
+    integer(c_int), intent(in) :: found(:)
     real(c_double) :: n(3), minv(3), mu, phi
+    integer :: j, i
     select case (sc)
+    case (SCENE_PWALLS)
+      y(2) = -y(2)
+    case (SCENE_FPU)
+      do j = 1, size(found)
+        if (found(j) == 0) cycle
+        i = mod(j - 1, fpu_n) + 1
+        y(fpu_n + i) = -y(fpu_n + i)   ! unit masses, wall normal e_i: v_i reverses
+      end do
     case (SCENE_PARTICLE)
       y(4) = -y(4)
     case (SCENE_ELLIPSE)
@@ -100,11 +140,11 @@ contains
   integer(c_int) function root_cb(t, sunvec_y, gout, user_data) result(ierr) bind(C)
     real(c_double), value :: t
     type(N_Vector) :: sunvec_y
-    real(c_double) :: gout(1)
+    real(c_double) :: gout(*)
     type(c_ptr), value :: user_data
     real(c_double), pointer :: y(:)
     y => FN_VGetArrayPointer(sunvec_y)
-    gout(1) = scene_gap(scene, y)
+    call scene_gaps(scene, y, gout(1:n_roots(scene)))
     ierr = 0
   end function root_cb
 end module cvode_results_problem
@@ -134,11 +174,11 @@ program cvode_results_driver
     integer(c_long) :: steps = 0
   end type run_result_t
 
-  character(len=512) :: mode, path, arg
+  character(len=512) :: mode, path, arg, dir
   real(c_double) :: rtol_long
 
   if (command_argument_count() < 2) then
-    write (error_unit, '(a)') 'usage: cvode_results_driver sweep FILE | long DIR RTOL'
+    write (error_unit, '(a)') 'usage: cvode_results_driver sweep FILE | long SCENE DIR RTOL'
     stop 2
   end if
   call get_command_argument(1, mode)
@@ -147,9 +187,10 @@ program cvode_results_driver
   case ('sweep')
     call sweep(trim(path))
   case ('long')
-    call get_command_argument(3, arg)
+    call get_command_argument(3, dir)
+    call get_command_argument(4, arg)
     read (arg, *) rtol_long
-    call long_run(trim(path), rtol_long)
+    call long_run(trim(path), trim(dir), rtol_long)
   case default
     write (error_unit, '(a)') 'unknown mode '//trim(mode)
     stop 2
@@ -173,9 +214,10 @@ contains
     real(c_double), allocatable, target :: y(:)
     real(rk), allocatable :: q0(:), qd0(:)
     real(c_double) :: tret(1), err, wmax, wend
-    integer(c_int) :: ret, dirs(1)
+    integer(c_int) :: ret
+    integer(c_int), allocatable :: dirs(:), found(:)
     integer(c_long) :: nst(1)
-    integer :: n, ns
+    integer :: n, ns, nr
 
     n = state_size(scene)
     call initial_state(scene, q0, qd0)
@@ -196,7 +238,9 @@ contains
     ret = FCVodeSStolerances(mem, tol, tol)
     ret = FCVodeSetMaxNumSteps(mem, 100000000_c_long)
     if (max_step > 0.0_c_double) ret = FCVodeSetMaxStep(mem, max_step)
-    ret = FCVodeRootInit(mem, 1, c_funloc(root_cb))
+    nr = n_roots(scene)
+    allocate (dirs(nr), found(nr))
+    ret = FCVodeRootInit(mem, int(nr, c_int), c_funloc(root_cb))
     dirs = -1
     ret = FCVodeSetRootDirection(mem, dirs)
     ret = FCVodeSetNoInactiveRootWarn(mem)
@@ -232,7 +276,8 @@ contains
         res%n_impacts = res%n_impacts + 1
         if (res%n_impacts > size(res%times)) call grow(res%times)
         res%times(res%n_impacts) = tret(1)
-        call scene_impact(scene, y)
+        ret = FCVodeGetRootInfo(mem, found)
+        call scene_impact(scene, y, found)
         ret = FCVodeGetNumSteps(mem, nst)        ! counters restart with CVodeReInit
         res%steps = res%steps + nst(1)
         ret = FCVodeReInit(mem, tret(1), sv)
@@ -282,13 +327,13 @@ contains
     open (newunit=unit, file=file, status='replace', action='write')
     write (unit, '(a)') 'scene,method,param,wall_median,cpu_median,reps,err_final,err_energy,err_impact,' // &
       'n_impacts,n_ref_impacts,steps,status'
-    do scene = 1, 3
+    do scene = 1, N_SCENES
       call reference_at(scene, t_final(scene), qref, qdref, tref, rstat)
       e0 = exact_energy0(scene)
       nq = state_size(scene) / 2
       do iv = 1, 2
         name = merge('cvode-adams', 'cvode-bdf  ', iv == 1)
-        do k = 3, 12
+        do k = 3, 13
           tol = 10.0_c_double**(-k)
           reps = 0
           do r = 1, size(walls)
@@ -301,8 +346,8 @@ contains
             if (r >= 5 .and. sum(walls(1:r)) > 0.2_c_double) exit
           end do
           if (res%status /= 0) then
-            write (unit, '(a,",",a,",",es10.3,",",10(a,","),i0)') trim(scene_names(scene)), trim(name), tol, &
-              ('nan', r = 1, 10), res%status
+            write (unit, '(a,",",a,",",es10.3,",",9(a,","),i0)') trim(scene_names(scene)), trim(name), tol, &
+              ('nan', r = 1, 9), res%status
             cycle
           end if
           err_final = maxval(abs(res%y(1:nq) - qref))
@@ -319,34 +364,45 @@ contains
     close (unit)
   end subroutine sweep
 
-  !> The ellipse over 10^4 s, both variants at one tolerance: |E - E0| per second of time.
-  subroutine long_run(dir, tol)
-    character(len=*), intent(in) :: dir
+  !> Long run (ellipse 1.1e5 s, walled pendulum 6e4 s; >= 10^5 impacts), both variants at one
+  !> tolerance: the largest |E - E0| of each 10 s window, and the cost (energy evaluated at every
+  !> internal step, inside the timing).
+  subroutine long_run(scene_name, dir, tol)
+    character(len=*), intent(in) :: scene_name, dir
     real(c_double), intent(in) :: tol
     type(run_result_t) :: res
-    real(c_double) :: w0, c0, wall, cpu
+    real(c_double) :: w0, c0, wall, cpu, t_end
     integer :: iv, unit, sunit, i
     character(len=16) :: name
     character(len=24) :: tag
-    scene = SCENE_ELLIPSE
+    select case (scene_name)
+    case ('ellipse'); scene = SCENE_ELLIPSE; t_end = 1.1e5_c_double
+    case ('pendulum_walls'); scene = SCENE_PWALLS; t_end = 6.0e4_c_double
+    case default
+      write (error_unit, '(a)') 'long: scene must be ellipse or pendulum_walls'
+      stop 2
+    end select
     write (tag, '(es8.1)') tol
-    open (newunit=sunit, file=dir//'/long_cvode_'//trim(adjustl(tag))//'.csv', status='replace', action='write')
-    write (sunit, '(a)') 'method,param,wall,cpu,max_energy_error,final_energy_error,n_impacts,t_end,status'
+    open (newunit=sunit, file=dir//'/long_'//scene_name//'_cvode_'//trim(adjustl(tag))//'.csv', &
+          status='replace', action='write')
+    write (sunit, '(a)') 'scene,method,param,wall,cpu,max_energy_error,final_energy_error,n_impacts,t_end,status'
     do iv = 1, 2
       name = merge('cvode-adams', 'cvode-bdf  ', iv == 1)
       w0 = wall_now(); c0 = cpu_now()
-      call run_cvode(iv == 1, tol, 1.0e4_c_double, max_step_of(scene), exact_energy0(scene), res, 1.0_c_double)
+      call run_cvode(iv == 1, tol, t_end, max_step_of(scene), exact_energy0(scene), res, 10.0_c_double)
       wall = wall_now() - w0; cpu = cpu_now() - c0
-      write (sunit, '(a,",",es10.3,",",es12.5,",",es12.5,",",es12.5,",",es12.5,",",i0,",",es14.7,",",i0)') &
-        trim(name), tol, wall, cpu, res%emax, res%sample_e(res%n_samples), res%n_impacts, res%t_end, res%status
-      open (newunit=unit, file=dir//'/long_'//trim(name)//'_'//trim(adjustl(tag))//'.csv', status='replace', &
-            action='write')
+      write (sunit, '(a,",",a,",",es10.3,",",es12.5,",",es12.5,",",es12.5,",",es12.5,",",i0,",",es14.7,",",i0)') &
+        scene_name, trim(name), tol, wall, cpu, res%emax, res%sample_e(res%n_samples), res%n_impacts, res%t_end, &
+        res%status
+      open (newunit=unit, file=dir//'/long_'//scene_name//'_'//trim(name)//'_'//trim(adjustl(tag))//'.csv', &
+            status='replace', action='write')
       write (unit, '(a)') 't,energy_error'
       do i = 1, res%n_samples
         write (unit, '(es14.7,",",es12.5)') res%sample_t(i), res%sample_e(i)
       end do
       close (unit)
-      write (output_unit, '(a)') 'cvode long run: '//trim(name)//' done'
+      write (output_unit, '(a,f7.1,a,i0,a)') 'cvode long run: '//scene_name//' '//trim(name)//' '// &
+        trim(adjustl(tag))//' done (', cpu, ' s CPU, ', res%n_impacts, ' impacts)'
       flush (output_unit)
     end do
     close (sunit)

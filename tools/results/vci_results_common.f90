@@ -1,5 +1,6 @@
-!> Shared by the results drivers (vci and CVODE): the three scenes' set-ups (docs/DESIGN.md §8), their
-!> independent references (test/support/vci_ref_*.f90), the error measures and the timers.
+!> Shared by the results drivers (vci and CVODE): the scenes' set-ups (the paper's three, docs/DESIGN.md
+!> §8, plus the walled planar pendulum and the FPU-beta chain between walls), their independent
+!> references (test/support/vci_ref_*.f90), the error measures and the timers.
 !>
 !> Error measures, the same for every method:
 !>  - final error: max-norm of the configuration error at the final time (particle (x, y),
@@ -12,25 +13,39 @@ module vci_results_common
   use vci_ref_particle, only: particle_exact
   use vci_ref_ellipse, only: ellipse_params, ellipse_exact, ellipse_energy
   use vci_ref_pendulum, only: pendulum_params, pendulum_exact, pendulum_energy
+  use vci_ref_pendulum_walls, only: pendulum_walls_params, pendulum_walls_exact
+  use vci_ref_fpu_walls, only: fpu_walls_params, fpu_walls_run
   implicit none
   private
 
   integer, parameter, public :: rk = real64
   real(rk), parameter, public :: pi = acos(-1.0_rk)
 
-  integer, parameter, public :: SCENE_PARTICLE = 1, SCENE_ELLIPSE = 2, SCENE_PENDULUM = 3
-  character(len=8), parameter, public :: scene_names(3) = [character(len=8) :: 'particle', 'ellipse', 'pendulum']
+  integer, parameter, public :: SCENE_PARTICLE = 1, SCENE_ELLIPSE = 2, SCENE_PENDULUM = 3, &
+                                SCENE_PWALLS = 4, SCENE_FPU = 5, N_SCENES = 5
+  character(len=14), parameter, public :: scene_names(N_SCENES) = [character(len=14) :: &
+    'particle', 'ellipse', 'pendulum', 'pendulum_walls', 'fpu_walls']
 
   !> Horizons: particle and pendulum as in the examples; the ellipse is chaotic, so only as far as
-  !> the coarsest step's impact sequence still follows the exact one (docs/DESIGN.md §8).
-  real(rk), parameter, public :: t_final(3) = [3.0_rk, 3.0_rk, 5.0_rk]
+  !> the coarsest step's impact sequence still follows the exact one (docs/DESIGN.md §8); the walled
+  !> pendulum over 10 s (18 impacts); the FPU chain over 2 s (41 impacts; its reference is a
+  !> quad-precision Taylor integration, seconds per run).
+  real(rk), parameter, public :: t_final(N_SCENES) = [3.0_rk, 3.0_rk, 5.0_rk, 10.0_rk, 2.0_rk]
 
   ! physical parameters (the paper's)
   real(rk), parameter, public :: grav = 9.8_rk, mass = 1.0_rk
   real(rk), parameter, public :: ell_a = 1.0_rk, ell_b = 0.5_rk
   real(rk), parameter, public :: pend_l = 2.0_rk, pend_r = 1.5_rk
+  ! walled planar pendulum: length, wall angle, initial speed (theta(0) = 0)
+  real(rk), parameter, public :: pw_l = 1.0_rk, pw_wall = 1.0_rk, pw_omega0 = 4.0_rk
+  ! FPU-beta chain: particles, quartic coefficient, walls at +-fpu_w
+  integer, parameter, public :: fpu_n = 32
+  real(rk), parameter, public :: fpu_beta = 1.0_rk, fpu_w = 0.6_rk
+  !> Taylor steps of the FPU reference: the first is used, the second checks it.
+  real(rk), parameter, public :: fpu_ref_steps(2) = [0.01_rk, 0.005_rk]
 
-  public :: initial_state, reference_at, exact_energy0, impact_time_error, median
+  public :: initial_state, initial_momentum, reference_at, exact_energy0, impact_time_error, median
+  public :: fpu_reference
   public :: wall_now, cpu_now, energy_of_velocity, pend_f
 
 contains
@@ -39,15 +54,44 @@ contains
   subroutine initial_state(scene, q0, qd0)
     integer, intent(in) :: scene
     real(rk), allocatable, intent(out) :: q0(:), qd0(:)
+    integer :: i
     select case (scene)
     case (SCENE_PARTICLE)
       q0 = [0.0_rk, 1.0_rk]; qd0 = [1.0_rk, 0.0_rk]
     case (SCENE_ELLIPSE)
       q0 = [pi / 2.0_rk, 0.0_rk, 3.5_rk]; qd0 = [-3.0_rk, 2.0_rk, 0.0_rk]
+    case (SCENE_PWALLS)
+      q0 = [0.0_rk]; qd0 = [pw_omega0]
+    case (SCENE_FPU)
+      ! the reference's n = 32 check (test/core/test_ref_fpu_walls.pf)
+      allocate (q0(fpu_n), qd0(fpu_n))
+      do i = 1, fpu_n
+        q0(i) = 0.4_rk * fpu_w * sin(2 * pi * i / (fpu_n + 1))
+        qd0(i) = 1.2_rk * sin(3 * pi * i / (fpu_n + 1)) + 0.8_rk * sin(pi * i / (fpu_n + 1))
+      end do
     case default
       q0 = [0.75_rk * pi, 0.0_rk]; qd0 = [pi / 4.0_rk, (pi + 0.5_rk) * pi / 4.0_rk]
     end select
   end subroutine initial_state
+
+  !> The exact initial momentum p(0) = dL/dqdot = M(q0) qdot0 (what a user passes to
+  !> init_from_momentum).
+  subroutine initial_momentum(scene, p0)
+    integer, intent(in) :: scene
+    real(rk), allocatable, intent(out) :: p0(:)
+    real(rk), allocatable :: q0(:), qd0(:)
+    call initial_state(scene, q0, qd0)
+    select case (scene)
+    case (SCENE_ELLIPSE)
+      p0 = [mass * (ell_a**2 + ell_b**2) / 4.0_rk * qd0(1), mass * qd0(2), mass * qd0(3)]
+    case (SCENE_PENDULUM)
+      p0 = mass * pend_l**2 * [qd0(1), sin(q0(1))**2 * qd0(2)]
+    case (SCENE_PWALLS)
+      p0 = mass * pw_l**2 * qd0
+    case default
+      p0 = mass * qd0
+    end select
+  end subroutine initial_momentum
 
   elemental real(rk) function pend_f(theta)
     real(rk), intent(in) :: theta
@@ -64,10 +108,24 @@ contains
     case (SCENE_ELLIPSE)
       e = 0.5_rk * (mass * (ell_a**2 + ell_b**2) / 4.0_rk * qd(1)**2 + mass * (qd(2)**2 + qd(3)**2)) &
           + mass * grav * q(3)
+    case (SCENE_PWALLS)
+      e = 0.5_rk * mass * pw_l**2 * qd(1)**2 - mass * grav * pw_l * cos(q(1))
+    case (SCENE_FPU)
+      e = 0.5_rk * sum(qd**2) + fpu_potential(q)
     case default
       e = 0.5_rk * mass * pend_l**2 * (qd(1)**2 + sin(q(1))**2 * qd(2)**2) + mass * grav * pend_l * cos(q(1))
     end select
   end function energy_of_velocity
+
+  !> Potential of the FPU chain, sum over the n + 1 springs of r^2/2 + beta r^4/4.
+  pure real(rk) function fpu_potential(x) result(v)
+    real(rk), intent(in) :: x(:)
+    real(rk) :: r(0:size(x))
+    integer :: n
+    n = size(x)
+    r(0) = x(1); r(1:n - 1) = x(2:n) - x(1:n - 1); r(n) = -x(n)
+    v = sum(0.5_rk * r**2 + 0.25_rk * fpu_beta * r**4)
+  end function fpu_potential
 
   real(rk) function exact_energy0(scene) result(e)
     integer, intent(in) :: scene
@@ -84,6 +142,8 @@ contains
   end function exact_energy0
 
   !> Reference configuration and velocity at time t, and the reference impact times in (0, t].
+  !> The last answer of each scene is kept (the FPU reference costs seconds; every run of a sweep
+  !> asks for the same final time).
   subroutine reference_at(scene, t, q, qd, times, status)
     integer, intent(in) :: scene
     real(rk), intent(in) :: t
@@ -92,9 +152,29 @@ contains
     real(rk), allocatable :: q0(:), qd0(:)
     real(rk) :: x, y, vx, vy, q3(3), v3(3), th, ph, thd
     integer :: n
+    type :: cached_t
+      logical :: have = .false.
+      real(rk) :: t = 0.0_rk
+      integer :: status = 0
+      real(rk), allocatable :: q(:), qd(:), times(:)
+    end type cached_t
+    type(cached_t), save :: cache(N_SCENES)
+    if (cache(scene)%have) then
+      if (cache(scene)%t == t) then
+        q = cache(scene)%q; qd = cache(scene)%qd; times = cache(scene)%times
+        status = cache(scene)%status
+        return
+      end if
+    end if
     call initial_state(scene, q0, qd0)
     status = 0
     select case (scene)
+    case (SCENE_PWALLS)
+      allocate (q(1), qd(1))
+      call pendulum_walls_exact(pendulum_walls_params(g=grav, ell=pw_l, theta_w=pw_wall, m=mass), &
+                                q0(1), qd0(1), t, q(1), qd(1), n, times, status)
+    case (SCENE_FPU)
+      call fpu_reference(t, fpu_ref_steps(1), q, qd, times, status)
     case (SCENE_PARTICLE)
       call particle_exact(q0(2), qd0(1), qd0(2), grav, t, x, y, vx, vy, times, n)
       q = [x, y]; qd = [vx, vy]
@@ -105,7 +185,22 @@ contains
       call pendulum_exact(pendulum_params(), q0(1), qd0(1), q0(2), t, th, ph, thd, times, n, status)
       q = [th, ph]; qd = [thd, pend_f(th) * thd]
     end select
+    cache(scene)%have = .true.; cache(scene)%t = t; cache(scene)%status = status
+    cache(scene)%q = q; cache(scene)%qd = qd; cache(scene)%times = times
   end subroutine reference_at
+
+  !> The FPU chain's event-driven quad-precision reference at time t with Taylor step `step`.
+  subroutine fpu_reference(t, step, q, qd, times, status)
+    real(rk), intent(in) :: t, step
+    real(rk), allocatable, intent(out) :: q(:), qd(:), times(:)
+    integer, intent(out) :: status
+    real(rk), allocatable :: q0(:), qd0(:)
+    integer :: n
+    call initial_state(SCENE_FPU, q0, qd0)
+    allocate (q(fpu_n), qd(fpu_n))
+    call fpu_walls_run(fpu_walls_params(beta=fpu_beta, w=fpu_w, step=step), q0, qd0, t, q, qd, n, &
+                       times, stat=status)
+  end subroutine fpu_reference
 
   !> Largest distance from a reference impact time to the nearest impact time of the method
   !> (huge when the method found no impact at all but the reference has some).

@@ -1,13 +1,29 @@
-!> Error against run time for vci on the paper's three scenes (issue 6 part 1, issue 7 item 3).
+!> Error against run time for vci on the results scenes (issues 6, 7, 16): the paper's three, the
+!> walled planar pendulum and the FPU-beta chain between walls.
 !>
 !>   vci_results_driver reference FILE    exact data at the final times, for the Python peers
-!>   vci_results_driver sweep FILE         step-size sweep, both impact conditions -> CSV
+!>   vci_results_driver sweep FILE         step-size sweep of every variant -> CSV
 !>   vci_results_driver richardson FILE    pendulum reference vs Richardson extrapolation of vci
-!>   vci_results_driver long DIR           ellipse, 10^6 steps at h = 1e-2: |E - E0| over time
+!>   vci_results_driver long SCENE DIR     long run (>= 10^5 impacts) of the ellipse or the walled
+!>                                         pendulum at h = 1e-2: |E - E0| over time
+!>
+!> Same start as every peer: each variant starts from the exact (q(0), qdot(0)) at t = 0, through
+!> init_from_momentum with p(0) = M q̇(0), unless it is a `-pair` variant (the paper's initial
+!> pair, kept as a separate labelled row). Step sizes are adjusted so that the final time T is a
+!> grid point: h = T/N (momentum start) or T/(N + 1/2) (pair q(0) -+ (h/2) q̇(0) at -+h/2), N the
+!> integer nearest to T/h_nominal; every method's final error is then taken at the same T.
 !>
 !> Timing: each timed repeat creates, initialises and runs an integrator with no observer; wall
 !> time by system_clock (median over repeats), CPU time by cpu_time (median). Errors come from
 !> one more, untimed, run with a recording observer. Measures: see vci_results_common.
+!>
+!> EXTENSION POINT (new vci schemes, e.g. left, midpoint, lobatto s = 2..4 from a continuous L):
+!> every method row comes from the table built in `variants()` below. A scheme is one more
+!> `variant_t` entry per impact condition (label, e.g. 'vci-lobatto3-hamiltonian'; scheme id and
+!> stages) plus its case in `make_model` (the continuous model of the scene) and in `start`
+!> (`call integ%set_scheme(...)` after create). Nothing else changes: the sweep, the CSV
+!> columns, the long runs and make_report.py (which reads the method names from the CSV) pick
+!> the new rows up.
 !> The recording observer of the results driver.
 module vci_results_recorder
   use vci
@@ -100,17 +116,33 @@ program vci_results_driver
   use vci_scene_particle, only: particle_on_floor
   use vci_scene_ellipse, only: ellipse_model
   use vci_scene_pendulum, only: pendulum_model
+  use vci_scene_pendulum_walls_ld, only: pendulum_walls_ld_model
+  use vci_scene_fpu_walls, only: fpu_walls_model
   use vci_results_common
   use vci_results_recorder
   implicit none
 
+  !> How the scene's model is discretised. SCHEME_LD: the scene's own user-written discrete L_d
+  !> (midpoint rule for the particle, the ellipse, the walled pendulum and the FPU chain; the
+  !> paper's left-point L_d for the nonholonomic pendulum). New schemes get new ids here.
+  integer, parameter :: SCHEME_LD = 0
 
-  character(len=512) :: mode, target_path
+  !> One method row of the report (see EXTENSION POINT in the header).
+  type :: variant_t
+    character(len=32) :: label = ''
+    integer :: impact_mode = VCI_IMPACT_DISCRETE
+    logical :: pair_start = .false.     !< the paper's initial pair instead of init_from_momentum
+    integer :: scheme = SCHEME_LD
+    integer :: stages = 0               !< for Lobatto schemes
+    logical :: paper_scenes_only = .false.  !< run on the particle, ellipse and pendulum only
+  end type variant_t
+
+  character(len=512) :: mode, target_path, arg3
   integer :: nargs
 
   nargs = command_argument_count()
   if (nargs < 2) then
-    write (error_unit, '(a)') 'usage: vci_results_driver reference|sweep|richardson|long PATH'
+    write (error_unit, '(a)') 'usage: vci_results_driver reference|sweep|richardson PATH | long SCENE DIR'
     stop 2
   end if
   call get_command_argument(1, mode)
@@ -119,7 +151,9 @@ program vci_results_driver
   case ('reference'); call write_reference(trim(target_path))
   case ('sweep'); call sweep(trim(target_path))
   case ('richardson'); call richardson(trim(target_path))
-  case ('long'); call long_run(trim(target_path))
+  case ('long')
+    call get_command_argument(3, arg3)
+    call long_run(trim(target_path), trim(arg3))
   case default
     write (error_unit, '(a)') 'unknown mode '//trim(mode)
     stop 2
@@ -127,61 +161,87 @@ program vci_results_driver
 
 contains
 
+  !> The method rows. Add new schemes here (EXTENSION POINT).
+  function variants() result(v)
+    type(variant_t), allocatable :: v(:)
+    v = [variant_t('vci-ld-discrete', VCI_IMPACT_DISCRETE, .false.), &
+         variant_t('vci-ld-hamiltonian', VCI_IMPACT_HAMILTONIAN, .false.), &
+         variant_t('vci-ld-pair-discrete', VCI_IMPACT_DISCRETE, .true., paper_scenes_only=.true.), &
+         variant_t('vci-ld-pair-hamiltonian', VCI_IMPACT_HAMILTONIAN, .true., paper_scenes_only=.true.)]
+  end function variants
 
-  !> A fresh model of the scene.
-  subroutine make_model(scene, model)
+  !> A fresh model of the scene, discretised as the variant says.
+  subroutine make_model(scene, var, model)
     integer, intent(in) :: scene
+    type(variant_t), intent(in) :: var
     class(vci_model_t), allocatable, intent(out) :: model
+    if (var%scheme /= SCHEME_LD) error stop 'make_model: unknown scheme'
     select case (scene)
     case (SCENE_PARTICLE); allocate (model, source=particle_on_floor(mass, grav))
     case (SCENE_ELLIPSE); allocate (model, source=ellipse_model())
-    case default; allocate (model, source=pendulum_model())
+    case (SCENE_PENDULUM); allocate (model, source=pendulum_model())
+    case (SCENE_PWALLS); allocate (model, source=pendulum_walls_ld_model(pw_wall))
+    case default; allocate (model, source=fpu_walls_model(fpu_n, fpu_beta, fpu_w))
     end select
   end subroutine make_model
 
-  !> Create and initialise an integrator with the scene's initial pair (the examples' set-ups).
-  subroutine start(scene, model, h, impact_mode, integ, stat)
-    integer, intent(in) :: scene, impact_mode
+  !> The step actually used for a nominal step, so that T = t_final is a grid point.
+  real(dp) function grid_step(scene, var, h_nominal, t_end) result(h)
+    integer, intent(in) :: scene
+    type(variant_t), intent(in) :: var
+    real(dp), intent(in) :: h_nominal, t_end
+    integer(i8) :: n
+    n = max(1_i8, nint(t_end / h_nominal, i8))
+    if (var%pair_start .and. scene /= SCENE_PENDULUM) then
+      h = t_end / (real(n, dp) + 0.5_dp)          ! the pair at -+h/2: grid (k - 1/2) h
+    else
+      h = t_end / real(n, dp)
+    end if
+  end function grid_step
+
+  !> Steps to take after the start so that the last grid time is t_end (h from grid_step).
+  integer(i8) function steps_to(scene, var, h, t_end)
+    integer, intent(in) :: scene
+    type(variant_t), intent(in) :: var
+    real(dp), intent(in) :: h, t_end
+    if (.not. var%pair_start) then
+      steps_to = nint(t_end / h, i8)                 ! t_k = k h from k = 0
+    else if (scene == SCENE_PENDULUM) then
+      steps_to = nint(t_end / h, i8) - 1_i8          ! pair at 0 and h, t_k = k h from k = 1
+    else
+      steps_to = nint(t_end / h + 0.5_dp, i8) - 1_i8 ! pair at -+h/2, t_k = (k - 1/2) h from k = 1
+    end if
+  end function steps_to
+
+  !> Create and initialise an integrator: from the exact (q(0), p(0)), or from the paper's pair.
+  subroutine start(scene, var, model, h, integ, stat)
+    integer, intent(in) :: scene
+    type(variant_t), intent(in) :: var
     class(vci_model_t), target, intent(inout) :: model
     real(dp), intent(in) :: h
     type(vci_integrator_t), intent(inout) :: integ
     integer, intent(out) :: stat
-    real(dp), allocatable :: q0(:), qd0(:)
+    real(dp), allocatable :: q0(:), qd0(:), p0(:)
     call initial_state(scene, q0, qd0)
     call integ%create(model, h, stat)
     if (stat == VCI_OK) call integ%set_tolerances(0.0_dp, 1.0e-12_dp, 30, stat)
-    if (stat == VCI_OK) call integ%set_impact_energy(impact_mode, stat)
+    if (stat == VCI_OK) call integ%set_impact_energy(var%impact_mode, stat)
+    if (stat == VCI_OK .and. scene == SCENE_FPU) call integ%set_max_impacts(8, stat)
     if (stat /= VCI_OK) return
-    if (scene == SCENE_PENDULUM) then
+    if (.not. var%pair_start) then
+      call initial_momentum(scene, p0)
+      call integ%init_from_momentum(0.0_dp, q0, p0, stat)
+    else if (scene == SCENE_PENDULUM) then
       call integ%init_from_pair(0.0_dp, q0, q0 + h * qd0, stat)
     else
       call integ%init_from_pair(-0.5_dp * h, q0 - 0.5_dp * h * qd0, q0 + 0.5_dp * h * qd0, stat)
     end if
   end subroutine start
 
-  !> Steps after the initial pair so that the last grid time is the one nearest to t_end.
-  integer(i8) function steps_to(scene, h, t_end)
-    integer, intent(in) :: scene
-    real(dp), intent(in) :: h, t_end
-    if (scene == SCENE_PENDULUM) then
-      steps_to = nint(t_end / h, i8) - 1_i8          ! grid t_k = k h, start at k = 1
-    else
-      steps_to = nint(t_end / h + 0.5_dp, i8) - 1_i8 ! grid t_k = (k - 1/2) h, start at k = 1
-    end if
-  end function steps_to
-
-  character(len=16) function mode_name(impact_mode)
-    integer, intent(in) :: impact_mode
-    if (impact_mode == VCI_IMPACT_HAMILTONIAN) then
-      mode_name = 'vci-hamiltonian'
-    else
-      mode_name = 'vci-discrete'
-    end if
-  end function mode_name
-
-  !> One accuracy run and timed repeats; one CSV row.
-  subroutine measure(unit, scene, h, impact_mode)
-    integer, intent(in) :: unit, scene, impact_mode
+  !> One accuracy run and timed repeats; one CSV row. h is the step from grid_step.
+  subroutine measure(unit, scene, var, h)
+    integer, intent(in) :: unit, scene
+    type(variant_t), intent(in) :: var
     real(dp), intent(in) :: h
     class(vci_model_t), allocatable, target :: model
     type(vci_integrator_t) :: integ
@@ -190,11 +250,12 @@ contains
     real(dp) :: walls(9), cpus(9), w0, c0, e, err_final, err_impact
     integer(i8) :: nsteps
     integer :: stat, rstat, reps, r
+    character(len=VCI_MSG_LEN) :: msg
 
-    call make_model(scene, model)
-    nsteps = steps_to(scene, h, t_final(scene))
+    call make_model(scene, var, model)
+    nsteps = steps_to(scene, var, h, t_final(scene))
     ! accuracy run, untimed
-    call start(scene, model, h, impact_mode, integ, stat)
+    call start(scene, var, model, h, integ, stat)
     rec%model => model
     rec%reduced_pendulum_energy = (scene == SCENE_PENDULUM)
     rec%e0 = exact_energy0(scene)
@@ -204,13 +265,20 @@ contains
       rec%emax = abs(e - rec%e0)
       call integ%integrate(nsteps, 1, stat, rec)
     end if
+    msg = integ%message()
+    if (stat == VCI_OK .and. abs(integ%time() - t_final(scene)) > 1.0e-9_dp * t_final(scene)) then
+      write (msg, '(a,es22.15)') 'ended off the final time, at t = ', integ%time()
+      stat = -1
+    end if
     if (stat /= VCI_OK) then
-      write (error_unit, '(a,es9.2,a)') trim(scene_names(scene))//' h = ', h, ': '//integ%message()
-      write (unit, '(a,",",a,",",es10.3,",",10(a,","),i0)') trim(scene_names(scene)), trim(mode_name(impact_mode)), &
-        h, ('nan', r = 1, 10), stat
+      write (error_unit, '(a,es9.2,a)') trim(scene_names(scene))//' '//trim(var%label)//' h = ', h, &
+        ': '//trim(msg)
+      write (unit, '(a,",",a,",",es10.3,",",9(a,","),i0)') trim(scene_names(scene)), trim(var%label), &
+        h, ('nan', r = 1, 9), stat
       return
     end if
-    call reference_at(scene, integ%time(), qref, qdref, tref, rstat)
+    ! every method is compared at the same time T (integ%time() is T up to rounding of k h)
+    call reference_at(scene, t_final(scene), qref, qdref, tref, rstat)
     err_final = maxval(abs(integ%configuration() - qref))
     err_impact = impact_time_error(tref, rec%times, rec%n_impacts)
 
@@ -218,32 +286,52 @@ contains
     reps = 0
     do r = 1, size(walls)
       w0 = wall_now(); c0 = cpu_now()
-      call start(scene, model, h, impact_mode, integ, stat)
+      call start(scene, var, model, h, integ, stat)
       call integ%integrate(nsteps, 1, stat)
       walls(r) = wall_now() - w0; cpus(r) = cpu_now() - c0
       reps = r
       if (r >= 3 .and. sum(walls(1:r)) > 1.0_dp) exit
       if (r >= 5 .and. sum(walls(1:r)) > 0.2_dp) exit
+      if (walls(1) > 2.0_dp) exit
     end do
     write (unit, '(a,",",a,",",es10.3,",",es12.5,",",es12.5,",",i0,",",3(es12.5,","),i0,",",i0,",",i0,",",i0)') &
-      trim(scene_names(scene)), trim(mode_name(impact_mode)), h, median(walls(1:reps)), median(cpus(1:reps)), reps, &
-      err_final, rec%emax, err_impact, rec%n_impacts, size(tref), nsteps + 1_i8, stat
+      trim(scene_names(scene)), trim(var%label), h, median(walls(1:reps)), median(cpus(1:reps)), reps, &
+      err_final, rec%emax, err_impact, rec%n_impacts, size(tref), nsteps, stat
     flush (unit)
   end subroutine measure
 
+  !> Nominal step sizes of each scene: wide enough that the error spans 1e-2 .. 1e-10 where the
+  !> method's order and vci's round-off floor allow, short enough to fit the time budget.
+  function nominal_steps(scene) result(hs)
+    integer, intent(in) :: scene
+    real(dp), allocatable :: hs(:)
+    select case (scene)
+    case (SCENE_FPU)
+      hs = [5.0e-2_dp, 2.0e-2_dp, 1.0e-2_dp, 5.0e-3_dp, 2.0e-3_dp, 1.0e-3_dp, 5.0e-4_dp, 2.0e-4_dp, 1.0e-4_dp]
+    case (SCENE_PWALLS)
+      hs = [1.0e-1_dp, 5.0e-2_dp, 2.0e-2_dp, 1.0e-2_dp, 5.0e-3_dp, 2.0e-3_dp, 1.0e-3_dp, 5.0e-4_dp, &
+            2.0e-4_dp, 1.0e-4_dp, 5.0e-5_dp, 2.0e-5_dp, 1.0e-5_dp]
+    case default
+      hs = [1.0e-1_dp, 5.0e-2_dp, 2.0e-2_dp, 1.0e-2_dp, 5.0e-3_dp, 2.0e-3_dp, 1.0e-3_dp, 5.0e-4_dp, &
+            2.0e-4_dp, 1.0e-4_dp, 5.0e-5_dp, 2.0e-5_dp, 1.0e-5_dp]
+    end select
+  end function nominal_steps
+
   subroutine sweep(path)
     character(len=*), intent(in) :: path
-    real(dp), parameter :: hs(11) = [2.0e-2_dp, 1.0e-2_dp, 5.0e-3_dp, 2.0e-3_dp, 1.0e-3_dp, 5.0e-4_dp, &
-                                     2.0e-4_dp, 1.0e-4_dp, 5.0e-5_dp, 2.0e-5_dp, 1.0e-5_dp]
-    integer :: unit, scene, i, imode
-    integer, parameter :: modes(2) = [VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN]
+    type(variant_t), allocatable :: vs(:)
+    real(dp), allocatable :: hs(:)
+    integer :: unit, scene, i, iv
+    vs = variants()
     open (newunit=unit, file=path, status='replace', action='write')
     write (unit, '(a)') 'scene,method,param,wall_median,cpu_median,reps,err_final,err_energy,err_impact,' // &
       'n_impacts,n_ref_impacts,steps,status'
-    do scene = 1, 3
-      do imode = 1, 2
+    do scene = 1, N_SCENES
+      hs = nominal_steps(scene)
+      do iv = 1, size(vs)
+        if (vs(iv)%paper_scenes_only .and. scene > SCENE_PENDULUM) cycle
         do i = 1, size(hs)
-          call measure(unit, scene, hs(i), modes(imode))
+          call measure(unit, scene, vs(iv), grid_step(scene, vs(iv), hs(i), t_final(scene)))
         end do
       end do
       write (output_unit, '(a)') 'vci sweep: '//trim(scene_names(scene))//' done'
@@ -255,12 +343,13 @@ contains
   !> Exact data at each scene's final time, for the Python peers (JSON).
   subroutine write_reference(path)
     character(len=*), intent(in) :: path
-    integer :: unit, scene, rstat
-    real(dp), allocatable :: q(:), qd(:), times(:)
+    integer :: unit, scene, rstat, rstat2
+    real(dp), allocatable :: q(:), qd(:), times(:), q2(:), qd2(:), times2(:)
+    real(dp) :: check
     character(len=*), parameter :: fmt_arr = '(*(es25.17e3,:,","))'
     open (newunit=unit, file=path, status='replace', action='write')
     write (unit, '(a)') '{'
-    do scene = 1, 3
+    do scene = 1, N_SCENES
       call reference_at(scene, t_final(scene), q, qd, times, rstat)
       write (unit, '(a)') '"'//trim(scene_names(scene))//'": {'
       write (unit, '(a,es25.17e3,a)') '"t_final": ', t_final(scene), ','
@@ -274,8 +363,21 @@ contains
       write (unit, '(a)') '],'
       write (unit, '(a)', advance='no') '"impact_times": ['
       if (size(times) > 0) write (unit, fmt_arr, advance='no') times
-      write (unit, '(a)') ']'
-      if (scene < 3) then
+      write (unit, '(a)') '],'
+      ! the FPU reference checked against itself at half the Taylor step (the others are exact)
+      check = 0.0_dp
+      if (scene == SCENE_FPU) then
+        call fpu_reference(t_final(scene), fpu_ref_steps(2), q2, qd2, times2, rstat2)
+        check = max(maxval(abs(q2 - q)), maxval(abs(qd2 - qd)))
+        if (size(times2) == size(times)) then
+          if (size(times) > 0) check = max(check, maxval(abs(times2 - times)))
+        else
+          check = huge(1.0_dp)
+        end if
+        if (rstat2 /= 0) check = huge(1.0_dp)
+      end if
+      write (unit, '(a,es25.17e3)') '"self_check": ', check
+      if (scene < N_SCENES) then
         write (unit, '(a)') '},'
       else
         write (unit, '(a)') '}'
@@ -296,14 +398,15 @@ contains
     real(dp) :: q(2, size(hs)), ti(3, size(hs)), rq(2), rt(3)
     real(dp), allocatable :: qref(:), qdref(:), tref(:)
     integer :: i, stat, unit, rstat
-    call make_model(SCENE_PENDULUM, model)
+    type(variant_t), parameter :: pair = variant_t('pair', VCI_IMPACT_DISCRETE, .true.)
+    call make_model(SCENE_PENDULUM, pair, model)
     call reference_at(SCENE_PENDULUM, t_final(SCENE_PENDULUM), qref, qdref, tref, rstat)
     do i = 1, size(hs)
-      call start(SCENE_PENDULUM, model, hs(i), VCI_IMPACT_DISCRETE, integ, stat)
+      call start(SCENE_PENDULUM, pair, model, hs(i), integ, stat)
       rec = recorder_t()
       rec%model => model
       allocate (rec%times(64), rec%sample_t(1), rec%sample_e(1))
-      call integ%integrate(steps_to(SCENE_PENDULUM, hs(i), t_final(SCENE_PENDULUM)), 1, stat, rec)
+      call integ%integrate(steps_to(SCENE_PENDULUM, pair, hs(i), t_final(SCENE_PENDULUM)), 1, stat, rec)
       if (stat /= VCI_OK .or. rec%n_impacts /= size(tref) .or. abs(integ%time() - t_final(SCENE_PENDULUM)) > 1.0e-9_dp) then
         write (error_unit, '(a,es10.3)') 'richardson: run failed or impact count differs at h = ', hs(i)
         stop 1
@@ -322,47 +425,57 @@ contains
     close (unit)
   end subroutine richardson
 
-  !> The ellipse over 10^4 s (10^6 steps at h = 1e-2), both impact conditions: |E - E0| over time
-  !> (largest of each block of 100 steps) and the cost of the run without an observer.
-  subroutine long_run(dir)
-    character(len=*), intent(in) :: dir
-    integer, parameter :: modes(2) = [VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN]
-    integer(i8), parameter :: nsteps = 1000000_i8
-    real(dp), parameter :: h = 1.0e-2_dp
+  !> Long run of the ellipse (1.1e5 s) or the walled pendulum (6e4 s), >= 10^5 impacts, both impact
+  !> conditions, from the exact start at h = 1e-2: |E - E0| over time (largest of each window
+  !> of 10 s), and the run's CPU time with the recording observer (the peers' long runs also
+  !> evaluate the energy at every step).
+  subroutine long_run(scene_name, dir)
+    character(len=*), intent(in) :: scene_name, dir
+    type(variant_t), allocatable :: vs(:)
+    real(dp), parameter :: h = 1.0e-2_dp, window = 10.0_dp
     class(vci_model_t), allocatable, target :: model
     type(vci_integrator_t) :: integ
     type(recorder_t) :: rec
-    real(dp) :: w0, c0, walls(3), cpus(3)
-    integer :: imode, stat, unit, sunit, i, r
-    call make_model(SCENE_ELLIPSE, model)
-    open (newunit=sunit, file=dir//'/long_vci.csv', status='replace', action='write')
-    write (sunit, '(a)') 'method,param,wall,cpu,max_energy_error,final_energy_error,n_impacts,t_end,status'
-    do imode = 1, 2
-      do r = 1, 3
-        w0 = wall_now(); c0 = cpu_now()
-        call start(SCENE_ELLIPSE, model, h, modes(imode), integ, stat)
-        call integ%integrate(nsteps - 1_i8, 1, stat)
-        walls(r) = wall_now() - w0; cpus(r) = cpu_now() - c0
-      end do
+    real(dp) :: w0, c0, wall, cpu, t_end
+    integer(i8) :: nsteps
+    integer :: iv, stat, unit, sunit, i, scene
+    character(len=64) :: name
+    select case (scene_name)
+    case ('ellipse'); scene = SCENE_ELLIPSE; t_end = 1.1e5_dp
+    case ('pendulum_walls'); scene = SCENE_PWALLS; t_end = 6.0e4_dp
+    case default
+      write (error_unit, '(a)') 'long: scene must be ellipse or pendulum_walls'
+      stop 2
+    end select
+    nsteps = nint(t_end / h, i8)
+    vs = variants()
+    open (newunit=sunit, file=dir//'/long_'//scene_name//'_vci.csv', status='replace', action='write')
+    write (sunit, '(a)') 'scene,method,param,wall,cpu,max_energy_error,final_energy_error,n_impacts,t_end,status'
+    do iv = 1, size(vs)
+      if (vs(iv)%pair_start) cycle
+      call make_model(scene, vs(iv), model)
       rec = recorder_t()
       rec%model => model
-      rec%block = 100_i8
+      rec%block = nint(window / h, i8)
+      rec%e0 = exact_energy0(scene)
       allocate (rec%times(1024), rec%sample_t(1024), rec%sample_e(1024))
-      call start(SCENE_ELLIPSE, model, h, modes(imode), integ, stat)
-      ! drift from the run's own first state (the initial pair's O(h^2) energy offset is not drift)
-      rec%e0 = energy_at(rec, integ%configuration(), integ%momentum())
-      call integ%integrate(nsteps - 1_i8, 1, stat, rec)
+      w0 = wall_now(); c0 = cpu_now()
+      call start(scene, vs(iv), model, h, integ, stat)
+      if (stat == VCI_OK) call integ%integrate(nsteps, 1, stat, rec)
+      wall = wall_now() - w0; cpu = cpu_now() - c0
       if (stat /= VCI_OK) write (error_unit, '(a)') 'long run: '//integ%message()
-      write (sunit, '(a,",",es10.3,",",es12.5,",",es12.5,",",es12.5,",",es12.5,",",i0,",",es14.7,",",i0)') &
-        trim(mode_name(modes(imode))), h, median(walls), median(cpus), rec%emax, rec%sample_e(rec%n_samples), &
+      name = vs(iv)%label
+      write (sunit, '(a,",",a,",",es10.3,",",es12.5,",",es12.5,",",es12.5,",",es12.5,",",i0,",",es14.7,",",i0)') &
+        scene_name, trim(name), h, wall, cpu, rec%emax, rec%sample_e(max(1, rec%n_samples)), &
         rec%n_impacts, integ%time(), stat
-      open (newunit=unit, file=dir//'/long_'//trim(mode_name(modes(imode)))//'.csv', status='replace', action='write')
+      open (newunit=unit, file=dir//'/long_'//scene_name//'_'//trim(name)//'.csv', status='replace', action='write')
       write (unit, '(a)') 't,energy_error'
       do i = 1, rec%n_samples
         write (unit, '(es14.7,",",es12.5)') rec%sample_t(i), rec%sample_e(i)
       end do
       close (unit)
-      write (output_unit, '(a)') 'vci long run: '//trim(mode_name(modes(imode)))//' done'
+      write (output_unit, '(a,f8.1,a,i0,a)') 'vci long run: '//scene_name//' '//trim(name)//' done (', cpu, &
+        ' s CPU, ', rec%n_impacts, ' impacts)'
       flush (output_unit)
     end do
     close (sunit)
