@@ -8,7 +8,7 @@ module vci_stepper
   use vci_status
   use vci_model, only: vci_model_t
   use vci_newton, only: vci_newton_t, vci_newton_result_t, NEWTON_MAX_ITERATIONS, NEWTON_NO_DESCENT, &
-                        NEWTON_SINGULAR, NEWTON_EVALUATION
+                        NEWTON_SINGULAR, NEWTON_EVALUATION, NEWTON_NONFINITE
   use vci_step_system, only: vci_step_system_t, KIND_SUBSTEP, KIND_WALL, KIND_REFLECT, KIND_IMPULSE, &
                              VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN
   use vci_observer, only: vci_impact_t
@@ -630,6 +630,8 @@ contains
         res%scaled_residual, ')'
     case (NEWTON_SINGULAR)
       self%cause = what//': Newton matrix singular and least-squares solve failed'
+    case (NEWTON_NONFINITE)
+      self%cause = what//': residual or Newton matrix not finite (callback values overflow)'
     case (NEWTON_EVALUATION)
       if (stat == VCI_ERR_NONFINITE) then
         self%cause = what//': callback '//trim(self%sys%failed_callback)//' returned NaN or Inf'

@@ -6,10 +6,22 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 #include "vci.h"
 #include "scenes.h"
+#include "lapack_guard.h"
 
 static int failures = 0;
+
+/* Library code must never end the process: an exit() before main returns (a Fortran STOP, LAPACK's
+ * XERBLA) is a failure with status 70, not a silent success. */
+static int finished = 0;
+static void exit_guard(void) {
+  if (finished) return;
+  printf("FAIL: the process exited inside a test (exit or STOP in library code)\n");
+  fflush(stdout);
+  _exit(70);
+}
 
 #define CHECK(cond) check((cond), #cond, __FILE__, __LINE__)
 #define CHECK_STATUS(call, expected) check_status((call), (expected), #call, __LINE__)
@@ -732,13 +744,96 @@ static void suite_output(void) {
 }
 
 /* ================================================================================================ */
+/* Callbacks that return huge finite values (1e308, whose differences overflow) or NaN now and then:
+ * every run ends with a status (never a hang), and no NaN/Inf ever reaches LAPACK (lapack_guard.c
+ * counts LAPACK calls with non-finite input). The faults hit from the `from`-th call of one
+ * callback on, at the calls a fixed linear congruential sequence picks (one in four). */
+typedef struct { ellipse_params e; int which, mode, calls, from; unsigned seed; } erratic_params;
+
+static double erratic_value(const erratic_params *p) {
+  static const double values[] = {1e308, -1e308, 1e200, NAN, INFINITY};
+  return values[p->mode];
+}
+
+static int erratic_hit(erratic_params *p, int which) {
+  if (p->which != which || ++p->calls < p->from) return 0;
+  p->seed = p->seed * 1103515245u + 12345u;
+  return ((p->seed >> 16) & 3u) == 0;
+}
+
+static int erratic_d1(int n, const double *q, const double *v, double h, double *o, void *u) {
+  erratic_params *p = (erratic_params *)u;
+  int rc = ellipse_d1(n, q, v, h, o, &p->e);
+  if (erratic_hit(p, 1)) o[p->calls % 3] = erratic_value(p);
+  return rc;
+}
+static int erratic_d2(int n, const double *q, const double *v, double h, double *o, void *u) {
+  erratic_params *p = (erratic_params *)u;
+  int rc = ellipse_d2(n, q, v, h, o, &p->e);
+  if (erratic_hit(p, 2)) o[p->calls % 3] = erratic_value(p);
+  return rc;
+}
+static int erratic_d3(int n, const double *q, const double *v, double h, double *o, void *u) {
+  erratic_params *p = (erratic_params *)u;
+  int rc = ellipse_d3(n, q, v, h, o, &p->e);
+  if (erratic_hit(p, 3)) o[0] = erratic_value(p);
+  return rc;
+}
+static int erratic_gaps(int n, int ng, const double *q, double *g, void *u) {
+  erratic_params *p = (erratic_params *)u;
+  int rc = ellipse_gaps(n, ng, q, g, &p->e);
+  if (erratic_hit(p, 4)) g[0] = erratic_value(p);
+  return rc;
+}
+
+static void suite_erratic(void) {
+  int which, mode, from, seed, runs = 0, failed_runs = 0;
+  long before = vci_test_lapack_calls();
+  for (which = 1; which <= 4; ++which)
+    for (mode = 0; mode < 5; ++mode)
+      for (from = 1; from < 200; from += 19)
+        for (seed = 0; seed < 2; ++seed) {
+          erratic_params p;
+          vci_callbacks cb = {0};
+          vci_model model = NULL;
+          vci_integrator integ = NULL;
+          double t0, q0[3], q1[3], t;
+          int status;
+          p.e = ellipse_default; p.which = which; p.mode = mode; p.calls = 0; p.from = from; p.seed = (unsigned)seed;
+          cb.d1_ld = erratic_d1; cb.d2_ld = erratic_d2; cb.d3_ld = erratic_d3; cb.gaps = erratic_gaps;
+          CHECK_STATUS(vci_model_create(&model, 3, 0, 1, &cb, &p), VCI_OK);
+          CHECK_STATUS(vci_integrator_create(&integ, model, 1e-2), VCI_OK);
+          ellipse_initial_pair(1e-2, &t0, q0, q1);
+          status = vci_init_from_pair(integ, t0, q0, q1);
+          if (status == VCI_OK) status = vci_integrate(integ, 150, 1);
+          ++runs;
+          if (status != VCI_OK) {
+            char msg[512];
+            ++failed_runs;
+            vci_last_error(integ, msg, sizeof msg);
+            CHECK(msg[0] != '\0'); /* a failure always says why */
+          } else {
+            CHECK_STATUS(vci_get_state(integ, &t, NULL, NULL), VCI_OK);
+            CHECK(isfinite(t));
+          }
+          vci_integrator_destroy(&integ);
+          vci_model_destroy(&model);
+        }
+  printf("  %d erratic runs, %d ended with an error status, %ld LAPACK calls\n", runs, failed_runs,
+         vci_test_lapack_calls() - before);
+  CHECK(vci_test_lapack_calls() > before); /* the guard sees vci's LAPACK calls (else this suite proves nothing) */
+  CHECK(vci_test_lapack_nonfinite_calls() == 0);
+}
+
+/* ================================================================================================ */
 int main(int argc, char **argv) {
   static const struct { const char *name; void (*run)(void); } suites[] = {
       {"version", suite_version},     {"handles", suite_handles},   {"arguments", suite_arguments},
       {"callbacks", suite_callbacks}, {"ellipse", suite_ellipse},   {"hamiltonian", suite_hamiltonian},
-      {"pendulum", suite_pendulum},   {"output", suite_output}};
+      {"pendulum", suite_pendulum},   {"output", suite_output},     {"erratic", suite_erratic}};
   size_t i, n = sizeof suites / sizeof suites[0];
   int ran = 0;
+  atexit(exit_guard);
   for (i = 0; i < n; ++i) {
     if (argc < 2 || strcmp(argv[1], suites[i].name) == 0 || strcmp(argv[1], "all") == 0) {
       int before = failures;
@@ -747,9 +842,15 @@ int main(int argc, char **argv) {
       ++ran;
     }
   }
+  finished = 1;
   if (!ran) {
     fprintf(stderr, "unknown suite %s\n", argv[1]);
     return 2;
+  }
+  /* whatever ran: no NaN/Inf ever reached LAPACK */
+  if (vci_test_lapack_nonfinite_calls() != 0) {
+    ++failures;
+    printf("FAIL: %ld LAPACK calls with NaN/Inf input\n", vci_test_lapack_nonfinite_calls());
   }
   return failures ? 1 : 0;
 }
