@@ -42,6 +42,7 @@ module vci_step_system
     ! workspace
     real(dp), allocatable, private :: d1(:), hess(:, :), g(:), dg(:, :), rp(:), rm(:), sp(:), sm(:), xp(:)
     real(dp), allocatable, private :: pplus(:)
+    real(dp), allocatable, private :: gp(:), gm(:)   !< all gaps at q +- d e_i (n_gaps may exceed n + m + 1)
     !> sum_j |dR_i/dx_j| |x_j| from the last Jacobian: the round-off floor of row i (positions are
     !> often large next to their change over a step), added to each row's scale
     real(dp), allocatable, private :: jscale(:)
@@ -79,11 +80,11 @@ contains
     nx = n + m + 1
     if (allocated(self%a)) deallocate (self%a, self%pa, self%omega, self%grad, self%gscale, self%d1, &
                                        self%hess, self%g, self%dg, self%rp, self%rm, self%sp, self%sm, &
-                                       self%xp, self%pplus, self%jscale, self%jabs)
+                                       self%xp, self%pplus, self%jscale, self%jabs, self%gp, self%gm)
     allocate (self%a(n), self%pa(n), self%omega(n, m), self%grad(n), self%gscale(n), self%d1(n), &
               self%hess(n, n), self%g(max(1, model%n_gaps)), self%dg(n, max(1, model%n_gaps)), &
               self%rp(nx), self%rm(nx), self%sp(nx), self%sm(nx), self%xp(nx), self%pplus(n), self%jscale(nx), &
-              self%jabs(nx, nx))
+              self%jabs(nx, nx), self%gp(max(1, model%n_gaps)), self%gm(max(1, model%n_gaps)))
     self%omega = 0.0_dp
     self%jscale = 0.0_dp
     self%jabs = 0.0_dp
@@ -197,13 +198,13 @@ contains
     do i = 1, self%n
       d = fd_rel * max(abs(q(i)), 1.0_dp)
       self%xp(i) = q(i) + d
-      call self%eval_gaps(self%xp(1:self%n), self%rp(1:ng), stat)
+      call self%eval_gaps(self%xp(1:self%n), self%gp(1:ng), stat)
       if (stat /= VCI_OK) return
       self%xp(i) = q(i) - d
-      call self%eval_gaps(self%xp(1:self%n), self%rm(1:ng), stat)
+      call self%eval_gaps(self%xp(1:self%n), self%gm(1:ng), stat)
       if (stat /= VCI_OK) return
       self%xp(i) = q(i)
-      dg(i, :) = (self%rp(1:ng) - self%rm(1:ng)) / (2.0_dp * d)
+      dg(i, :) = (self%gp(1:ng) - self%gm(1:ng)) / (2.0_dp * d)
     end do
   end subroutine eval_gap_gradients
 
