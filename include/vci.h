@@ -43,7 +43,8 @@ enum {
   VCI_ERR_TOO_MANY_IMPACTS, /* 6: more impacts in one step than allowed (contact, chatter) */
   VCI_ERR_INADMISSIBLE,     /* 7: a state lies outside the admissible set (some g_j < 0) */
   VCI_ERR_IO,               /* 8: output could not be written, or HDF5 not built in */
-  VCI_ERR_STATE             /* 9: call out of order (e.g. step before init) */
+  VCI_ERR_STATE,            /* 9: call out of order (e.g. step before init) */
+  VCI_ERR_MEMORY            /* 10: an allocation failed (sizes too large for this machine) */
 };
 
 /** Impact energy conditions for vci_set_impact_energy. */

@@ -16,6 +16,7 @@ module vci_capi
   use vci_kinds, only: dp, i8
   use vci_status
   use vci_model, only: vci_model_t
+  use vci_limits, only: vci_size_problem
   use vci_observer, only: vci_observer_t, vci_run_info_t, vci_impact_t
   use vci_integrator, only: vci_integrator_t, VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN
   use vci, only: VCI_VERSION_NUMBER
@@ -142,7 +143,7 @@ module vci_capi
 
   ! NUL-terminated status strings handed out by vci_status_string (static storage)
   integer, parameter :: STATUS_LEN = 48
-  character(kind=c_char, len=STATUS_LEN), target, save :: status_text(0:10)
+  character(kind=c_char, len=STATUS_LEN), target, save :: status_text(0:11)
   logical, save :: status_text_ready = .false.
 
 contains
@@ -487,15 +488,18 @@ contains
     type(vci_callbacks_c), pointer :: fcb
     type(c_model_t), pointer :: mp
     character(len=64) :: what
+    character(len=:), allocatable :: why
+    integer :: st
     vci_model_create = VCI_ERR_ARGUMENT
     if (.not. c_associated(model)) then
       global_message = 'vci_model_create: the model argument is NULL'; return
     end if
     call c_f_pointer(model, out)
     out = c_null_ptr
-    if (n < 1 .or. m < 0 .or. m > n .or. ngaps < 0) then
+    why = vci_size_problem(int(n), int(m), int(ngaps))
+    if (why /= '') then
       write (global_message, '(a,3(i0,a))') 'vci_model_create: sizes n = ', n, ', m = ', m, ', ngaps = ', ngaps, &
-        ' invalid (need n >= 1, 0 <= m <= n, ngaps >= 0)'
+        ' invalid ('//why//')'
       return
     end if
     if (.not. c_associated(cb)) then
@@ -512,7 +516,11 @@ contains
     if (what /= '') then
       global_message = 'vci_model_create: callback '//trim(what)//' is NULL'; return
     end if
-    allocate (mp)
+    allocate (mp, stat=st)
+    if (st /= 0) then
+      global_message = 'vci_model_create: out of memory'
+      vci_model_create = VCI_ERR_MEMORY; return
+    end if
     mp%n = n; mp%m = m; mp%n_gaps = ngaps
     mp%cb = fcb
     mp%user = user
@@ -568,7 +576,11 @@ contains
     if (stat /= VCI_OK) then
       vci_integrator_create = stat; return
     end if
-    allocate (ip)
+    allocate (ip, stat=stat)
+    if (stat /= 0) then
+      global_message = 'vci_integrator_create: out of memory'
+      vci_integrator_create = VCI_ERR_MEMORY; return
+    end if
     call ip%integ%create(mp, real(h, dp), stat)
     if (stat /= VCI_OK) then
       global_message = 'vci_integrator_create: '//trim(ip%integ%message)

@@ -9,6 +9,7 @@ module vci_integrator
   use vci_kinds, only: dp, i8
   use vci_status
   use vci_model, only: vci_model_t
+  use vci_limits, only: vci_size_problem
   use vci_stepper, only: vci_stepper_t, vci_settings_t
   use vci_step_system, only: VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN
   use vci_observer, only: vci_observer_t, vci_run_info_t
@@ -69,11 +70,13 @@ contains
     class(vci_model_t), target, intent(inout) :: model
     real(dp), intent(in) :: h
     integer, intent(out) :: stat
+    character(len=:), allocatable :: why
     self%created = .false.; self%initialized = .false.
     self%stats = vci_stats_t()
-    if (model%n < 1 .or. model%m < 0 .or. model%m > model%n .or. model%n_gaps < 0) then
+    why = vci_size_problem(model%n, model%m, model%n_gaps)
+    if (why /= '') then
       write (self%message, '(a,3(i0,a))') 'create: model sizes invalid (n = ', model%n, ', m = ', model%m, &
-        ', n_gaps = ', model%n_gaps, '; need n >= 1, 0 <= m <= n, n_gaps >= 0)'
+        ', n_gaps = ', model%n_gaps, '; '//why//')'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
     if (.not. (ieee_is_finite(h) .and. h > 0.0_dp)) then
@@ -84,9 +87,14 @@ contains
     self%h = h
     if (allocated(self%q)) deallocate (self%q, self%p, self%lambda, self%vel, self%qn, self%pn, self%lambdan)
     allocate (self%q(model%n), self%p(model%n), self%lambda(model%m), self%vel(model%n), &
-              self%qn(model%n), self%pn(model%n), self%lambdan(model%m))
+              self%qn(model%n), self%pn(model%n), self%lambdan(model%m), stat=stat)
+    if (stat == 0) call self%stepper%setup(model, self%settings, stat)
+    if (stat /= 0) then
+      write (self%message, '(a,3(i0,a))') 'create: cannot allocate the workspace for n = ', model%n, ', m = ', &
+        model%m, ', n_gaps = ', model%n_gaps, ' (out of memory)'
+      call finish(self, VCI_ERR_MEMORY, stat); return
+    end if
     self%lambda = 0.0_dp; self%q = 0.0_dp; self%p = 0.0_dp; self%vel = 0.0_dp
-    call self%stepper%setup(model, self%settings)
     self%created = .true.
     self%message = ''
     call finish(self, VCI_OK, stat)
@@ -151,8 +159,7 @@ contains
       write (self%message, '(a,i0,a)') 'set_max_impacts: ', max_impacts, ' (need >= 1)'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
-    self%settings%max_impacts_per_step = max_impacts
-    if (self%created) call self%stepper%reserve_impacts(max_impacts)
+    self%settings%max_impacts_per_step = max_impacts   ! records grow on demand up to it
     self%stepper%settings = self%settings
     call finish(self, VCI_OK, stat)
   end subroutine set_max_impacts
@@ -225,7 +232,11 @@ contains
     end if
     ! optional procedures: the defaults answer VCI_NOT_PROVIDED
     allocate (hess(n, n), omega(n, max(1, self%model%m)), g(self%model%n_gaps), w(self%model%m), &
-              dg(n, self%model%n_gaps), w2(self%model%n_gaps))
+              dg(n, self%model%n_gaps), w2(self%model%n_gaps), stat=s)
+    if (s /= 0) then
+      self%message = who//': cannot allocate the probes of the model (out of memory)'
+      call finish(self, VCI_ERR_MEMORY, stat); return
+    end if
     s = 0
     call self%model%mixed_hessian(q0, v0, self%h, hess, s)
     self%stepper%sys%has_hessian = (s /= VCI_NOT_PROVIDED)

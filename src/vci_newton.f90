@@ -14,7 +14,7 @@
 module vci_newton
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use vci_kinds, only: dp
-  use vci_status, only: VCI_OK, VCI_ERR_NEWTON, VCI_ERR_NONFINITE
+  use vci_status, only: VCI_OK, VCI_ERR_NEWTON, VCI_ERR_NONFINITE, VCI_ERR_MEMORY
   use vci_lapack, only: dgetrf, dgetrs, dgelsd
   implicit none
   private
@@ -92,22 +92,35 @@ contains
   end function always_admissible
 
   !> Allocate workspace for systems of up to nmax unknowns (call once, outside the step loop).
-  subroutine reserve(self, nmax)
+  !> stat (optional): VCI_ERR_MEMORY when an allocation fails (the solver then has no workspace).
+  subroutine reserve(self, nmax, stat)
     class(vci_newton_t), intent(inout) :: self
     integer, intent(in) :: nmax
+    integer, intent(out), optional :: stat
     real(dp) :: query(1), a(1, 1), b(1, 1), s(1)
-    integer :: iq(1), rank, info, lwork, liwork, nlvl
+    integer :: iq(1), rank, info, lwork, liwork, nlvl, st
+    if (present(stat)) stat = VCI_OK
     if (self%capacity >= nmax) return
-    self%capacity = nmax
+    self%capacity = 0
     if (allocated(self%jac)) deallocate (self%jac, self%lu, self%r, self%sc, self%dx, self%xt, &
-                                         self%rt, self%sct, self%sv, self%work, self%ipiv, self%iwork, self%rw)
+                                         self%rt, self%sct, self%sv, self%ipiv, self%rw)
+    if (allocated(self%work)) deallocate (self%work, self%iwork)
     allocate (self%jac(nmax, nmax), self%lu(nmax, nmax), self%r(nmax), self%sc(nmax), self%dx(nmax), &
-              self%xt(nmax), self%rt(nmax), self%sct(nmax), self%sv(nmax), self%ipiv(nmax), self%rw(nmax))
-    call dgelsd(nmax, nmax, 1, a, nmax, b, nmax, s, -1.0_dp, rank, query, -1, iq, info)
-    lwork = max(1, int(query(1)))
-    nlvl = max(0, int(log(real(nmax, dp) / 26.0_dp) / log(2.0_dp)) + 1)
-    liwork = max(1, 3 * nmax * nlvl + 11 * nmax, iq(1))
-    allocate (self%work(lwork), self%iwork(liwork))
+              self%xt(nmax), self%rt(nmax), self%sct(nmax), self%sv(nmax), self%ipiv(nmax), self%rw(nmax), stat=st)
+    if (st == 0) then
+      call dgelsd(nmax, nmax, 1, a, nmax, b, nmax, s, -1.0_dp, rank, query, -1, iq, info)
+      lwork = max(1, int(query(1)))
+      nlvl = max(0, int(log(real(nmax, dp) / 26.0_dp) / log(2.0_dp)) + 1)
+      liwork = max(1, 3 * nmax * nlvl + 11 * nmax, iq(1))
+      allocate (self%work(lwork), self%iwork(liwork), stat=st)
+    end if
+    if (st /= 0) then
+      if (allocated(self%jac)) deallocate (self%jac, self%lu, self%r, self%sc, self%dx, self%xt, &
+                                           self%rt, self%sct, self%sv, self%ipiv, self%rw)
+      if (present(stat)) stat = VCI_ERR_MEMORY
+      return
+    end if
+    self%capacity = nmax
   end subroutine reserve
 
   !> Solve sys%residual(x) = 0 for x(1:n), starting from the given x. On failure x holds the best

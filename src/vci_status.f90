@@ -13,6 +13,7 @@ module vci_status
   integer, parameter, public :: VCI_ERR_INADMISSIBLE = 7      !< a state lies outside the admissible set
   integer, parameter, public :: VCI_ERR_IO = 8                !< output could not be written
   integer, parameter, public :: VCI_ERR_STATE = 9             !< call out of order (e.g. step before init)
+  integer, parameter, public :: VCI_ERR_MEMORY = 10           !< an allocation failed (sizes too large for this machine)
 
   !> Returned by the default (not overridden) optional model procedures. Never escapes the library.
   integer, parameter, public :: VCI_NOT_PROVIDED = -1
@@ -39,6 +40,7 @@ contains
     case (VCI_ERR_INADMISSIBLE);     name = 'state outside the admissible set'
     case (VCI_ERR_IO);               name = 'input/output error'
     case (VCI_ERR_STATE);            name = 'call out of order'
+    case (VCI_ERR_MEMORY);           name = 'out of memory'
     case default;                    name = 'unknown status'
     end select
   end function vci_status_name

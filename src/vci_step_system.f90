@@ -69,10 +69,11 @@ module vci_step_system
 
 contains
 
-  !> Bind to a model and size the workspace (once, before the step loop).
-  subroutine setup(self, model)
+  !> Bind to a model and size the workspace (once, before the step loop); stat /= 0: out of memory.
+  subroutine setup(self, model, stat)
     class(vci_step_system_t), intent(inout) :: self
     class(vci_model_t), target, intent(inout) :: model
+    integer, intent(out) :: stat
     integer :: n, m, nx
     self%model => model
     n = model%n; m = model%m
@@ -84,7 +85,8 @@ contains
     allocate (self%a(n), self%pa(n), self%omega(n, m), self%grad(n), self%gscale(n), self%d1(n), &
               self%hess(n, n), self%g(max(1, model%n_gaps)), self%dg(n, max(1, model%n_gaps)), &
               self%rp(nx), self%rm(nx), self%sp(nx), self%sm(nx), self%xp(nx), self%pplus(n), self%jscale(nx), &
-              self%jabs(nx, nx), self%gp(max(1, model%n_gaps)), self%gm(max(1, model%n_gaps)))
+              self%jabs(nx, nx), self%gp(max(1, model%n_gaps)), self%gm(max(1, model%n_gaps)), stat=stat)
+    if (stat /= 0) return
     self%omega = 0.0_dp
     self%jscale = 0.0_dp
     self%jabs = 0.0_dp

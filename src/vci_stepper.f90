@@ -53,18 +53,24 @@ module vci_stepper
 
 contains
 
-  subroutine setup(self, model, settings)
+  !> Size everything for the model; stat = VCI_ERR_MEMORY when an allocation fails.
+  subroutine setup(self, model, settings, stat)
     class(vci_stepper_t), intent(inout) :: self
     class(vci_model_t), target, intent(inout) :: model
     type(vci_settings_t), intent(in) :: settings
+    integer, intent(out) :: stat
     integer :: n, m, ng, nx
     n = model%n; m = model%m; ng = model%n_gaps
     self%n = n; self%m = m; self%ng = ng
     self%settings = settings
     self%stats = vci_solver_stats_t()
-    call self%sys%setup(model)
+    call self%sys%setup(model, stat)
+    if (stat /= 0) then
+      stat = VCI_ERR_MEMORY; return
+    end if
     nx = n + m + 1
-    call self%newton%reserve(nx)
+    call self%newton%reserve(nx, stat)
+    if (stat /= VCI_OK) return
     call apply_settings(self)
     if (allocated(self%x)) deallocate (self%x, self%a, self%pa, self%b, self%qt, self%pminus, self%gb, &
                                        self%ga, self%dga, self%best_x, self%jac, self%rhs, self%r, self%sc, &
@@ -73,22 +79,43 @@ contains
     allocate (self%x(nx), self%a(n), self%pa(n), self%b(n), self%qt(n), self%pminus(n), &
               self%gb(max(1, ng)), self%ga(max(1, ng)), self%dga(n, max(1, ng)), self%best_x(nx), &
               self%jac(nx, nx), self%rhs(nx), self%r(nx), self%sc(nx), self%vin(n), self%pimp(n), self%nu(m), &
-              self%qs(n), self%gw(max(1, ng)), self%xlo(nx), self%xhi(nx), self%lam0(m))
-    call self%reserve_impacts(settings%max_impacts_per_step)
+              self%qs(n), self%gw(max(1, ng)), self%xlo(nx), self%xhi(nx), self%lam0(m), stat=stat)
+    if (stat /= 0) then
+      stat = VCI_ERR_MEMORY; return
+    end if
+    if (allocated(self%impacts)) deallocate (self%impacts)
+    ! records for the impacts of one step, grown on demand up to the bound (which may be huge)
+    call self%reserve_impacts(min(settings%max_impacts_per_step, 16), stat)
   end subroutine setup
 
-  !> Room for the impact records of one step (the bound on impacts per step).
-  subroutine reserve_impacts(self, max_impacts)
+  !> Room for at least `count` impact records in one step, keeping those already recorded.
+  !> stat = VCI_ERR_MEMORY when an allocation fails (the records are then unchanged).
+  subroutine reserve_impacts(self, count, stat)
     class(vci_stepper_t), intent(inout) :: self
-    integer, intent(in) :: max_impacts
-    integer :: i
-    if (allocated(self%impacts)) deallocate (self%impacts)
-    allocate (self%impacts(max(1, max_impacts)))
-    do i = 1, size(self%impacts)
-      allocate (self%impacts(i)%q(self%n), self%impacts(i)%p_before(self%n), self%impacts(i)%p_after(self%n), &
-                self%impacts(i)%grad_g(self%n))
+    integer, intent(in) :: count
+    integer, intent(out) :: stat
+    type(vci_impact_t), allocatable :: grown(:)
+    integer :: i, k
+    stat = VCI_OK
+    k = 0
+    if (allocated(self%impacts)) k = size(self%impacts)
+    if (k >= max(1, count)) return
+    allocate (grown(max(1, count)), stat=stat)
+    do i = k + 1, size(grown)
+      if (stat /= 0) exit
+      allocate (grown(i)%q(self%n), grown(i)%p_before(self%n), grown(i)%p_after(self%n), &
+                grown(i)%grad_g(self%n), stat=stat)
     end do
-    self%n_impacts = 0
+    if (stat /= 0) then
+      stat = VCI_ERR_MEMORY; return
+    end if
+    do i = 1, k
+      call move_alloc(self%impacts(i)%q, grown(i)%q)
+      call move_alloc(self%impacts(i)%p_before, grown(i)%p_before)
+      call move_alloc(self%impacts(i)%p_after, grown(i)%p_after)
+      call move_alloc(self%impacts(i)%grad_g, grown(i)%grad_g)
+    end do
+    call move_alloc(grown, self%impacts)
   end subroutine reserve_impacts
 
   subroutine apply_settings(self)
@@ -216,6 +243,12 @@ contains
       end if
 
       ! Stage 2: reflect from (qt, p_minus) over the rest of the sub-step.
+      if (self%n_impacts == size(self%impacts)) then
+        call self%reserve_impacts(min(2 * size(self%impacts), self%settings%max_impacts_per_step), stat)
+        if (stat /= VCI_OK) then
+          self%cause = 'cannot allocate the record of another impact'; return
+        end if
+      end if
       self%vin = (self%b - self%a) / tau
       call stage_reflect(self, jstar, (1.0_dp - alpha) * tau, e_minus, stat)
       if (stat /= VCI_OK) return

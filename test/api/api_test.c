@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <unistd.h>
 #include "vci.h"
 #include "scenes.h"
@@ -105,11 +106,11 @@ static void suite_version(void) {
   static const char *names[] = {"ok", "invalid argument", "user callback failed", "non-finite value",
                                 "Newton iteration did not converge", "impact could not be resolved",
                                 "too many impacts in one step", "state outside the admissible set",
-                                "input/output error", "call out of order"};
+                                "input/output error", "call out of order", "out of memory"};
   int s;
   CHECK(vci_version() == VCI_VERSION_NUMBER);
   CHECK(vci_version() == 100); /* 0.1.0, as project(VERSION) in CMakeLists.txt */
-  for (s = VCI_OK; s <= VCI_ERR_STATE; ++s) {
+  for (s = VCI_OK; s <= VCI_ERR_MEMORY; ++s) {
     CHECK(vci_status_string(s) != NULL);
     if (strcmp(vci_status_string(s), names[s]) != 0) {
       ++failures;
@@ -117,9 +118,9 @@ static void suite_version(void) {
     }
   }
   CHECK(strcmp(vci_status_string(-1), "unknown status") == 0);
-  CHECK(strcmp(vci_status_string(10), "unknown status") == 0);
+  CHECK(strcmp(vci_status_string(11), "unknown status") == 0);
   CHECK(strcmp(vci_status_string(123456), "unknown status") == 0);
-  CHECK(VCI_ERR_STATE == 9 && VCI_ERR_IO == 8 && VCI_ERR_ARGUMENT == 1);
+  CHECK(VCI_ERR_STATE == 9 && VCI_ERR_IO == 8 && VCI_ERR_ARGUMENT == 1 && VCI_ERR_MEMORY == 10);
 }
 
 /* ================================================================================================ */
@@ -826,11 +827,68 @@ static void suite_erratic(void) {
 }
 
 /* ================================================================================================ */
+/* Sizes the library cannot handle are refused; allocations that fail give VCI_ERR_MEMORY (the
+ * Fortran runtime would otherwise print "Error allocating" and exit). RLIMIT_AS makes the
+ * allocation fail deterministically. */
+static int one_gap(int n, int ng, const double *q, double *g, void *u) {
+  int j;
+  (void)n; (void)u;
+  for (j = 0; j < ng; ++j) g[j] = q[0] + 10.0;
+  return 0;
+}
+
+static void suite_limits(void) {
+  vci_callbacks cb = ellipse_callbacks();
+  vci_model model = NULL;
+  vci_integrator integ = NULL;
+  struct rlimit old, tight;
+  ellipse_par = ellipse_default;
+  /* dense Newton matrices of (n + m + 1)^2 entries with 32-bit LAPACK indices */
+  CHECK_STATUS(vci_model_create(&model, 100000, 0, 1, &cb, &ellipse_par), VCI_ERR_ARGUMENT);
+  CHECK_MESSAGE(NULL, "46340");
+  CHECK_STATUS(vci_model_create(&model, 46340, 0, 1, &cb, &ellipse_par), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_model_create(&model, 30000, 16340, 1, &cb, &ellipse_par), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_model_create(&model, 2147483647, 0, 0, &cb, &ellipse_par), VCI_ERR_ARGUMENT);
+  /* gradients of ngaps walls indexed dg[i + n*j] with int */
+  CHECK_STATUS(vci_model_create(&model, 3, 0, 1000000000, &cb, &ellipse_par), VCI_ERR_ARGUMENT);
+  CHECK_MESSAGE(NULL, "n_gaps");
+  CHECK(model == NULL);
+
+  /* within the limits but beyond the memory: VCI_ERR_MEMORY, and the process goes on */
+  cb.gaps = one_gap;
+  cb.gap_gradients = NULL;
+  CHECK_STATUS(vci_model_create(&model, 1, 0, 1000000000, &cb, &ellipse_par), VCI_OK);
+  if (getrlimit(RLIMIT_AS, &old) == 0) {
+    tight = old;
+    tight.rlim_cur = 1024UL * 1024UL * 1024UL * 4UL; /* 4 GB: the workspace needs 8 GB per gap array */
+    if (old.rlim_cur != RLIM_INFINITY && old.rlim_cur < tight.rlim_cur) tight.rlim_cur = old.rlim_cur;
+    if (getenv("VCI_TEST_NO_RLIMIT") == NULL && setrlimit(RLIMIT_AS, &tight) == 0) {
+      CHECK_STATUS(vci_integrator_create(&integ, model, 1e-2), VCI_ERR_MEMORY);
+      CHECK_MESSAGE(NULL, "out of memory");
+      CHECK(integ == NULL);
+      setrlimit(RLIMIT_AS, &old);
+    } else {
+      printf("  (RLIMIT_AS not set: the allocation failure is not exercised)\n");
+    }
+  }
+  vci_model_destroy(&model);
+
+  /* a huge bound on impacts per step allocates nothing up front */
+  cb = ellipse_callbacks();
+  integ = make_ellipse(&model, &cb, 1e-2);
+  CHECK_STATUS(vci_set_max_impacts(integ, 2147483647), VCI_OK);
+  CHECK_STATUS(vci_integrate(integ, 200, 1), VCI_OK);
+  vci_integrator_destroy(&integ);
+  vci_model_destroy(&model);
+}
+
+/* ================================================================================================ */
 int main(int argc, char **argv) {
   static const struct { const char *name; void (*run)(void); } suites[] = {
       {"version", suite_version},     {"handles", suite_handles},   {"arguments", suite_arguments},
       {"callbacks", suite_callbacks}, {"ellipse", suite_ellipse},   {"hamiltonian", suite_hamiltonian},
-      {"pendulum", suite_pendulum},   {"output", suite_output},     {"erratic", suite_erratic}};
+      {"pendulum", suite_pendulum},   {"output", suite_output},     {"erratic", suite_erratic},
+      {"limits", suite_limits}};
   size_t i, n = sizeof suites / sizeof suites[0];
   int ran = 0;
   atexit(exit_guard);
