@@ -12,5 +12,5 @@ module vci
   implicit none
   public
   !> Library version: major*10000 + minor*100 + patch (as vci_version() in C).
-  integer, parameter :: VCI_VERSION_NUMBER = 100
+  integer, parameter :: VCI_VERSION_NUMBER = 200
 end module vci

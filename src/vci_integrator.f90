@@ -106,10 +106,11 @@ contains
     real(dp), intent(in) :: atol, rtol
     integer, intent(in) :: max_iterations
     integer, intent(out) :: stat
+    ! rtol >= 1 accepts any iterate whose residual is smaller than its terms: even the initial guess
     if (.not. (ieee_is_finite(atol) .and. atol >= 0.0_dp .and. ieee_is_finite(rtol) .and. rtol >= 0.0_dp &
-               .and. atol + rtol > 0.0_dp .and. max_iterations >= 1)) then
+               .and. rtol < 1.0_dp .and. atol + rtol > 0.0_dp .and. max_iterations >= 1)) then
       write (self%message, '(a,es10.3,a,es10.3,a,i0,a)') 'set_tolerances: atol = ', atol, ', rtol = ', rtol, &
-        ', max_iterations = ', max_iterations, ' (need atol, rtol >= 0, not both 0, max_iterations >= 1)'
+        ', max_iterations = ', max_iterations, ' (need atol >= 0, 0 <= rtol < 1, not both 0, max_iterations >= 1)'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
     self%settings%atol = atol; self%settings%rtol = rtol; self%settings%max_iterations = max_iterations
@@ -172,6 +173,11 @@ contains
     integer, intent(out) :: stat
     call check_init(self, 'init_from_pair', t0, q0, q1, stat, q1)
     if (stat /= VCI_OK) return
+    if (.not. ieee_is_finite(t0 + self%h)) then
+      self%initialized = .false.
+      write (self%message, '(a,es12.4,a,es12.4,a)') 'init_from_pair: t0 + h = ', t0, ' + ', self%h, ' overflows'
+      call finish(self, VCI_ERR_ARGUMENT, stat); return
+    end if
     self%stepper%sys%dir = 1
     call self%stepper%sys%momentum_out(q0, q1, self%h, self%p, stat)
     if (stat == VCI_OK) call self%stepper%sys%energy_of(q0, q1, self%h, self%energy, stat)
@@ -248,6 +254,11 @@ contains
           ' constraints but does not supply constraint_forms'
         call finish(self, VCI_ERR_ARGUMENT, stat); return
       end if
+      if (s /= 0) then
+        write (self%message, '(a,i0,a)') who//': callback constraint_forms failed at the initial '// &
+          'configuration (stat = ', s, ')'
+        call finish(self, VCI_ERR_CALLBACK, stat); return
+      end if
       s = 0
       call self%model%discrete_constraint(q0, q0, self%h, w, s)
       if (s == VCI_NOT_PROVIDED) then
@@ -307,6 +318,11 @@ contains
     if (direction /= 1 .and. direction /= -1) then
       write (self%message, '(a,i0,a)') 'step: direction ', direction, ' (need +1 or -1)'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
+    end if
+    if (.not. ieee_is_finite(self%t0 + real(self%k + direction, dp) * self%h)) then
+      write (self%message, '(a,i0,a,es14.7,a,es10.3,a)') 'step from index ', self%k, ' (t = ', self%t, &
+        '): the time of the next state overflows (h = ', self%h, ')'
+      call finish(self, VCI_ERR_NONFINITE, stat); return
     end if
     if (self%e_dir /= direction) self%e_arrive = ieee_value(1.0_dp, ieee_quiet_nan)
     call self%stepper%advance(direction, self%h, self%t, self%q, self%p, self%lambda, self%vel, &
@@ -392,6 +408,7 @@ contains
       end if
     end if
     self%status = stat
+    if (stat == VCI_OK) self%message = ''   ! also after 0 steps: no message of an earlier call
   end subroutine integrate
 
   !> The current state and solver memory, for restarts that continue bit for bit.

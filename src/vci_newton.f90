@@ -31,8 +31,11 @@ module vci_newton
   integer, parameter, public :: NEWTON_EVALUATION = 4      !< the residual or Jacobian reported failure
   integer, parameter, public :: NEWTON_NONFINITE = 5       !< residual, scale or Jacobian not finite (overflow)
 
-  !> A nonlinear system as Newton sees it.
+  !> A nonlinear system as Newton sees it. A residual that fails (stat /= 0) at a trial point of
+  !> the line search is backed off from, unless the system sets `unrecoverable` (a callback's
+  !> negative return): then the solve ends at once with that status.
   type, abstract, public :: vci_system_t
+    logical :: unrecoverable = .false.
   contains
     procedure(residual_iface), deferred :: residual
     procedure(jacobian_iface), deferred :: jacobian
@@ -137,6 +140,7 @@ contains
     n = size(x)
     res = vci_newton_result_t()
     factored = .false.
+    sys%unrecoverable = .false.
     call sys%residual(x, self%r(1:n), self%sc(1:n), stat)
     if (stat /= VCI_OK) then
       call fail_eval(res, stat); return
@@ -174,6 +178,9 @@ contains
           ! an overflowing trial point is backed off from like a failed evaluation
           if (stat == VCI_OK .and. .not. (all_finite(self%rt(1:n)) .and. all_finite(self%sct(1:n)))) &
             stat = VCI_ERR_NONFINITE
+          if (stat /= VCI_OK .and. sys%unrecoverable) then
+            call fail_eval(res, stat); return
+          end if
           if (stat /= VCI_OK) trial_stat = stat
           if (stat == VCI_OK) then
             phit = merit(self, self%rt(1:n), self%sct(1:n))

@@ -39,6 +39,7 @@ module vci_step_system
     real(dp) :: e_minus = 0.0_dp         !< E_d of the arriving sub-step, or H(qt, p_minus)
     ! failure report of the last evaluation
     character(len=32) :: failed_callback = ''
+    integer :: failed_stat = 0           !< the stat that callback set (> 0 recoverable, < 0 not)
     ! workspace
     real(dp), allocatable, private :: d1(:), hess(:, :), g(:), dg(:, :), rp(:), rm(:), sp(:), sm(:), xp(:)
     real(dp), allocatable, private :: pplus(:)
@@ -218,8 +219,7 @@ contains
     stat = 0
     if (self%m == 0) return
     call self%model%constraint_forms(q, omega, stat)
-    if (stat == VCI_OK) call check_matrix(self, stat, omega, 'constraint forms')
-    if (stat /= VCI_OK .and. self%failed_callback == '') self%failed_callback = 'constraint forms'
+    call check_matrix(self, stat, omega, 'constraint forms')   ! a nonzero stat is VCI_ERR_CALLBACK
   end subroutine eval_forms
 
   !> Residual rows; with `momentum_rows` false only the constraint and last rows are evaluated
@@ -490,7 +490,8 @@ contains
     end if
   end function step_admissible
 
-  !> Turn a callback's return into a library status: nonzero -> VCI_ERR_CALLBACK, NaN/Inf -> NONFINITE.
+  !> Turn a callback's return into a library status: nonzero -> VCI_ERR_CALLBACK (negative:
+  !> unrecoverable), NaN/Inf -> NONFINITE (recoverable).
   subroutine check(self, stat, values, what)
     class(vci_step_system_t), intent(inout) :: self
     integer, intent(inout) :: stat
@@ -498,6 +499,8 @@ contains
     character(len=*), intent(in) :: what
     integer :: i
     if (stat /= 0) then
+      self%failed_stat = stat
+      if (stat < 0) self%unrecoverable = .true.   ! Newton must not back off from it
       stat = VCI_ERR_CALLBACK
       self%failed_callback = what
       return
@@ -506,6 +509,7 @@ contains
     do i = 1, size(values)
       if (.not. (abs(values(i)) <= huge(1.0_dp))) then   ! NaN or +-Inf
         stat = VCI_ERR_NONFINITE
+        self%failed_stat = 0
         self%failed_callback = what
         return
       end if

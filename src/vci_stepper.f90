@@ -646,6 +646,7 @@ contains
     integer, intent(out) :: stat
     type(vci_newton_result_t) :: res
     self%sys%failed_callback = ''
+    self%sys%failed_stat = 0
     call self%sys%forget_jacobian()
     call self%newton%solve(self%sys, self%x(1:nx), res)
     self%stats%newton_solves = self%stats%newton_solves + 1
@@ -669,7 +670,8 @@ contains
       if (stat == VCI_ERR_NONFINITE) then
         self%cause = what//': callback '//trim(self%sys%failed_callback)//' returned NaN or Inf'
       else
-        self%cause = what//': callback '//trim(self%sys%failed_callback)//' reported failure'
+        self%cause = what//': callback '//trim(self%sys%failed_callback)//' reported failure'// &
+                     stat_text(self%sys%failed_stat)
       end if
     end select
   end subroutine run_newton
@@ -677,10 +679,25 @@ contains
   subroutine set_cause(self, what)
     type(vci_stepper_t), intent(inout) :: self
     character(len=*), intent(in) :: what
-    if (len_trim(self%sys%failed_callback) > 0) then
+    if (len_trim(self%sys%failed_callback) > 0 .and. self%sys%failed_stat /= 0) then
+      self%cause = what//': callback '//trim(self%sys%failed_callback)//' reported failure'// &
+                   stat_text(self%sys%failed_stat)
+    else if (len_trim(self%sys%failed_callback) > 0) then
       self%cause = what//': callback '//trim(self%sys%failed_callback)//' failed or returned NaN/Inf'
     else
       self%cause = what//' failed'
     end if
   end subroutine set_cause
+
+  !> " (stat = k, recoverable)" or " (stat = k, unrecoverable)": the callback's own code.
+  function stat_text(stat) result(text)
+    integer, intent(in) :: stat
+    character(len=:), allocatable :: text
+    character(len=16) :: k
+    text = ''
+    if (stat == 0) return
+    write (k, '(i0)') stat
+    text = ' (stat = '//trim(k)//merge(', recoverable  ', ', unrecoverable', stat > 0)
+    text = trim(text)//')'
+  end function stat_text
 end module vci_stepper
