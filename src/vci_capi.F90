@@ -716,7 +716,7 @@ contains
     type(c_model_t), pointer :: mp
     type(c_integrator_t), pointer :: none
     character(len=64) :: what
-    character(len=:), allocatable :: why
+    character(len=80) :: why
     integer :: st
     status = VCI_ERR_ARGUMENT
     why = vci_size_problem(int(n), int(m), int(ngaps))
@@ -724,7 +724,7 @@ contains
       block
         character(len=VCI_MSG_LEN) :: msg
         write (msg, '(a,3(i0,a))') 'vci_model_create: sizes n = ', n, ', m = ', m, ', ngaps = ', ngaps, &
-          ' invalid ('//why//')'
+          ' invalid ('//trim(why)//')'
         call set_thread_message(msg)
       end block
       return
@@ -1031,10 +1031,10 @@ contains
     vci_integrate = stat
   end function vci_integrate
 
-  !> The output writer's own message, if it has one.
+  !> The output writer's own message, if it has one (fixed length: see vci_limits).
   function output_message(ip) result(msg)
     type(c_integrator_t), intent(in) :: ip
-    character(len=:), allocatable :: msg
+    character(len=VCI_MSG_LEN) :: msg
     msg = ''
 #ifdef VCI_HAVE_HDF5
     if (allocated(ip%obs%output)) then
@@ -1236,12 +1236,12 @@ contains
     type(c_ptr), value :: integ
     type(c_integrator_t), pointer :: ip
     integer :: stat
-    character(len=:), allocatable :: why
+    character(len=VCI_MSG_LEN) :: why
     call enter(integ, 'vci_close_output', ip, stat)
     if (stat == VCI_OK) then
       why = output_message(ip)
       stat = close_output(ip)
-      if (stat /= VCI_OK) stat = fail(ip, stat, 'vci_close_output: the output file could not be finished: '//why)
+      if (stat /= VCI_OK) stat = fail(ip, stat, 'vci_close_output: the output file could not be finished: '//trim(why))
       call leave(ip)
     end if
     vci_close_output = stat

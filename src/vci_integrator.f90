@@ -70,13 +70,13 @@ contains
     class(vci_model_t), target, intent(inout) :: model
     real(dp), intent(in) :: h
     integer, intent(out) :: stat
-    character(len=:), allocatable :: why
+    character(len=80) :: why
     self%created = .false.; self%initialized = .false.
     self%stats = vci_stats_t()
     why = vci_size_problem(model%n, model%m, model%n_gaps)
     if (why /= '') then
       write (self%message, '(a,3(i0,a))') 'create: model sizes invalid (n = ', model%n, ', m = ', model%m, &
-        ', n_gaps = ', model%n_gaps, '; '//why//')'
+        ', n_gaps = ', model%n_gaps, '; '//trim(why)//')'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
     if (.not. (ieee_is_finite(h) .and. h > 0.0_dp)) then

@@ -16,10 +16,12 @@ module vci_limits
 
 contains
 
-  !> Why the sizes are refused, or '' when they are fine.
+  !> Why the sizes are refused, or '' when they are fine. (A fixed-length result: gfortran keeps
+  !> the length of a deferred-length function result in a static variable, which is not
+  !> thread-safe, and this runs in concurrent C calls.)
   pure function vci_size_problem(n, m, n_gaps) result(why)
     integer, intent(in) :: n, m, n_gaps
-    character(len=:), allocatable :: why
+    character(len=80) :: why
     why = ''
     if (n < 1 .or. m < 0 .or. m > n .or. n_gaps < 0) then
       why = 'need n >= 1, 0 <= m <= n, n_gaps >= 0'

@@ -671,7 +671,7 @@ contains
         self%cause = what//': callback '//trim(self%sys%failed_callback)//' returned NaN or Inf'
       else
         self%cause = what//': callback '//trim(self%sys%failed_callback)//' reported failure'// &
-                     stat_text(self%sys%failed_stat)
+                     trim(stat_text(self%sys%failed_stat))
       end if
     end select
   end subroutine run_newton
@@ -681,7 +681,7 @@ contains
     character(len=*), intent(in) :: what
     if (len_trim(self%sys%failed_callback) > 0 .and. self%sys%failed_stat /= 0) then
       self%cause = what//': callback '//trim(self%sys%failed_callback)//' reported failure'// &
-                   stat_text(self%sys%failed_stat)
+                   trim(stat_text(self%sys%failed_stat))
     else if (len_trim(self%sys%failed_callback) > 0) then
       self%cause = what//': callback '//trim(self%sys%failed_callback)//' failed or returned NaN/Inf'
     else
@@ -689,15 +689,15 @@ contains
     end if
   end subroutine set_cause
 
-  !> " (stat = k, recoverable)" or " (stat = k, unrecoverable)": the callback's own code.
+  !> " (stat = k, recoverable)" or " (stat = k, unrecoverable)": the callback's own code. Fixed
+  !> length: gfortran's deferred-length function results are not thread-safe.
   function stat_text(stat) result(text)
     integer, intent(in) :: stat
-    character(len=:), allocatable :: text
+    character(len=48) :: text
     character(len=16) :: k
     text = ''
     if (stat == 0) return
     write (k, '(i0)') stat
-    text = ' (stat = '//trim(k)//merge(', recoverable  ', ', unrecoverable', stat > 0)
-    text = trim(text)//')'
+    text = ' (stat = '//trim(k)//trim(merge(', recoverable  ', ', unrecoverable', stat > 0))//')'
   end function stat_text
 end module vci_stepper
