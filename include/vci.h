@@ -141,6 +141,60 @@ typedef struct vci_callbacks {
 int  vci_model_create_v2(vci_model *model, int n, int m, int ngaps, const vci_callbacks *cb, void *user);
 #define vci_model_create vci_model_create_v2
 
+/* ---- Continuous Lagrangian models (docs/SCHEMES.md): the library builds L_d from L by a scheme ---- */
+
+/** Schemes for vci_set_scheme (the Fortran VCI_SCHEME_* values). */
+enum {
+  VCI_SCHEME_DISCRETE = 0, /* the model is a discrete L_d (vci_model_create): the only scheme it has */
+  VCI_SCHEME_LEFT = 1,     /* L_d = h L(q, (v - q)/h): the paper's retraction, order 1 */
+  VCI_SCHEME_MIDPOINT = 2, /* L_d = h L((q + v)/2, (v - q)/h): order 2, the default for a continuous model */
+  VCI_SCHEME_LOBATTO = 3   /* Galerkin with s + 1 Lobatto points, s = 1..VCI_LOBATTO_MAX_STAGES: order 2s (m = 0 only) */
+};
+#define VCI_LOBATTO_MAX_STAGES 8
+
+/** out[n] = dL/dq or dL/dqdot at (q[n], v[n]); or out[0] = L(q, v) (vci_lagrangian_value_fn). */
+typedef int (*vci_lagrangian_value_fn)(int n, const double *q, const double *v, double *l /* [1] */, void *user);
+typedef int (*vci_lagrangian_grad_fn)(int n, const double *q, const double *v, double *out, void *user);
+/** The three Hessian blocks at (q, v), each n x n column-major: lqq[i + n*j] = d2L/dq_i dq_j,
+ *  lqv[i + n*j] = d2L/dq_i dv_j, lvv[i + n*j] = d2L/dv_i dv_j. */
+typedef int (*vci_lagrangian_hessians_fn)(int n, const double *q, const double *v, double *lqq, double *lqv,
+                                          double *lvv, void *user);
+
+/** The callbacks of a continuous model, a struct of its own with its own leading size (same
+ *  rules as vci_callbacks: initialise with VCI_LAGRANGIAN_CALLBACKS_INIT; members are only ever
+ *  added at the end). Same return contract and conventions as the discrete callbacks. */
+typedef struct vci_lagrangian_callbacks {
+  size_t size;                                  /* = sizeof(vci_lagrangian_callbacks) */
+  vci_lagrangian_value_fn lagrangian;           /* required: L(q, v) */
+  vci_lagrangian_grad_fn dl_dq, dl_dv;          /* required: dL/dq, dL/dqdot (the momentum) */
+  vci_lagrangian_hessians_fn hessians;          /* optional (NULL: differenced from dl_dq, dl_dv) */
+  vci_forms_fn constraint_forms;                /* required iff m > 0 (then not with lobatto) */
+  vci_gaps_fn gaps;                             /* required iff ngaps > 0 */
+  vci_gap_grads_fn gap_gradients;               /* optional (NULL: differenced) */
+  vci_energy_fn energy;                         /* optional H(q, p) (NULL: Legendre inversion of dl_dv) */
+  /* new members here */
+} vci_lagrangian_callbacks;
+
+#ifdef __cplusplus
+#define VCI_LAGRANGIAN_CALLBACKS_INIT {sizeof(vci_lagrangian_callbacks), 0, 0, 0, 0, 0, 0, 0, 0}
+#else
+#define VCI_LAGRANGIAN_CALLBACKS_INIT {.size = sizeof(vci_lagrangian_callbacks)}
+#endif
+
+/** Create a continuous model L(q, qdot) of n coordinates, m constraints, ngaps walls (the
+ *  callbacks are copied; `user` goes to every one). An integrator made from it uses
+ *  VCI_SCHEME_MIDPOINT until vci_set_scheme chooses another. On failure *model = NULL.
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT: as vci_model_create, with lagrangian, dl_dq, dl_dv required;
+ *  VCI_ERR_MEMORY. */
+int  vci_model_create_lagrangian(vci_model *model, int n, int m, int ngaps, const vci_lagrangian_callbacks *cb,
+                                 void *user);
+
+/** Choose the scheme of an integrator made from a continuous model: VCI_SCHEME_LEFT, _MIDPOINT,
+ *  or _LOBATTO with `stages` = s in 1..VCI_LOBATTO_MAX_STAGES (ignored for the others). Call before
+ *  initialising: the state is reset. Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, a discrete
+ *  model, unknown scheme, s out of range, lobatto with m > 0; VCI_ERR_STATE: busy. */
+int  vci_set_scheme(vci_integrator integ, int scheme, int stages);
+
 /** Release the model and set *model = NULL. NULL-safe (model or *model NULL: nothing happens).
  *  Integrators created from it keep their own copy: it may be destroyed right after
  *  vci_integrator_create. */

@@ -26,6 +26,7 @@ module vci_capi
   use vci_status
   use vci_limits, only: vci_size_problem
   use vci_model, only: vci_model_t
+  use vci_lagrangian, only: vci_lagrangian_t
   use vci_observer, only: vci_observer_t, vci_run_info_t, vci_impact_t
   use vci_integrator, only: vci_integrator_t, vci_stats_t, VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN
   use vci_callback_adapter, only: vci_callback_record_t
@@ -36,7 +37,8 @@ module vci_capi
   implicit none
   private
 
-  public :: vci_model_create_v2, vci_model_create_v0_1, vci_model_destroy
+  public :: vci_model_create_v2, vci_model_create_v0_1, vci_model_create_lagrangian, vci_model_destroy
+  public :: vci_set_scheme
   public :: vci_integrator_create, vci_integrator_destroy
   public :: vci_set_tolerances, vci_set_impact_energy, vci_set_max_impacts
   public :: vci_init_from_pair, vci_init_from_momentum, vci_step, vci_integrate
@@ -62,8 +64,25 @@ module vci_capi
                       gaps, gap_gradients, energy
   end type vci_callbacks_v0_1
 
+  !> Mirror of `struct vci_lagrangian_callbacks` in vci.h (continuous models): a leading size of
+  !> its own, then the callbacks; the same growth rules as vci_callbacks_c.
+  type, bind(C) :: vci_lagrangian_callbacks_c
+    integer(c_size_t) :: size = 0
+    type(c_funptr) :: lagrangian = c_null_funptr, dl_dq = c_null_funptr, dl_dv = c_null_funptr
+    type(c_funptr) :: hessians = c_null_funptr, constraint_forms = c_null_funptr
+    type(c_funptr) :: gaps = c_null_funptr, gap_gradients = c_null_funptr, energy = c_null_funptr
+  end type vci_lagrangian_callbacks_c
+
   !> The C signatures of the callbacks (vci.h); each returns 0, > 0 (recoverable) or < 0.
+  !> (L, dL/dq and dL/dqdot have c_energy_fn's shape: n, q, v, out, user.)
   abstract interface
+    integer(c_int) function c_lhess_fn(n, q, v, lqq, lqv, lvv, user) bind(C)
+      import :: c_int, c_double, c_ptr
+      integer(c_int), value :: n
+      real(c_double), intent(in) :: q(*), v(*)
+      real(c_double), intent(inout) :: lqq(*), lqv(*), lvv(*)
+      type(c_ptr), value :: user
+    end function c_lhess_fn
     integer(c_int) function c_ld_grad_fn(n, q, v, h, out, user) bind(C)
       import :: c_int, c_double, c_ptr
       integer(c_int), value :: n
@@ -132,8 +151,12 @@ module vci_capi
 
   !> The model behind a `vci_model` handle (immutable once created), and each integrator's own
   !> copy of it: C function pointers, user pointer, and the integrator's callback record.
+  !> A continuous model's handle is a c_model_t too (continuous = .true., callbacks in lcb): the
+  !> registry, copies and destroy are the same; an integrator made from it drives a c_lagrangian_t.
   type, extends(vci_model_t) :: c_model_t
     type(vci_callbacks_c) :: cb
+    logical :: continuous = .false.
+    type(vci_lagrangian_callbacks_c) :: lcb
     type(c_ptr) :: user = c_null_ptr
     type(vci_callback_record_t) :: record
   contains
@@ -168,9 +191,27 @@ module vci_capi
     procedure :: on_finish => obs_finish
   end type c_observer_t
 
+  !> The C continuous model: extends vci_lagrangian_t as c_model_t extends vci_model_t; the return
+  !> codes go through the same adapter, into the record of its integrator's model copy.
+  type, extends(vci_lagrangian_t) :: c_lagrangian_t
+    type(vci_lagrangian_callbacks_c) :: cb
+    type(c_ptr) :: user = c_null_ptr
+    type(vci_callback_record_t), pointer :: record => null()
+  contains
+    procedure :: lagrangian => cl_value
+    procedure :: dl_dq => cl_dl_dq
+    procedure :: dl_dv => cl_dl_dv
+    procedure :: hessians => cl_hessians
+    procedure :: constraint_forms => cl_forms
+    procedure :: gaps => cl_gaps
+    procedure :: gap_gradients => cl_gap_grads
+    procedure :: energy => cl_energy
+  end type c_lagrangian_t
+
   type :: c_integrator_t
     type(vci_integrator_t) :: integ
-    type(c_model_t) :: model              !< this integrator's own copy of the model
+    type(c_model_t) :: model              !< this integrator's own copy of the model (and its record)
+    type(c_lagrangian_t) :: lag           !< the continuous model it drives, when model%continuous
     type(c_observer_t) :: obs
     logical :: busy = .false.             !< a call on it is running (guarded by the registry lock)
     logical :: destroy_pending = .false.  !< destroyed while busy: freed when that call returns
@@ -535,6 +576,140 @@ contains
   end subroutine cm_energy
 
   ! ---------------------------------------------------------------------------------------------
+  ! the C continuous model: the same pattern, with vci_lagrangian_t's procedures
+
+  !> Call f(n, q, v, out, user) (L, dL/dq, dL/dqdot, H: c_energy_fn's shape) and note its return.
+  subroutine call_qv(self, fp, name, q, v, out, stat)
+    class(c_lagrangian_t), intent(inout) :: self
+    type(c_funptr), intent(in) :: fp
+    character(len=*), intent(in) :: name
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    procedure(c_energy_fn), pointer :: f
+    integer :: rc
+    call c_f_procpointer(fp, f)
+    out = 0.0_dp   ! defined even where a failing callback left it unwritten
+    rc = f(self%n, q, v, out, self%user)
+    call self%record%note(rc, 'the C callback '//name, finite1(out), stat)
+  end subroutine call_qv
+
+  subroutine cl_value(self, q, v, l, stat)
+    class(c_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: l
+    integer, intent(inout) :: stat
+    real(dp) :: tmp(1)
+    l = 0.0_dp
+    if (.not. c_associated(self%cb%lagrangian)) then
+      call self%not_provided(stat); return
+    end if
+    call call_qv(self, self%cb%lagrangian, 'lagrangian', q, v, tmp, stat)
+    l = tmp(1)
+  end subroutine cl_value
+
+  subroutine cl_dl_dq(self, q, v, out, stat)
+    class(c_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    if (.not. c_associated(self%cb%dl_dq)) then
+      out = 0.0_dp; call self%not_provided(stat); return
+    end if
+    call call_qv(self, self%cb%dl_dq, 'dl_dq', q, v, out, stat)
+  end subroutine cl_dl_dq
+
+  subroutine cl_dl_dv(self, q, v, out, stat)
+    class(c_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    if (.not. c_associated(self%cb%dl_dv)) then
+      out = 0.0_dp; call self%not_provided(stat); return
+    end if
+    call call_qv(self, self%cb%dl_dv, 'dl_dv', q, v, out, stat)
+  end subroutine cl_dl_dv
+
+  subroutine cl_hessians(self, q, v, lqq, lqv, lvv, stat)
+    class(c_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: lqq(:, :), lqv(:, :), lvv(:, :)
+    integer, intent(inout) :: stat
+    procedure(c_lhess_fn), pointer :: f
+    integer :: rc
+    lqq = 0.0_dp; lqv = 0.0_dp; lvv = 0.0_dp   ! defined even where a failing callback left them unwritten
+    if (.not. c_associated(self%cb%hessians)) then
+      call self%not_provided(stat); return
+    end if
+    call c_f_procpointer(self%cb%hessians, f)
+    rc = f(self%n, q, v, lqq, lqv, lvv, self%user)
+    call self%record%note(rc, 'the C callback hessians', all(ieee_is_finite(lqq)) .and. &
+                          all(ieee_is_finite(lqv)) .and. all(ieee_is_finite(lvv)), stat)
+  end subroutine cl_hessians
+
+  subroutine cl_forms(self, q, omega, stat)
+    class(c_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: omega(:, :)
+    integer, intent(inout) :: stat
+    procedure(c_forms_fn), pointer :: f
+    integer :: rc
+    omega = 0.0_dp
+    if (.not. c_associated(self%cb%constraint_forms)) then
+      call self%not_provided(stat); return
+    end if
+    call c_f_procpointer(self%cb%constraint_forms, f)
+    rc = f(self%n, self%m, q, omega, self%user)
+    call self%record%note(rc, 'the C callback constraint_forms', all(ieee_is_finite(omega)), stat)
+  end subroutine cl_forms
+
+  subroutine cl_gaps(self, q, g, stat)
+    class(c_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: g(:)
+    integer, intent(inout) :: stat
+    procedure(c_forms_fn), pointer :: f
+    integer :: rc
+    g = 0.0_dp
+    if (.not. c_associated(self%cb%gaps)) then
+      call self%not_provided(stat); return
+    end if
+    call c_f_procpointer(self%cb%gaps, f)
+    rc = f(self%n, self%n_gaps, q, g, self%user)
+    call self%record%note(rc, 'the C callback gaps', finite1(g), stat)
+  end subroutine cl_gaps
+
+  subroutine cl_gap_grads(self, q, dg, stat)
+    class(c_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: dg(:, :)
+    integer, intent(inout) :: stat
+    procedure(c_forms_fn), pointer :: f
+    integer :: rc
+    dg = 0.0_dp
+    if (.not. c_associated(self%cb%gap_gradients)) then
+      call self%not_provided(stat); return
+    end if
+    call c_f_procpointer(self%cb%gap_gradients, f)
+    rc = f(self%n, self%n_gaps, q, dg, self%user)
+    call self%record%note(rc, 'the C callback gap_gradients', all(ieee_is_finite(dg)), stat)
+  end subroutine cl_gap_grads
+
+  subroutine cl_energy(self, q, p, e, stat)
+    class(c_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), p(:)
+    real(dp), intent(out) :: e
+    integer, intent(inout) :: stat
+    real(dp) :: tmp(1)
+    e = 0.0_dp
+    if (.not. c_associated(self%cb%energy)) then
+      call self%not_provided(stat); return
+    end if
+    call call_qv(self, self%cb%energy, 'energy', q, p, tmp, stat)
+    e = tmp(1)
+  end subroutine cl_energy
+
+  ! ---------------------------------------------------------------------------------------------
   ! the observer behind vci_set_impact_callback and vci_open_output
 
   subroutine obs_start(self, info, q, p, stat)
@@ -699,6 +874,80 @@ contains
     vci_model_create_v0_1 = create_model(model, n, m, ngaps, local, user)
   end function vci_model_create_v0_1
 
+  !> int vci_model_create_lagrangian(vci_model *model, int n, int m, int ngaps,
+  !> const vci_lagrangian_callbacks *cb, void *user). Reads cb->size bytes of the callbacks (the
+  !> rules of vci_model_create_v2).
+  integer(c_int) function vci_model_create_lagrangian(model, n, m, ngaps, cb, user) &
+    bind(C, name='vci_model_create_lagrangian')
+    type(c_ptr), value :: model, cb, user
+    integer(c_int), value :: n, m, ngaps
+    type(vci_lagrangian_callbacks_c) :: local
+    type(c_funptr), pointer :: fps(:)
+    integer(c_size_t), pointer :: size_field
+    integer(c_int8_t), pointer :: src(:)
+    integer(c_size_t) :: nbytes, ours, least
+    character(len=24) :: txt
+    character(len=64) :: what
+    integer :: k, i
+    vci_model_create_lagrangian = VCI_ERR_ARGUMENT
+    if (.not. c_associated(model)) then
+      call set_thread_message('vci_model_create_lagrangian: the model argument is NULL'); return
+    end if
+    call null_out(model)
+    if (.not. c_associated(cb)) then
+      call set_thread_message('vci_model_create_lagrangian: the callbacks argument is NULL'); return
+    end if
+    call c_f_pointer(cb, size_field)
+    nbytes = size_field
+    ours = c_sizeof(local)
+    least = c_sizeof(local%size) + 3 * c_sizeof(c_null_funptr)   ! up to dl_dv: the required ones
+    write (txt, '(i0)') nbytes
+    if (nbytes < least .or. nbytes > 4096) then
+      call set_thread_message('vci_model_create_lagrangian: cb->size = '//trim(txt)//' is not the size of a '// &
+                              'vci_lagrangian_callbacks (initialise it with VCI_LAGRANGIAN_CALLBACKS_INIT)')
+      return
+    end if
+    call c_f_pointer(cb, src, [nbytes])
+    if (nbytes > ours) then
+      if (any(src(ours + 1:nbytes) /= 0)) then
+        call set_thread_message('vci_model_create_lagrangian: callbacks this library does not know are set '// &
+                                '(cb->size = '//trim(txt)//'; the program was built against a newer vci.h)')
+        return
+      end if
+    end if
+    ! the members the caller's header has (those beyond its size stay NULL), one by one: a byte copy
+    ! into `local` through a second pointer was lost to gfortran's optimiser
+    k = int((min(nbytes, ours) - c_sizeof(local%size)) / c_sizeof(c_null_funptr))
+    call c_f_pointer(transfer(transfer(cb, 0_c_intptr_t) + c_sizeof(local%size), cb), fps, [k])
+    local = vci_lagrangian_callbacks_c()
+    local%size = ours
+    do i = 1, k
+      select case (i)
+      case (1); local%lagrangian = fps(i)
+      case (2); local%dl_dq = fps(i)
+      case (3); local%dl_dv = fps(i)
+      case (4); local%hessians = fps(i)
+      case (5); local%constraint_forms = fps(i)
+      case (6); local%gaps = fps(i)
+      case (7); local%gap_gradients = fps(i)
+      case (8); local%energy = fps(i)
+      end select
+    end do
+    what = ''
+    if (.not. c_associated(local%lagrangian)) what = 'lagrangian'
+    if (.not. c_associated(local%dl_dq)) what = 'dl_dq'
+    if (.not. c_associated(local%dl_dv)) what = 'dl_dv'
+    if (m > 0 .and. .not. c_associated(local%constraint_forms)) what = 'constraint_forms (needed as m > 0)'
+    if (ngaps > 0 .and. .not. c_associated(local%gaps)) what = 'gaps (needed as ngaps > 0)'
+    if (what /= '') then
+      call set_thread_message('vci_model_create_lagrangian: callback '//trim(what)//' is NULL (lagrangian, '// &
+                              'dl_dq and dl_dv are required)')
+      return
+    end if
+    ! sizes, allocation and registry as for a discrete model
+    vci_model_create_lagrangian = create_model(model, n, m, ngaps, vci_callbacks_c(), user, local)
+  end function vci_model_create_lagrangian
+
   !> *out = NULL for the handle pointer `out` (not NULL).
   subroutine null_out(out)
     type(c_ptr), intent(in) :: out
@@ -707,11 +956,13 @@ contains
     h = c_null_ptr
   end subroutine null_out
 
-  !> Both model_create entry points: validate, allocate, register.
-  integer function create_model(model, n, m, ngaps, fcb, user) result(status)
+  !> The model_create entry points: validate, allocate, register. With lcb: a continuous model
+  !> (its callbacks already checked; fcb unused).
+  integer function create_model(model, n, m, ngaps, fcb, user, lcb) result(status)
     type(c_ptr), intent(in) :: model, user
     integer(c_int), intent(in) :: n, m, ngaps
     type(vci_callbacks_c), intent(in) :: fcb
+    type(vci_lagrangian_callbacks_c), intent(in), optional :: lcb
     type(c_ptr), pointer :: out
     type(c_model_t), pointer :: mp
     type(c_integrator_t), pointer :: none
@@ -730,12 +981,14 @@ contains
       return
     end if
     what = ''
-    if (.not. c_associated(fcb%d1_ld)) what = 'd1_ld'
-    if (.not. c_associated(fcb%d2_ld)) what = 'd2_ld'
-    if (.not. c_associated(fcb%d3_ld)) what = 'd3_ld'
-    if (m > 0 .and. .not. c_associated(fcb%constraint_forms)) what = 'constraint_forms (needed as m > 0)'
-    if (m > 0 .and. .not. c_associated(fcb%discrete_constraint)) what = 'discrete_constraint (needed as m > 0)'
-    if (ngaps > 0 .and. .not. c_associated(fcb%gaps)) what = 'gaps (needed as ngaps > 0)'
+    if (.not. present(lcb)) then
+      if (.not. c_associated(fcb%d1_ld)) what = 'd1_ld'
+      if (.not. c_associated(fcb%d2_ld)) what = 'd2_ld'
+      if (.not. c_associated(fcb%d3_ld)) what = 'd3_ld'
+      if (m > 0 .and. .not. c_associated(fcb%constraint_forms)) what = 'constraint_forms (needed as m > 0)'
+      if (m > 0 .and. .not. c_associated(fcb%discrete_constraint)) what = 'discrete_constraint (needed as m > 0)'
+      if (ngaps > 0 .and. .not. c_associated(fcb%gaps)) what = 'gaps (needed as ngaps > 0)'
+    end if
     if (what /= '') then
       call set_thread_message('vci_model_create: callback '//trim(what)//' is NULL'); return
     end if
@@ -747,6 +1000,10 @@ contains
     mp%n = n; mp%m = m; mp%n_gaps = ngaps
     mp%cb = fcb
     mp%user = user
+    if (present(lcb)) then
+      mp%continuous = .true.
+      mp%lcb = lcb
+    end if
     none => null()
     call c_f_pointer(model, out)
     call lock_registry()
@@ -822,7 +1079,15 @@ contains
       return
     end if
     call ip%model%record%clear()
-    call ip%integ%create(ip%model, real(h, dp), stat)
+    if (ip%model%continuous) then
+      ip%lag%n = ip%model%n; ip%lag%m = ip%model%m; ip%lag%n_gaps = ip%model%n_gaps
+      ip%lag%cb = ip%model%lcb
+      ip%lag%user = ip%model%user
+      ip%lag%record => ip%model%record
+      call ip%integ%create(ip%lag, real(h, dp), stat)
+    else
+      call ip%integ%create(ip%model, real(h, dp), stat)
+    end if
     if (stat /= VCI_OK) then
       call set_thread_message('vci_integrator_create: '//trim(ip%integ%message_text()))
       deallocate (ip)
@@ -915,6 +1180,27 @@ contains
     end if
     vci_set_max_impacts = stat
   end function vci_set_max_impacts
+
+  !> int vci_set_scheme(vci_integrator integ, int scheme, int stages): the scheme of a continuous model.
+  integer(c_int) function vci_set_scheme(integ, scheme, stages) bind(C, name='vci_set_scheme')
+    type(c_ptr), value :: integ
+    integer(c_int), value :: scheme, stages
+    type(c_integrator_t), pointer :: ip
+    integer :: stat
+    call enter(integ, 'vci_set_scheme', ip, stat)
+    if (stat == VCI_OK) then
+      if (output_blocks_init(ip, 'vci_set_scheme', stat)) then
+        continue
+      else if (.not. ip%model%continuous) then
+        stat = fail(ip, VCI_ERR_ARGUMENT, 'vci_set_scheme: the model is a discrete L_d (vci_model_create); '// &
+                    'schemes discretise a continuous one (vci_model_create_lagrangian)')
+      else
+        call ip%integ%set_scheme(int(scheme), int(stages), stat)
+      end if
+      call leave(ip)
+    end if
+    vci_set_scheme = stat
+  end function vci_set_scheme
 
   !> An output file holds one run from one initialisation: no new start while it has rows.
   logical function output_blocks_init(ip, who, stat)
