@@ -35,18 +35,23 @@
 !>     TASK 8: OUT(1:N*NG) = gap gradients at Q, column j = grad g_j            (IOPT bit 2)
 !>     TASK 9: OUT(1)      = energy H(Q, P) with P passed in V                   (IOPT bit 4)
 !>
-!> IERR arrives 0; set it nonzero to stop the step (ISTAT = 2). IOPT declares the optional tasks
+!> IERR arrives 0; the callback contract of the C interface holds: IERR > 0 is a recoverable
+!> failure (at a trial point of Newton's line search the solver backs off, elsewhere the step
+!> stops with ISTAT = 2), IERR < 0 an unrecoverable one (the step stops at once, ISTAT = 2). The
+!> message then names the TASK and the IERR. IOPT declares the optional tasks
 !> the routine supplies (sum of 1: mixed Hessian, 2: gap gradients, 4: energy); the others are
 !> differenced or not needed, and the routine is never called for them. ISTAT takes the values of
 !> the C enum (0 ok, 1 argument, 2 callback, 3 non-finite, 4 Newton, 5 impact, 6 too many impacts,
 !> 7 inadmissible, 8 I/O, 9 call out of order).
 module vci_legacy
   use, intrinsic :: iso_c_binding, only: c_ptr, c_f_pointer, c_null_ptr
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use vci_kinds, only: dp, i8
   use vci_status
   use vci_model, only: vci_model_t
   use vci_observer, only: vci_observer_t, vci_impact_t
   use vci_integrator, only: vci_integrator_t
+  use vci_callback_adapter, only: vci_callback_record_t
   implicit none
   private
 
@@ -76,7 +81,7 @@ module vci_legacy
     procedure(vci_legacy_model_fn), pointer, nopass :: fn => null()
     integer :: iopt = 0
     type(c_ptr) :: rpar = c_null_ptr, ipar = c_null_ptr
-    integer :: last_ierr = 0, last_task = 0   !< the last nonzero IERR and its TASK (0: none)
+    type(vci_callback_record_t) :: record     !< the last failing TASK and its IERR
   contains
     procedure :: d1 => lm_d1
     procedure :: d2 => lm_d2
@@ -89,12 +94,14 @@ module vci_legacy
     procedure :: energy => lm_energy
   end type legacy_model_t
 
-  !> Records the impact times of one VCIADV call.
+  !> Records the impact times of one VCIADV call; clears the callback record after every step.
   type, extends(vci_observer_t) :: impact_log_t
     integer :: count = 0
     real(dp), allocatable :: times(:)
+    type(vci_callback_record_t), pointer :: record => null()
   contains
     procedure :: on_impact => log_impact
+    procedure :: on_step => log_step
   end type impact_log_t
 
   !> One live integrator of the handle interface.
@@ -111,24 +118,24 @@ module vci_legacy
 
 contains
 
-  !> Call the model routine for one task: IERR nonzero becomes a failure (never "not provided").
-  subroutine call_task(self, task, q, v, h, out, stat)
+  !> Call the model routine for one task (nout outputs); IERR goes through the callback adapter.
+  subroutine call_task(self, task, q, v, h, out, nout, stat)
     class(legacy_model_t), intent(inout) :: self
-    integer, intent(in) :: task
+    integer, intent(in) :: task, nout
     real(dp), intent(in) :: q(:), v(:), h
     real(dp), intent(inout) :: out(*)
     integer, intent(inout) :: stat
     real(dp), pointer, contiguous :: rp(:)
     integer, pointer, contiguous :: ip(:)
     integer :: ierr
+    character(len=32) :: name
     call c_f_pointer(self%rpar, rp, [1])
     call c_f_pointer(self%ipar, ip, [1])
     ierr = 0
+    out(1:nout) = 0.0_dp   ! defined even where a failing routine left it unwritten
     call self%fn(task, self%n, self%m, self%n_gaps, q, v, h, out(1), rp, ip, ierr)   ! out(1): sequence association
-    if (ierr /= 0) then
-      stat = 1
-      self%last_ierr = ierr; self%last_task = task
-    end if
+    write (name, '(a,i0)') 'MODEL with TASK = ', task
+    call self%record%note(ierr, trim(name), all(ieee_is_finite(out(1:nout))), stat)
   end subroutine call_task
 
   subroutine lm_d1(self, q, v, h, out, stat)
@@ -136,7 +143,7 @@ contains
     real(dp), intent(in) :: q(:), v(:), h
     real(dp), intent(out) :: out(:)
     integer, intent(inout) :: stat
-    call call_task(self, TASK_D1, q, v, h, out, stat)
+    call call_task(self, TASK_D1, q, v, h, out, size(out), stat)
   end subroutine lm_d1
 
   subroutine lm_d2(self, q, v, h, out, stat)
@@ -144,7 +151,7 @@ contains
     real(dp), intent(in) :: q(:), v(:), h
     real(dp), intent(out) :: out(:)
     integer, intent(inout) :: stat
-    call call_task(self, TASK_D2, q, v, h, out, stat)
+    call call_task(self, TASK_D2, q, v, h, out, size(out), stat)
   end subroutine lm_d2
 
   subroutine lm_d3(self, q, v, h, out, stat)
@@ -154,7 +161,7 @@ contains
     integer, intent(inout) :: stat
     real(dp) :: tmp(1)
     tmp = 0.0_dp
-    call call_task(self, TASK_D3, q, v, h, tmp, stat)
+    call call_task(self, TASK_D3, q, v, h, tmp, 1, stat)
     out = tmp(1)
   end subroutine lm_d3
 
@@ -166,7 +173,7 @@ contains
     if (iand(self%iopt, IOPT_HESSIAN) == 0) then
       hess = 0.0_dp; call self%not_provided(stat); return
     end if
-    call call_task(self, TASK_HESSIAN, q, v, h, hess, stat)
+    call call_task(self, TASK_HESSIAN, q, v, h, hess, size(hess), stat)
   end subroutine lm_hessian
 
   subroutine lm_forms(self, q, omega, stat)
@@ -174,7 +181,7 @@ contains
     real(dp), intent(in) :: q(:)
     real(dp), intent(out) :: omega(:, :)
     integer, intent(inout) :: stat
-    call call_task(self, TASK_FORMS, q, q, 0.0_dp, omega, stat)
+    call call_task(self, TASK_FORMS, q, q, 0.0_dp, omega, size(omega), stat)
   end subroutine lm_forms
 
   subroutine lm_dconstraint(self, base, other, h, out, stat)
@@ -182,7 +189,7 @@ contains
     real(dp), intent(in) :: base(:), other(:), h
     real(dp), intent(out) :: out(:)
     integer, intent(inout) :: stat
-    call call_task(self, TASK_DCONSTRAINT, base, other, h, out, stat)
+    call call_task(self, TASK_DCONSTRAINT, base, other, h, out, size(out), stat)
   end subroutine lm_dconstraint
 
   subroutine lm_gaps(self, q, g, stat)
@@ -190,7 +197,7 @@ contains
     real(dp), intent(in) :: q(:)
     real(dp), intent(out) :: g(:)
     integer, intent(inout) :: stat
-    call call_task(self, TASK_GAPS, q, q, 0.0_dp, g, stat)
+    call call_task(self, TASK_GAPS, q, q, 0.0_dp, g, size(g), stat)
   end subroutine lm_gaps
 
   subroutine lm_gap_grads(self, q, dg, stat)
@@ -201,7 +208,7 @@ contains
     if (iand(self%iopt, IOPT_GAP_GRADS) == 0) then
       dg = 0.0_dp; call self%not_provided(stat); return
     end if
-    call call_task(self, TASK_GAP_GRADS, q, q, 0.0_dp, dg, stat)
+    call call_task(self, TASK_GAP_GRADS, q, q, 0.0_dp, dg, size(dg), stat)
   end subroutine lm_gap_grads
 
   subroutine lm_energy(self, q, p, e, stat)
@@ -214,7 +221,7 @@ contains
       e = 0.0_dp; call self%not_provided(stat); return
     end if
     tmp = 0.0_dp
-    call call_task(self, TASK_ENERGY, q, p, 0.0_dp, tmp, stat)
+    call call_task(self, TASK_ENERGY, q, p, 0.0_dp, tmp, 1, stat)
     e = tmp(1)
   end subroutine lm_energy
 
@@ -225,6 +232,15 @@ contains
     self%count = self%count + 1
     if (self%count <= size(self%times)) self%times(self%count) = impact%t
   end subroutine log_impact
+
+  !> An accepted step: a failure the line search absorbed in it is no cause of a later failure.
+  subroutine log_step(self, step, t, q, p, lambda, energy, stat)
+    class(impact_log_t), intent(inout) :: self
+    integer(i8), intent(in) :: step
+    real(dp), intent(in) :: t, q(:), p(:), lambda(:), energy
+    integer, intent(inout) :: stat
+    if (associated(self%record)) call self%record%clear()
+  end subroutine log_step
 
   ! ---------------------------------------------------------------------------------------------
   ! the handle table behind the external routines
@@ -259,7 +275,7 @@ contains
     slots(i)%model%rpar = rpar; slots(i)%model%ipar = ipar
     call slots(i)%integ%create(slots(i)%model, h, stat)
     if (stat /= VCI_OK) then
-      global_message = 'VCINEW: '//slots(i)%integ%message()
+      global_message = 'VCINEW: '//trim(slots(i)%integ%message_text())
       deallocate (slots(i)%model, slots(i)%integ)
       if (all(slots%id == 0)) deallocate (slots)
       return
@@ -284,28 +300,23 @@ contains
       stat = VCI_ERR_ARGUMENT; return
     end if
     integ => slots(i)%integ
-    slots(i)%model%last_ierr = 0; slots(i)%model%last_task = 0
+    call integ%report_failure(VCI_OK, '')
+    call slots(i)%model%record%clear()
     stat = VCI_OK
   end subroutine legacy_get
 
-  !> After a call into the integrator: name the failing TASK and its IERR. The Newton line search
-  !> backtracks from trial points where the model routine fails, so a routine that keeps failing
-  !> ends as VCI_ERR_NEWTON; it is reported as VCI_ERR_CALLBACK, the Newton message kept.
+  !> After a call into the integrator: name the failing TASK and its IERR (the shared adapter).
   subroutine legacy_after(ih, stat)
     integer, intent(in) :: ih
     integer, intent(inout) :: stat
     integer :: i
-    character(len=48) :: what
+    character(len=VCI_MSG_LEN) :: msg
     i = 0
     if (ih > 0 .and. allocated(slots)) i = findloc(slots%id, ih, dim=1)
     if (i == 0) return
-    associate (md => slots(i)%model, integ => slots(i)%integ)
-      if ((stat == VCI_ERR_CALLBACK .or. stat == VCI_ERR_NEWTON) .and. md%last_ierr /= 0) then
-        write (what, '(a,i0,a,i0,a)') ' (MODEL returned IERR = ', md%last_ierr, ' for TASK = ', md%last_task, ')'
-        stat = VCI_ERR_CALLBACK
-        call integ%report_failure(stat, integ%message()//trim(what))
-      end if
-    end associate
+    msg = slots(i)%integ%message_text()
+    call slots(i)%model%record%annotate(stat, msg)
+    call slots(i)%integ%report_failure(stat, msg)
   end subroutine legacy_after
 
   !> Free the integrator named ih (no-op if none); ih becomes 0.
@@ -322,22 +333,31 @@ contains
     ih = 0
   end subroutine legacy_delete
 
-  !> nsteps steps in direction idir; the state and the impact times of this call out.
-  subroutine legacy_advance(integ, nsteps, idir, t, q, p, nimp, timp, stat)
-    type(vci_integrator_t), intent(inout) :: integ
-    integer, intent(in) :: nsteps, idir
+  !> nsteps steps in direction idir on the integrator named ih (live: legacy_get succeeded); the
+  !> state and the impact times of this call out.
+  subroutine legacy_advance(ih, nsteps, idir, t, q, p, nimp, timp, stat)
+    integer, intent(in) :: ih, nsteps, idir
     real(dp), intent(inout) :: t, q(:), p(:), timp(:)
     integer, intent(out) :: nimp, stat
     type(impact_log_t) :: log
-    integer :: k
-    allocate (log%times(size(timp)))
-    call integ%integrate(int(nsteps, i8), idir, stat, log)
-    nimp = log%count
-    k = min(nimp, size(timp))
-    timp(1:k) = log%times(1:k)
-    if (integ%is_initialized()) then
-      t = integ%time(); q = integ%configuration(); p = integ%momentum()
+    integer :: k, i
+    i = findloc(slots%id, ih, dim=1)
+    allocate (log%times(size(timp)), stat=stat)
+    if (stat /= 0) then
+      nimp = 0
+      call slots(i)%integ%report_failure(VCI_ERR_MEMORY, 'VCIADV: cannot allocate the impact log (out of memory)')
+      stat = VCI_ERR_MEMORY; return
     end if
+    log%record => slots(i)%model%record
+    associate (integ => slots(i)%integ)
+      call integ%integrate(int(nsteps, i8), idir, stat, log)
+      nimp = log%count
+      k = min(nimp, size(timp))
+      timp(1:k) = log%times(1:k)
+      if (integ%is_initialized()) then
+        t = integ%time(); q = integ%configuration(); p = integ%momentum()
+      end if
+    end associate
   end subroutine legacy_advance
 
   !> The message of the last call on ih, or of the last failure without a live handle.
@@ -348,7 +368,7 @@ contains
     msg = global_message
     i = 0
     if (ih > 0 .and. allocated(slots)) i = findloc(slots%id, ih, dim=1)
-    if (i > 0) msg = slots(i)%integ%message()
+    if (i > 0) msg = slots(i)%integ%message_text()
   end function legacy_message
 end module vci_legacy
 
@@ -455,7 +475,7 @@ subroutine vciadv(ih, nsteps, idir, t, q, p, nimp, timp, ltimp, istat)
     call integ%report_failure(VCI_ERR_ARGUMENT, msg); istat = VCI_ERR_ARGUMENT; return
   end if
   n = integ%n_coordinates()
-  call legacy_advance(integ, nsteps, idir, t, q(1:n), p(1:n), nimp, timp(1:ltimp), istat)
+  call legacy_advance(ih, nsteps, idir, t, q(1:n), p(1:n), nimp, timp(1:ltimp), istat)
   call legacy_after(ih, istat)
 end subroutine vciadv
 

@@ -6,13 +6,22 @@
 !> of the row-equilibrated Jacobian; when
 !> that matrix is singular, a rank-revealing least-squares solve (dgelsd) gives the minimum-norm
 !> step instead. All workspace is allocated by `reserve`, so `solve` allocates nothing.
+!>
+!> Nothing non-finite reaches LAPACK: a residual, scale or Jacobian with NaN/Inf (a callback's
+!> huge but finite values overflow in differences) ends the solve with VCI_ERR_NONFINITE, or, at a
+!> trial point of the line search, is backed off from like a failed evaluation. (With NaN input,
+!> OpenBLAS's dgelsd can loop forever and reference LAPACK's prints through XERBLA.)
 module vci_newton
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use vci_kinds, only: dp
-  use vci_status, only: VCI_OK, VCI_ERR_NEWTON, VCI_ERR_NONFINITE
+  use vci_status, only: VCI_OK, VCI_ERR_NEWTON, VCI_ERR_NONFINITE, VCI_ERR_MEMORY
   use vci_lapack, only: dgetrf, dgetrs, dgelsd
   implicit none
   private
+
+  interface all_finite
+    module procedure all_finite_1, all_finite_2
+  end interface all_finite
 
   !> Why a solve stopped.
   integer, parameter, public :: NEWTON_CONVERGED = 0
@@ -20,9 +29,13 @@ module vci_newton
   integer, parameter, public :: NEWTON_NO_DESCENT = 2      !< backtracking found no decrease
   integer, parameter, public :: NEWTON_SINGULAR = 3        !< even the least-squares solve failed
   integer, parameter, public :: NEWTON_EVALUATION = 4      !< the residual or Jacobian reported failure
+  integer, parameter, public :: NEWTON_NONFINITE = 5       !< residual, scale or Jacobian not finite (overflow)
 
-  !> A nonlinear system as Newton sees it.
+  !> A nonlinear system as Newton sees it. A residual that fails (stat /= 0) at a trial point of
+  !> the line search is backed off from, unless the system sets `unrecoverable` (a callback's
+  !> negative return): then the solve ends at once with that status.
   type, abstract, public :: vci_system_t
+    logical :: unrecoverable = .false.
   contains
     procedure(residual_iface), deferred :: residual
     procedure(jacobian_iface), deferred :: jacobian
@@ -82,22 +95,35 @@ contains
   end function always_admissible
 
   !> Allocate workspace for systems of up to nmax unknowns (call once, outside the step loop).
-  subroutine reserve(self, nmax)
+  !> stat (optional): VCI_ERR_MEMORY when an allocation fails (the solver then has no workspace).
+  subroutine reserve(self, nmax, stat)
     class(vci_newton_t), intent(inout) :: self
     integer, intent(in) :: nmax
+    integer, intent(out), optional :: stat
     real(dp) :: query(1), a(1, 1), b(1, 1), s(1)
-    integer :: iq(1), rank, info, lwork, liwork, nlvl
+    integer :: iq(1), rank, info, lwork, liwork, nlvl, st
+    if (present(stat)) stat = VCI_OK
     if (self%capacity >= nmax) return
-    self%capacity = nmax
+    self%capacity = 0
     if (allocated(self%jac)) deallocate (self%jac, self%lu, self%r, self%sc, self%dx, self%xt, &
-                                         self%rt, self%sct, self%sv, self%work, self%ipiv, self%iwork, self%rw)
+                                         self%rt, self%sct, self%sv, self%ipiv, self%rw)
+    if (allocated(self%work)) deallocate (self%work, self%iwork)
     allocate (self%jac(nmax, nmax), self%lu(nmax, nmax), self%r(nmax), self%sc(nmax), self%dx(nmax), &
-              self%xt(nmax), self%rt(nmax), self%sct(nmax), self%sv(nmax), self%ipiv(nmax), self%rw(nmax))
-    call dgelsd(nmax, nmax, 1, a, nmax, b, nmax, s, -1.0_dp, rank, query, -1, iq, info)
-    lwork = max(1, int(query(1)))
-    nlvl = max(0, int(log(real(nmax, dp) / 26.0_dp) / log(2.0_dp)) + 1)
-    liwork = max(1, 3 * nmax * nlvl + 11 * nmax, iq(1))
-    allocate (self%work(lwork), self%iwork(liwork))
+              self%xt(nmax), self%rt(nmax), self%sct(nmax), self%sv(nmax), self%ipiv(nmax), self%rw(nmax), stat=st)
+    if (st == 0) then
+      call dgelsd(nmax, nmax, 1, a, nmax, b, nmax, s, -1.0_dp, rank, query, -1, iq, info)
+      lwork = max(1, int(query(1)))
+      nlvl = max(0, int(log(real(nmax, dp) / 26.0_dp) / log(2.0_dp)) + 1)
+      liwork = max(1, 3 * nmax * nlvl + 11 * nmax, iq(1))
+      allocate (self%work(lwork), self%iwork(liwork), stat=st)
+    end if
+    if (st /= 0) then
+      if (allocated(self%jac)) deallocate (self%jac, self%lu, self%r, self%sc, self%dx, self%xt, &
+                                           self%rt, self%sct, self%sv, self%ipiv, self%rw)
+      if (present(stat)) stat = VCI_ERR_MEMORY
+      return
+    end if
+    self%capacity = nmax
   end subroutine reserve
 
   !> Solve sys%residual(x) = 0 for x(1:n), starting from the given x. On failure x holds the best
@@ -114,9 +140,13 @@ contains
     n = size(x)
     res = vci_newton_result_t()
     factored = .false.
+    sys%unrecoverable = .false.
     call sys%residual(x, self%r(1:n), self%sc(1:n), stat)
     if (stat /= VCI_OK) then
       call fail_eval(res, stat); return
+    end if
+    if (.not. (all_finite(self%r(1:n)) .and. all_finite(self%sc(1:n)))) then
+      call fail_nonfinite(res); return
     end if
     phi = merit(self, self%r(1:n), self%sc(1:n))
     res%scaled_residual = phi
@@ -128,7 +158,13 @@ contains
       if (stat /= VCI_OK) then
         call fail_eval(res, stat); return
       end if
+      if (.not. all_finite(self%jac(1:n, 1:n))) then
+        call fail_nonfinite(res); return
+      end if
       call newton_direction(self, n, factored, res)
+      if (res%reason == NEWTON_NONFINITE) then
+        res%status = VCI_ERR_NONFINITE; return
+      end if
       if (res%reason == NEWTON_SINGULAR) then
         res%status = VCI_ERR_NEWTON; return
       end if
@@ -139,6 +175,12 @@ contains
         self%xt(1:n) = x - step * self%dx(1:n)
         if (sys%admissible(self%xt(1:n))) then
           call sys%residual(self%xt(1:n), self%rt(1:n), self%sct(1:n), stat)
+          ! an overflowing trial point is backed off from like a failed evaluation
+          if (stat == VCI_OK .and. .not. (all_finite(self%rt(1:n)) .and. all_finite(self%sct(1:n)))) &
+            stat = VCI_ERR_NONFINITE
+          if (stat /= VCI_OK .and. sys%unrecoverable) then
+            call fail_eval(res, stat); return
+          end if
           if (stat /= VCI_OK) trial_stat = stat
           if (stat == VCI_OK) then
             phit = merit(self, self%rt(1:n), self%sct(1:n))
@@ -172,6 +214,7 @@ contains
   end subroutine solve
 
   !> Solve the small dense system a x = b in place (b becomes x), with the solver's workspace.
+  !> info /= 0: singular even for least squares, or a or b not finite (LAPACK is then not called).
   subroutine linear_solve(self, n, a, b, info)
     class(vci_newton_t), intent(inout) :: self
     integer, intent(in) :: n
@@ -179,18 +222,27 @@ contains
     real(dp), intent(inout) :: b(:)
     integer, intent(out) :: info
     integer :: rank
+    if (.not. (all_finite(a(1:n, 1:n)) .and. all_finite(b(1:n)))) then
+      info = -1; return
+    end if
+    self%rt(1:n) = b(1:n)                  ! the right-hand side, for the fallback
     self%lu(1:n, 1:n) = a(1:n, 1:n)
     call lu_factor(self, n, info)
     if (info == 0) then
       call lu_solve(self, n, b)
-      if (all(ieee_is_finite(b(1:n)))) return
+      if (all_finite(b(1:n))) return
     end if
     ! singular: the minimum-norm least-squares solution, as in the Newton direction
     self%jac(1:n, 1:n) = a(1:n, 1:n)
-    self%dx(1:n) = b(1:n)
+    self%dx(1:n) = self%rt(1:n)
     call dgelsd(n, n, 1, self%jac, self%capacity, self%dx, self%capacity, self%sv, 1.0e-12_dp, rank, &
                 self%work, size(self%work), self%iwork, info)
-    if (info == 0) b(1:n) = self%dx(1:n)
+    if (info == 0 .and. all_finite(self%dx(1:n))) then
+      b(1:n) = self%dx(1:n)
+    else
+      b(1:n) = self%rt(1:n)
+      if (info == 0) info = -1
+    end if
   end subroutine linear_solve
 
   !> Newton direction dx = J^{-1} r on the row-equilibrated system; least squares when singular.
@@ -213,9 +265,13 @@ contains
       self%dx(i) = self%r(i) * w
       self%rw(i) = w
     end do
+    factored = .false.
+    ! r w overflows when r is huge and the row's entries tiny: nothing non-finite goes to LAPACK
+    if (.not. (all_finite(self%lu(1:n, 1:n)) .and. all_finite(self%dx(1:n)))) then
+      res%reason = NEWTON_NONFINITE; return
+    end if
     self%jac(1:n, 1:n) = self%lu(1:n, 1:n)   ! keep the equilibrated matrix for the fallback
     call lu_factor(self, n, info)
-    factored = .false.
     if (info == 0) then
       dmin = huge(1.0_dp); dmax = 0.0_dp
       do i = 1, n
@@ -250,11 +306,13 @@ contains
     do i = 1, n
       self%dx(i) = self%r(i) * self%rw(i)
     end do
+    if (.not. all_finite(self%dx(1:n))) return
     call lu_solve(self, n, self%dx)
     self%xt(1:n) = x - self%dx(1:n)
     if (.not. sys%admissible(self%xt(1:n))) return
     call sys%residual(self%xt(1:n), self%rt(1:n), self%sct(1:n), stat)
     if (stat /= VCI_OK) return
+    if (.not. (all_finite(self%rt(1:n)) .and. all_finite(self%sct(1:n)))) return
     phit = merit(self, self%rt(1:n), self%sct(1:n))
     res%iterations = res%iterations + 1
     if (phit <= phi) then
@@ -291,6 +349,34 @@ contains
     end do
     if (.not. ieee_is_finite(merit)) merit = huge(1.0_dp)
   end function merit
+
+  !> No NaN or Inf in a (any rank: assumed-rank is F2018, so vectors and matrices separately).
+  pure logical function all_finite_1(a) result(ok)
+    real(dp), intent(in) :: a(:)
+    integer :: i
+    ok = .true.
+    do i = 1, size(a)
+      if (.not. (abs(a(i)) <= huge(1.0_dp))) then
+        ok = .false.; return
+      end if
+    end do
+  end function all_finite_1
+
+  pure logical function all_finite_2(a) result(ok)
+    real(dp), intent(in) :: a(:, :)
+    integer :: j
+    ok = .true.
+    do j = 1, size(a, 2)
+      ok = all_finite_1(a(:, j))
+      if (.not. ok) return
+    end do
+  end function all_finite_2
+
+  subroutine fail_nonfinite(res)
+    type(vci_newton_result_t), intent(inout) :: res
+    res%reason = NEWTON_NONFINITE
+    res%status = VCI_ERR_NONFINITE
+  end subroutine fail_nonfinite
 
   subroutine fail_eval(res, stat)
     type(vci_newton_result_t), intent(inout) :: res

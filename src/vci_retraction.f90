@@ -9,7 +9,7 @@
 !> inversion of dL/dqdot (vci_lagrangian).
 module vci_retraction
   use vci_kinds, only: dp
-  use vci_status, only: VCI_OK
+  use vci_status, only: VCI_OK, VCI_ERR_CALLBACK
   use vci_model, only: vci_model_t
   use vci_lagrangian, only: vci_lagrangian_t, vci_lagrangian_work_t, lagrangian_work_setup, &
                             lagrangian_hessians, lagrangian_hamiltonian
@@ -32,23 +32,25 @@ module vci_retraction
 contains
 
   !> Wrap lag with rule (RETRACTION_LEFT or RETRACTION_MIDPOINT); has_hessians and has_energy say
-  !> which optional procedures the model supplies (probed by the integrator).
-  subroutine bind(self, lag, rule, has_hessians, has_energy)
+  !> which optional procedures the model supplies (probed by the integrator). stat /= 0: out of memory.
+  subroutine bind(self, lag, rule, has_hessians, has_energy, stat)
     class(vci_retraction_model_t), intent(inout) :: self
     class(vci_lagrangian_t), target, intent(inout) :: lag
     integer, intent(in) :: rule
     logical, intent(in) :: has_hessians, has_energy
+    integer, intent(out) :: stat
     integer :: n
     self%lag => lag
     self%rule = rule
     self%n = lag%n; self%m = lag%m; self%n_gaps = lag%n_gaps
     n = lag%n
-    call lagrangian_work_setup(self%work, n)
+    call lagrangian_work_setup(self%work, n, stat)
+    if (stat /= 0) return
     self%work%has_hessians = has_hessians
     self%has_model_energy = has_energy
     if (allocated(self%pt)) deallocate (self%pt, self%w, self%lq, self%lv, self%lqq, self%lqv, self%lvv, self%om)
     allocate (self%pt(n), self%w(n), self%lq(n), self%lv(n), self%lqq(n, n), self%lqv(n, n), self%lvv(n, n), &
-              self%om(n, max(1, lag%m)))
+              self%om(n, max(1, lag%m)), stat=stat)
   end subroutine bind
 
   !> The evaluation point and velocity of the segment (q, v, h).
@@ -129,7 +131,7 @@ contains
     call point_velocity(self, q, v, h)
     call lagrangian_hessians(self%lag, self%work, self%pt, self%w, self%lqq, self%lqv, self%lvv, s)
     if (s /= VCI_OK) then
-      stat = 1; return
+      stat = failure_code(self, s); return
     end if
     if (self%rule == RETRACTION_LEFT) then
       hess = self%lqv - self%lvv / h
@@ -189,6 +191,16 @@ contains
     end if
     self%w = 0.0_dp
     call lagrangian_hamiltonian(self%lag, self%work, q, p, self%w, e, s)
-    if (s /= VCI_OK) stat = 1
+    if (s /= VCI_OK) stat = failure_code(self, s)
   end subroutine energy
+
+  !> The stat to report for a failed derived quantity: the callback's own code when one failed
+  !> (so an unrecoverable code stays unrecoverable), else 1 (NaN/Inf or a Legendre inversion that
+  !> did not converge: recoverable at a trial point).
+  integer function failure_code(self, status)
+    class(vci_retraction_model_t), intent(in) :: self
+    integer, intent(in) :: status
+    failure_code = 1
+    if (status == VCI_ERR_CALLBACK .and. self%work%code /= 0) failure_code = self%work%code
+  end function failure_code
 end module vci_retraction

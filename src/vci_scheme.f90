@@ -46,6 +46,7 @@ module vci_scheme
     real(dp), allocatable :: b_target(:) !< KIND_PAIR: the given end of the segment
     real(dp) :: e_minus = 0.0_dp         !< E_d of the arriving sub-step, or H(qt, p_minus)
     character(len=32) :: failed_callback = ''   !< which callback failed in the last evaluation
+    integer :: failed_stat = 0           !< the stat that callback set (> 0 recoverable, < 0 not)
     real(dp), allocatable :: pplus(:)
     real(dp), allocatable, private :: gp(:), gm(:), qp(:), vout(:), xsave(:), ip(:), im(:), isp(:), ism(:)
   contains
@@ -73,6 +74,7 @@ module vci_scheme
     procedure :: eval_gap_gradients
     procedure :: eval_forms
     procedure :: check
+    procedure :: note_failure
     procedure :: check_matrix
   end type vci_scheme_t
 
@@ -153,10 +155,11 @@ module vci_scheme
 
 contains
 
-  !> Sizes and the workspace every scheme shares (once, before the step loop).
-  subroutine setup_common(self, base)
+  !> Sizes and the workspace every scheme shares (once, before the step loop); stat /= 0: out of memory.
+  subroutine setup_common(self, base, stat)
     class(vci_scheme_t), intent(inout) :: self
     class(vci_model_base_t), target, intent(inout) :: base
+    integer, intent(out) :: stat
     integer :: n, m, ng
     self%base => base
     n = base%n; m = base%m; ng = max(1, base%n_gaps)
@@ -166,7 +169,8 @@ contains
                                        self%im, self%isp, self%ism)
     allocate (self%a(n), self%pa(n), self%omega(n, m), self%grad(n), self%gscale(n), self%b_target(n), &
               self%pplus(n), self%gp(ng), self%gm(ng), self%qp(n), self%vout(n), self%xsave(m + 1), &
-              self%ip(m + 1), self%im(m + 1), self%isp(m + 1), self%ism(m + 1))
+              self%ip(m + 1), self%im(m + 1), self%isp(m + 1), self%ism(m + 1), stat=stat)
+    if (stat /= 0) return
     self%omega = 0.0_dp
     self%a = 0.0_dp; self%pa = 0.0_dp; self%grad = 0.0_dp; self%gscale = 0.0_dp
   end subroutine setup_common
@@ -293,8 +297,7 @@ contains
     stat = 0
     if (self%m == 0) return
     call self%base%constraint_forms(q, omega, stat)
-    if (stat == VCI_OK) call self%check_matrix(stat, omega, 'constraint forms')
-    if (stat /= VCI_OK .and. self%failed_callback == '') self%failed_callback = 'constraint forms'
+    call self%check_matrix(stat, omega, 'constraint forms')   ! a nonzero stat is VCI_ERR_CALLBACK
   end subroutine eval_forms
 
   !> The Hamiltonian impact: energy row and, with constraints, the outgoing velocity dH/dp(qt, p+)
@@ -363,7 +366,8 @@ contains
     end do
   end subroutine impulse_jacobian
 
-  !> Turn a callback's return into a library status: nonzero -> VCI_ERR_CALLBACK, NaN/Inf -> NONFINITE.
+  !> Turn a callback's return into a library status: nonzero -> VCI_ERR_CALLBACK (negative:
+  !> unrecoverable, Newton must not back off from it), NaN/Inf -> NONFINITE (recoverable).
   subroutine check(self, stat, values, what)
     class(vci_scheme_t), intent(inout) :: self
     integer, intent(inout) :: stat
@@ -371,19 +375,30 @@ contains
     character(len=*), intent(in) :: what
     integer :: i
     if (stat /= 0) then
+      call self%note_failure(stat, what)
       stat = VCI_ERR_CALLBACK
-      self%failed_callback = what
       return
     end if
     stat = VCI_OK
     do i = 1, size(values)
       if (.not. (abs(values(i)) <= huge(1.0_dp))) then   ! NaN or +-Inf
         stat = VCI_ERR_NONFINITE
+        self%failed_stat = 0
         self%failed_callback = what
         return
       end if
     end do
   end subroutine check
+
+  !> A callback named `what` set stat = code /= 0: remember it; a negative code is unrecoverable.
+  subroutine note_failure(self, code, what)
+    class(vci_scheme_t), intent(inout) :: self
+    integer, intent(in) :: code
+    character(len=*), intent(in) :: what
+    self%failed_stat = code
+    if (code < 0) self%unrecoverable = .true.
+    self%failed_callback = what
+  end subroutine note_failure
 
   !> check() for a matrix, without the temporary a reshape would allocate.
   subroutine check_matrix(self, stat, values, what)

@@ -43,12 +43,14 @@ module vci_scheme_discrete
 
 contains
 
-  !> Bind to a model and size the workspace (once, before the step loop).
-  subroutine setup(self, model)
+  !> Bind to a model and size the workspace (once, before the step loop); stat /= 0: out of memory.
+  subroutine setup(self, model, stat)
     class(vci_scheme_discrete_t), intent(inout) :: self
     class(vci_model_t), target, intent(inout) :: model
+    integer, intent(out) :: stat
     integer :: n, m, nx
-    call self%setup_common(model)
+    call self%setup_common(model, stat)
+    if (stat /= 0) return
     self%model => model
     n = model%n; m = model%m
     nx = n + m + 1
@@ -56,7 +58,8 @@ contains
                                         self%xp, self%jscale, self%jabs)
     allocate (self%d1(n), self%hess(n, n), self%g(max(1, model%n_gaps)), &
               self%rp(nx), self%rm(nx), self%sp(nx), self%sm(nx), self%xp(nx), self%jscale(nx), &
-              self%jabs(nx, nx))
+              self%jabs(nx, nx), stat=stat)
+    if (stat /= 0) return
     self%jscale = 0.0_dp
     self%jabs = 0.0_dp
   end subroutine setup
