@@ -63,6 +63,11 @@ module vci_newton
     integer :: max_iterations = 30
     integer :: max_backtracks = 12
     logical :: polish = .true.         !< one extra step with the last factorisation: ~ machine precision
+    !> Systems of at most this many unknowns are factorised by the in-line LU below (partial
+    !> pivoting, the same elimination as LAPACK's unblocked dgetf2) instead of dgetrf/dgetrs: for a
+    !> 3x3 matrix a LAPACK call through OpenBLAS costs ~10x its arithmetic (locks, dispatch). 0: always
+    !> LAPACK. docs/bench/throughput.md measures the difference; test_newton compares both paths.
+    integer :: small_lu_max = 8
     integer :: capacity = 0
     real(dp), allocatable, private :: jac(:, :), lu(:, :), r(:), sc(:), dx(:), xt(:), rt(:), sct(:)
     real(dp), allocatable, private :: sv(:), work(:), rw(:)
@@ -263,12 +268,17 @@ contains
     end if
   end subroutine polish_step
 
-  !> LU factorisation with partial pivoting of lu(1:n, 1:n) in place (LAPACK dgetrf).
+  !> LU factorisation with partial pivoting of lu(1:n, 1:n) in place (LAPACK dgetrf, or the in-line
+  !> elimination for n <= small_lu_max); info as dgetrf's (k > 0: U(k, k) = 0).
   subroutine lu_factor(self, n, info)
     type(vci_newton_t), intent(inout) :: self
     integer, intent(in) :: n
     integer, intent(out) :: info
-    call dgetrf(n, n, self%lu, self%capacity, self%ipiv, info)
+    if (n <= self%small_lu_max) then
+      call small_lu(n, self%lu, self%ipiv, info)
+    else
+      call dgetrf(n, n, self%lu, self%capacity, self%ipiv, info)
+    end if
   end subroutine lu_factor
 
   !> b := A^{-1} b with the factors of lu_factor (dgetrs 'N' with one right-hand side).
@@ -277,8 +287,77 @@ contains
     integer, intent(in) :: n
     real(dp), intent(inout) :: b(:)
     integer :: info
-    call dgetrs('N', n, 1, self%lu, self%capacity, self%ipiv, b, size(b), info)
+    if (n <= self%small_lu_max) then
+      call small_lu_solve(n, self%lu, self%ipiv, b)
+    else
+      call dgetrs('N', n, 1, self%lu, self%capacity, self%ipiv, b, size(b), info)
+    end if
   end subroutine lu_solve
+
+  !> Right-looking LU with partial pivoting (the pivot is the first largest |entry| of the column, as
+  !> LAPACK's idamax picks it); ipiv as LAPACK's. Stops at an exact zero pivot (info = its column).
+  pure subroutine small_lu(n, a, ipiv, info)
+    integer, intent(in) :: n
+    real(dp), intent(inout) :: a(:, :)
+    integer, intent(inout) :: ipiv(:)
+    integer, intent(out) :: info
+    integer :: i, j, k, p
+    real(dp) :: t, piv_inv
+    info = 0
+    do j = 1, n
+      p = j
+      do i = j + 1, n
+        if (abs(a(i, j)) > abs(a(p, j))) p = i
+      end do
+      ipiv(j) = p
+      if (a(p, j) == 0.0_dp) then
+        if (info == 0) info = j
+        cycle
+      end if
+      if (p /= j) then
+        do k = 1, n
+          t = a(j, k); a(j, k) = a(p, k); a(p, k) = t
+        end do
+      end if
+      piv_inv = 1.0_dp / a(j, j)
+      do i = j + 1, n
+        a(i, j) = a(i, j) * piv_inv
+      end do
+      do k = j + 1, n
+        t = a(j, k)
+        do i = j + 1, n
+          a(i, k) = a(i, k) - a(i, j) * t
+        end do
+      end do
+    end do
+  end subroutine small_lu
+
+  pure subroutine small_lu_solve(n, a, ipiv, b)
+    integer, intent(in) :: n
+    real(dp), intent(in) :: a(:, :)
+    integer, intent(in) :: ipiv(:)
+    real(dp), intent(inout) :: b(:)
+    integer :: i, k
+    real(dp) :: t
+    do i = 1, n
+      if (ipiv(i) /= i) then
+        t = b(i); b(i) = b(ipiv(i)); b(ipiv(i)) = t
+      end if
+    end do
+    do k = 1, n                 ! L y = b (unit diagonal), column by column
+      t = b(k)
+      do i = k + 1, n
+        b(i) = b(i) - a(i, k) * t
+      end do
+    end do
+    do k = n, 1, -1             ! U x = y
+      b(k) = b(k) / a(k, k)
+      t = b(k)
+      do i = 1, k - 1
+        b(i) = b(i) - a(i, k) * t
+      end do
+    end do
+  end subroutine small_lu_solve
 
 
   pure real(dp) function merit(self, r, sc)
