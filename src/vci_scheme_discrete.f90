@@ -11,6 +11,7 @@
 !>
 !> The new momentum is p_b = s D2 L^s(a, b, tau). Layout: x = [b(n), lambda(m), extra].
 module vci_scheme_discrete
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use vci_kinds, only: dp
   use vci_status, only: VCI_OK
   use vci_model, only: vci_model_t
@@ -31,6 +32,10 @@ module vci_scheme_discrete
     !> the row's value alone does not show when it cancels the force term (a body released from
     !> rest: p_a = 0 and D1 -> 0 at the solution, so the row would have no size at all)
     real(dp), allocatable, private :: jabs(:, :)
+    logical, private :: jac_known = .false.   !< jabs holds this solve's Jacobian
+    !> Scan every callback's values for NaN/Inf (set only to name the culprit after the residual,
+    !> checked once as a whole, turned out non-finite: the hot path checks one sum per residual)
+    logical, private :: scan_values = .false.
   contains
     procedure :: setup
     procedure :: unknowns
@@ -59,6 +64,7 @@ contains
               self%jabs(nx, nx))
     self%jscale = 0.0_dp
     self%jabs = 0.0_dp
+    self%jac_known = .false.
   end subroutine setup
 
   pure integer function unknowns(self, kind)
@@ -128,8 +134,21 @@ contains
       call self%model%d2(b, a, tau, out, stat)
       out = -out
     end if
-    call self%check(stat, out, 'D1/D2 of L_d')
+    call check_fast(self, stat, out, 'D1/D2 of L_d')
   end subroutine d1s
+
+  !> A callback's status (nonzero: VCI_ERR_CALLBACK); its values are scanned only when scan_values.
+  subroutine check_fast(self, stat, values, what)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    integer, intent(inout) :: stat
+    real(dp), intent(in) :: values(:)
+    character(len=*), intent(in) :: what
+    if (self%scan_values .or. stat /= 0) then
+      call self%check(stat, values, what)
+    else
+      stat = VCI_OK
+    end if
+  end subroutine check_fast
 
   !> p_b = s D2 L^s(a, b, tau)  (forward: D2 L_d(a, b); backward: -D1 L_d(b, a)), b = endpoint of x.
   subroutine momentum_out(self, x, a, tau, p, stat)
@@ -215,7 +234,7 @@ contains
     if (m > 0) then
       stat = 0
       call self%model%discrete_constraint(self%a, x(1:n), tau, r(n + 1:n + m), stat)
-      call self%check(stat, r(n + 1:n + m), 'discrete constraint')
+      call check_fast(self, stat, r(n + 1:n + m), 'discrete constraint')
       if (stat /= VCI_OK) return
       do mu = 1, m
         sc(n + mu) = abs(r(n + mu)) + sum(abs(self%omega(:, mu)) * abs(x(1:n) - self%a)) / tau
@@ -250,17 +269,29 @@ contains
     real(dp), intent(in) :: x(:)
     real(dp), intent(out) :: r(:), scale(:)
     integer, intent(out) :: stat
-    integer :: j
+    integer :: j, n
+    real(dp) :: fl
+    n = self%n
     call rows(self, x, r, scale, .true., stat)
+    if (stat /= VCI_OK) return
     ! size of the kinetic terms of the momentum rows, from the current solve's Jacobian
-    if (stat == VCI_OK) then
-      do j = 1, self%n
-        scale(1:self%n) = scale(1:self%n) + self%jabs(1:self%n, j) * abs(x(j) - self%a(j))
+    if (self%jac_known) then
+      do j = 1, n
+        scale(1:n) = scale(1:n) + self%jabs(1:n, j) * abs(x(j) - self%a(j))
       end do
     end if
     ! round-off floor of each row: a few ulps of sum_j |dR_i/dx_j| |x_j|, in units of rtol
-    if (stat == VCI_OK) scale = scale + (8.0_dp * epsilon(1.0_dp) / max(self%rtol, epsilon(1.0_dp))) * &
-                                self%jscale(1:size(x))
+    fl = 8.0_dp * epsilon(1.0_dp) / max(self%rtol, epsilon(1.0_dp))
+    do j = 1, size(x)
+      scale(j) = scale(j) + fl * self%jscale(j)
+    end do
+    ! one finiteness check for all the callbacks' values; when it fails, evaluate again scanning
+    ! each callback's values so that the failure names the culprit
+    if (.not. ieee_is_finite(sum(r) + sum(scale))) then
+      self%scan_values = .true.
+      call rows(self, x, r, scale, .true., stat)
+      self%scan_values = .false.
+    end if
   end subroutine step_residual
 
   !> Jacobian: the momentum block from the model's mixed Hessian when it has one, multiplier and
@@ -288,7 +319,13 @@ contains
         if (stat /= VCI_OK) return
         jac(1:n, 1:n) = -transpose(self%hess)
       end if
-      if (nx > n) then
+      if (nx > n .and. self%kind == KIND_SUBSTEP) then
+        ! only the m constraint rows depend on b besides the momentum block
+        do j = 1, n
+          call fd_constraint_column(self, x, j, tau, fd_step(x(j), x(j) - self%a(j)), jac(n + 1:n + m, j), stat)
+          if (stat /= VCI_OK) return
+        end do
+      else if (nx > n) then
         do j = 1, n
           call fd_column(self, x, j, fd_step(x(j), x(j) - self%a(j)), .false., jac(:, j), stat)
           if (stat /= VCI_OK) return
@@ -323,12 +360,13 @@ contains
       self%jscale(j) = sum(abs(jac(j, 1:nx)) * abs(x(1:nx)))
     end do
     self%jabs(1:nx, 1:nx) = abs(jac(1:nx, 1:nx))
+    self%jac_known = .true.
   end subroutine step_jacobian
 
   !> A new solve starts: its Jacobian is not known yet (see jabs).
   subroutine forget_jacobian(self)
     class(vci_scheme_discrete_t), intent(inout) :: self
-    self%jabs = 0.0_dp
+    self%jac_known = .false.
   end subroutine forget_jacobian
 
   pure real(dp) function fd_step(xj, motion)
@@ -336,6 +374,28 @@ contains
     fd_step = vci_fd_rel * max(abs(xj), abs(motion))
     if (fd_step == 0.0_dp) fd_step = vci_fd_rel
   end function fd_step
+
+  !> Central difference of the discrete constraint omega_d(a, b, tau) along b_j.
+  subroutine fd_constraint_column(self, x, j, tau, d, col, stat)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:), tau, d
+    integer, intent(in) :: j
+    real(dp), intent(out) :: col(:)
+    integer, intent(out) :: stat
+    integer :: n, m
+    n = self%n; m = self%m
+    self%xp(1:n) = x(1:n)
+    self%xp(j) = x(j) + d
+    stat = 0
+    call self%model%discrete_constraint(self%a, self%xp(1:n), tau, self%rp(1:m), stat)
+    call self%check(stat, self%rp(1:m), 'discrete constraint')
+    if (stat /= VCI_OK) return
+    self%xp(j) = x(j) - d
+    call self%model%discrete_constraint(self%a, self%xp(1:n), tau, self%rm(1:m), stat)
+    call self%check(stat, self%rm(1:m), 'discrete constraint')
+    if (stat /= VCI_OK) return
+    col = (self%rp(1:m) - self%rm(1:m)) / (2.0_dp * d)
+  end subroutine fd_constraint_column
 
   !> Central difference of the residual along unknown j (all rows, or only the non-momentum rows).
   subroutine fd_column(self, x, j, d, all_rows, col, stat)
