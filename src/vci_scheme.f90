@@ -61,6 +61,7 @@ module vci_scheme
     procedure(out_scalar_iface), deferred :: energy_out
     procedure(hamiltonian_iface), deferred :: hamiltonian
     procedure :: needs_pair_solve
+    procedure :: endpoint_direction
     procedure :: forget_jacobian
     procedure :: setup_common
     procedure :: extra_index
@@ -176,6 +177,15 @@ contains
     class(vci_scheme_t), intent(in) :: self
     needs_pair_solve = .false.
   end function needs_pair_solve
+
+  !> The endpoint's part of a change dx of the unknowns (a sensitivity, e.g. d x / d mu). Layouts
+  !> that store the endpoint itself return get_endpoint(dx); those storing an increment override.
+  subroutine endpoint_direction(self, x, v)
+    class(vci_scheme_t), intent(in) :: self
+    real(dp), intent(in) :: x(:)
+    real(dp), intent(out) :: v(:)
+    call self%get_endpoint(x, v)
+  end subroutine endpoint_direction
 
   !> A new solve starts (schemes that size rows from the last Jacobian reset that memory here).
   subroutine forget_jacobian(self)

@@ -9,12 +9,15 @@
 !>              omega_d(qt, b, tau) = 0,  E_d(qt, b, tau) = E_minus             (unknown mu)
 !>              or, for the Hamiltonian condition, H(qt, p_minus + mu grad g_j) = H(qt, p_minus).
 !>
-!> The new momentum is p_b = s D2 L^s(a, b, tau). Layout: x = [b(n), lambda(m), extra].
+!> The new momentum is p_b = s D2 L^s(a, b, tau). Layout: x = [b(n), lambda(m), extra] for a user's
+!> L_d; x = [d(n), lambda(m), extra] with the increment d = b - a for a retraction of a continuous L
+!> (`increments`), whose closed form takes d itself (vci_retraction: no round-off of b - a).
 module vci_scheme_discrete
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use vci_kinds, only: dp
   use vci_status, only: VCI_OK
   use vci_model, only: vci_model_t
+  use vci_retraction, only: vci_retraction_model_t, RETRACTION_LEFT
   use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_WALL, KIND_REFLECT, KIND_IMPULSE, KIND_PAIR, &
                         VCI_IMPACT_HAMILTONIAN, vci_fd_rel
   implicit none
@@ -22,8 +25,10 @@ module vci_scheme_discrete
 
   type, extends(vci_scheme_t), public :: vci_scheme_discrete_t
     class(vci_model_t), pointer :: model => null()
+    class(vci_retraction_model_t), pointer :: ret => null()   !< the model, when it is a retraction
+    logical :: increments = .false.   !< x(1:n) is the increment d = b - a (retractions)
     logical :: has_hessian = .false.
-    real(dp), allocatable, private :: d1(:), hess(:, :), g(:), rp(:), rm(:), sp(:), sm(:), xp(:)
+    real(dp), allocatable, private :: d1(:), hess(:, :), g(:), rp(:), rm(:), sp(:), sm(:), xp(:), bb(:)
     !> sum_j |dR_i/dx_j| |x_j| from the last Jacobian: the round-off floor of row i (positions are
     !> often large next to their change over a step), added to each row's scale
     real(dp), allocatable, private :: jscale(:)
@@ -42,6 +47,7 @@ module vci_scheme_discrete
     procedure :: scheme_residual => step_residual
     procedure :: scheme_jacobian => step_jacobian
     procedure :: put_endpoint, get_endpoint, put_multipliers, get_multipliers, momentum_rhs
+    procedure :: endpoint_direction
     procedure :: momentum_out, energy_out, hamiltonian
     procedure :: forget_jacobian
   end type vci_scheme_discrete_t
@@ -55,11 +61,18 @@ contains
     integer :: n, m, nx
     call self%setup_common(model)
     self%model => model
+    self%ret => null()
+    self%increments = .false.
+    select type (model)
+    class is (vci_retraction_model_t)
+      self%ret => model
+      self%increments = .true.
+    end select
     n = model%n; m = model%m
     nx = n + m + 1
     if (allocated(self%d1)) deallocate (self%d1, self%hess, self%g, self%rp, self%rm, self%sp, self%sm, &
-                                        self%xp, self%jscale, self%jabs)
-    allocate (self%d1(n), self%hess(n, n), self%g(max(1, model%n_gaps)), &
+                                        self%xp, self%jscale, self%jabs, self%bb)
+    allocate (self%d1(n), self%hess(n, n), self%g(max(1, model%n_gaps)), self%bb(n), &
               self%rp(nx), self%rm(nx), self%sp(nx), self%sm(nx), self%xp(nx), self%jscale(nx), &
               self%jabs(nx, nx))
     self%jscale = 0.0_dp
@@ -81,15 +94,55 @@ contains
     class(vci_scheme_discrete_t), intent(in) :: self
     real(dp), intent(inout) :: x(:)
     real(dp), intent(in) :: a(:), b(:)
-    x(1:self%n) = b
+    if (self%increments) then
+      x(1:self%n) = b - a
+    else
+      x(1:self%n) = b
+    end if
   end subroutine put_endpoint
 
+  !> The endpoint of x (for increments, from the sub-step's start a set by the stepper).
   subroutine get_endpoint(self, x, v)
     class(vci_scheme_discrete_t), intent(in) :: self
     real(dp), intent(in) :: x(:)
     real(dp), intent(out) :: v(:)
-    v = x(1:self%n)
+    if (self%increments) then
+      v = self%a + x(1:self%n)
+    else
+      v = x(1:self%n)
+    end if
   end subroutine get_endpoint
+
+  !> The endpoint's part of a change of the unknowns (a sensitivity), both layouts.
+  subroutine endpoint_direction(self, x, v)
+    class(vci_scheme_discrete_t), intent(in) :: self
+    real(dp), intent(in) :: x(:)
+    real(dp), intent(out) :: v(:)
+    v = x(1:self%n)
+  end subroutine endpoint_direction
+
+  !> The endpoint b of the unknowns x into bb (both layouts).
+  subroutine endpoint_of(self, x)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:)
+    if (self%increments) then
+      self%bb = self%a + x(1:self%n)
+    else
+      self%bb = x(1:self%n)
+    end if
+  end subroutine endpoint_of
+
+  !> |b - a| for the row sizes, both layouts.
+  pure real(dp) function motion(self, x, j)
+    class(vci_scheme_discrete_t), intent(in) :: self
+    real(dp), intent(in) :: x(:)
+    integer, intent(in) :: j
+    if (self%increments) then
+      motion = abs(x(j))
+    else
+      motion = abs(x(j) - self%a(j))
+    end if
+  end function motion
 
   subroutine put_multipliers(self, x, v)
     class(vci_scheme_discrete_t), intent(in) :: self
@@ -121,14 +174,17 @@ contains
     if (self%kind == KIND_WALL) step_length = x(self%n + self%m + 1) * self%tau
   end function step_length
 
-  !> out = s D1 L^s(a, b, tau)  (forward: D1 L_d(a, b); backward: -D2 L_d(b, a)).
+  !> out = s D1 L^s(a, b, tau)  (forward: D1 L_d(a, b); backward: -D2 L_d(b, a)); b (or the
+  !> increment, for retractions) is x(1:n).
   subroutine d1s(self, a, b, tau, out, stat)
     class(vci_scheme_discrete_t), intent(inout) :: self
     real(dp), intent(in) :: a(:), b(:), tau
     real(dp), intent(out) :: out(:)
     integer, intent(out) :: stat
     stat = 0
-    if (self%dir > 0) then
+    if (self%increments) then
+      call self%ret%d1s_inc(a, b, tau, self%dir, out, stat)
+    else if (self%dir > 0) then
       call self%model%d1(a, b, tau, out, stat)
     else
       call self%model%d2(b, a, tau, out, stat)
@@ -157,7 +213,9 @@ contains
     real(dp), intent(out) :: p(:)
     integer, intent(out) :: stat
     stat = 0
-    if (self%dir > 0) then
+    if (self%increments) then
+      call self%ret%pout_inc(a, x(1:self%n), tau, self%dir, p, stat)
+    else if (self%dir > 0) then
       call self%model%d2(a, x(1:self%n), tau, p, stat)
     else
       call self%model%d1(x(1:self%n), a, tau, p, stat)
@@ -174,7 +232,10 @@ contains
     integer, intent(out) :: stat
     real(dp) :: tmp(1)
     stat = 0
-    if (self%dir > 0) then
+    if (self%increments) then
+      call self%ret%energy_inc(a, x(1:self%n), tau, self%dir, e, stat)
+      e = -e
+    else if (self%dir > 0) then
       call self%model%d3(a, x(1:self%n), tau, e, stat)
     else
       call self%model%d3(x(1:self%n), a, tau, e, stat)
@@ -233,20 +294,33 @@ contains
     end if
     if (m > 0) then
       stat = 0
-      call self%model%discrete_constraint(self%a, x(1:n), tau, r(n + 1:n + m), stat)
+      if (self%increments) then
+        call self%ret%constraint_inc(self%a, x(1:n), tau, r(n + 1:n + m), stat)
+      else
+        call self%model%discrete_constraint(self%a, x(1:n), tau, r(n + 1:n + m), stat)
+      end if
       call check_fast(self, stat, r(n + 1:n + m), 'discrete constraint')
       if (stat /= VCI_OK) return
       do mu = 1, m
-        sc(n + mu) = abs(r(n + mu)) + sum(abs(self%omega(:, mu)) * abs(x(1:n) - self%a)) / tau
+        ol = 0.0_dp
+        do i = 1, n
+          ol = ol + abs(self%omega(i, mu)) * motion(self, x, i)
+        end do
+        sc(n + mu) = abs(r(n + mu)) + ol / tau
       end do
     end if
     select case (self%kind)
     case (KIND_WALL)
-      call self%eval_gaps(x(1:n), self%g(1:self%n_gaps), stat)
+      call endpoint_of(self, x)
+      call self%eval_gaps(self%bb, self%g(1:self%n_gaps), stat)
       if (stat /= VCI_OK) return
       r(last) = self%g(self%gap)
       ! g's size: its value, its terms (grad g . q) and its change over the sub-step
-      sc(last) = abs(r(last)) + sum(self%gscale * (abs(x(1:n)) + abs(x(1:n) - self%a)))
+      ol = 0.0_dp
+      do i = 1, n
+        ol = ol + self%gscale(i) * (abs(self%bb(i)) + motion(self, x, i))
+      end do
+      sc(last) = abs(r(last)) + ol
     case (KIND_REFLECT)
       if (self%impact_energy == VCI_IMPACT_HAMILTONIAN) then
         self%pplus = self%pa + x(last) * self%grad
@@ -260,7 +334,11 @@ contains
         r(last) = e - self%e_minus
         sc(last) = abs(e) + abs(self%e_minus)
       end if
-      sc(last) = sc(last) + sum(abs(self%pa) * abs(x(1:n) - self%a)) / tau
+      ol = 0.0_dp
+      do i = 1, n
+        ol = ol + abs(self%pa(i)) * motion(self, x, i)
+      end do
+      sc(last) = sc(last) + ol / tau
     end select
   end subroutine rows
 
@@ -277,7 +355,7 @@ contains
     ! size of the kinetic terms of the momentum rows, from the current solve's Jacobian
     if (self%jac_known) then
       do j = 1, n
-        scale(1:n) = scale(1:n) + self%jabs(1:n, j) * abs(x(j) - self%a(j))
+        scale(1:n) = scale(1:n) + self%jabs(1:n, j) * motion(self, x, j)
       end do
     end if
     ! round-off floor of each row: a few ulps of sum_j |dR_i/dx_j| |x_j|, in units of rtol
@@ -308,7 +386,12 @@ contains
     tau = step_length(self, x)
     ! columns of b
     if (self%has_hessian) then
-      if (self%dir > 0) then
+      if (self%increments) then
+        call self%ret%jacobian_inc(self%a, x(1:n), tau, self%dir, self%hess, stat)
+        call self%check_matrix(stat, self%hess, 'mixed Hessian')
+        if (stat /= VCI_OK) return
+        jac(1:n, 1:n) = self%hess
+      else if (self%dir > 0) then
         call self%model%mixed_hessian(self%a, x(1:n), tau, self%hess, stat)
         call self%check_matrix(stat, self%hess, 'mixed Hessian')
         if (stat /= VCI_OK) return
@@ -319,21 +402,26 @@ contains
         if (stat /= VCI_OK) return
         jac(1:n, 1:n) = -transpose(self%hess)
       end if
-      if (nx > n .and. self%kind == KIND_SUBSTEP) then
+      if (nx > n .and. self%kind == KIND_SUBSTEP .and. self%increments .and. self%ret%rule == RETRACTION_LEFT) then
+        ! left retraction: omega_d = Omega(a)^T d / tau is linear in d, its Jacobian Omega(a)^T / tau
+        do j = 1, n
+          jac(n + 1:n + m, j) = self%omega(j, 1:m) / tau
+        end do
+      else if (nx > n .and. self%kind == KIND_SUBSTEP) then
         ! only the m constraint rows depend on b besides the momentum block
         do j = 1, n
-          call fd_constraint_column(self, x, j, tau, fd_step(x(j), x(j) - self%a(j)), jac(n + 1:n + m, j), stat)
+          call fd_constraint_column(self, x, j, tau, fd_step(position(self, x, j), motion(self, x, j)), jac(n + 1:n + m, j), stat)
           if (stat /= VCI_OK) return
         end do
       else if (nx > n) then
         do j = 1, n
-          call fd_column(self, x, j, fd_step(x(j), x(j) - self%a(j)), .false., jac(:, j), stat)
+          call fd_column(self, x, j, fd_step(position(self, x, j), motion(self, x, j)), .false., jac(:, j), stat)
           if (stat /= VCI_OK) return
         end do
       end if
     else
       do j = 1, n
-        call fd_column(self, x, j, fd_step(x(j), x(j) - self%a(j)), .true., jac(:, j), stat)
+        call fd_column(self, x, j, fd_step(position(self, x, j), motion(self, x, j)), .true., jac(:, j), stat)
         if (stat /= VCI_OK) return
       end do
     end if
@@ -356,8 +444,11 @@ contains
         jac(last, last) = (hp - hm) / (2.0_dp * d)
       end if
     end select
+    ! the round-off floor is sized on positions in both layouts (a user's L_d rounds b - a to ulps of
+    ! |b|; a retraction rounds a + d/2 where forces are evaluated)
+    call endpoint_of(self, x)
     do j = 1, nx
-      self%jscale(j) = sum(abs(jac(j, 1:nx)) * abs(x(1:nx)))
+      self%jscale(j) = sum(abs(jac(j, 1:n)) * abs(self%bb)) + sum(abs(jac(j, n + 1:nx)) * abs(x(n + 1:nx)))
     end do
     self%jabs(1:nx, 1:nx) = abs(jac(1:nx, 1:nx))
     self%jac_known = .true.
@@ -369,9 +460,21 @@ contains
     self%jac_known = .false.
   end subroutine forget_jacobian
 
-  pure real(dp) function fd_step(xj, motion)
-    real(dp), intent(in) :: xj, motion
-    fd_step = vci_fd_rel * max(abs(xj), abs(motion))
+  !> b_j, both layouts.
+  pure real(dp) function position(self, x, j)
+    class(vci_scheme_discrete_t), intent(in) :: self
+    real(dp), intent(in) :: x(:)
+    integer, intent(in) :: j
+    if (self%increments) then
+      position = self%a(j) + x(j)
+    else
+      position = x(j)
+    end if
+  end function position
+
+  pure real(dp) function fd_step(xj, change)
+    real(dp), intent(in) :: xj, change
+    fd_step = vci_fd_rel * max(abs(xj), abs(change))
     if (fd_step == 0.0_dp) fd_step = vci_fd_rel
   end function fd_step
 
@@ -387,11 +490,19 @@ contains
     self%xp(1:n) = x(1:n)
     self%xp(j) = x(j) + d
     stat = 0
-    call self%model%discrete_constraint(self%a, self%xp(1:n), tau, self%rp(1:m), stat)
+    if (self%increments) then
+      call self%ret%constraint_inc(self%a, self%xp(1:n), tau, self%rp(1:m), stat)
+    else
+      call self%model%discrete_constraint(self%a, self%xp(1:n), tau, self%rp(1:m), stat)
+    end if
     call self%check(stat, self%rp(1:m), 'discrete constraint')
     if (stat /= VCI_OK) return
     self%xp(j) = x(j) - d
-    call self%model%discrete_constraint(self%a, self%xp(1:n), tau, self%rm(1:m), stat)
+    if (self%increments) then
+      call self%ret%constraint_inc(self%a, self%xp(1:n), tau, self%rm(1:m), stat)
+    else
+      call self%model%discrete_constraint(self%a, self%xp(1:n), tau, self%rm(1:m), stat)
+    end if
     call self%check(stat, self%rm(1:m), 'discrete constraint')
     if (stat /= VCI_OK) return
     col = (self%rp(1:m) - self%rm(1:m)) / (2.0_dp * d)

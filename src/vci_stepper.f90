@@ -479,7 +479,7 @@ contains
       self%bt = -self%sys%grad
       call self%sys%momentum_rhs(self%bt, self%rhs(1:nx0))
       call self%newton%linear_solve(nx0, self%jac, self%rhs, info)
-      call self%sys%get_endpoint(self%rhs(1:nx0), self%bt)
+      call self%sys%endpoint_direction(self%rhs(1:nx0), self%bt)   ! (i14: a sensitivity, not a point)
       den = dot_product(self%sys%grad, self%bt)
       if (info /= 0 .or. .not. (abs(den) > 0.0_dp) .or. .not. ieee_is_finite(den)) then
         stat = VCI_ERR_IMPACT
