@@ -53,7 +53,7 @@ module vci_scheme
     procedure(rows_iface), deferred :: scheme_residual
     procedure(jac_iface), deferred :: scheme_jacobian
     procedure(put_endpoint_iface), deferred :: put_endpoint
-    procedure(get_vec_iface), deferred :: get_endpoint
+    procedure(get_endpoint_iface), deferred :: get_endpoint
     procedure(put_vec_iface), deferred :: put_multipliers
     procedure(get_vec_iface), deferred :: get_multipliers
     procedure(momentum_rhs_iface), deferred :: momentum_rhs
@@ -111,6 +111,13 @@ module vci_scheme
       real(dp), intent(in) :: x(:)
       real(dp), intent(out) :: v(:)
     end subroutine get_vec_iface
+    !> The endpoint of the unknowns x (inout: a scheme may remember the rounding of the last one).
+    subroutine get_endpoint_iface(self, x, v)
+      import :: vci_scheme_t, dp
+      class(vci_scheme_t), intent(inout) :: self
+      real(dp), intent(in) :: x(:)
+      real(dp), intent(out) :: v(:)
+    end subroutine get_endpoint_iface
     subroutine put_vec_iface(self, x, v)
       import :: vci_scheme_t, dp
       class(vci_scheme_t), intent(in) :: self
@@ -181,7 +188,7 @@ contains
   !> The endpoint's part of a change dx of the unknowns (a sensitivity, e.g. d x / d mu). Layouts
   !> that store the endpoint itself return get_endpoint(dx); those storing an increment override.
   subroutine endpoint_direction(self, x, v)
-    class(vci_scheme_t), intent(in) :: self
+    class(vci_scheme_t), intent(inout) :: self
     real(dp), intent(in) :: x(:)
     real(dp), intent(out) :: v(:)
     call self%get_endpoint(x, v)

@@ -27,6 +27,10 @@ module vci_scheme_discrete
     class(vci_model_t), pointer :: model => null()
     class(vci_retraction_model_t), pointer :: ret => null()   !< the model, when it is a retraction
     logical :: increments = .false.   !< x(1:n) is the increment d = b - a (retractions)
+    !> Compensated positions (increments only): end_key is the endpoint get_endpoint returned last
+    !> and end_lo the part of a + d its rounding dropped; start_* the same for the current start
+    real(dp), allocatable, private :: start_key(:), start_lo(:), end_key(:), end_lo(:)
+    logical, private :: have_end = .false.
     logical :: has_hessian = .false.
     real(dp), allocatable, private :: d1(:), hess(:, :), g(:), rp(:), rm(:), sp(:), sm(:), xp(:), bb(:)
     !> sum_j |dR_i/dx_j| |x_j| from the last Jacobian: the round-off floor of row i (positions are
@@ -71,13 +75,17 @@ contains
     n = model%n; m = model%m
     nx = n + m + 1
     if (allocated(self%d1)) deallocate (self%d1, self%hess, self%g, self%rp, self%rm, self%sp, self%sm, &
-                                        self%xp, self%jscale, self%jabs, self%bb)
-    allocate (self%d1(n), self%hess(n, n), self%g(max(1, model%n_gaps)), self%bb(n), &
+                                        self%xp, self%jscale, self%jabs, self%bb, self%start_key, &
+                                        self%start_lo, self%end_key, self%end_lo)
+    allocate (self%d1(n), self%hess(n, n), self%g(max(1, model%n_gaps)), self%bb(n), self%start_key(n), self%start_lo(n), &
+              self%end_key(n), self%end_lo(n), &
               self%rp(nx), self%rm(nx), self%sp(nx), self%sm(nx), self%xp(nx), self%jscale(nx), &
               self%jabs(nx, nx))
     self%jscale = 0.0_dp
     self%jabs = 0.0_dp
     self%jac_known = .false.
+    self%have_end = .false.
+    self%start_key = huge(1.0_dp); self%start_lo = 0.0_dp
   end subroutine setup
 
   pure integer function unknowns(self, kind)
@@ -101,21 +109,42 @@ contains
     end if
   end subroutine put_endpoint
 
-  !> The endpoint of x (for increments, from the sub-step's start a set by the stepper).
+  !> The endpoint of x. For increments, b = a + d from the sub-step's start a set by the stepper,
+  !> summed with compensation: when a is an endpoint this procedure returned, the part of it that
+  !> rounding dropped is added back to the increment, and the new rounding error is kept (TwoSum).
+  !> Positions then carry one rounding instead of one per step (docs/bench/roundoff.md).
   subroutine get_endpoint(self, x, v)
-    class(vci_scheme_discrete_t), intent(in) :: self
+    class(vci_scheme_discrete_t), intent(inout) :: self
     real(dp), intent(in) :: x(:)
     real(dp), intent(out) :: v(:)
-    if (self%increments) then
-      v = self%a + x(1:self%n)
-    else
-      v = x(1:self%n)
+    integer :: i, n
+    real(dp) :: s, bv
+    n = self%n
+    if (.not. self%increments) then
+      v = x(1:n)
+      return
     end if
+    if (.not. all(self%a == self%start_key)) then
+      if (self%have_end .and. all(self%a == self%end_key)) then   ! the last endpoint starts this sub-step
+        self%start_lo = self%end_lo
+      else                                                        ! a point from elsewhere: no low part
+        self%start_lo = 0.0_dp
+      end if
+      self%start_key = self%a
+    end if
+    do i = 1, n
+      s = x(i) + self%start_lo(i)
+      v(i) = self%a(i) + s
+      bv = v(i) - self%a(i)
+      self%end_lo(i) = (self%a(i) - (v(i) - bv)) + (s - bv)     ! TwoSum: a + s = v + end_lo exactly
+    end do
+    self%end_key = v
+    self%have_end = .true.
   end subroutine get_endpoint
 
   !> The endpoint's part of a change of the unknowns (a sensitivity), both layouts.
   subroutine endpoint_direction(self, x, v)
-    class(vci_scheme_discrete_t), intent(in) :: self
+    class(vci_scheme_discrete_t), intent(inout) :: self
     real(dp), intent(in) :: x(:)
     real(dp), intent(out) :: v(:)
     v = x(1:self%n)
