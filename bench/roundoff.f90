@@ -7,8 +7,9 @@
 !>    plus round-off. Four variants separate the two: the hand-derived L_d (unknown q_{k+1}) and the
 !>    continuous L with the midpoint scheme (unknown the increment q_{k+1} - q_k), each at the
 !>    default tolerance rtol = 1e-12 and at rtol = 1e-15 (Newton to the round-off floor).
-!> 2. `--long N H`: N steps of the continuous ellipse (midpoint, Hamiltonian impacts) at step H;
-!>    prints max |H - H0| over windows ending at t = 2^k H, for a fit of its growth against t.
+!> 2. `--long N H [discrete]`: N steps of the continuous ellipse (midpoint; `discrete`: the
+!>    hand-derived L_d) with Hamiltonian impacts at step H; prints the largest |H - H0| up to
+!>    t = 2^k H, for a fit of its growth against t.
 module roundoff_runs
   use vci
   use vci_scene_ellipse, only: ellipse_t, ellipse_model, ellipse_lagrangian_t, ellipse_lagrangian_model
@@ -72,7 +73,8 @@ program roundoff
     if (trim(arg) == '--long') then
       call get_command_argument(2, arg); read (arg, *) nsteps
       call get_command_argument(3, arg); read (arg, *) h
-      call long_run(nsteps, h)
+      call get_command_argument(4, arg)
+      call long_run(nsteps, h, trim(arg) == 'discrete')
       stop
     end if
   end if
@@ -113,15 +115,16 @@ contains
 
   !> H - H0 along a long run of the continuous ellipse (midpoint, Hamiltonian impacts): the largest
   !> |H - H0| up to t = 2^k h, k = 0, 1, ...
-  subroutine long_run(nsteps, h)
+  subroutine long_run(nsteps, h, discrete)
     integer(i8), intent(in) :: nsteps
     real(dp), intent(in) :: h
+    logical, intent(in) :: discrete
     type(vci_integrator_t) :: integ
     type(ellipse_t), target :: md
     real(dp) :: e0, e, emax, mm(3)
     integer(i8) :: k, next
     integer :: s
-    call long_setup(integ, h, e0, mm, md)
+    call long_setup(integ, h, e0, mm, md, discrete)
     emax = 0.0_dp; next = 1
     write (output_unit, '(a)') '| t | steps | max abs(H - H0) so far | impacts |'
     write (output_unit, '(a)') '|---:|---:|---:|---:|'
@@ -140,18 +143,24 @@ contains
     end do
   end subroutine long_run
 
-  subroutine long_setup(integ, h, e0, mm, md)
+  subroutine long_setup(integ, h, e0, mm, md, discrete)
     type(vci_integrator_t), intent(inout) :: integ
     real(dp), intent(in) :: h
+    logical, intent(in) :: discrete
     real(dp), intent(out) :: e0, mm(3)
     type(ellipse_t), target, intent(inout) :: md
     type(ellipse_lagrangian_t), target, save :: mc
+    type(ellipse_t), target, save :: mdd
     integer :: s
-    md = ellipse_model()
+    md = ellipse_model(); mdd = ellipse_model()
     mc = ellipse_lagrangian_model()
     mm = [md%inertia(), md%mass, md%mass]
-    call integ%create(mc, h, s)
-    call integ%set_scheme(VCI_SCHEME_MIDPOINT, 1, s)
+    if (discrete) then
+      call integ%create(mdd, h, s)
+    else
+      call integ%create(mc, h, s)
+      call integ%set_scheme(VCI_SCHEME_MIDPOINT, 1, s)
+    end if
     call integ%set_impact_energy(VCI_IMPACT_HAMILTONIAN, s)
     call integ%init_from_momentum(0.0_dp, q0, mm * qd0, s)
     call md%energy(q0, mm * qd0, e0, s)
