@@ -8,7 +8,7 @@
 !> step instead. All workspace is allocated by `reserve`, so `solve` allocates nothing.
 module vci_newton
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
-  use vci_kinds, only: dp
+  use vci_kinds, only: dp, i8
   use vci_status, only: VCI_OK, VCI_ERR_NEWTON, VCI_ERR_NONFINITE
   use vci_lapack, only: dgetrf, dgetrs, dgelsd
   implicit none
@@ -21,12 +21,17 @@ module vci_newton
   integer, parameter, public :: NEWTON_SINGULAR = 3        !< even the least-squares solve failed
   integer, parameter, public :: NEWTON_EVALUATION = 4      !< the residual or Jacobian reported failure
 
+  !> Systems of at least this many unknowns are "large": they reuse the Newton matrix's factors across
+  !> iterations and solves (simplified Newton, below) and schemes size their rows in O(n) per residual.
+  integer, parameter, public :: vci_large_system = 16
+
   !> A nonlinear system as Newton sees it.
   type, abstract, public :: vci_system_t
   contains
     procedure(residual_iface), deferred :: residual
     procedure(jacobian_iface), deferred :: jacobian
     procedure :: admissible => always_admissible
+    procedure :: reuse_key => never_reuse
   end type vci_system_t
 
   abstract interface
@@ -68,6 +73,16 @@ module vci_newton
     !> 3x3 matrix a LAPACK call through OpenBLAS costs ~10x its arithmetic (locks, dispatch). 0: always
     !> LAPACK. docs/bench/throughput.md measures the difference; test_newton compares both paths.
     integer :: small_lu_max = 8
+    !> Simplified Newton for systems of at least reuse_min unknowns: a solve whose system has the
+    !> same nonzero reuse_key as the one the factors were computed for starts with chord steps on
+    !> those factors, and evaluates and factorises a new Jacobian only when a chord step contracts
+    !> the scaled residual by less than reuse_contraction (or fails). Huge(1): never.
+    integer :: reuse_min = vci_large_system
+    real(dp) :: reuse_contraction = 0.25_dp
+    integer(i8) :: factorisations = 0     !< LU factorisations of Newton matrices so far
+    logical, private :: have_lu = .false.
+    integer, private :: lu_n = 0
+    real(dp), private :: lu_key = 0.0_dp
     integer :: capacity = 0
     real(dp), allocatable, private :: jac(:, :), lu(:, :), r(:), sc(:), dx(:), xt(:), rt(:), sct(:)
     real(dp), allocatable, private :: sv(:), work(:), rw(:)
@@ -79,6 +94,13 @@ module vci_newton
   end type vci_newton_t
 
 contains
+
+  !> A nonzero key names a family of systems whose Jacobians are close enough to share factors
+  !> (e.g. regular sub-steps of one length and direction); 0: never reuse.
+  real(dp) function never_reuse(self)
+    class(vci_system_t), intent(inout) :: self
+    never_reuse = 0.0_dp
+  end function never_reuse
 
   logical function always_admissible(self, x)
     class(vci_system_t), intent(inout) :: self
@@ -112,19 +134,50 @@ contains
     class(vci_system_t), intent(inout) :: sys
     real(dp), intent(inout) :: x(:)
     type(vci_newton_result_t), intent(out) :: res
-    integer :: n, stat, it, ib, trial_stat
-    real(dp) :: phi, phit, step
+    integer :: n, stat, it, ib, trial_stat, i
+    real(dp) :: phi, phit, step, key
     logical :: factored
 
     n = size(x)
     res = vci_newton_result_t()
     factored = .false.
+    key = 0.0_dp
+    if (n >= self%reuse_min) key = sys%reuse_key()
     call sys%residual(x, self%r(1:n), self%sc(1:n), stat)
     if (stat /= VCI_OK) then
       call fail_eval(res, stat); return
     end if
     phi = merit(self, self%r(1:n), self%sc(1:n))
     res%scaled_residual = phi
+
+    ! Simplified Newton: chord steps on the factors of an earlier solve of the same family, kept
+    ! while each contracts the scaled residual by reuse_contraction or better; if they stop above
+    ! the tolerance, full Newton (a new Jacobian and factors) takes over from there
+    if (key /= 0.0_dp .and. self%have_lu .and. self%lu_n == n .and. key == self%lu_key) then
+      factored = .true.
+      do it = 1, self%max_iterations
+        ! cheap steps: go on below the tolerance, to about round-off (chord steps converge linearly)
+        if (phi <= 1.0e-3_dp) exit
+        do i = 1, n
+          self%dx(i) = self%r(i) * self%rw(i)
+        end do
+        call lu_solve(self, n, self%dx)
+        self%xt(1:n) = x - self%dx(1:n)
+        if (.not. sys%admissible(self%xt(1:n))) exit
+        call sys%residual(self%xt(1:n), self%rt(1:n), self%sct(1:n), stat)
+        if (stat /= VCI_OK) exit
+        phit = merit(self, self%rt(1:n), self%sct(1:n))
+        ! above the tolerance a chord step must contract well (else new factors pay); below it,
+        ! any decrease is taken on the way to round-off
+        if (.not. (phit <= self%reuse_contraction * phi .or. (phi <= 1.0_dp .and. phit < phi))) exit
+        res%iterations = res%iterations + 1
+        x = self%xt(1:n)
+        self%r(1:n) = self%rt(1:n)
+        self%sc(1:n) = self%sct(1:n)
+        phi = phit
+        res%scaled_residual = phi
+      end do
+    end if
 
     do it = 1, self%max_iterations
       if (phi <= 1.0_dp) exit
@@ -134,6 +187,8 @@ contains
         call fail_eval(res, stat); return
       end if
       call newton_direction(self, n, factored, res)
+      self%have_lu = factored .and. key /= 0.0_dp
+      self%lu_n = n; self%lu_key = key
       if (res%reason == NEWTON_SINGULAR) then
         res%status = VCI_ERR_NEWTON; return
       end if
@@ -184,6 +239,7 @@ contains
     real(dp), intent(inout) :: b(:)
     integer, intent(out) :: info
     integer :: rank
+    self%have_lu = .false.            ! the factors below are not a Newton matrix's
     self%lu(1:n, 1:n) = a(1:n, 1:n)
     call lu_factor(self, n, info)
     if (info == 0) then
@@ -220,6 +276,7 @@ contains
     end do
     self%jac(1:n, 1:n) = self%lu(1:n, 1:n)   ! keep the equilibrated matrix for the fallback
     call lu_factor(self, n, info)
+    self%factorisations = self%factorisations + 1
     factored = .false.
     if (info == 0) then
       dmin = huge(1.0_dp); dmax = 0.0_dp

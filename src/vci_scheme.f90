@@ -70,6 +70,7 @@ module vci_scheme
     procedure :: residual => dispatch_residual
     procedure :: jacobian => dispatch_jacobian
     procedure :: admissible => wall_admissible
+    procedure :: reuse_key => substep_key
     procedure :: eval_gaps
     procedure :: eval_gap_gradients
     procedure :: eval_forms
@@ -250,6 +251,14 @@ contains
       call self%scheme_jacobian(x, r, jac, stat)
     end if
   end subroutine dispatch_jacobian
+
+  !> Regular sub-steps of one length and direction share Newton factors (large systems, vci_newton);
+  !> the systems of an impact never do.
+  real(dp) function substep_key(self)
+    class(vci_scheme_t), intent(inout) :: self
+    substep_key = 0.0_dp
+    if (self%kind == KIND_SUBSTEP) substep_key = real(self%dir, dp) * self%tau
+  end function substep_key
 
   !> Stage 1 keeps the impact fraction inside (0, 1].
   logical function wall_admissible(self, x)

@@ -18,6 +18,7 @@ module vci_scheme_discrete
   use vci_status, only: VCI_OK
   use vci_model, only: vci_model_t
   use vci_retraction, only: vci_retraction_model_t, RETRACTION_LEFT
+  use vci_newton, only: vci_large_system
   use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_WALL, KIND_REFLECT, KIND_IMPULSE, KIND_PAIR, &
                         VCI_IMPACT_HAMILTONIAN, vci_fd_rel
   implicit none
@@ -42,6 +43,9 @@ module vci_scheme_discrete
     !> rest: p_a = 0 and D1 -> 0 at the solution, so the row would have no size at all)
     real(dp), allocatable, private :: jabs(:, :)
     logical, private :: jac_known = .false.   !< jabs holds this solve's Jacobian
+    !> Large systems (vci_large_system unknowns or more): sum_j |dR_i/db_j| |b_j - a_j| is taken at
+    !> the last Jacobian's point (kin) instead of at every residual: O(n) per residual, not O(n^2)
+    real(dp), allocatable, private :: kin(:)
     !> Scan every callback's values for NaN/Inf (set only to name the culprit after the residual,
     !> checked once as a whole, turned out non-finite: the hot path checks one sum per residual)
     logical, private :: scan_values = .false.
@@ -76,9 +80,9 @@ contains
     nx = n + m + 1
     if (allocated(self%d1)) deallocate (self%d1, self%hess, self%g, self%rp, self%rm, self%sp, self%sm, &
                                         self%xp, self%jscale, self%jabs, self%bb, self%start_key, &
-                                        self%start_lo, self%end_key, self%end_lo)
+                                        self%start_lo, self%end_key, self%end_lo, self%kin)
     allocate (self%d1(n), self%hess(n, n), self%g(max(1, model%n_gaps)), self%bb(n), self%start_key(n), self%start_lo(n), &
-              self%end_key(n), self%end_lo(n), &
+              self%end_key(n), self%end_lo(n), self%kin(n), &
               self%rp(nx), self%rm(nx), self%sp(nx), self%sm(nx), self%xp(nx), self%jscale(nx), &
               self%jabs(nx, nx))
     self%jscale = 0.0_dp
@@ -382,7 +386,9 @@ contains
     call rows(self, x, r, scale, .true., stat)
     if (stat /= VCI_OK) return
     ! size of the kinetic terms of the momentum rows, from the current solve's Jacobian
-    if (self%jac_known) then
+    if (self%jac_known .and. size(x) >= vci_large_system) then
+      scale(1:n) = scale(1:n) + self%kin
+    else if (self%jac_known) then
       do j = 1, n
         scale(1:n) = scale(1:n) + self%jabs(1:n, j) * motion(self, x, j)
       end do
@@ -481,6 +487,12 @@ contains
     end do
     self%jabs(1:nx, 1:nx) = abs(jac(1:nx, 1:nx))
     self%jac_known = .true.
+    if (nx >= vci_large_system) then
+      self%kin = 0.0_dp
+      do j = 1, n
+        self%kin = self%kin + self%jabs(1:n, j) * motion(self, x, j)
+      end do
+    end if
   end subroutine step_jacobian
 
   !> A new solve starts: its Jacobian is not known yet (see jabs).
