@@ -402,6 +402,7 @@ contains
       return
     end if
     stat = VCI_OK
+    if (abs(sum(values)) <= huge(1.0_dp)) return          ! all finite (one test on the sum)
     do i = 1, size(values)
       if (.not. (abs(values(i)) <= huge(1.0_dp))) then   ! NaN or +-Inf
         stat = VCI_ERR_NONFINITE

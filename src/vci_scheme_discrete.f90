@@ -390,7 +390,10 @@ contains
       scale(1:n) = scale(1:n) + self%kin
     else if (self%jac_known) then
       do j = 1, n
-        scale(1:n) = scale(1:n) + self%jabs(1:n, j) * motion(self, x, j)
+        self%kin(j) = motion(self, x, j)
+      end do
+      do j = 1, n
+        scale(1:n) = scale(1:n) + self%jabs(1:n, j) * self%kin(j)
       end do
     end if
     ! round-off floor of each row: a few ulps of sum_j |dR_i/dx_j| |x_j|, in units of rtol

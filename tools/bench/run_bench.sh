@@ -1,7 +1,11 @@
 #!/bin/sh
-# Throughput benchmark of vci against hand-specialised loops (issue 2 item 9, issue 6).
-# Builds the benchmark in Release, runs it (one process: trajectory check, timed repeats, peak
-# memory) and writes docs/bench/throughput.md with the machine it ran on.
+# Throughput benchmark of vci against hand-written loops (issue 2 item 9, issue 6, issue 14).
+# Builds the benchmarks in Release, runs them (one process each: trajectory check, timed repeats,
+# peak memory; callgrind instruction counts; the chain against n) and writes docs/bench/throughput.md
+# with the machine it ran on. The ratios that issue 14 asks for: library / same-algorithm loop and
+# library / closed-form loop per regular step, impact step / regular step, and for the chain the
+# step against one LU factorisation. OpenBLAS runs single-threaded in the chain table (vci's Newton
+# matrices are small; the threaded run is shown beside it).
 #
 #   tools/bench/run_bench.sh                 # full run (~30 s), writes docs/bench/throughput.md
 #   tools/bench/run_bench.sh --quick         # short repeats, for a smoke test
@@ -15,7 +19,7 @@ OUT=${OUT:-$ROOT/docs/bench/throughput.md}
 
 cmake -S "$ROOT" -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release \
   -DVCI_BUILD_BENCH=ON -DVCI_BUILD_TESTS=OFF -DVCI_BUILD_EXAMPLES=OFF >/dev/null
-cmake --build "$BUILD_DIR" -j"$(nproc 2>/dev/null || echo 2)" --target vci_bench_throughput >/dev/null
+cmake --build "$BUILD_DIR" -j"$(nproc 2>/dev/null || echo 2)" --target vci_bench_throughput vci_bench_chain >/dev/null
 
 EXE="$BUILD_DIR/bin/vci_bench_throughput"
 TMP=$(mktemp)
@@ -95,6 +99,19 @@ mkdir -p "$(dirname "$OUT")"
   echo
   cat "$TMP"
   if [ -n "$CG" ]; then echo; cat "$CG"; fi
+  echo
+  echo "### Cost per step against n (FPU-beta chain, midpoint, analytic Hessians)"
+  echo
+  echo "\`OPENBLAS_NUM_THREADS=1 vci_bench_chain\` (bench/chain.f90): an FPU-beta chain of n unit masses between"
+  echo "fixed ends, walls on every particle (2n gaps, not reached), h = 0.05; each row times the step and one"
+  echo "dgetrf of a dense n x n matrix in the same process (medians of 5 interleaved repeats). From n = 16 the"
+  echo "Newton matrix's factors are reused across steps (simplified Newton, src/vci_newton.f90)."
+  echo
+  OPENBLAS_NUM_THREADS=1 "$BUILD_DIR/bin/vci_bench_chain"
+  echo
+  echo "The same with OpenBLAS's default threads ($(nproc 2>/dev/null || echo '?') cores, shared):"
+  echo
+  env -u OPENBLAS_NUM_THREADS "$BUILD_DIR/bin/vci_bench_chain"
 } >"$OUT"
 cat "$OUT"
 if [ "$status" -ne 0 ]; then
