@@ -121,10 +121,11 @@ contains
     logical, intent(in) :: discrete
     type(vci_integrator_t) :: integ
     type(ellipse_t), target :: md
-    real(dp) :: e0, e, emax, mm(3)
+    real(dp) :: e0, e, emax, mm(3), lt(64), le(64), slope
     integer(i8) :: k, next
-    integer :: s
+    integer :: s, nfit
     call long_setup(integ, h, e0, mm, md, discrete)
+    nfit = 0
     emax = 0.0_dp; next = 1
     write (output_unit, '(a)') '| t | steps | max abs(H - H0) so far | impacts |'
     write (output_unit, '(a)') '|---:|---:|---:|---:|'
@@ -138,9 +139,19 @@ contains
       if (k == next .or. k == nsteps) then
         write (output_unit, '("| ",es10.4," | ",i0," | ",es9.3," | ",i0," |")') real(k, dp) * h, k, emax, &
           integ%stats%impacts
+        if (real(k, dp) * h >= 10.0_dp .and. emax > 0.0_dp .and. nfit < size(lt)) then
+          nfit = nfit + 1; lt(nfit) = log(real(k, dp) * h); le(nfit) = log(emax)
+        end if
         next = 2 * next
       end if
     end do
+    if (nfit >= 2) then
+      slope = sum((lt(1:nfit) - sum(lt(1:nfit)) / nfit) * (le(1:nfit) - sum(le(1:nfit)) / nfit)) / &
+              sum((lt(1:nfit) - sum(lt(1:nfit)) / nfit)**2)
+      write (output_unit, '(a)') ''
+      write (output_unit, '(a,f5.2,a)') 'Least-squares slope of log max|H - H0| against log t for t >= 10 s: ', &
+        slope, ' (Brouwer''s law: 0.5).'
+    end if
   end subroutine long_run
 
   subroutine long_setup(integ, h, e0, mm, md, discrete)

@@ -150,6 +150,7 @@ program throughput
   end do
 
   call report()
+  call impact_report()
   if (checksum /= checksum) write (error_unit, '(a)') 'checksum NaN'
   if (.not. all_ok) then
     write (error_unit, '(a)') 'vci_bench_throughput: trajectory check FAILED (see table)'
@@ -469,6 +470,51 @@ contains
     write (u, '(a)') '|---|---|---:|---:|---:|---|'
     write (u, '(a)', advance='no') check_report
   end subroutine report
+
+  !> Regular and impact steps of the library, timed one by one (system_clock around each step) over
+  !> repeated episodes of the scenes with impacts; medians of each kind.
+  subroutine impact_report()
+    integer, parameter :: cap = 400000
+    real(dp), allocatable :: treg(:), timp(:)
+    integer :: nreg, nimp, k, ise, ivar
+    integer(int64) :: c0, c1, rate, e, neps
+    real(dp) :: mreg, mimp
+    allocate (treg(cap), timp(2000))
+    write (output_unit, '(a)') ''
+    write (output_unit, '(a)') '### Regular and impact steps of the library'
+    write (output_unit, '(a)') ''
+    write (output_unit, '(a)') 'Each step of repeated episodes timed on its own (system_clock around integ%step; '// &
+      'includes the clock''s own cost, ~20 ns); medians over the steps with and without an impact.'
+    write (output_unit, '(a)') ''
+    write (output_unit, '(a)') '| scene | variant | regular steps timed | impact steps timed | regular step (ns) '// &
+      '| impact step (ns) | impact / regular |'
+    write (output_unit, '(a)') '|---|---|---:|---:|---:|---:|---:|'
+    do ise = 2, 3
+      do ivar = V_LIB, V_LIB_FD
+        nreg = 0; nimp = 0
+        neps = max(1_int64, min(cap / sc(ise)%nsteps, 2000_int64 / max(1, sc(ise)%expected_impacts)))
+        do e = 1, neps
+          call integ(ise, ivar)%init_from_pair(sc(ise)%t0, sc(ise)%q0, sc(ise)%q1, stat)
+          do k = 1, int(sc(ise)%nsteps)
+            call system_clock(c0, rate)
+            call integ(ise, ivar)%step(1, stat)
+            call system_clock(c1)
+            call must(stat, 'library step')
+            if (integ(ise, ivar)%stepper%n_impacts > 0) then
+              if (nimp < size(timp)) nimp = nimp + 1
+              timp(nimp) = real(c1 - c0, dp) / real(rate, dp)
+            else
+              if (nreg < cap) nreg = nreg + 1
+              treg(nreg) = real(c1 - c0, dp) / real(rate, dp)
+            end if
+          end do
+        end do
+        mreg = median(treg(1:nreg)); mimp = median(timp(1:max(1, nimp)))
+        write (output_unit, '("| ",a," | ",a," | ",i0," | ",i0," | ",f9.1," | ",f10.1," | ",f7.2," |")') &
+          trim(scene_name(ise)), trim(var_name(ivar)), nreg, nimp, 1.0e9_dp * mreg, 1.0e9_dp * mimp, mimp / mreg
+      end do
+    end do
+  end subroutine impact_report
 
   !> --profile SCENE VARIANT EPISODES: run one variant only (for valgrind --tool=callgrind).
   subroutine profile_mode(i)

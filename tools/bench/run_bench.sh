@@ -31,8 +31,8 @@ status=0
 # not (a loaded machine moves the times, not the counts). CALLGRIND=0 skips it.
 CG=""
 if [ "${CALLGRIND:-1}" != 0 ] && command -v valgrind >/dev/null 2>&1; then
-  CG=$(mktemp); CGRAW=$(mktemp)
-  trap 'rm -f "$TMP" "$CG" "$CGRAW"' EXIT
+  CG=$(mktemp)
+  trap 'rm -f "$TMP" "$CG"' EXIT
   {
     echo "### Instructions per step (callgrind)"
     echo
@@ -51,27 +51,9 @@ if [ "${CALLGRIND:-1}" != 0 ] && command -v valgrind >/dev/null 2>&1; then
                "$EXE" --profile "$name" "$v" "$eps" 2>&1 | awk '/Collected/ {print $4}')
         set_counts="$set_counts $(( ir / (nst * eps) ))"
       done
-      echo "$name $set_counts" >>"$CGRAW"
       echo "$set_counts" | awk -v s="$name" '{ if ($4 > 0) printf "| %s | %d | %d | %d | %d | %.1f | %.2f | %.2f |\n", s, $1, $2, $3, $4, $1/$3, $1/$4, $2/$4;
                                                else printf "| %s | %d | %d | %d | n/a | %.1f | n/a | n/a |\n", s, $1, $2, $3, $1/$3 }'
     done
-    echo
-    echo "### Regular and impact steps (instructions)"
-    echo
-    echo "Regular step: the free scene (same model, no impact). Impact step: a regular step plus the"
-    echo "excess of the scene with impacts over the free one per impact, (I_scene - I_free) N / impacts + I_free"
-    echo "(ellipse: 200 steps, 2 impacts; pendulum: 4999 steps, 3 impacts)."
-    echo
-    echo "| scene | variant | regular step | impact step | impact / regular |"
-    echo "|---|---|---:|---:|---:|"
-    awk 'BEGIN { split("library, analytic H|library, differenced H|closed-form loop|same-algorithm loop", vn, "|") }
-         { for (i = 2; i <= 5; i++) c[$1, i - 1] = $i }
-         END {
-           n["ellipse"] = 200; k["ellipse"] = 2; n["pendulum"] = 4999; k["pendulum"] = 3
-           split("ellipse pendulum", sc, " ")
-           for (j = 1; j <= 2; j++) { s = sc[j]; f = s "-free"
-             for (v = 1; v <= 4; v++) { reg = c[f, v]; imp = reg + (c[s, v] - reg) * n[s] / k[s]
-               printf "| %s | %s | %d | %d | %.1f |\n", s, vn[v], reg, imp, imp / reg } } }' "$CGRAW"
     echo
   } >"$CG"
 fi

@@ -39,11 +39,11 @@ mkdir -p "$(dirname "$OUT")"
     echo
     echo "Continuous L, midpoint scheme (increments, compensated positions): \`vci_bench_roundoff --long 10000000 1e-3\`"
     echo
-    "$EXE" --long 10000000 1e-3 2>/dev/null | grep '^|'
+    "$EXE" --long 10000000 1e-3 2>/dev/null | grep -v '^Note'
     echo
     echo "Hand-derived L_d (positions as unknowns): \`vci_bench_roundoff --long 10000000 1e-3 discrete\`"
     echo
-    "$EXE" --long 10000000 1e-3 discrete 2>/dev/null | grep '^|'
+    "$EXE" --long 10000000 1e-3 discrete 2>/dev/null | grep -v '^Note'
   fi
 } >"$OUT"
 cat "$OUT"
