@@ -34,6 +34,7 @@ module vci_integrator
   !> Counters over the integrator's life.
   type, public :: vci_stats_t
     integer(i8) :: steps = 0, impacts = 0, newton_solves = 0, newton_iterations = 0, fallbacks = 0
+    integer(i8) :: factorisations = 0   !< LU factorisations of Newton matrices
   end type vci_stats_t
 
   type, public :: vci_integrator_t
@@ -90,6 +91,7 @@ module vci_integrator
     procedure :: impact_count
     procedure :: impact
     procedure :: statistics
+    procedure :: set_solver_paths
     procedure :: status
     procedure :: message
     procedure :: message_text
@@ -790,8 +792,18 @@ contains
     solver = self%stepper%solver_stats()
     stats%steps = self%steps_taken; stats%impacts = self%impacts_found
     stats%newton_solves = solver%newton_solves; stats%newton_iterations = solver%newton_iterations
+    stats%factorisations = self%stepper%factorisations()
     stats%fallbacks = solver%fallbacks
   end function statistics
+
+  !> Linear-algebra paths of Newton (docs/DESIGN.md §6): the in-line LU for systems of at most
+  !> small_lu_max unknowns (0: LAPACK always), factor reuse for systems of at least reuse_min
+  !> unknowns (huge: full Newton always). For tests and benchmarks that compare the paths.
+  subroutine set_solver_paths(self, small_lu_max, reuse_min)
+    class(vci_integrator_t), intent(inout) :: self
+    integer, intent(in) :: small_lu_max, reuse_min
+    call self%stepper%set_solver_paths(small_lu_max, reuse_min)
+  end subroutine set_solver_paths
 
   !> Status of the last call (VCI_OK or a VCI_ERR_*).
   pure integer function status(self)

@@ -13,7 +13,7 @@
 !> OpenBLAS's dgelsd can loop forever and reference LAPACK's prints through XERBLA.)
 module vci_newton
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
-  use vci_kinds, only: dp
+  use vci_kinds, only: dp, i8
   use vci_status, only: VCI_OK, VCI_ERR_NEWTON, VCI_ERR_NONFINITE, VCI_ERR_MEMORY
   use vci_lapack, only: dgetrf, dgetrs, dgelsd
   implicit none
@@ -31,6 +31,10 @@ module vci_newton
   integer, parameter, public :: NEWTON_EVALUATION = 4      !< the residual or Jacobian reported failure
   integer, parameter, public :: NEWTON_NONFINITE = 5       !< residual, scale or Jacobian not finite (overflow)
 
+  !> Systems of at least this many unknowns are "large": they reuse the Newton matrix's factors across
+  !> iterations and solves (simplified Newton, below) and schemes size their rows in O(n) per residual.
+  integer, parameter, public :: vci_large_system = 16
+
   !> A nonlinear system as Newton sees it. A residual that fails (stat /= 0) at a trial point of
   !> the line search is backed off from, unless the system sets `unrecoverable` (a callback's
   !> negative return): then the solve ends at once with that status.
@@ -40,6 +44,7 @@ module vci_newton
     procedure(residual_iface), deferred :: residual
     procedure(jacobian_iface), deferred :: jacobian
     procedure :: admissible => always_admissible
+    procedure :: reuse_key => never_reuse
   end type vci_system_t
 
   abstract interface
@@ -76,6 +81,21 @@ module vci_newton
     integer :: max_iterations = 30
     integer :: max_backtracks = 12
     logical :: polish = .true.         !< one extra step with the last factorisation: ~ machine precision
+    !> Systems of at most this many unknowns are factorised by the in-line LU below (partial
+    !> pivoting, the same elimination as LAPACK's unblocked dgetf2) instead of dgetrf/dgetrs: for a
+    !> 3x3 matrix a LAPACK call through OpenBLAS costs ~10x its arithmetic (locks, dispatch). 0: always
+    !> LAPACK. docs/bench/throughput.md measures the difference; test_newton compares both paths.
+    integer :: small_lu_max = 8
+    !> Simplified Newton for systems of at least reuse_min unknowns: a solve whose system has the
+    !> same nonzero reuse_key as the one the factors were computed for starts with chord steps on
+    !> those factors, and evaluates and factorises a new Jacobian only when a chord step contracts
+    !> the scaled residual by less than reuse_contraction (or fails). Huge(1): never.
+    integer :: reuse_min = vci_large_system
+    real(dp) :: reuse_contraction = 0.25_dp
+    integer(i8) :: factorisations = 0     !< LU factorisations of Newton matrices so far
+    logical, private :: have_lu = .false.
+    integer, private :: lu_n = 0
+    real(dp), private :: lu_key = 0.0_dp
     integer :: capacity = 0
     real(dp), allocatable, private :: jac(:, :), lu(:, :), r(:), sc(:), dx(:), xt(:), rt(:), sct(:)
     real(dp), allocatable, private :: sv(:), work(:), rw(:)
@@ -87,6 +107,13 @@ module vci_newton
   end type vci_newton_t
 
 contains
+
+  !> A nonzero key names a family of systems whose Jacobians are close enough to share factors
+  !> (e.g. regular sub-steps of one length and direction); 0: never reuse.
+  real(dp) function never_reuse(self)
+    class(vci_system_t), intent(inout) :: self
+    never_reuse = 0.0_dp
+  end function never_reuse
 
   logical function always_admissible(self, x)
     class(vci_system_t), intent(inout) :: self
@@ -133,14 +160,16 @@ contains
     class(vci_system_t), intent(inout) :: sys
     real(dp), intent(inout) :: x(:)
     type(vci_newton_result_t), intent(out) :: res
-    integer :: n, stat, it, ib, trial_stat
-    real(dp) :: phi, phit, step
+    integer :: n, stat, it, ib, trial_stat, i
+    real(dp) :: phi, phit, step, key
     logical :: factored
 
     n = size(x)
     res = vci_newton_result_t()
     factored = .false.
     sys%unrecoverable = .false.
+    key = 0.0_dp
+    if (n >= self%reuse_min) key = sys%reuse_key()
     call sys%residual(x, self%r(1:n), self%sc(1:n), stat)
     if (stat /= VCI_OK) then
       call fail_eval(res, stat); return
@@ -150,6 +179,35 @@ contains
     end if
     phi = merit(self, self%r(1:n), self%sc(1:n))
     res%scaled_residual = phi
+
+    ! Simplified Newton: chord steps on the factors of an earlier solve of the same family, kept
+    ! while each contracts the scaled residual by reuse_contraction or better; if they stop above
+    ! the tolerance, full Newton (a new Jacobian and factors) takes over from there
+    if (key /= 0.0_dp .and. self%have_lu .and. self%lu_n == n .and. key == self%lu_key) then
+      factored = .true.
+      do it = 1, self%max_iterations
+        ! cheap steps: go on below the tolerance, to about round-off (chord steps converge linearly)
+        if (phi <= 1.0e-3_dp) exit
+        do i = 1, n
+          self%dx(i) = self%r(i) * self%rw(i)
+        end do
+        call lu_solve(self, n, self%dx)
+        self%xt(1:n) = x - self%dx(1:n)
+        if (.not. sys%admissible(self%xt(1:n))) exit
+        call sys%residual(self%xt(1:n), self%rt(1:n), self%sct(1:n), stat)
+        if (stat /= VCI_OK) exit
+        phit = merit(self, self%rt(1:n), self%sct(1:n))
+        ! above the tolerance a chord step must contract well (else new factors pay); below it,
+        ! any decrease is taken on the way to round-off
+        if (.not. (phit <= self%reuse_contraction * phi .or. (phi <= 1.0_dp .and. phit < phi))) exit
+        res%iterations = res%iterations + 1
+        x = self%xt(1:n)
+        self%r(1:n) = self%rt(1:n)
+        self%sc(1:n) = self%sct(1:n)
+        phi = phit
+        res%scaled_residual = phi
+      end do
+    end if
 
     do it = 1, self%max_iterations
       if (phi <= 1.0_dp) exit
@@ -165,6 +223,8 @@ contains
       if (res%reason == NEWTON_NONFINITE) then
         res%status = VCI_ERR_NONFINITE; return
       end if
+      self%have_lu = factored .and. key /= 0.0_dp
+      self%lu_n = n; self%lu_key = key
       if (res%reason == NEWTON_SINGULAR) then
         res%status = VCI_ERR_NEWTON; return
       end if
@@ -226,6 +286,7 @@ contains
       info = -1; return
     end if
     self%rt(1:n) = b(1:n)                  ! the right-hand side, for the fallback
+    self%have_lu = .false.            ! the factors below are not a Newton matrix's
     self%lu(1:n, 1:n) = a(1:n, 1:n)
     call lu_factor(self, n, info)
     if (info == 0) then
@@ -272,6 +333,8 @@ contains
     end if
     self%jac(1:n, 1:n) = self%lu(1:n, 1:n)   ! keep the equilibrated matrix for the fallback
     call lu_factor(self, n, info)
+    self%factorisations = self%factorisations + 1
+    factored = .false.
     if (info == 0) then
       dmin = huge(1.0_dp); dmax = 0.0_dp
       do i = 1, n
@@ -321,12 +384,17 @@ contains
     end if
   end subroutine polish_step
 
-  !> LU factorisation with partial pivoting of lu(1:n, 1:n) in place (LAPACK dgetrf).
+  !> LU factorisation with partial pivoting of lu(1:n, 1:n) in place (LAPACK dgetrf, or the in-line
+  !> elimination for n <= small_lu_max); info as dgetrf's (k > 0: U(k, k) = 0).
   subroutine lu_factor(self, n, info)
     type(vci_newton_t), intent(inout) :: self
     integer, intent(in) :: n
     integer, intent(out) :: info
-    call dgetrf(n, n, self%lu, self%capacity, self%ipiv, info)
+    if (n <= self%small_lu_max) then
+      call small_lu(n, self%lu, self%ipiv, info)
+    else
+      call dgetrf(n, n, self%lu, self%capacity, self%ipiv, info)
+    end if
   end subroutine lu_factor
 
   !> b := A^{-1} b with the factors of lu_factor (dgetrs 'N' with one right-hand side).
@@ -335,8 +403,77 @@ contains
     integer, intent(in) :: n
     real(dp), intent(inout) :: b(:)
     integer :: info
-    call dgetrs('N', n, 1, self%lu, self%capacity, self%ipiv, b, size(b), info)
+    if (n <= self%small_lu_max) then
+      call small_lu_solve(n, self%lu, self%ipiv, b)
+    else
+      call dgetrs('N', n, 1, self%lu, self%capacity, self%ipiv, b, size(b), info)
+    end if
   end subroutine lu_solve
+
+  !> Right-looking LU with partial pivoting (the pivot is the first largest |entry| of the column, as
+  !> LAPACK's idamax picks it); ipiv as LAPACK's. Stops at an exact zero pivot (info = its column).
+  pure subroutine small_lu(n, a, ipiv, info)
+    integer, intent(in) :: n
+    real(dp), intent(inout) :: a(:, :)
+    integer, intent(inout) :: ipiv(:)
+    integer, intent(out) :: info
+    integer :: i, j, k, p
+    real(dp) :: t, piv_inv
+    info = 0
+    do j = 1, n
+      p = j
+      do i = j + 1, n
+        if (abs(a(i, j)) > abs(a(p, j))) p = i
+      end do
+      ipiv(j) = p
+      if (a(p, j) == 0.0_dp) then
+        if (info == 0) info = j
+        cycle
+      end if
+      if (p /= j) then
+        do k = 1, n
+          t = a(j, k); a(j, k) = a(p, k); a(p, k) = t
+        end do
+      end if
+      piv_inv = 1.0_dp / a(j, j)
+      do i = j + 1, n
+        a(i, j) = a(i, j) * piv_inv
+      end do
+      do k = j + 1, n
+        t = a(j, k)
+        do i = j + 1, n
+          a(i, k) = a(i, k) - a(i, j) * t
+        end do
+      end do
+    end do
+  end subroutine small_lu
+
+  pure subroutine small_lu_solve(n, a, ipiv, b)
+    integer, intent(in) :: n
+    real(dp), intent(in) :: a(:, :)
+    integer, intent(in) :: ipiv(:)
+    real(dp), intent(inout) :: b(:)
+    integer :: i, k
+    real(dp) :: t
+    do i = 1, n
+      if (ipiv(i) /= i) then
+        t = b(i); b(i) = b(ipiv(i)); b(ipiv(i)) = t
+      end if
+    end do
+    do k = 1, n                 ! L y = b (unit diagonal), column by column
+      t = b(k)
+      do i = k + 1, n
+        b(i) = b(i) - a(i, k) * t
+      end do
+    end do
+    do k = n, 1, -1             ! U x = y
+      b(k) = b(k) / a(k, k)
+      t = b(k)
+      do i = 1, k - 1
+        b(i) = b(i) - a(i, k) * t
+      end do
+    end do
+  end subroutine small_lu_solve
 
 
   pure real(dp) function merit(self, r, sc)

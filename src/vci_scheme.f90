@@ -54,7 +54,7 @@ module vci_scheme
     procedure(rows_iface), deferred :: scheme_residual
     procedure(jac_iface), deferred :: scheme_jacobian
     procedure(put_endpoint_iface), deferred :: put_endpoint
-    procedure(get_vec_iface), deferred :: get_endpoint
+    procedure(get_endpoint_iface), deferred :: get_endpoint
     procedure(put_vec_iface), deferred :: put_multipliers
     procedure(get_vec_iface), deferred :: get_multipliers
     procedure(momentum_rhs_iface), deferred :: momentum_rhs
@@ -62,6 +62,7 @@ module vci_scheme
     procedure(out_scalar_iface), deferred :: energy_out
     procedure(hamiltonian_iface), deferred :: hamiltonian
     procedure :: needs_pair_solve
+    procedure :: endpoint_direction
     procedure :: forget_jacobian
     procedure :: setup_common
     procedure :: extra_index
@@ -70,6 +71,7 @@ module vci_scheme
     procedure :: residual => dispatch_residual
     procedure :: jacobian => dispatch_jacobian
     procedure :: admissible => wall_admissible
+    procedure :: reuse_key => substep_key
     procedure :: eval_gaps
     procedure :: eval_gap_gradients
     procedure :: eval_forms
@@ -112,6 +114,13 @@ module vci_scheme
       real(dp), intent(in) :: x(:)
       real(dp), intent(out) :: v(:)
     end subroutine get_vec_iface
+    !> The endpoint of the unknowns x (inout: a scheme may remember the rounding of the last one).
+    subroutine get_endpoint_iface(self, x, v)
+      import :: vci_scheme_t, dp
+      class(vci_scheme_t), intent(inout) :: self
+      real(dp), intent(in) :: x(:)
+      real(dp), intent(out) :: v(:)
+    end subroutine get_endpoint_iface
     subroutine put_vec_iface(self, x, v)
       import :: vci_scheme_t, dp
       class(vci_scheme_t), intent(in) :: self
@@ -181,6 +190,15 @@ contains
     needs_pair_solve = .false.
   end function needs_pair_solve
 
+  !> The endpoint's part of a change dx of the unknowns (a sensitivity, e.g. d x / d mu). Layouts
+  !> that store the endpoint itself return get_endpoint(dx); those storing an increment override.
+  subroutine endpoint_direction(self, x, v)
+    class(vci_scheme_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:)
+    real(dp), intent(out) :: v(:)
+    call self%get_endpoint(x, v)
+  end subroutine endpoint_direction
+
   !> A new solve starts (schemes that size rows from the last Jacobian reset that memory here).
   subroutine forget_jacobian(self)
     class(vci_scheme_t), intent(inout) :: self
@@ -237,6 +255,14 @@ contains
       call self%scheme_jacobian(x, r, jac, stat)
     end if
   end subroutine dispatch_jacobian
+
+  !> Regular sub-steps of one length and direction share Newton factors (large systems, vci_newton);
+  !> the systems of an impact never do.
+  real(dp) function substep_key(self)
+    class(vci_scheme_t), intent(inout) :: self
+    substep_key = 0.0_dp
+    if (self%kind == KIND_SUBSTEP) substep_key = real(self%dir, dp) * self%tau
+  end function substep_key
 
   !> Stage 1 keeps the impact fraction inside (0, 1].
   logical function wall_admissible(self, x)
@@ -380,6 +406,7 @@ contains
       return
     end if
     stat = VCI_OK
+    if (abs(sum(values)) <= huge(1.0_dp)) return          ! all finite (one test on the sum)
     do i = 1, size(values)
       if (.not. (abs(values(i)) <= huge(1.0_dp))) then   ! NaN or +-Inf
         stat = VCI_ERR_NONFINITE

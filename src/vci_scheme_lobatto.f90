@@ -123,7 +123,7 @@ contains
   end subroutine put_endpoint
 
   subroutine get_endpoint(self, x, v)
-    class(vci_scheme_lobatto_t), intent(in) :: self
+    class(vci_scheme_lobatto_t), intent(inout) :: self
     real(dp), intent(in) :: x(:)
     real(dp), intent(out) :: v(:)
     v = x((self%s - 1) * self%n + 1:self%s * self%n)

@@ -75,6 +75,8 @@ module vci_stepper
     procedure :: configure
     procedure :: current_settings
     procedure :: solver_stats
+    procedure :: set_solver_paths
+    procedure :: factorisations
     procedure :: failure_cause
     procedure :: use_model_derivatives
     procedure :: advance
@@ -144,6 +146,21 @@ contains
     type(vci_solver_stats_t) :: stats
     stats = self%stats
   end function solver_stats
+
+  !> Which linear-algebra paths Newton may take: the in-line LU up to small_lu_max unknowns, factor
+  !> reuse from reuse_min unknowns (tests and benchmarks compare each path with LAPACK / full Newton).
+  subroutine set_solver_paths(self, small_lu_max, reuse_min)
+    class(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: small_lu_max, reuse_min
+    self%newton%small_lu_max = small_lu_max
+    self%newton%reuse_min = reuse_min
+  end subroutine set_solver_paths
+
+  !> LU factorisations of Newton matrices so far.
+  pure integer(i8) function factorisations(self)
+    class(vci_stepper_t), intent(in) :: self
+    factorisations = self%newton%factorisations
+  end function factorisations
 
   !> Why the last advance or pair_momentum failed.
   !> (Fixed length, trailing blanks: gfortran's deferred-length results are not thread-safe.)
@@ -542,7 +559,7 @@ contains
       self%q_trial = -self%sys%grad
       call self%sys%momentum_rhs(self%q_trial, self%rhs(1:nx0))
       call self%newton%linear_solve(nx0, self%jac, self%rhs, info)
-      call self%sys%get_endpoint(self%rhs(1:nx0), self%q_trial)
+      call self%sys%endpoint_direction(self%rhs(1:nx0), self%q_trial)   ! a sensitivity, not a point
       den = dot_product(self%sys%grad, self%q_trial)
       if (info /= 0 .or. .not. (abs(den) > 0.0_dp) .or. .not. ieee_is_finite(den)) then
         stat = VCI_ERR_IMPACT
