@@ -3,7 +3,7 @@
 # Usage: tools/install-deps.sh [extra packages...]. Runs apt-get only when something is missing.
 set -euo pipefail
 packages=(cmake make gfortran gcc liblapack-dev libblas-dev libhdf5-dev hdf5-tools pkg-config python3
-          python3-numpy python3-h5py python3-matplotlib valgrind "$@")
+          python3-numpy python3-h5py python3-matplotlib valgrind libasan8 libubsan1 libtsan2 "$@")
 missing=()
 for p in "${packages[@]}"; do
   if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep "install ok installed" > /dev/null; then

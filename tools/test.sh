@@ -6,3 +6,11 @@ bash tools/install-deps.sh
 cmake --preset default
 cmake --build --preset default
 ctest --preset default
+# The C and core suites and the random-input harness (60 s) under AddressSanitizer and
+# UndefinedBehaviorSanitizer; the threads test under ThreadSanitizer (docs/TESTING.md).
+cmake --preset asan
+cmake --build --preset asan
+ctest --preset asan
+cmake --preset tsan
+cmake --build --preset tsan
+ctest --preset tsan
