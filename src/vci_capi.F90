@@ -831,7 +831,9 @@ contains
     ours = c_sizeof(local)
     least = c_sizeof(local%size) + 3 * c_sizeof(c_null_funptr)   ! up to d3_ld: the required ones
     write (txt, '(i0)') nbytes
-    if (nbytes < least .or. nbytes > 4096) then
+    ! every header's struct is the size field and whole pointers: anything else is no vci_callbacks
+    if (nbytes < least .or. nbytes > 4096 .or. &
+        mod(nbytes - c_sizeof(local%size), c_sizeof(c_null_funptr)) /= 0) then
       call set_thread_message('vci_model_create: cb->size = '//trim(txt)//' is not the size of a vci_callbacks '// &
                               '(initialise it with VCI_CALLBACKS_INIT)')
       return
@@ -1264,8 +1266,8 @@ contains
     integer, intent(in) :: direction
     integer, intent(out) :: stat
     stat = VCI_OK
-    output_blocks_direction = allocated(ip%obs%output) .and. ip%obs%started .and. abs(direction) == 1 .and. &
-                              direction /= ip%obs%direction
+    output_blocks_direction = allocated(ip%obs%output) .and. ip%obs%started .and. &
+                              (direction == 1 .or. direction == -1) .and. direction /= ip%obs%direction
     if (output_blocks_direction) stat = fail(ip, VCI_ERR_STATE, who//': the open output file holds a run in the '// &
       'other direction; close it (vci_close_output) or open a new one to integrate this way')
   end function output_blocks_direction
@@ -1284,7 +1286,7 @@ contains
       ! a single step has no on_start of its own: the output's run starts with the first step
       ostat = 0
       if (allocated(ip%obs%output) .and. .not. ip%obs%started .and. ip%integ%is_initialized() .and. &
-          abs(direction) == 1) call ip%obs%on_start(ip%integ%run_info(int(direction)), ip%integ%configuration(), &
+          (direction == 1 .or. direction == -1)) call ip%obs%on_start(ip%integ%run_info(int(direction)), ip%integ%configuration(), &
                                                     ip%integ%momentum(), ostat)
       if (ostat /= 0) then
         stat = fail(ip, VCI_ERR_IO, 'vci_step: the output could not start the run: '//trim(output_message(ip)))

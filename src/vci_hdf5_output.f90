@@ -873,13 +873,24 @@ contains
     real(dp), intent(in) :: v(:)
     integer, intent(inout) :: stat
     integer(hid_t) :: space, dset
-    integer :: err, e2
+    integer :: err, e2, s
     logical :: ex
     if (stat /= VCI_OK) return
     call h5lexists_f(loc, name, ex, err)
     if (err == 0 .and. ex) then
       call h5dopen_f(loc, name, dset, err)
-    else if (err == 0) then
+      ! a dataset of another shape (a damaged or foreign file being appended to) is replaced
+      s = VCI_OK
+      if (err == 0) then
+        if (dset_rows(self, dset, name, 0, s) /= size(v) .or. s /= VCI_OK) then
+          call h5dclose_f(dset, e2)
+          call h5ldelete_f(loc, name, err)
+          ex = .false.
+          self%message = ''
+        end if
+      end if
+    end if
+    if (err == 0 .and. .not. ex) then
       call h5screate_simple_f(1, [int(size(v), hsize_t)], space, err)
       if (err == 0) call h5dcreate_f(loc, name, H5T_IEEE_F64LE, space, dset, err)
       call h5sclose_f(space, e2)

@@ -1149,6 +1149,8 @@ static void suite_abi(void) {
   CHECK_MESSAGE(NULL, "VCI_CALLBACKS_INIT");
   cb.size = 1u << 20;
   CHECK_STATUS(vci_model_create(&model, 3, 0, 1, &cb, &ellipse_par), VCI_ERR_ARGUMENT);
+  cb.size = offsetof(vci_callbacks, energy) + 3; /* part of a pointer: no header has that size */
+  CHECK_STATUS(vci_model_create(&model, 3, 0, 1, &cb, &ellipse_par), VCI_ERR_ARGUMENT);
 
   /* a newer header with one more member: NULL is fine, set is refused */
   memset(&newer, 0, sizeof newer);
