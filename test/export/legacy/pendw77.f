@@ -59,7 +59,7 @@ C     1. The run, three ways of supplying the optional TASKs
         CALL CHECKR('final time', T, TREF, 1.0D-12, NBAD)
 C       lobatto s = 4 (order 8) is ~1e-11 from exact at h = 0.05
 C       (docs/SCHEMES.md); 1e-9 leaves room for round-off, not for
-C       a lower order (s = 3 is ~1e-8 off)
+C       a lower order (s = 3 is ~3e-8 off)
         CALL CHECKR('theta = exact', Q(1), QREF, 1.0D-9, NBAD)
         CALL CHECKR('p = exact', P(1), PREF, 1.0D-9, NBAD)
         CALL VCIDEL(IH)
