@@ -34,6 +34,16 @@ STYLE = {
     "scipy-dop853": dict(color="tab:green", marker="D", ls="-."),
     "scipy-radau": dict(color="olive", marker="P", ls="-."),
     "siconos-moreau-jean": dict(color="tab:purple", marker="X", ls="-."),
+    # the schemes from the continuous L: colour per scheme, dotted = the paper's impact condition
+    "vci-left-discrete": dict(color="gray", marker="<", ls=":"),
+    "vci-midpoint-discrete": dict(color="tab:cyan", marker="o", ls=":"),
+    "vci-midpoint-hamiltonian": dict(color="tab:cyan", marker="s", ls="-"),
+    "vci-lobatto2-discrete": dict(color="tab:brown", marker="o", ls=":"),
+    "vci-lobatto2-hamiltonian": dict(color="tab:brown", marker="s", ls="-"),
+    "vci-lobatto3-discrete": dict(color="goldenrod", marker="o", ls=":"),
+    "vci-lobatto3-hamiltonian": dict(color="goldenrod", marker="s", ls="-"),
+    "vci-lobatto4-discrete": dict(color="deeppink", marker="o", ls=":"),
+    "vci-lobatto4-hamiltonian": dict(color="deeppink", marker="s", ls="-"),
 }
 AUTO = ["tab:cyan", "tab:brown", "tab:pink", "tab:gray", "teal", "darkgoldenrod", "slateblue"]
 FLOOR = 1e-16   # errors below this are plotted at this value (exact to rounding)
@@ -129,7 +139,7 @@ def plot_scene(rows, scene, figdir):
         ax.set_ylabel(label)
         ax.grid(True, which="major", alpha=0.4)
         ax.set_title(label, fontsize=10)
-    axes[0].legend(fontsize=8, loc="best")
+    axes[0].legend(fontsize=7, loc="best", ncol=2)
     fig.suptitle(f"{TITLE[scene]}: error against CPU time, every method from the exact (q(0), q̇(0)) "
                  f"(-pair: vci from the paper's initial pair); errors below {FLOOR:g} drawn at {FLOOR:g}",
                  fontsize=11)
@@ -191,7 +201,10 @@ def lsq(xs, ys):
 
 
 def order_fit(rows, scene, method, hmin=1e-3, hmax=2.1e-2):
-    """Least-squares slope of log(final error) against log(h) over hmin <= h <= hmax."""
+    """Least-squares slope of log(final error) against log(h) over hmin <= h <= hmax (Lobatto rows:
+    every h, their asymptotic range lies at large steps), errors above 1e-10."""
+    if "lobatto" in method:
+        hmin, hmax = 0.0, 1.0
     pts = [(math.log(r["param"]), math.log(r["err_final"])) for r in rows
            if r["scene"] == scene and r["method"] == method and r["status"] == 0
            and hmin * 0.9 <= r["param"] <= hmax and r["err_final"] > 1e-10]
@@ -272,8 +285,8 @@ def plot_long(outdir, scene, shown, figdir):
                         f"{s['n_impacts']} impacts)")
     ax.set_xlabel("time t [s]")
     ax.set_ylabel("largest |E − E0| up to t")
-    ax.set_title(f"{TITLE[scene]}: energy error over a long run, vci (h = 1e-2) and each peer's best run "
-                 "costing ≤ 1.1× vci-ld-hamiltonian's CPU time (else its cheapest)", fontsize=9)
+    ax.set_title(f"{TITLE[scene]}: energy error over a long run, vci (ld rows h = 1e-2, Lobatto h = 0.1) and "
+                 "each peer's best run costing ≤ 1.1× vci-ld-hamiltonian's CPU time (else its cheapest)", fontsize=9)
     ax.grid(True, which="major", alpha=0.4)
     ax.legend(fontsize=8, loc="lower right")
     fig.tight_layout()
@@ -314,12 +327,15 @@ def main(outdir, root):
     w(f"Last run: {meta['date']} on {meta['nproc']} cores ({meta['cpu']}); the whole command took "
       f"**{meta['elapsed_s'] / 60:.1f} min**; vci at commit {meta.get('commit', '?')}. "
       f"Versions: {meta['versions']}.\n")
-    w("> **Not yet in this edition:** the vci schemes built from a continuous Lagrangian (`left`, "
-      "`midpoint`, `lobatto` s = 2, 3, 4; issue \"Schemes built from L\") are still being added to "
-      "the library. Every vci row below is the scene's own user-written discrete Lagrangian "
-      "(`vci-ld-*`: the midpoint rule, second order, except the nonholonomic pendulum, whose paper "
-      "L_d is the first-order left-point rule). The driver's EXTENSION POINT "
-      "(tools/results/vci_results_driver.f90) adds the schemes as extra rows.\n")
+    w("> **vci rows.** `vci-ld-*`: the scene's own hand-written discrete Lagrangian (the midpoint rule, "
+      "second order; the nonholonomic pendulum's is the paper's first-order left-point rule). "
+      "`vci-left-*`, `vci-midpoint-*`, `vci-lobattoS-*`: the library's schemes built from the scene's "
+      "continuous L (docs/SCHEMES.md; `integ%set_scheme`), orders 1, 2 and 2s. The suffix is the impact "
+      "condition: `discrete` the paper's E_d(αh) = E_d((1−α)h), `hamiltonian` H(q̃, p⁺) = H(q̃, p⁻). "
+      "`left` runs only with `discrete` (with `hamiltonian` its first-order momenta make the energy at the "
+      "wall drift, docs/SCHEMES.md); Lobatto is refused by the library for nonholonomic constraints (m > 0), "
+      "so the pendulum in the cylinder has `left` and `midpoint` only; on the FPU chain midpoint and "
+      "Lobatto s = 2, 4 with `hamiltonian` (time budget).\n")
 
     # --- summary
     w("## Summary\n")
@@ -343,7 +359,8 @@ def main(outdir, root):
                 else:
                     fits.append(f"{m} — (error ≤ 1e-10 at every h: exact to round-off, no order)")
         if fits:
-            w("Least-squares order of vci's final error in h (h = 2e-2 … 1e-3, errors above 1e-10): " + "; ".join(fits) + ".\n")
+            w("Least-squares order of vci's final error in h (h = 2e-2 … 1e-3; Lobatto rows: every h; errors "
+              "above 1e-10): " + "; ".join(fits) + ".\n")
         w("Cheapest run (CPU time, with its step size or tolerance) of each method that reaches each "
           "level of final error at T; **bold**: the cheapest overall.\n")
         w(cheapest_table(rows, scene) + "\n")
@@ -462,7 +479,8 @@ def summary_text(rows, summaries, outdir):
             v = best_vci(rows, scene, lev)
             c = best_at(rows, scene, "cvode-adams", lev)
             if v and c:
-                cells.append(f"{v['cpu_median'] / c['cpu_median']:.2g} ({v['method'].replace('vci-ld-', '')})")
+                cells.append(f"{v['cpu_median'] / c['cpu_median']:.2g} ({v['method'].replace('vci-', '')}, "
+                             f"h {fmt(v['param'], 1)})")
             elif v:
                 cells.append("vci only")
             elif c:
@@ -471,7 +489,7 @@ def summary_text(rows, summaries, outdir):
                 cells.append("neither")
         lines.append(f"| {scene} | " + " | ".join(cells) + " |")
     lines.append("")
-    lines.append("Long runs (h = 1e-2 for vci; drift slope = log-log slope of the windowed |E − E0| over "
+    lines.append("Long runs (vci-ld rows at h = 1e-2, the Lobatto row at h = 0.1; drift slope = log-log slope of the windowed |E − E0| over "
                  "the last two decades of time; 0 bounded, ½ random walk, 1 linear drift):\n")
     for scene in ("pendulum_walls", "ellipse"):
         parts = []
@@ -521,24 +539,34 @@ MEASURED = """\
   vci and CVODE are Fortran, timed in-process; SciPy and Siconos are timed from Python around the
   integration loop (interpreter overhead is part of what a user of them pays). The machine may be
   shared: CPU time is the measure.
-- **Methods.** `vci-ld-discrete`: vci with the paper's impact condition (E_d(αh) = E_d((1−α)h));
-  `vci-ld-hamiltonian`: vci with H(q̃, p⁺) = H(q̃, p⁻) at the wall; Newton rtol 1e-12; nominal
-  steps 1e-1 … 1e-5 (FPU: 5e-2 … 1e-4). `cvode-adams` (Adams, fixed point), `cvode-bdf` (BDF,
+- **Methods.** `vci-ld-discrete`: vci on the scene's hand-written L_d with the paper's impact
+  condition (E_d(αh) = E_d((1−α)h)); `vci-ld-hamiltonian`: the same with H(q̃, p⁺) = H(q̃, p⁻) at
+  the wall; Newton rtol 1e-12; nominal steps 1e-1 … 1e-5 (FPU: 5e-2 … 1e-4). The schemes from the
+  scenes' continuous L (`examples/scenes/`, analytic Hessian blocks): `vci-left-discrete`,
+  `vci-midpoint-*` (rtol 1e-12, steps 1e-1 … 1e-4; the ld rows cover the smaller ones) and
+  `vci-lobattoS-*` (rtol 1e-14, steps 0.4 … 1e-3; FPU 0.2 … 2e-3, s = 4 down to 5e-2 only; larger
+  steps fail, listed at the end). The OpenBLAS used by vci's Newton, CVODE-BDF and SciPy runs
+  single-threaded (`OPENBLAS_NUM_THREADS=1`). `cvode-adams` (Adams, fixed point), `cvode-bdf` (BDF,
   Newton, dense difference-quotient Jacobian): SUNDIALS CVODE {sundials} through its Fortran 2003
   interface, root finding on every gap (decreasing crossings), elastic impact map and CVodeReInit
   at each root. `scipy-dop853`, `scipy-radau`: `solve_ivp` with a terminal event per wall and the
-  impact map between restarts. The ODE peers sweep rtol = atol = 1e-3 … 1e-13; on the ellipse
+  impact map between restarts. The ODE peers sweep rtol = atol = 1e-3 … 1e-13 (SciPy's Radau at
+  every other power of ten); on the ellipse
   they get max_step = 0.05 s so that a short dip of the gap cannot be stepped over unseen.
-  `siconos-moreau-jean`: Siconos Moreau–Jean (θ = ½, Newton impact law e = 1, LCP), one relation
-  per wall, nonlinear forces and the ellipse's floor as C plugins; not on the nonholonomic
+  `siconos-moreau-jean`: Siconos Moreau–Jean (θ = ½, Newton impact law e = 1, LCP), steps
+  1e-1 … 5e-5 (FPU: … 5e-4), one relation per wall, nonlinear forces and the ellipse's floor as C plugins; not on the nonholonomic
   pendulum (not a Siconos relation). The pendulum's ODE peers integrate the Lagrange–d'Alembert
   system in (θ, φ) with the multiplier eliminated.
 """
 
 LONG_INTRO = """\
 The walled pendulum over 6·10⁴ s and the ellipse over 1.1·10⁵ s (each ≥ 10⁵ impacts) from the same
-exact start. vci at h = 1e-2, both impact conditions, timed with its energy observer (the peers
-also evaluate the energy at every step). CVODE at rtol 1e-6 … 1e-12 over the same horizon.
+exact start. vci's hand-written L_d at h = 1e-2 with both impact conditions, and the best Lobatto
+row of the scene's sweep with the Hamiltonian condition at h = 0.1 (s = 4 on the walled pendulum,
+s = 2 on the ellipse: a cost near CVODE-Adams's), each timed with its energy observer (the peers
+also evaluate the energy at every step); vci's long runs allow up to 64 impacts per step (the
+ellipse's chaotic run has bursts of chatter that a 0.1 s step would otherwise refuse).
+CVODE-Adams at rtol 1e-6 … 1e-12 and CVODE-BDF at 1e-6 and 1e-10 over the same horizon.
 SciPy (DOP853, rtol 1e-10) and Siconos (h = 1e-2) pay about a millisecond of Python per impact
 or per few steps, so they run over a tenth of the horizon (~10⁴ impacts) to keep the page under
 15 minutes; their drift slope is over that shorter run. Each peer is plotted at its best run
