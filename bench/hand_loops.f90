@@ -35,7 +35,7 @@ module vci_bench_hand
     real(dp) :: mass = 1.0_dp, grav = 9.8_dp, length = 2.0_dp, radius = 1.5_dp
   end type pendulum_par_t
 
-  public :: hand_particle, hand_ellipse, hand_pendulum
+  public :: hand_particle, hand_ellipse, hand_pendulum, ellipse_impacts, pendulum_impacts, solve3
 
 contains
 
@@ -120,9 +120,7 @@ contains
     real(dp), intent(out) :: q(3), p(3)
     type(hand_result_t), intent(out) :: res
     integer(int64) :: k
-    real(dp) :: minv(3), mm(3), m, g, a2, b2, hg, qn(3), a(3), pa(3), tau, used, tk, alpha, qt(3), pm(3), em
-    real(dp) :: t1, t2, w(3), nrm(3), s, c, phi, mu, ca, cb, cc
-    integer :: nimp
+    real(dp) :: minv(3), mm(3), m, g, a2, b2, hg, qn(3), qt(3), t2, w(3)
     m = par%mass; g = par%grav; a2 = par%a**2; b2 = par%b**2
     mm = [m * (a2 + b2) / 4.0_dp, m, m]
     minv = 1.0_dp / mm
@@ -137,43 +135,60 @@ contains
         q = qn; p = w; p(3) = w(3) - hg
         cycle
       end if
-      tk = t0 + real(k, dp) * h
-      a = q; pa = p; tau = h; used = 0.0_dp; nimp = 0
-      do
-        nimp = nimp + 1
-        if (nimp > 16) then
-          res%ok = .false.; return
-        end if
-        alpha = stage1_ellipse(a, pa, tau, minv, g, a2, b2, res%newton_iterations)
-        if (alpha < 0.0_dp) then
-          res%ok = .false.; return
-        end if
-        t1 = alpha * tau
-        qt = a + t1 * minv * pa; qt(3) = qt(3) - 0.5_dp * g * t1**2
-        pm = pa; pm(3) = pa(3) - t1 * m * g                           ! D2 L_d(a, qt, t1)
-        em = 0.5_dp * sum(mm * (qt - a)**2) / t1**2 + 0.5_dp * m * g * (a(3) + qt(3))
-        ! stage 2: w = M (q+ - qt)/t2 = pm + mu n - (t2/2) m g e_y, E_d(qt, q+, t2) = em
-        s = sin(qt(1)); c = cos(qt(1)); phi = sqrt(a2 * s**2 + b2 * c**2)
-        nrm = [-(a2 - b2) * s * c / phi, 0.0_dp, 1.0_dp]
-        t2 = (1.0_dp - alpha) * tau
-        w = pm; w(3) = w(3) - 0.5_dp * t2 * m * g
-        ! E_d = w.M^-1.w/2 + m g qt_y + g t2 w_y/2
-        ca = 0.5_dp * sum(minv * nrm**2)
-        cb = sum(minv * nrm * w) + 0.5_dp * g * t2 * nrm(3)
-        cc = 0.5_dp * sum(minv * w**2) + m * g * qt(3) + 0.5_dp * g * t2 * w(3) - em
-        mu = big_root(ca, cb, cc)
-        w = w + mu * nrm
-        qn = qt + t2 * minv * w
-        call record(res, tk + used + t1, (used + t1) / h, mu)
-        used = used + t1
-        if (qn(3) - sqrt(a2 * sin(qn(1))**2 + b2 * cos(qn(1))**2) >= 0.0_dp) exit
-        a = qt; pa = pm + mu * nrm; tau = t2
-      end do
-      q = qn
-      p = w; p(3) = w(3) - 0.5_dp * t2 * m * g                       ! D2 L_d(qt, q+, t2)
+      call ellipse_impacts(par, h, t0 + real(k, dp) * h, q, p, res, qt, t2)
+      if (.not. res%ok) return
     end do
-
   end subroutine hand_ellipse
+
+  !> The impacts of one ellipse step from (q, p) (whose regular end is beyond the wall): stage 1 by a
+  !> scalar Newton on alpha, stage 2 in closed form, repeated while the end is beyond the wall.
+  !> Returns the new (q, p), and the last sub-step's start qt and length t2.
+  subroutine ellipse_impacts(par, h, tk, q, p, res, qt, t2)
+    type(ellipse_par_t), intent(in) :: par
+    real(dp), intent(in) :: h, tk
+    real(dp), intent(inout) :: q(3), p(3)
+    type(hand_result_t), intent(inout) :: res
+    real(dp), intent(out) :: qt(3), t2
+    real(dp) :: minv(3), mm(3), m, g, a2, b2, qn(3), a(3), pa(3), tau, used, alpha, pm(3), em
+    real(dp) :: t1, w(3), nrm(3), s, c, phi, mu, ca, cb, cc
+    integer :: nimp
+    m = par%mass; g = par%grav; a2 = par%a**2; b2 = par%b**2
+    mm = [m * (a2 + b2) / 4.0_dp, m, m]
+    minv = 1.0_dp / mm
+    a = q; pa = p; tau = h; used = 0.0_dp; nimp = 0
+    do
+      nimp = nimp + 1
+      if (nimp > 16) then
+        res%ok = .false.; return
+      end if
+      alpha = stage1_ellipse(a, pa, tau, minv, g, a2, b2, res%newton_iterations)
+      if (alpha < 0.0_dp) then
+        res%ok = .false.; return
+      end if
+      t1 = alpha * tau
+      qt = a + t1 * minv * pa; qt(3) = qt(3) - 0.5_dp * g * t1**2
+      pm = pa; pm(3) = pa(3) - t1 * m * g                           ! D2 L_d(a, qt, t1)
+      em = 0.5_dp * sum(mm * (qt - a)**2) / t1**2 + 0.5_dp * m * g * (a(3) + qt(3))
+      ! stage 2: w = M (q+ - qt)/t2 = pm + mu n - (t2/2) m g e_y, E_d(qt, q+, t2) = em
+      s = sin(qt(1)); c = cos(qt(1)); phi = sqrt(a2 * s**2 + b2 * c**2)
+      nrm = [-(a2 - b2) * s * c / phi, 0.0_dp, 1.0_dp]
+      t2 = (1.0_dp - alpha) * tau
+      w = pm; w(3) = w(3) - 0.5_dp * t2 * m * g
+      ! E_d = w.M^-1.w/2 + m g qt_y + g t2 w_y/2
+      ca = 0.5_dp * sum(minv * nrm**2)
+      cb = sum(minv * nrm * w) + 0.5_dp * g * t2 * nrm(3)
+      cc = 0.5_dp * sum(minv * w**2) + m * g * qt(3) + 0.5_dp * g * t2 * w(3) - em
+      mu = big_root(ca, cb, cc)
+      w = w + mu * nrm
+      qn = qt + t2 * minv * w
+      call record(res, tk + used + t1, (used + t1) / h, mu)
+      used = used + t1
+      if (qn(3) - sqrt(a2 * sin(qn(1))**2 + b2 * cos(qn(1))**2) >= 0.0_dp) exit
+      a = qt; pa = pm + mu * nrm; tau = t2
+    end do
+    q = qn
+    p = w; p(3) = w(3) - 0.5_dp * t2 * m * g                       ! D2 L_d(qt, q+, t2)
+  end subroutine ellipse_impacts
 
   !> First alpha in (0, 1] with g(q~(alpha)) = 0 for the ellipse, q~(alpha) the free flight from
   !> (a, pa) over alpha tau: bracket by sampling, then Newton kept inside the bracket (bisection
@@ -239,13 +254,10 @@ contains
     real(dp), intent(out) :: q(2), p(2)
     type(hand_result_t), intent(out) :: res
     integer(int64) :: k
-    real(dp) :: ml2, mgl, s, c, f, d1, d2, r(3), jac(3, 3), dx(3), x(3), vel(2), lam, tk, used, tau
-    real(dp) :: s0, a(2), pa(2), thw, t1, t2, qa, qb, qc, qt(2), pm(2), em, st, ct, ft, nrm1, e1, mu, lamt
-    real(dp) :: qn(2), pn(2), dnorm
-    integer :: it, nimp
-    integer(int64) :: jw
+    real(dp) :: ml2, mgl, s, c, f, d1, d2, r(3), jac(3, 3), dx(3), x(3), vel(2), lam
+    real(dp) :: qn(2), dnorm
+    integer :: it
     ml2 = par%mass * par%length**2; mgl = par%mass * par%grav * par%length
-    s0 = asin(par%radius / par%length)
     q = q1
     s = sin(q0(1))
     p = [ml2 * (q1(1) - q0(1)) / h, ml2 * (q1(2) - q0(2)) * s**2 / h]   ! D2 L_d(q0, q1, h)
@@ -277,53 +289,71 @@ contains
         q = qn
         cycle
       end if
-      tk = t0 + real(k, dp) * h
-      a = q; pa = p; tau = h; used = 0.0_dp; nimp = 0
-      do
-        nimp = nimp + 1
-        if (nimp > 16) then
-          res%ok = .false.; return
-        end if
-        ! stage 1: the wall fixes theta~ (first root of sin^2 = (R/l)^2 from a(1) towards qn(1));
-        ! omega_d = 0 fixes phi~; the momentum row is then a quadratic in the sub-step length t1.
-        jw = floor(qn(1) / pi, int64)
-        if (qn(1) > a(1)) then
-          thw = real(jw, dp) * pi + s0
-        else
-          thw = real(jw + 1, dp) * pi - s0
-        end if
-        s = sin(a(1)); c = cos(a(1)); f = pi + c**2
-        d1 = thw - a(1); d2 = f * d1
-        qa = mgl * s; qb = pa(1) + f * pa(2); qc = ml2 * (-d1 + d2**2 * s * c - f * d2 * s**2)
-        t1 = -2.0_dp * qc / (qb + sign(sqrt(max(qb * qb - 4.0_dp * qa * qc, 0.0_dp)), qb))
-        if (.not. (t1 > 0.0_dp .and. t1 <= tau)) then
-          res%ok = .false.; return
-        end if
-        qt = [thw, a(2) + d2]
-        pm = [ml2 * d1 / t1, ml2 * d2 * s**2 / t1]                       ! D2 L_d(a, qt, t1)
-        em = 0.5_dp * ml2 * (d1**2 + d2**2 * s**2) / t1**2 + mgl * c      ! E_d(a, qt, t1)
-        ! stage 2 from qt over t2: omega_d: d2 = f~ d1; energy: d1^2 from E_d(qt, q+, t2) = em;
-        ! the reflected root leaves the wall (grad g . d > 0)
-        st = sin(thw); ct = cos(thw); ft = pi + ct**2
-        t2 = (1.0_dp - t1 / tau) * tau
-        nrm1 = -2.0_dp * par%length**2 * st * ct
-        e1 = 2.0_dp * (em - mgl * ct) * t2**2 / (ml2 * (1.0_dp + ft**2 * st**2))
-        d1 = sign(sqrt(max(e1, 0.0_dp)), nrm1); d2 = ft * d1
-        lamt = ml2 * d2 * st**2 / t2 - pm(2)
-        ! momentum row 1 gives the impulse: D1_1 L_d(qt, q+, t2) + pm1 - f~ lambda~ + mu n1 = 0
-        mu = -(-ml2 * d1 / t2 + ml2 * d2**2 * st * ct / t2 + t2 * mgl * st + pm(1) - ft * lamt) / nrm1
-        qn = qt + [d1, d2]
-        pn = [ml2 * d1 / t2, ml2 * d2 * st**2 / t2]                       ! D2 L_d(qt, q+, t2)
-        call record(res, tk + used + t1, (used + t1) / h, mu)
-        used = used + t1
-        if (par%radius**2 - par%length**2 * sin(qn(1))**2 >= 0.0_dp) exit
-        a = qt; pa = pm + [mu * nrm1, 0.0_dp]; tau = t2
-      end do
-      lam = lamt
-      vel = (qn - qt) / t2
-      q = qn; p = pn
+      call pendulum_impacts(par, h, t0 + real(k, dp) * h, q, p, qn, lam, vel, res)
+      if (.not. res%ok) return
     end do
   end subroutine hand_pendulum
+
+  !> The impacts of one pendulum step from (q, p) whose regular end qn is beyond the wall: the wall
+  !> fixes theta~, stage 1 is a quadratic in the sub-step length, stage 2 a square root. Returns the
+  !> new (q, p), the multiplier and the last sub-step's velocity.
+  subroutine pendulum_impacts(par, h, tk, q, p, qn, lam, vel, res)
+    type(pendulum_par_t), intent(in) :: par
+    real(dp), intent(in) :: h, tk
+    real(dp), intent(inout) :: q(2), p(2), qn(2)
+    real(dp), intent(out) :: lam, vel(2)
+    type(hand_result_t), intent(inout) :: res
+    real(dp) :: ml2, mgl, s, c, f, d1, d2, used, tau, s0, a(2), pa(2), thw, t1, t2, qa, qb, qc, qt(2), pm(2)
+    real(dp) :: em, st, ct, ft, nrm1, e1, mu, lamt, pn(2)
+    integer :: nimp
+    integer(int64) :: jw
+    ml2 = par%mass * par%length**2; mgl = par%mass * par%grav * par%length
+    s0 = asin(par%radius / par%length)
+    a = q; pa = p; tau = h; used = 0.0_dp; nimp = 0
+    do
+      nimp = nimp + 1
+      if (nimp > 16) then
+        res%ok = .false.; return
+      end if
+      ! stage 1: the wall fixes theta~ (first root of sin^2 = (R/l)^2 from a(1) towards qn(1));
+      ! omega_d = 0 fixes phi~; the momentum row is then a quadratic in the sub-step length t1.
+      jw = floor(qn(1) / pi, int64)
+      if (qn(1) > a(1)) then
+        thw = real(jw, dp) * pi + s0
+      else
+        thw = real(jw + 1, dp) * pi - s0
+      end if
+      s = sin(a(1)); c = cos(a(1)); f = pi + c**2
+      d1 = thw - a(1); d2 = f * d1
+      qa = mgl * s; qb = pa(1) + f * pa(2); qc = ml2 * (-d1 + d2**2 * s * c - f * d2 * s**2)
+      t1 = -2.0_dp * qc / (qb + sign(sqrt(max(qb * qb - 4.0_dp * qa * qc, 0.0_dp)), qb))
+      if (.not. (t1 > 0.0_dp .and. t1 <= tau)) then
+        res%ok = .false.; return
+      end if
+      qt = [thw, a(2) + d2]
+      pm = [ml2 * d1 / t1, ml2 * d2 * s**2 / t1]                       ! D2 L_d(a, qt, t1)
+      em = 0.5_dp * ml2 * (d1**2 + d2**2 * s**2) / t1**2 + mgl * c      ! E_d(a, qt, t1)
+      ! stage 2 from qt over t2: omega_d: d2 = f~ d1; energy: d1^2 from E_d(qt, q+, t2) = em;
+      ! the reflected root leaves the wall (grad g . d > 0)
+      st = sin(thw); ct = cos(thw); ft = pi + ct**2
+      t2 = (1.0_dp - t1 / tau) * tau
+      nrm1 = -2.0_dp * par%length**2 * st * ct
+      e1 = 2.0_dp * (em - mgl * ct) * t2**2 / (ml2 * (1.0_dp + ft**2 * st**2))
+      d1 = sign(sqrt(max(e1, 0.0_dp)), nrm1); d2 = ft * d1
+      lamt = ml2 * d2 * st**2 / t2 - pm(2)
+      ! momentum row 1 gives the impulse: D1_1 L_d(qt, q+, t2) + pm1 - f~ lambda~ + mu n1 = 0
+      mu = -(-ml2 * d1 / t2 + ml2 * d2**2 * st * ct / t2 + t2 * mgl * st + pm(1) - ft * lamt) / nrm1
+      qn = qt + [d1, d2]
+      pn = [ml2 * d1 / t2, ml2 * d2 * st**2 / t2]                       ! D2 L_d(qt, q+, t2)
+      call record(res, tk + used + t1, (used + t1) / h, mu)
+      used = used + t1
+      if (par%radius**2 - par%length**2 * sin(qn(1))**2 >= 0.0_dp) exit
+      a = qt; pa = pm + [mu * nrm1, 0.0_dp]; tau = t2
+    end do
+    lam = lamt
+    vel = (qn - qt) / t2
+    q = qn; p = pn
+  end subroutine pendulum_impacts
 
   !> x = A^-1 b for 3x3 A by Gaussian elimination with partial pivoting.
   pure subroutine solve3(a_in, b_in, x)

@@ -42,14 +42,21 @@ program throughput
   use vci_scene_ellipse, only: ellipse_t, ellipse_model
   use vci_scene_pendulum, only: pendulum_t, pendulum_model
   use vci_bench_hand
+  use vci_bench_same, only: same_ellipse, same_pendulum
   use vci_bench_impact_log, only: impact_log_t
   implicit none
 
-  integer, parameter :: n_scenes = 3, n_var = 3
-  character(len=8), parameter :: scene_name(n_scenes) = [character(len=8) :: 'particle', 'ellipse', 'pendulum']
+  !> Scenes 4 and 5 are 2 and 3 without impacts (the ellipse dropped from high up, the pendulum in a
+  !> cylinder wider than its reach): their time per step is that of a regular step.
+  integer, parameter :: n_scenes = 5, n_var = 4
+  character(len=13), parameter :: scene_name(n_scenes) = [character(len=13) :: 'particle', 'ellipse', &
+    'pendulum', 'ellipse-free', 'pendulum-free']
   character(len=22), parameter :: var_name(n_var) = [character(len=22) :: 'library, analytic H', &
-                                                     'library, differenced H', 'hand loop']
-  integer, parameter :: V_LIB = 1, V_LIB_FD = 2, V_HAND = 3
+                                                     'library, differenced H', 'closed-form hand loop', &
+                                                     'same-algorithm loop']
+  integer, parameter :: V_LIB = 1, V_LIB_FD = 2, V_HAND = 3, V_SAME = 4
+  !> The scene whose impacts a free scene leaves out (0: none).
+  integer, parameter :: with_impacts(n_scenes) = [0, 0, 0, 2, 3]
 
   !> One scene: its default set-up and a model per library variant.
   type :: scene_t
@@ -61,11 +68,11 @@ program throughput
 
   type(particle_t), target :: part(2)
   type(ellipse_t), target :: ell(2)
-  type(pendulum_t), target :: pend(2)
+  type(pendulum_t), target :: pend(2), pendf(2)
   type(vci_integrator_t) :: integ(n_scenes, 2)
   type(scene_t) :: sc(n_scenes)
   type(ellipse_par_t) :: epar
-  type(pendulum_par_t) :: ppar
+  type(pendulum_par_t) :: ppar, ppar_free
 
   integer :: repeats = 7, is, iv, ir, i, nargs, stat
   real(dp) :: min_time = 0.25_dp
@@ -94,7 +101,7 @@ program throughput
       call profile_mode(i); stop
     case ('--help', '-h')
       write (output_unit, '(a)') 'vci_bench_throughput [--quick] [--repeats N] [--min-time S]'
-      write (output_unit, '(a)') 'vci_bench_throughput --profile SCENE(particle|ellipse|pendulum) VARIANT(1|2|3) EPISODES'
+      write (output_unit, '(a)') 'vci_bench_throughput --profile SCENE VARIANT(1..4) EPISODES'
       stop
     case default
       write (error_unit, '(a)') 'unknown argument '//trim(arg); error stop 2
@@ -113,7 +120,8 @@ program throughput
   ! 2. calibrate: episodes per repeat so that one repeat lasts at least min_time
   do is = 1, n_scenes
     do iv = 1, n_var
-      episodes(is, iv) = calibrate(is, iv)
+      episodes(is, iv) = 1
+      if (available(is, iv)) episodes(is, iv) = calibrate(is, iv)
     end do
   end do
 
@@ -122,7 +130,8 @@ program throughput
   do ir = 1, repeats
     do is = 1, n_scenes
       do iv = 1, n_var
-        tps(is, iv, ir) = run_timed(is, iv, episodes(is, iv)) / real(episodes(is, iv) * sc(is)%nsteps, dp)
+        tps(is, iv, ir) = 0.0_dp
+        if (available(is, iv)) tps(is, iv, ir) = run_timed(is, iv, episodes(is, iv)) / real(episodes(is, iv) * sc(is)%nsteps, dp)
       end do
     end do
   end do
@@ -130,6 +139,8 @@ program throughput
   ! 4. peak resident memory of each variant on its own (high-water mark reset before each run)
   do is = 1, n_scenes
     do iv = 1, n_var
+      hwm(is, iv) = 0.0_dp; rss0(is, iv) = 0.0_dp; newton_per_step(is, iv) = 0.0_dp
+      if (.not. available(is, iv)) cycle
       call reset_hwm()
       rss0(is, iv) = read_status_kb('VmRSS:')
       hwm(is, iv) = run_timed(is, iv, max(1_int64, episodes(is, iv) / 4))
@@ -139,6 +150,7 @@ program throughput
   end do
 
   call report()
+  call impact_report()
   if (checksum /= checksum) write (error_unit, '(a)') 'checksum NaN'
   if (.not. all_ok) then
     write (error_unit, '(a)') 'vci_bench_throughput: trajectory check FAILED (see table)'
@@ -164,19 +176,28 @@ contains
     q2 = [0.75_dp * acos(-1.0_dp), 0.0_dp]
     qd2 = [acos(-1.0_dp) / 4.0_dp, (acos(-1.0_dp) + 0.5_dp) * acos(-1.0_dp) / 4.0_dp]
     sc(3)%q0 = q2; sc(3)%q1 = q2 + sc(3)%h * qd2
+    ! the same without impacts: the ellipse starts 100 m up; the pendulum's cylinder is wider than l
+    sc(4) = sc(2); sc(4)%expected_impacts = 0
+    sc(4)%q0(3) = sc(4)%q0(3) + 100.0_dp; sc(4)%q1(3) = sc(4)%q1(3) + 100.0_dp
+    sc(5) = sc(3); sc(5)%expected_impacts = 0
 
     do k = 1, 2
       part(k) = particle_on_floor(1.0_dp, 9.8_dp)
       ell(k) = ellipse_model()
       pend(k) = pendulum_model()
+      pendf(k) = pendulum_model(); pendf(k)%radius = 2.5_dp
     end do
+    pendf(2)%analytic_hessian = .false.
     part(2)%analytic_hessian = .false.; ell(2)%analytic_hessian = .false.; pend(2)%analytic_hessian = .false.
     epar = ellipse_par_t(mass=ell(1)%mass, grav=ell(1)%grav, a=ell(1)%a, b=ell(1)%b)
     ppar = pendulum_par_t(mass=pend(1)%mass, grav=pend(1)%grav, length=pend(1)%length, radius=pend(1)%radius)
+    ppar_free = ppar; ppar_free%radius = pendf(1)%radius
     do k = 1, 2
       call integ(1, k)%create(part(k), sc(1)%h, stat); call must(stat, 'create particle')
       call integ(2, k)%create(ell(k), sc(2)%h, stat); call must(stat, 'create ellipse')
       call integ(3, k)%create(pend(k), sc(3)%h, stat); call must(stat, 'create pendulum')
+      call integ(4, k)%create(ell(k), sc(4)%h, stat); call must(stat, 'create ellipse-free')
+      call integ(5, k)%create(pendf(k), sc(5)%h, stat); call must(stat, 'create pendulum-free')
     end do
   end subroutine setup_scenes
 
@@ -189,20 +210,45 @@ contains
     end if
   end subroutine must
 
-  !> One hand-loop episode of scene is: final state and impacts.
-  subroutine hand_run(is, q, p, res)
+  !> One hand-loop episode of scene is (closed-form loop, or the same-algorithm loop when `same`):
+  !> final state and impacts.
+  subroutine hand_run(is, q, p, res, same)
     integer, intent(in) :: is
     real(dp), intent(out) :: q(:), p(:)
     type(hand_result_t), intent(out) :: res
+    logical, intent(in) :: same
+    real(dp) :: e
+    if (same) then
+      select case (is)
+      case (2, 4)
+        call same_ellipse(epar, sc(is)%h, sc(is)%t0, sc(is)%q0, sc(is)%q1, sc(is)%nsteps, q, p, e, res)
+      case (3)
+        call same_pendulum(ppar, sc(3)%h, sc(3)%t0, sc(3)%q0, sc(3)%q1, sc(3)%nsteps, q, p, e, res)
+      case (5)
+        call same_pendulum(ppar_free, sc(5)%h, sc(5)%t0, sc(5)%q0, sc(5)%q1, sc(5)%nsteps, q, p, e, res)
+      case default
+        res = hand_result_t(); res%ok = .false.; q = 0.0_dp; p = 0.0_dp; e = 0.0_dp
+      end select
+      checksum = checksum + e
+      return
+    end if
     select case (is)
     case (1)
       call hand_particle(part(1)%mass, part(1)%grav, sc(1)%h, sc(1)%t0, sc(1)%q0, sc(1)%q1, sc(1)%nsteps, q, p, res)
-    case (2)
-      call hand_ellipse(epar, sc(2)%h, sc(2)%t0, sc(2)%q0, sc(2)%q1, sc(2)%nsteps, q, p, res)
+    case (2, 4)
+      call hand_ellipse(epar, sc(is)%h, sc(is)%t0, sc(is)%q0, sc(is)%q1, sc(is)%nsteps, q, p, res)
     case (3)
       call hand_pendulum(ppar, sc(3)%h, sc(3)%t0, sc(3)%q0, sc(3)%q1, sc(3)%nsteps, q, p, res)
+    case (5)
+      call hand_pendulum(ppar_free, sc(5)%h, sc(5)%t0, sc(5)%q0, sc(5)%q1, sc(5)%nsteps, q, p, res)
     end select
   end subroutine hand_run
+
+  !> Is variant iv defined for scene is? (no same-algorithm loop for the particle)
+  logical function available(is, iv)
+    integer, intent(in) :: is, iv
+    available = .not. (iv == V_SAME .and. is == 1)
+  end function available
 
   !> One library episode: init from the pair, nsteps forward steps.
   subroutine lib_run(is, k, stat, observer)
@@ -214,32 +260,42 @@ contains
     call integ(is, k)%integrate(sc(is)%nsteps, 1, stat, observer)
   end subroutine lib_run
 
-  !> Library (both variants) against the hand loop: impact count and times, final (q, p).
+  !> Library (both variants) and the same-algorithm loop against the closed-form hand loop: impact
+  !> count and times, final (q, p).
   subroutine verify(is, all_ok)
     integer, intent(in) :: is
     logical, intent(inout) :: all_ok
-    type(hand_result_t) :: hres
+    type(hand_result_t) :: hres, sres
     type(impact_log_t) :: log
-    real(dp) :: qh(size(sc(is)%q0)), ph(size(sc(is)%q0)), dt, dq
-    integer :: k, j, nimp
+    real(dp) :: qh(size(sc(is)%q0)), ph(size(sc(is)%q0)), qv(size(sc(is)%q0)), pv(size(sc(is)%q0)), dt, dq
+    integer :: k, j, nimp, nv
     logical :: ok
     character(len=256) :: line
-    call hand_run(is, qh, ph, hres)
-    do k = 1, 2
-      log = impact_log_t()
-      call lib_run(is, k, stat, log)
-      ok = stat == VCI_OK .and. hres%ok .and. log%n == hres%n_impacts .and. log%n == sc(is)%expected_impacts
+    call hand_run(is, qh, ph, hres, .false.)
+    do k = 1, n_var
+      if (k == V_HAND .or. .not. available(is, k)) cycle
+      if (k == V_SAME) then
+        call hand_run(is, qv, pv, sres, .true.)
+        log = impact_log_t()
+        log%n = sres%n_impacts; log%t = sres%t_impact
+        stat = merge(VCI_OK, VCI_ERR_NEWTON, sres%ok)
+      else
+        log = impact_log_t()
+        call lib_run(is, k, stat, log)
+        qv = integ(is, k)%configuration(); pv = integ(is, k)%momentum()
+      end if
+      nv = log%n
+      ok = stat == VCI_OK .and. hres%ok .and. nv == hres%n_impacts .and. nv == sc(is)%expected_impacts
       dt = 0.0_dp
-      nimp = min(log%n, hres%n_impacts, max_recorded)
+      nimp = min(nv, hres%n_impacts, max_recorded)
       do j = 1, nimp
         dt = max(dt, abs(log%t(j) - hres%t_impact(j)))
       end do
-      dq = max(maxval(abs(integ(is, k)%configuration() - qh) / max(1.0_dp, abs(qh))), &
-               maxval(abs(integ(is, k)%momentum() - ph) / max(1.0_dp, abs(ph))))
+      dq = max(maxval(abs(qv - qh) / max(1.0_dp, abs(qh))), maxval(abs(pv - ph) / max(1.0_dp, abs(ph))))
       ok = ok .and. dt <= 1.0e-10_dp .and. dq <= 1.0e-9_dp
       all_ok = all_ok .and. ok
       write (line, '(a," | ",a," | ",i0," / ",i0," | ",es8.1," | ",es8.1," | ",a)') trim(scene_name(is)), &
-        trim(var_name(k)), log%n, hres%n_impacts, dt, dq, trim(merge('yes', 'NO ', ok))
+        trim(var_name(k)), nv, hres%n_impacts, dt, dq, trim(merge('yes', 'NO ', ok))
       check_report = check_report//'| '//trim(line)//' |'//new_line('a')
     end do
   end subroutine verify
@@ -260,9 +316,9 @@ contains
     integer :: n
     n = size(sc(is)%q0)
     t_start = now()
-    if (iv == V_HAND) then
+    if (iv == V_HAND .or. iv == V_SAME) then
       do e = 1, neps
-        call hand_run(is, q(1:n), p(1:n), hres)
+        call hand_run(is, q(1:n), p(1:n), hres, iv == V_SAME)
         checksum = checksum + q(1)
       end do
     else
@@ -298,8 +354,8 @@ contains
     real(dp) :: q(3), p(3)
     integer :: n
     n = size(sc(is)%q0)
-    if (iv == V_HAND) then
-      call hand_run(is, q(1:n), p(1:n), hres)
+    if (iv == V_HAND .or. iv == V_SAME) then
+      call hand_run(is, q(1:n), p(1:n), hres, iv == V_SAME)
       newton_count = real(hres%newton_iterations, dp) / real(sc(is)%nsteps, dp)
     else
       stats = integ(is, iv)%statistics()
@@ -361,40 +417,47 @@ contains
   subroutine report()
     real(dp) :: med(n_scenes, n_var), spread
     integer :: u
+    character(len=16) :: same_col
     u = output_unit
     do is = 1, n_scenes
       do iv = 1, n_var
-        med(is, iv) = median(tps(is, iv, :))
+        med(is, iv) = 0.0_dp
+        if (available(is, iv)) med(is, iv) = median(tps(is, iv, :))
       end do
     end do
     write (u, '(a)') '### Time per step'
     write (u, '(a)') ''
     write (u, '(a,i0,a,f4.2,a)') 'Median of ', repeats, ' repeats, each at least ', min_time, &
       ' s of repeated episodes (init from the pair + the scene''s steps, no observer). '// &
-      'Ratio = library time per step / hand-loop time per step.'
+      'Ratios = time per step / that of the closed-form hand loop (the floor) and of the same-algorithm '// &
+      'hand loop (the yardstick: bench/same_loops.f90), same run.'
     write (u, '(a)') ''
     write (u, '(a)') '| scene | steps/episode | variant | ns/step (median) | spread (max-min)/median | steps/s '// &
-      '| Newton it./step | ratio to hand |'
-    write (u, '(a)') '|---|---:|---|---:|---:|---:|---:|---:|'
+      '| Newton it./step | ratio to closed form | ratio to same algorithm |'
+    write (u, '(a)') '|---|---:|---|---:|---:|---:|---:|---:|---:|'
     do is = 1, n_scenes
       do iv = 1, n_var
+        if (.not. available(is, iv)) cycle
         spread = (maxval(tps(is, iv, :)) - minval(tps(is, iv, :))) / med(is, iv)
-        write (u, '("| ",a," | ",i0," | ",a," | ",f9.1," | ",f5.2," | ",es9.3," | ",f5.2," | ",f6.2," |")') &
+        same_col = 'n/a'
+        if (available(is, V_SAME)) write (same_col, '(f6.2)') med(is, iv) / med(is, V_SAME)
+        write (u, '("| ",a," | ",i0," | ",a," | ",f9.1," | ",f5.2," | ",es9.3," | ",f5.2," | ",f6.2," | ",a," |")') &
           trim(scene_name(is)), sc(is)%nsteps, trim(var_name(iv)), 1.0e9_dp * med(is, iv), spread, &
-          1.0_dp / med(is, iv), newton_per_step(is, iv), med(is, iv) / med(is, V_HAND)
+          1.0_dp / med(is, iv), newton_per_step(is, iv), med(is, iv) / med(is, V_HAND), trim(adjustl(same_col))
       end do
     end do
     write (u, '(a)') ''
     write (u, '(a)') '### Peak resident memory'
     write (u, '(a)') ''
     write (u, '(a)') 'VmHWM of this process after resetting the high-water mark (/proc/self/clear_refs) and '// &
-      'running one variant alone; the resident size at the reset (code, runtime, all three variants'' '// &
-      'data) is the floor. Ratio = library / hand loop.'
+      'running one variant alone; the resident size at the reset (code, runtime, all variants'' '// &
+      'data) is the floor. Ratio = variant / closed-form hand loop.'
     write (u, '(a)') ''
     write (u, '(a)') '| scene | variant | VmRSS at reset (kB) | VmHWM after run (kB) | growth (kB) | ratio to hand |'
     write (u, '(a)') '|---|---|---:|---:|---:|---:|'
     do is = 1, n_scenes
       do iv = 1, n_var
+        if (.not. available(is, iv)) cycle
         write (u, '("| ",a," | ",a," | ",i0," | ",i0," | ",i0," | ",f5.3," |")') trim(scene_name(is)), &
           trim(var_name(iv)), nint(rss0(is, iv)), nint(hwm(is, iv)), nint(hwm(is, iv) - rss0(is, iv)), &
           hwm(is, iv) / hwm(is, V_HAND)
@@ -404,13 +467,58 @@ contains
     write (u, '(a)') '### Same trajectories (checked before timing)'
     write (u, '(a)') ''
     write (u, '(a)') 'Required: the impact count of the example, impact times within 1e-10 s, final state within '// &
-      '1e-9 (relative to max(1, |value|)); otherwise the run fails.'
+      '1e-9 (relative to max(1, |value|)) of the closed-form hand loop; otherwise the run fails.'
     write (u, '(a)') ''
-    write (u, '(a)') '| scene | library variant | impacts (library / hand) | max abs. diff. of impact times (s) | '// &
+    write (u, '(a)') '| scene | variant | impacts (variant / closed form) | max abs. diff. of impact times (s) | '// &
       'max rel. diff. of final (q, p) | same |'
     write (u, '(a)') '|---|---|---:|---:|---:|---|'
     write (u, '(a)', advance='no') check_report
   end subroutine report
+
+  !> Regular and impact steps of the library, timed one by one (system_clock around each step) over
+  !> repeated episodes of the scenes with impacts; medians of each kind.
+  subroutine impact_report()
+    integer, parameter :: cap = 400000
+    real(dp), allocatable :: treg(:), timp(:)
+    integer :: nreg, nimp, k, ise, ivar
+    integer(int64) :: c0, c1, rate, e, neps
+    real(dp) :: mreg, mimp
+    allocate (treg(cap), timp(2000))
+    write (output_unit, '(a)') ''
+    write (output_unit, '(a)') '### Regular and impact steps of the library'
+    write (output_unit, '(a)') ''
+    write (output_unit, '(a)') 'Each step of repeated episodes timed on its own (system_clock around integ%step; '// &
+      'includes the clock''s own cost, ~20 ns); medians over the steps with and without an impact.'
+    write (output_unit, '(a)') ''
+    write (output_unit, '(a)') '| scene | variant | regular steps timed | impact steps timed | regular step (ns) '// &
+      '| impact step (ns) | impact / regular |'
+    write (output_unit, '(a)') '|---|---|---:|---:|---:|---:|---:|'
+    do ise = 2, 3
+      do ivar = V_LIB, V_LIB_FD
+        nreg = 0; nimp = 0
+        neps = max(1_int64, min(cap / sc(ise)%nsteps, 2000_int64 / max(1, sc(ise)%expected_impacts)))
+        do e = 1, neps
+          call integ(ise, ivar)%init_from_pair(sc(ise)%t0, sc(ise)%q0, sc(ise)%q1, stat)
+          do k = 1, int(sc(ise)%nsteps)
+            call system_clock(c0, rate)
+            call integ(ise, ivar)%step(1, stat)
+            call system_clock(c1)
+            call must(stat, 'library step')
+            if (integ(ise, ivar)%impact_count() > 0) then
+              if (nimp < size(timp)) nimp = nimp + 1
+              timp(nimp) = real(c1 - c0, dp) / real(rate, dp)
+            else
+              if (nreg < cap) nreg = nreg + 1
+              treg(nreg) = real(c1 - c0, dp) / real(rate, dp)
+            end if
+          end do
+        end do
+        mreg = median(treg(1:nreg)); mimp = median(timp(1:max(1, nimp)))
+        write (output_unit, '("| ",a," | ",a," | ",i0," | ",i0," | ",f9.1," | ",f10.1," | ",f7.2," |")') &
+          trim(scene_name(ise)), trim(var_name(ivar)), nreg, nimp, 1.0e9_dp * mreg, 1.0e9_dp * mimp, mimp / mreg
+      end do
+    end do
+  end subroutine impact_report
 
   !> --profile SCENE VARIANT EPISODES: run one variant only (for valgrind --tool=callgrind).
   subroutine profile_mode(i)

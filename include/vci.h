@@ -1,20 +1,38 @@
 /* vci.h -- C interface of vci, variational collision integrators for nonholonomic Lagrangian
  * systems with impacts. Hand-written; the Fortran side is src/vci_capi.F90.
  *
- * Usage: fill a vci_callbacks (zero-initialise it: `vci_callbacks cb = {0};`), vci_model_create,
+ * Usage: fill a vci_callbacks initialised with VCI_CALLBACKS_INIT, vci_model_create,
  * vci_integrator_create, vci_init_from_pair (or _from_momentum), vci_integrate, vci_get_state,
  * then vci_integrator_destroy and vci_model_destroy. Every int-returning call returns VCI_OK (0)
  * or a status from the enum below; after a failure vci_last_error(integ, ...) says which step, at
- * which time and why. The library never prints, exits or aborts.
+ * which time and why. The library never prints, exits or aborts, and hands nothing non-finite to
+ * LAPACK.
  *
- * Handles: NULL, destroyed or foreign handles are detected (a registry of live handles is
- * consulted before any handle is used) and give VCI_ERR_ARGUMENT; the message is then read with
- * vci_last_error(NULL, ...). A stale copy of a destroyed handle is detected as long as its
- * memory has not been handed out again to a new handle.
+ * Handles: a handle is a token, not an address, checked against a registry of live objects before
+ * anything is done with it. NULL, destroyed (also after the memory was reused), foreign or garbage
+ * handles give VCI_ERR_ARGUMENT; the message is then read with vci_last_error(NULL, ...).
  *
- * Threads: different integrators may run in different threads, but creating and destroying
- * handles, and calls with invalid handles (which write the library-wide message), must not
- * overlap with other vci calls.
+ * Threads (docs/C_API.md, "Threads"): every function may be called from any thread at any time.
+ *  - A model is immutable once created and may be shared: several threads may create integrators
+ *    from it at once, and destroy it meanwhile. Each integrator keeps its own copy of the model and
+ *    its own status and message: integrators in different threads share nothing (but the `user`
+ *    data their callbacks receive, which the callbacks must then guard themselves).
+ *  - An integrator is used by one call at a time. A call on an integrator while another call on it
+ *    runs (from another thread, or from one of its own callbacks) returns VCI_ERR_STATE and leaves
+ *    the integrator alone (message: vci_last_error(NULL, ...)); vci_integrator_destroy in that
+ *    situation kills the handle at once and frees the integrator when the running call returns
+ *    (which then stops after its current step and returns VCI_ERR_STATE).
+ *  - Failures with no live integrator to hold them are kept per thread: vci_last_error(NULL, ...)
+ *    gives the calling thread's last one.
+ *  - Output files (HDF5) are written under one library-wide lock.
+ *
+ * Callback contract (all model callbacks; SUNDIALS style): return 0 on success; a positive value
+ * for a recoverable failure: at a trial point of Newton's line search the solver backs off to a
+ * shorter step, anywhere else the step fails with VCI_ERR_CALLBACK; a negative value for an
+ * unrecoverable failure: the step fails at once with VCI_ERR_CALLBACK. vci_last_error then names
+ * the callback and the value it returned. NaN or Inf in an output counts as a recoverable failure
+ * (VCI_ERR_NONFINITE if it ends the step). The state stays at the last accepted step. Codes are
+ * never carried over: a failure the line search absorbed is forgotten once its step is accepted.
  *
  * Arrays are caller-owned, of doubles, and column-major; sizes use the model's n (configuration
  * dimension), m (number of constraint one-forms) and ngaps (number of gap functions).
@@ -22,13 +40,16 @@
 #ifndef VCI_H
 #define VCI_H
 
+#include <stddef.h>
+#include <stdint.h>
+
 #ifdef __cplusplus
 extern "C" {
 #endif
 
 /** Version of this header; vci_version() gives the library's (major*10000 + minor*100 + patch). */
 #define VCI_VERSION_MAJOR 0
-#define VCI_VERSION_MINOR 1
+#define VCI_VERSION_MINOR 2
 #define VCI_VERSION_PATCH 0
 #define VCI_VERSION_NUMBER (VCI_VERSION_MAJOR * 10000 + VCI_VERSION_MINOR * 100 + VCI_VERSION_PATCH)
 
@@ -37,13 +58,14 @@ enum {
   VCI_OK = 0,
   VCI_ERR_ARGUMENT,         /* 1: bad input: NULL or dead handle, NULL array, bad size or value */
   VCI_ERR_CALLBACK,         /* 2: a user callback returned nonzero */
-  VCI_ERR_NONFINITE,        /* 3: NaN or Inf from a callback or a solve */
+  VCI_ERR_NONFINITE,        /* 3: NaN or Inf from a callback or a solve, or a time that overflows */
   VCI_ERR_NEWTON,           /* 4: Newton iteration did not converge */
   VCI_ERR_IMPACT,           /* 5: the impact stages had no admissible solution */
   VCI_ERR_TOO_MANY_IMPACTS, /* 6: more impacts in one step than allowed (contact, chatter) */
   VCI_ERR_INADMISSIBLE,     /* 7: a state lies outside the admissible set (some g_j < 0) */
   VCI_ERR_IO,               /* 8: output could not be written, or HDF5 not built in */
-  VCI_ERR_STATE             /* 9: call out of order (e.g. step before init) */
+  VCI_ERR_STATE,            /* 9: call out of order (step before init), or the integrator is busy */
+  VCI_ERR_MEMORY            /* 10: an allocation failed (sizes too large for this machine) */
 };
 
 /** Impact energy conditions for vci_set_impact_energy. */
@@ -55,8 +77,7 @@ enum {
 typedef struct vci_model_s *vci_model;           /* opaque */
 typedef struct vci_integrator_s *vci_integrator; /* opaque */
 
-/* Callbacks return 0 on success; anything else stops the step with VCI_ERR_CALLBACK (and
- * vci_last_error reports the value returned). Non-finite outputs give VCI_ERR_NONFINITE.
+/* Callbacks return 0, > 0 (recoverable failure) or < 0 (unrecoverable): the contract above.
  * Matrices are column-major: omega[i + n*mu] is component i of the one-form omega^mu;
  * hess[i + n*j] = d2 L_d / dq_i dv_j. `user` is the pointer given to vci_model_create. */
 
@@ -81,12 +102,16 @@ typedef int (*vci_gap_grads_fn)(int n, int ngaps, const double *q, double *dg /*
 typedef int (*vci_energy_fn)(int n, const double *q, const double *p, double *e /* [1] */, void *user);
 /** Called for each impact: time t, fraction alpha of the step, gap_index j (0-based, the index into
  *  g[] of vci_gaps_fn), the configuration q[n] on the wall and the normal impulse (p after minus p
- *  before = impulse * grad g_j, forward time). Nonzero return: VCI_ERR_CALLBACK, but the step that
- *  contains the impact has been accepted (the state is after it). */
+ *  before = impulse * grad g_j, forward time). Nonzero return (either sign): VCI_ERR_CALLBACK, but
+ *  the step that contains the impact has been accepted (the state is after it). */
 typedef int (*vci_impact_fn)(double t, double alpha, int gap_index, const double *q, double impulse, void *user);
 
-/** The model's callbacks. Zero-initialise the struct: members may be added at its end only. */
+/** The model's callbacks. `size` says how large the struct was in the header the caller was
+ *  built with: always initialise with VCI_CALLBACKS_INIT, then set the members you need.
+ *  Members are only ever added at the end; the library treats those beyond `size` as NULL, and
+ *  refuses a struct from a newer header that sets members it does not know. */
 typedef struct vci_callbacks {
+  size_t size;                                              /* = sizeof(vci_callbacks): VCI_CALLBACKS_INIT */
   vci_ld_grad_fn d1_ld, d2_ld; vci_ld_dh_fn d3_ld;          /* required */
   vci_hessian_fn mixed_hessian;                             /* optional (NULL: differenced) */
   vci_forms_fn constraint_forms;                            /* required iff m > 0 */
@@ -94,45 +119,118 @@ typedef struct vci_callbacks {
   vci_gaps_fn gaps;                                         /* required iff ngaps > 0 */
   vci_gap_grads_fn gap_gradients;                           /* optional (NULL: differenced) */
   vci_energy_fn energy;                                     /* optional; needed by VCI_IMPACT_HAMILTONIAN */
+  /* new members here */
 } vci_callbacks;
+
+/** Initialiser: `vci_callbacks cb = VCI_CALLBACKS_INIT;` (size set, every callback NULL). The C form
+ *  is designated (no -Wmissing-field-initializers warning); the C++ one lists every member. */
+#ifdef __cplusplus
+#define VCI_CALLBACKS_INIT {sizeof(vci_callbacks), 0, 0, 0, 0, 0, 0, 0, 0, 0}
+#else
+#define VCI_CALLBACKS_INIT {.size = sizeof(vci_callbacks)}
+#endif
 
 /** Create a model of n coordinates, m constraints, ngaps walls. The callbacks are copied; `user`
  *  is passed to every callback. On failure *model = NULL (if model is not NULL).
- *  Returns VCI_OK; VCI_ERR_ARGUMENT: model or cb NULL, n < 1, m < 0, m > n, ngaps < 0, or a
- *  required callback NULL. */
-int  vci_model_create(vci_model *model, int n, int m, int ngaps, const vci_callbacks *cb, void *user);
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT: model or cb NULL, cb->size not that of a vci_callbacks (not
+ *  initialised with VCI_CALLBACKS_INIT), a callback set that this library does not know (a newer
+ *  header), n < 1, m < 0, m > n, ngaps < 0, n + m + 1 > 46340, n * ngaps >= 2^31, or a required
+ *  callback NULL; VCI_ERR_MEMORY.
+ *  (vci_model_create is a macro: the symbol vci_model_create keeps the 0.1 struct without `size`,
+ *  for binaries built against vci 0.1.) */
+int  vci_model_create_v2(vci_model *model, int n, int m, int ngaps, const vci_callbacks *cb, void *user);
+#define vci_model_create vci_model_create_v2
+
+/* ---- Continuous Lagrangian models (docs/SCHEMES.md): the library builds L_d from L by a scheme ---- */
+
+/** Schemes for vci_set_scheme (the Fortran VCI_SCHEME_* values). */
+enum {
+  VCI_SCHEME_DISCRETE = 0, /* the model is a discrete L_d (vci_model_create): the only scheme it has */
+  VCI_SCHEME_LEFT = 1,     /* L_d = h L(q, (v - q)/h): the paper's retraction, order 1 */
+  VCI_SCHEME_MIDPOINT = 2, /* L_d = h L((q + v)/2, (v - q)/h): order 2, the default for a continuous model */
+  VCI_SCHEME_LOBATTO = 3   /* Galerkin with s + 1 Lobatto points, s = 1..VCI_LOBATTO_MAX_STAGES: order 2s (m = 0 only) */
+};
+#define VCI_LOBATTO_MAX_STAGES 8
+
+/** out[n] = dL/dq or dL/dqdot at (q[n], v[n]); or out[0] = L(q, v) (vci_lagrangian_value_fn). */
+typedef int (*vci_lagrangian_value_fn)(int n, const double *q, const double *v, double *l /* [1] */, void *user);
+typedef int (*vci_lagrangian_grad_fn)(int n, const double *q, const double *v, double *out, void *user);
+/** The three Hessian blocks at (q, v), each n x n column-major: lqq[i + n*j] = d2L/dq_i dq_j,
+ *  lqv[i + n*j] = d2L/dq_i dv_j, lvv[i + n*j] = d2L/dv_i dv_j. */
+typedef int (*vci_lagrangian_hessians_fn)(int n, const double *q, const double *v, double *lqq, double *lqv,
+                                          double *lvv, void *user);
+
+/** The callbacks of a continuous model, a struct of its own with its own leading size (same
+ *  rules as vci_callbacks: initialise with VCI_LAGRANGIAN_CALLBACKS_INIT; members are only ever
+ *  added at the end). Same return contract and conventions as the discrete callbacks. */
+typedef struct vci_lagrangian_callbacks {
+  size_t size;                                  /* = sizeof(vci_lagrangian_callbacks) */
+  vci_lagrangian_value_fn lagrangian;           /* required: L(q, v) */
+  vci_lagrangian_grad_fn dl_dq, dl_dv;          /* required: dL/dq, dL/dqdot (the momentum) */
+  vci_lagrangian_hessians_fn hessians;          /* optional (NULL: differenced from dl_dq, dl_dv) */
+  vci_forms_fn constraint_forms;                /* required iff m > 0 (then not with lobatto) */
+  vci_gaps_fn gaps;                             /* required iff ngaps > 0 */
+  vci_gap_grads_fn gap_gradients;               /* optional (NULL: differenced) */
+  vci_energy_fn energy;                         /* optional H(q, p) (NULL: Legendre inversion of dl_dv) */
+  /* new members here */
+} vci_lagrangian_callbacks;
+
+#ifdef __cplusplus
+#define VCI_LAGRANGIAN_CALLBACKS_INIT {sizeof(vci_lagrangian_callbacks), 0, 0, 0, 0, 0, 0, 0, 0}
+#else
+#define VCI_LAGRANGIAN_CALLBACKS_INIT {.size = sizeof(vci_lagrangian_callbacks)}
+#endif
+
+/** Create a continuous model L(q, qdot) of n coordinates, m constraints, ngaps walls (the
+ *  callbacks are copied; `user` goes to every one). An integrator made from it uses
+ *  VCI_SCHEME_MIDPOINT until vci_set_scheme chooses another. On failure *model = NULL.
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT: as vci_model_create, with lagrangian, dl_dq, dl_dv required;
+ *  VCI_ERR_MEMORY. */
+int  vci_model_create_lagrangian(vci_model *model, int n, int m, int ngaps, const vci_lagrangian_callbacks *cb,
+                                 void *user);
+
+/** Choose the scheme of an integrator made from a continuous model: VCI_SCHEME_LEFT, _MIDPOINT,
+ *  or _LOBATTO with `stages` = s in 1..VCI_LOBATTO_MAX_STAGES (ignored for the others). Call before
+ *  initialising: the state is reset. Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, a discrete
+ *  model, unknown scheme, s out of range, lobatto with m > 0; VCI_ERR_STATE: busy. */
+int  vci_set_scheme(vci_integrator integ, int scheme, int stages);
 
 /** Release the model and set *model = NULL. NULL-safe (model or *model NULL: nothing happens).
- *  Integrators created from it keep it alive: it may be destroyed right after vci_integrator_create. */
+ *  Integrators created from it keep their own copy: it may be destroyed right after
+ *  vci_integrator_create. */
 void vci_model_destroy(vci_model *model);
 
 /** Create an integrator of step length h (> 0, finite) for model. On failure *integ = NULL.
- *  Returns VCI_OK; VCI_ERR_ARGUMENT: integ NULL, model NULL or not live, h not positive and finite. */
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT: integ NULL, model NULL or not live, h not positive and finite;
+ *  VCI_ERR_MEMORY: the workspace (about 3 (n + m + 1)^2 doubles) could not be allocated. */
 int  vci_integrator_create(vci_integrator *integ, vci_model model, double h);
 
-/** Destroy the integrator (finishing its output file, if any) and set *integ = NULL. NULL-safe. */
+/** Destroy the integrator (finishing its output file, if any) and set *integ = NULL. NULL-safe.
+ *  When a call on it is running, the integrator is freed as that call returns (see Threads). */
 void vci_integrator_destroy(vci_integrator *integ);
 
 /** Newton tolerances: row i converges when |r_i| <= atol + rtol * (size of row i's terms); at most
  *  max_iterations per solve. Defaults: atol = 0, rtol = 1e-12, max_iterations = 30.
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, atol or rtol negative or not finite, both zero,
- *  max_iterations < 1. */
+ *  rtol >= 1 (any iterate would pass), max_iterations < 1; VCI_ERR_STATE: busy. */
 int  vci_set_tolerances(vci_integrator integ, double atol, double rtol, int max_iterations);
 
 /** Impact energy condition, VCI_IMPACT_DISCRETE (default) or VCI_IMPACT_HAMILTONIAN.
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, unknown mode, or hamiltonian without the energy
- *  callback. */
+ *  callback; VCI_ERR_STATE: busy. */
 int  vci_set_impact_energy(vci_integrator integ, int mode);
 
-/** Impacts allowed inside one step before VCI_ERR_TOO_MANY_IMPACTS (default 16).
- *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, max_impacts < 1. */
+/** Impacts allowed inside one step before VCI_ERR_TOO_MANY_IMPACTS (default 16); the records
+ *  grow on demand, so a large bound costs nothing up front.
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, max_impacts < 1; VCI_ERR_STATE: busy. */
 int  vci_set_max_impacts(vci_integrator integ, int max_impacts);
 
 /** Start from the pair q0[n] at t0 and q1[n] at t0 + h. The current state becomes
  *  (t0 + h, q1, p1) with p1 = D2 L_d(q0, q1, h), step index 1; the discrete energy is E_d(q0, q1, h).
- *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, q0 or q1 NULL, NaN/Inf in t0, q0 or q1, a
- *  required constraint callback missing; VCI_ERR_INADMISSIBLE: q0 or q1 outside the admissible
- *  set; VCI_ERR_CALLBACK or VCI_ERR_NONFINITE: D2, D3 or gaps failed or gave NaN/Inf. After a
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, q0 or q1 NULL, NaN/Inf in t0, q0 or q1, t0 + h
+ *  overflows, a required constraint callback missing; VCI_ERR_INADMISSIBLE: q0 or q1 outside the
+ *  admissible set; VCI_ERR_CALLBACK or VCI_ERR_NONFINITE: a callback failed or gave NaN/Inf;
+ *  VCI_ERR_STATE: busy, or an open output file already holds steps (close it first). After a
  *  failure the integrator has no state (VCI_ERR_STATE from stepping) until initialised again. */
 int  vci_init_from_pair(vci_integrator integ, double t0, const double *q0, const double *q1);
 
@@ -141,19 +239,21 @@ int  vci_init_from_pair(vci_integrator integ, double t0, const double *q0, const
 int  vci_init_from_momentum(vci_integrator integ, double t0, const double *q0, const double *p0);
 
 /** One step: direction +1 forward ((+) scheme), -1 backward ((-) scheme).
- *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle or direction; VCI_ERR_STATE: not initialised;
- *  VCI_ERR_CALLBACK, VCI_ERR_NONFINITE, VCI_ERR_NEWTON, VCI_ERR_IMPACT, VCI_ERR_TOO_MANY_IMPACTS:
- *  the step failed and the state stays at the last accepted step; VCI_ERR_CALLBACK also when the
- *  impact callback returned nonzero, VCI_ERR_IO when the output file failed (for these two the
- *  step was accepted). */
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle or direction; VCI_ERR_STATE: not initialised, busy,
+ *  or an open output file holds a run in the other direction; VCI_ERR_NONFINITE: also when the
+ *  time of the next state overflows;
+ *  VCI_ERR_CALLBACK, VCI_ERR_NONFINITE, VCI_ERR_NEWTON, VCI_ERR_IMPACT, VCI_ERR_TOO_MANY_IMPACTS,
+ *  VCI_ERR_MEMORY: the step failed and the state stays at the last accepted step; VCI_ERR_CALLBACK
+ *  also when the impact callback returned nonzero, VCI_ERR_IO when the output file failed (for
+ *  these two the step was accepted). */
 int  vci_step(vci_integrator integ, int direction);                 /* +1 forward, -1 backward */
 
 /** nsteps (>= 0) steps in one direction; stops at the first failure (state = last accepted step).
  *  Returns as vci_step, and VCI_ERR_ARGUMENT for nsteps < 0. */
-int  vci_integrate(vci_integrator integ, long nsteps, int direction);
+int  vci_integrate(vci_integrator integ, int64_t nsteps, int direction);
 
 /** The current state: *t, q[n], p[n]. Any of t, q, p may be NULL to skip it.
- *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle; VCI_ERR_STATE: not initialised. */
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle; VCI_ERR_STATE: not initialised, or busy. */
 int  vci_get_state(vci_integrator integ, double *t, double *q, double *p);
 
 /** The multipliers lambda[m] of the last step (nothing is written when m = 0).
@@ -162,35 +262,36 @@ int  vci_get_multipliers(vci_integrator integ, double *lambda);
 
 /** The discrete energy E_d of the last step (of its last sub-step if it had impacts); NaN after
  *  vci_init_from_momentum until the first step.
- *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, energy NULL; VCI_ERR_STATE: not initialised. */
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, energy NULL; VCI_ERR_STATE: not initialised, busy. */
 int  vci_get_energy(vci_integrator integ, double *energy);
 
 /** The index k of the current state (t = t0 + k h). Returns as vci_get_energy. */
-int  vci_get_index(vci_integrator integ, long *k);
+int  vci_get_index(vci_integrator integ, int64_t *k);
 
 /** Counters over the integrator's life; any pointer may be NULL to skip it.
- *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle. */
-int  vci_get_stats(vci_integrator integ, long *steps, long *impacts, long *newton_iterations);
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle; VCI_ERR_STATE: busy. */
+int  vci_get_stats(vci_integrator integ, int64_t *steps, int64_t *impacts, int64_t *newton_iterations);
 
 /** Call fn(..., user) at every impact of later steps; fn = NULL removes it.
- *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle. */
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle; VCI_ERR_STATE: busy. */
 int  vci_set_impact_callback(vci_integrator integ, vci_impact_fn fn, void *user);
 
 /** Write the trajectory of later steps to the HDF5 file path (replaced if it exists); the file is
- *  finished by vci_close_output, vci_integrator_destroy or the next vci_open_output.
+ *  finished by vci_close_output, vci_integrator_destroy or the next vci_open_output. One file holds
+ *  one run: steps in one direction from one initialisation (other calls give VCI_ERR_STATE).
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, path NULL or empty; VCI_ERR_IO: the file cannot
- *  be created, or this library was built without HDF5 (vci_last_error says which). */
+ *  be created, or this library was built without HDF5 (vci_last_error says which); VCI_ERR_STATE. */
 int  vci_open_output(vci_integrator integ, const char *path);      /* HDF5; VCI_ERR_IO when unavailable */
 
 /** Finish and close the output file, if any. Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle;
- *  VCI_ERR_IO: the file could not be finished. */
+ *  VCI_ERR_IO: the file could not be finished (the message says why); VCI_ERR_STATE: busy. */
 int  vci_close_output(vci_integrator integ);
 
 /** Copy the message of the last call on integ (empty after a success) into buffer[size],
- *  truncated to size - 1 characters and NUL-terminated. integ = NULL: the last failure that had no
- *  live integrator to hold it (failed create, NULL or dead handle).
+ *  truncated to size - 1 characters and NUL-terminated. integ = NULL: the calling thread's last
+ *  failure that had no live integrator to hold it (failed create, NULL, dead or busy handle).
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: buffer NULL or size < 1 (nothing written), or integ not live
- *  (buffer then says so). */
+ *  (buffer then says so); VCI_ERR_STATE: a call on integ is running (buffer says so). */
 int  vci_last_error(vci_integrator integ, char *buffer, int size);  /* NUL-terminated, truncated to size */
 
 /** A static description of a status code ("unknown status" for other values); never NULL. */

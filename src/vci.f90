@@ -11,10 +11,11 @@ module vci
                             VCI_SCHEME_DISCRETE, VCI_SCHEME_LEFT, VCI_SCHEME_MIDPOINT, VCI_SCHEME_LOBATTO, &
                             VCI_LOBATTO_MAX_STAGES, vci_scheme_name
   use vci_newton, only: vci_newton_t, vci_newton_result_t, vci_system_t, NEWTON_CONVERGED, &
-                        NEWTON_MAX_ITERATIONS, NEWTON_NO_DESCENT, NEWTON_SINGULAR, NEWTON_EVALUATION
+                        NEWTON_MAX_ITERATIONS, NEWTON_NO_DESCENT, NEWTON_SINGULAR, NEWTON_EVALUATION, &
+                        NEWTON_NONFINITE
   use vci_csv_output, only: vci_csv_writer_t
   implicit none
   public
   !> Library version: major*10000 + minor*100 + patch (as vci_version() in C).
-  integer, parameter :: VCI_VERSION_NUMBER = 100
+  integer, parameter :: VCI_VERSION_NUMBER = 200
 end module vci

@@ -1,23 +1,35 @@
 !> The C ABI of vci (include/vci.h): the only module that speaks iso_c_binding for C callers.
 !>
-!> Handles are c_loc of allocated Fortran objects and are checked against a registry of live
-!> handles before they are dereferenced, so NULL, destroyed or foreign handles give
-!> VCI_ERR_ARGUMENT instead of a crash. The C model is one more extension of vci_model_t: it holds
-!> the C function pointers and the user pointer and dispatches with c_f_procpointer (no internal
-!> procedures, hence no trampolines and no executable stack). A model is reference counted, so an
-!> integrator keeps it alive after vci_model_destroy.
+!> Handles are not addresses: a handle is a token (serial number, slot) into a registry of live
+!> objects. Serial numbers are never reused, so NULL, destroyed, foreign or garbage handles give
+!> VCI_ERR_ARGUMENT instead of a crash even after malloc has reused the memory of a destroyed object.
+!> The registry is guarded by a lock (src/vci_capi_sync.c), so handles may be created, used and
+!> destroyed from any thread.
 !>
-!> Errors that cannot be attached to a live integrator (bad handles, failed creation) go to a
-!> library-wide message read with vci_last_error(NULL, ...). The registry and that message are
-!> global state: create/destroy and calls with invalid handles are not thread-safe.
+!> No mutable state is shared between integrators: a model is immutable once created, and each
+!> integrator keeps its own copy of it (callbacks, user pointer, sizes) together with its own
+!> status, message and callback record. An integrator is marked busy while a call on it runs;
+!> another call on it (from a callback it is running, or from another thread) gives VCI_ERR_STATE,
+!> and vci_integrator_destroy of a busy integrator is carried out when the running call returns.
+!> Failures without a live integrator to hold them (bad handles, failed creation) go to a message
+!> of the calling thread, read with vci_last_error(NULL, ...). HDF5 is not thread-safe: all output
+!> calls are serialised by a second lock.
+!>
+!> The C model is one more extension of vci_model_t: it holds the C function pointers and the
+!> user pointer and dispatches with c_f_procpointer (no internal procedures, hence no trampolines
+!> and no executable stack). Return codes pass through the shared callback adapter
+!> (vci_callback_adapter): 0 success, > 0 recoverable, < 0 unrecoverable.
 module vci_capi
   use, intrinsic :: iso_c_binding
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use vci_kinds, only: dp, i8
   use vci_status
+  use vci_limits, only: vci_size_problem
   use vci_model, only: vci_model_t
+  use vci_lagrangian, only: vci_lagrangian_t
   use vci_observer, only: vci_observer_t, vci_run_info_t, vci_impact_t
   use vci_integrator, only: vci_integrator_t, vci_stats_t, VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN
+  use vci_callback_adapter, only: vci_callback_record_t
   use vci, only: VCI_VERSION_NUMBER
 #ifdef VCI_HAVE_HDF5
   use vci_hdf5_output, only: vci_hdf5_writer_t
@@ -25,21 +37,52 @@ module vci_capi
   implicit none
   private
 
-  public :: vci_model_create, vci_model_destroy, vci_integrator_create, vci_integrator_destroy
+  public :: vci_model_create_v2, vci_model_create_v0_1, vci_model_create_lagrangian, vci_model_destroy
+  public :: vci_set_scheme
+  public :: vci_integrator_create, vci_integrator_destroy
   public :: vci_set_tolerances, vci_set_impact_energy, vci_set_max_impacts
   public :: vci_init_from_pair, vci_init_from_momentum, vci_step, vci_integrate
   public :: vci_get_state, vci_get_multipliers, vci_get_energy, vci_get_index, vci_get_stats
   public :: vci_set_impact_callback, vci_open_output, vci_close_output
   public :: vci_last_error, vci_status_string, vci_version
 
-  !> Mirror of `struct vci_callbacks` in vci.h (same order; new members only at the end).
+  !> Mirror of `struct vci_callbacks` in vci.h: a leading size, then the callbacks. New members are
+  !> added at the end only; a caller built against an older header passes a smaller size and the
+  !> members beyond it are NULL (docs/C_API.md, "Adding a callback").
   type, bind(C) :: vci_callbacks_c
-    type(c_funptr) :: d1_ld, d2_ld, d3_ld, mixed_hessian, constraint_forms, discrete_constraint, &
-                      gaps, gap_gradients, energy
+    integer(c_size_t) :: size = 0
+    type(c_funptr) :: d1_ld = c_null_funptr, d2_ld = c_null_funptr, d3_ld = c_null_funptr
+    type(c_funptr) :: mixed_hessian = c_null_funptr, constraint_forms = c_null_funptr
+    type(c_funptr) :: discrete_constraint = c_null_funptr, gaps = c_null_funptr
+    type(c_funptr) :: gap_gradients = c_null_funptr, energy = c_null_funptr
   end type vci_callbacks_c
 
-  !> The C signatures of the callbacks (vci.h); each returns 0 on success.
+  !> The callbacks as vci.h 0.1.0 laid them out (nine pointers, no size): what binaries built
+  !> against 0.1 pass to the symbol vci_model_create.
+  type, bind(C) :: vci_callbacks_v0_1
+    type(c_funptr) :: d1_ld, d2_ld, d3_ld, mixed_hessian, constraint_forms, discrete_constraint, &
+                      gaps, gap_gradients, energy
+  end type vci_callbacks_v0_1
+
+  !> Mirror of `struct vci_lagrangian_callbacks` in vci.h (continuous models): a leading size of
+  !> its own, then the callbacks; the same growth rules as vci_callbacks_c.
+  type, bind(C) :: vci_lagrangian_callbacks_c
+    integer(c_size_t) :: size = 0
+    type(c_funptr) :: lagrangian = c_null_funptr, dl_dq = c_null_funptr, dl_dv = c_null_funptr
+    type(c_funptr) :: hessians = c_null_funptr, constraint_forms = c_null_funptr
+    type(c_funptr) :: gaps = c_null_funptr, gap_gradients = c_null_funptr, energy = c_null_funptr
+  end type vci_lagrangian_callbacks_c
+
+  !> The C signatures of the callbacks (vci.h); each returns 0, > 0 (recoverable) or < 0.
+  !> (L, dL/dq and dL/dqdot have c_energy_fn's shape: n, q, v, out, user.)
   abstract interface
+    integer(c_int) function c_lhess_fn(n, q, v, lqq, lqv, lvv, user) bind(C)
+      import :: c_int, c_double, c_ptr
+      integer(c_int), value :: n
+      real(c_double), intent(in) :: q(*), v(*)
+      real(c_double), intent(inout) :: lqq(*), lqv(*), lvv(*)
+      type(c_ptr), value :: user
+    end function c_lhess_fn
     integer(c_int) function c_ld_grad_fn(n, q, v, h, out, user) bind(C)
       import :: c_int, c_double, c_ptr
       integer(c_int), value :: n
@@ -80,21 +123,42 @@ module vci_capi
     end function c_impact_fn
   end interface
 
+  ! src/vci_capi_sync.c
   interface
     pure integer(c_size_t) function c_strlen(s) bind(C, name='strlen')
       import :: c_size_t, c_ptr
       type(c_ptr), value, intent(in) :: s
     end function c_strlen
+    subroutine lock_registry() bind(C, name='vci_lock_registry')
+    end subroutine lock_registry
+    subroutine unlock_registry() bind(C, name='vci_unlock_registry')
+    end subroutine unlock_registry
+    subroutine lock_io() bind(C, name='vci_lock_io')
+    end subroutine lock_io
+    subroutine unlock_io() bind(C, name='vci_unlock_io')
+    end subroutine unlock_io
+    subroutine c_set_thread_message(msg, len) bind(C, name='vci_set_thread_message')
+      import :: c_char, c_int
+      character(kind=c_char), intent(in) :: msg(*)
+      integer(c_int), value :: len
+    end subroutine c_set_thread_message
+    integer(c_int) function c_get_thread_message(buf, size) bind(C, name='vci_get_thread_message')
+      import :: c_char, c_int
+      character(kind=c_char), intent(inout) :: buf(*)
+      integer(c_int), value :: size
+    end function c_get_thread_message
   end interface
 
-  !> The model behind a `vci_model` handle: C function pointers plus the user pointer.
+  !> The model behind a `vci_model` handle (immutable once created), and each integrator's own
+  !> copy of it: C function pointers, user pointer, and the integrator's callback record.
+  !> A continuous model's handle is a c_model_t too (continuous = .true., callbacks in lcb): the
+  !> registry, copies and destroy are the same; an integrator made from it drives a c_lagrangian_t.
   type, extends(vci_model_t) :: c_model_t
     type(vci_callbacks_c) :: cb
+    logical :: continuous = .false.
+    type(vci_lagrangian_callbacks_c) :: lcb
     type(c_ptr) :: user = c_null_ptr
-    integer :: refs = 0               !< the handle itself plus every integrator using the model
-    integer(c_int) :: last_rc = 0     !< nonzero return of the last failing callback (0: none failed)
-    character(len=24) :: last_failed = ''     !< which callback returned nonzero
-    character(len=24) :: last_nonfinite = ''  !< which callback returned NaN/Inf (with 0)
+    type(vci_callback_record_t) :: record
   contains
     procedure :: d1 => cm_d1
     procedure :: d2 => cm_d2
@@ -109,7 +173,7 @@ module vci_capi
 
   !> Forwards impacts to the C impact callback and everything to the output file, if any. The
   !> output sees one run from vci_open_output to vci_close_output/destroy, however many
-  !> vci_step/vci_integrate calls it spans.
+  !> vci_step/vci_integrate calls it spans (all in one direction, from one initialisation).
   type, extends(vci_observer_t) :: c_observer_t
     type(c_funptr) :: impact_fn = c_null_funptr
     type(c_ptr) :: user = c_null_ptr
@@ -117,6 +181,9 @@ module vci_capi
     real(dp) :: impact_t = 0.0_dp
     class(vci_observer_t), allocatable :: output
     logical :: started = .false.
+    integer :: direction = 0               !< of the output's run, once started
+    type(c_integrator_t), pointer :: owner => null()
+    logical :: stopped_by_destroy = .false.
   contains
     procedure :: on_start => obs_start
     procedure :: on_step => obs_step
@@ -124,112 +191,197 @@ module vci_capi
     procedure :: on_finish => obs_finish
   end type c_observer_t
 
-  !> The object behind a `vci_integrator` handle.
+  !> The C continuous model: extends vci_lagrangian_t as c_model_t extends vci_model_t; the return
+  !> codes go through the same adapter, into the record of its integrator's model copy.
+  type, extends(vci_lagrangian_t) :: c_lagrangian_t
+    type(vci_lagrangian_callbacks_c) :: cb
+    type(c_ptr) :: user = c_null_ptr
+    type(vci_callback_record_t), pointer :: record => null()
+  contains
+    procedure :: lagrangian => cl_value
+    procedure :: dl_dq => cl_dl_dq
+    procedure :: dl_dv => cl_dl_dv
+    procedure :: hessians => cl_hessians
+    procedure :: constraint_forms => cl_forms
+    procedure :: gaps => cl_gaps
+    procedure :: gap_gradients => cl_gap_grads
+    procedure :: energy => cl_energy
+  end type c_lagrangian_t
+
   type :: c_integrator_t
     type(vci_integrator_t) :: integ
-    type(c_model_t), pointer :: model => null()
+    type(c_model_t) :: model              !< this integrator's own copy of the model (and its record)
+    type(c_lagrangian_t) :: lag           !< the continuous model it drives, when model%continuous
     type(c_observer_t) :: obs
+    logical :: busy = .false.             !< a call on it is running (guarded by the registry lock)
+    logical :: destroy_pending = .false.  !< destroyed while busy: freed when that call returns
   end type c_integrator_t
 
-  ! registry of live handles (addresses), so that no handle is dereferenced unless it is live
+  ! The registry: a handle is the token serial * 2**slot_bits + slot; slot 0 is never used, so no
+  ! handle is NULL. Serial numbers grow by one per created object and are never reused.
   integer, parameter :: KIND_MODEL = 1, KIND_INTEGRATOR = 2
-  integer(c_intptr_t), allocatable, save :: live_addr(:)
-  integer, allocatable, save :: live_kind(:)
+  integer, parameter :: slot_bits = merge(20, 12, bit_size(0_c_intptr_t) > 32)
+  integer(c_intptr_t), parameter :: slot_mask = 2_c_intptr_t**slot_bits - 1
+  integer(c_intptr_t), parameter :: max_serial = huge(0_c_intptr_t) / 2_c_intptr_t**slot_bits
+  type :: slot_t
+    integer(c_intptr_t) :: serial = 0      !< 0: free
+    integer :: kind = 0
+    type(c_model_t), pointer :: model => null()
+    type(c_integrator_t), pointer :: integ => null()
+  end type slot_t
+  type(slot_t), allocatable, save :: slots(:)
   integer, save :: n_live = 0
+  integer(c_intptr_t), save :: last_serial = 0
 
-  !> Message of the last failure not attached to a live integrator.
-  character(len=VCI_MSG_LEN), save :: global_message = ''
-
-  ! NUL-terminated status strings handed out by vci_status_string (static storage)
-  integer, parameter :: STATUS_LEN = 48
-  character(kind=c_char, len=STATUS_LEN), target, save :: status_text(0:10)
-  logical, save :: status_text_ready = .false.
+  ! NUL-terminated status strings handed out by vci_status_string: initialised at load time, read-only
+  integer, parameter :: STATUS_LEN = 40
+  integer, parameter :: N_STATUS = ubound(VCI_STATUS_NAMES, 1)
+  integer :: i_
+  character(kind=c_char, len=STATUS_LEN), target, save :: status_text(0:N_STATUS + 1) = &
+    [character(kind=c_char, len=STATUS_LEN) :: (trim(VCI_STATUS_NAMES(i_))//c_null_char, i_ = 0, N_STATUS), &
+     'unknown status'//c_null_char]
 
 contains
 
   ! ---------------------------------------------------------------------------------------------
-  ! registry
+  ! the calling thread's message (failures without a live integrator)
 
-  integer(c_intptr_t) function addr_of(p)
-    type(c_ptr), intent(in) :: p
-    addr_of = transfer(p, 0_c_intptr_t)
-  end function addr_of
-
-  integer function find_live(p, kind)
-    type(c_ptr), intent(in) :: p
-    integer, intent(in) :: kind
+  subroutine set_thread_message(msg)
+    character(len=*), intent(in) :: msg
+    character(kind=c_char) :: buf(max(1, len_trim(msg)))
     integer :: i
-    integer(c_intptr_t) :: a
-    find_live = 0
-    if (.not. c_associated(p)) return
-    a = addr_of(p)
-    do i = 1, n_live
-      if (live_addr(i) == a .and. live_kind(i) == kind) then
-        find_live = i; return
-      end if
+    do i = 1, len_trim(msg)
+      buf(i) = msg(i:i)
     end do
+    call c_set_thread_message(buf, int(len_trim(msg), c_int))
+  end subroutine set_thread_message
+
+  function thread_message() result(msg)
+    character(len=VCI_MSG_LEN) :: msg
+    character(kind=c_char) :: buf(VCI_MSG_LEN)
+    integer :: i, n
+    n = c_get_thread_message(buf, int(VCI_MSG_LEN, c_int))
+    msg = ''
+    do i = 1, n
+      msg(i:i) = buf(i)
+    end do
+  end function thread_message
+
+  ! ---------------------------------------------------------------------------------------------
+  ! the registry (every procedure here runs with the registry lock held)
+
+  !> The slot a handle names if it is live and of the given kind, else 0.
+  integer function find_live(handle, kind) result(i)
+    type(c_ptr), intent(in) :: handle
+    integer, intent(in) :: kind
+    integer(c_intptr_t) :: token, slot
+    i = 0
+    if (.not. c_associated(handle) .or. .not. allocated(slots)) return
+    token = transfer(handle, token)
+    if (token <= 0) return
+    slot = iand(token, slot_mask)
+    if (slot < 1 .or. slot > size(slots)) return
+    if (slots(slot)%serial /= shiftr(token, slot_bits) .or. slots(slot)%kind /= kind) return
+    i = int(slot)
   end function find_live
 
-  subroutine register(p, kind)
-    type(c_ptr), intent(in) :: p
+  !> Take a free slot for a new object; its handle, or C NULL when the registry is full.
+  function register(kind, mp, ip) result(handle)
     integer, intent(in) :: kind
-    integer(c_intptr_t), allocatable :: ta(:)
-    integer, allocatable :: tk(:)
-    if (.not. allocated(live_addr)) allocate (live_addr(8), live_kind(8))
-    if (n_live == size(live_addr)) then
-      allocate (ta(2 * n_live), tk(2 * n_live))
-      ta(1:n_live) = live_addr(1:n_live); tk(1:n_live) = live_kind(1:n_live)
-      call move_alloc(ta, live_addr); call move_alloc(tk, live_kind)
+    type(c_model_t), pointer, intent(in) :: mp
+    type(c_integrator_t), pointer, intent(in) :: ip
+    type(c_ptr) :: handle
+    type(slot_t), allocatable :: grown(:)
+    integer :: i, st
+    handle = c_null_ptr
+    if (.not. allocated(slots)) then
+      allocate (slots(16), stat=st)
+      if (st /= 0) return
     end if
+    i = 0
+    if (n_live < size(slots)) then
+      do i = 1, size(slots)
+        if (slots(i)%serial == 0) exit
+      end do
+    end if
+    if (i < 1 .or. i > size(slots)) then
+      if (2_c_intptr_t * size(slots) > slot_mask) return      ! 2**slot_bits - 1 live handles at most
+      allocate (grown(2 * size(slots)), stat=st)
+      if (st /= 0) return
+      grown(1:size(slots)) = slots
+      i = size(slots) + 1
+      call move_alloc(grown, slots)
+    end if
+    last_serial = last_serial + 1
+    if (last_serial > max_serial) last_serial = 1             ! after ~8.8e12 handles (64-bit)
+    slots(i)%serial = last_serial
+    slots(i)%kind = kind
+    slots(i)%model => mp
+    slots(i)%integ => ip
     n_live = n_live + 1
-    live_addr(n_live) = addr_of(p); live_kind(n_live) = kind
-  end subroutine register
+    handle = transfer(last_serial * 2_c_intptr_t**slot_bits + i, handle)
+  end function register
 
   subroutine unregister(i)
     integer, intent(in) :: i
-    live_addr(i) = live_addr(n_live); live_kind(i) = live_kind(n_live)
+    slots(i) = slot_t()
     n_live = n_live - 1
-    if (n_live == 0) deallocate (live_addr, live_kind)   ! nothing left behind at exit
+    if (n_live == 0) deallocate (slots)   ! nothing left behind at exit
   end subroutine unregister
 
-  !> The model behind a live handle, or a status and a global message naming the caller.
-  subroutine get_model(handle, who, mp, stat)
-    type(c_ptr), intent(in) :: handle
-    character(len=*), intent(in) :: who
-    type(c_model_t), pointer, intent(out) :: mp
-    integer, intent(out) :: stat
-    mp => null()
-    if (.not. c_associated(handle)) then
-      global_message = who//': the model handle is NULL'
-      stat = VCI_ERR_ARGUMENT; return
-    end if
-    if (find_live(handle, KIND_MODEL) == 0) then
-      global_message = who//': not a live model handle (destroyed, or not made by vci_model_create)'
-      stat = VCI_ERR_ARGUMENT; return
-    end if
-    call c_f_pointer(handle, mp)
-    stat = VCI_OK
-  end subroutine get_model
+  ! ---------------------------------------------------------------------------------------------
+  ! entering and leaving a call on an integrator
 
-  !> The integrator behind a live handle, or a status and a global message naming the caller.
-  subroutine get_integ(handle, who, ip, stat)
+  !> Look the handle up and mark the integrator busy; on failure a status and the thread's message.
+  !> Every successful enter is paired with one leave. The call starts with a clean slate: status
+  !> OK, empty message, empty callback record.
+  subroutine enter(handle, who, ip, stat)
     type(c_ptr), intent(in) :: handle
     character(len=*), intent(in) :: who
     type(c_integrator_t), pointer, intent(out) :: ip
     integer, intent(out) :: stat
+    integer :: i
     ip => null()
-    if (.not. c_associated(handle)) then
-      global_message = who//': the integrator handle is NULL'
-      stat = VCI_ERR_ARGUMENT; return
-    end if
-    if (find_live(handle, KIND_INTEGRATOR) == 0) then
-      global_message = who//': not a live integrator handle (destroyed, or not made by vci_integrator_create)'
-      stat = VCI_ERR_ARGUMENT; return
-    end if
-    call c_f_pointer(handle, ip)
-    ip%model%last_rc = 0; ip%model%last_failed = ''; ip%model%last_nonfinite = ''
     stat = VCI_OK
-  end subroutine get_integ
+    call lock_registry()
+    i = find_live(handle, KIND_INTEGRATOR)
+    if (i > 0) then
+      ip => slots(i)%integ
+      if (ip%busy) then
+        ip => null()
+        stat = VCI_ERR_STATE
+      else
+        ip%busy = .true.
+      end if
+    end if
+    call unlock_registry()
+    if (.not. c_associated(handle)) then
+      call set_thread_message(who//': the integrator handle is NULL')
+      stat = VCI_ERR_ARGUMENT
+    else if (stat == VCI_ERR_STATE) then
+      call set_thread_message(who//': the integrator is busy: a call on it is running (it may not be '// &
+                              'called from its own callbacks, nor from two threads at once)')
+    else if (i == 0) then
+      call set_thread_message(who//': not a live integrator handle (destroyed, or not made by '// &
+                              'vci_integrator_create)')
+      stat = VCI_ERR_ARGUMENT
+    else
+      call ip%integ%report_failure(VCI_OK, '')
+      call ip%model%record%clear()
+    end if
+  end subroutine enter
+
+  !> The call on ip is over: not busy any more, and freed if it was destroyed meanwhile.
+  subroutine leave(ip)
+    type(c_integrator_t), pointer, intent(inout) :: ip
+    logical :: free_it
+    call lock_registry()
+    ip%busy = .false.
+    free_it = ip%destroy_pending
+    call unlock_registry()
+    if (free_it) call free_integrator(ip)
+    ip => null()
+  end subroutine leave
 
   !> Record a failure detected in this layer on the integrator (read back with vci_last_error).
   integer function fail(ip, status, message)
@@ -240,36 +392,33 @@ contains
     fail = status
   end function fail
 
-  !> After a call into the integrator: name the C callback that failed and its return code. The
-  !> Newton line search backtracks from trial points where a callback fails or gives NaN/Inf, so a
-  !> callback that keeps failing ends as VCI_ERR_NEWTON ("no decrease"); the C contract promises
-  !> VCI_ERR_CALLBACK (VCI_ERR_NONFINITE) for it, so such failures are reported as the callback's,
-  !> with the Newton message kept. A failing impact callback is VCI_ERR_CALLBACK, not an output error.
+  !> After a call into the integrator: name the C callback behind a callback failure (its code),
+  !> and report a failing impact callback as VCI_ERR_CALLBACK, not as an output error. The status
+  !> of the call itself; the integrator's status and message follow it.
   integer function after_call(ip, stat) result(status)
     type(c_integrator_t), intent(inout) :: ip
     integer, intent(in) :: stat
     character(len=32) :: rc
     character(len=VCI_MSG_LEN) :: msg
     status = stat
-    msg = ip%integ%message()
-    if ((stat == VCI_ERR_CALLBACK .or. stat == VCI_ERR_NEWTON) .and. ip%model%last_rc /= 0) then
-      write (rc, '(i0)') ip%model%last_rc
-      msg = trim(msg)//' (the C callback '//trim(ip%model%last_failed)//' returned '//trim(rc)//')'
-      status = VCI_ERR_CALLBACK
-    else if ((stat == VCI_ERR_NONFINITE .or. stat == VCI_ERR_NEWTON) .and. ip%model%last_nonfinite /= '') then
-      msg = trim(msg)//' (the C callback '//trim(ip%model%last_nonfinite)//' returned NaN or Inf)'
-      status = VCI_ERR_NONFINITE
+    msg = ip%integ%message_text()
+    if (ip%obs%stopped_by_destroy) then
+      status = VCI_ERR_STATE
+      call set_thread_message('the integrator was destroyed during the call (from a callback or another '// &
+                              'thread); the run stopped after the step under way')
     else if (stat == VCI_ERR_IO .and. ip%obs%impact_rc /= 0) then
       write (rc, '(i0)') ip%obs%impact_rc
       write (msg, '(a,es14.7,a)') 'impact callback returned '//trim(rc)//' at the impact at t = ', &
         ip%obs%impact_t, '; the step containing it was accepted, the state is after it'
       status = VCI_ERR_CALLBACK
+    else
+      call ip%model%record%annotate(stat, msg)
     end if
     call ip%integ%report_failure(status, msg)
     ip%obs%impact_rc = 0
   end function after_call
 
-  !> A C array of n doubles as a Fortran pointer; false (and a message) when NULL.
+  !> A C array of n doubles as a Fortran pointer; false when NULL.
   logical function c_array(p, n, arr)
     type(c_ptr), intent(in) :: p
     integer, intent(in) :: n
@@ -280,26 +429,12 @@ contains
   end function c_array
 
   ! ---------------------------------------------------------------------------------------------
-  ! the C model: each procedure presets nothing (stat arrives as 0) and maps any nonzero C return
-  ! to 1; an absent callback answers "not provided" on its own channel (not_provided)
+  ! the C model: each procedure calls its C function and hands the return code to the adapter
 
-  !> Record a callback's outcome: nonzero rc becomes stat = 1; NaN/Inf outputs are remembered, so
-  !> that a failure the Newton line search absorbed (it backtracks from failing trial points) can
-  !> still be reported as the callback's (see after_call).
-  subroutine note(self, rc, name, finite, stat)
-    class(c_model_t), intent(inout) :: self
-    integer(c_int), intent(in) :: rc
-    character(len=*), intent(in) :: name
-    logical, intent(in) :: finite
-    integer, intent(inout) :: stat
-    if (rc /= 0) then
-      self%last_rc = rc
-      self%last_failed = name
-      stat = 1
-    else if (.not. finite) then
-      self%last_nonfinite = name
-    end if
-  end subroutine note
+  logical function finite1(a)
+    real(dp), intent(in) :: a(:)
+    finite1 = all(ieee_is_finite(a))
+  end function finite1
 
   subroutine cm_d1(self, q, v, h, out, stat)
     class(c_model_t), intent(inout) :: self
@@ -307,8 +442,11 @@ contains
     real(dp), intent(out) :: out(:)
     integer, intent(inout) :: stat
     procedure(c_ld_grad_fn), pointer :: f
+    integer :: rc
     call c_f_procpointer(self%cb%d1_ld, f)
-    call note(self, f(self%n, q, v, h, out, self%user), 'd1_ld', all(ieee_is_finite(out)), stat)
+    out = 0.0_dp   ! defined even where a failing callback left it unwritten
+    rc = f(self%n, q, v, h, out, self%user)
+    call self%record%note(rc, 'the C callback d1_ld', finite1(out), stat)
   end subroutine cm_d1
 
   subroutine cm_d2(self, q, v, h, out, stat)
@@ -317,8 +455,11 @@ contains
     real(dp), intent(out) :: out(:)
     integer, intent(inout) :: stat
     procedure(c_ld_grad_fn), pointer :: f
+    integer :: rc
     call c_f_procpointer(self%cb%d2_ld, f)
-    call note(self, f(self%n, q, v, h, out, self%user), 'd2_ld', all(ieee_is_finite(out)), stat)
+    out = 0.0_dp   ! defined even where a failing callback left it unwritten
+    rc = f(self%n, q, v, h, out, self%user)
+    call self%record%note(rc, 'the C callback d2_ld', finite1(out), stat)
   end subroutine cm_d2
 
   subroutine cm_d3(self, q, v, h, out, stat)
@@ -328,9 +469,11 @@ contains
     integer, intent(inout) :: stat
     procedure(c_ld_grad_fn), pointer :: f
     real(c_double) :: tmp(1)
-    tmp = 0.0_dp
+    integer :: rc
     call c_f_procpointer(self%cb%d3_ld, f)
-    call note(self, f(self%n, q, v, h, tmp, self%user), 'd3_ld', ieee_is_finite(tmp(1)), stat)
+    tmp = 0.0_dp   ! defined even where a failing callback left it unwritten
+    rc = f(self%n, q, v, h, tmp, self%user)
+    call self%record%note(rc, 'the C callback d3_ld', finite1(tmp), stat)
     out = tmp(1)
   end subroutine cm_d3
 
@@ -340,11 +483,14 @@ contains
     real(dp), intent(out) :: hess(:, :)
     integer, intent(inout) :: stat
     procedure(c_ld_grad_fn), pointer :: f
+    integer :: rc
     if (.not. c_associated(self%cb%mixed_hessian)) then
       hess = 0.0_dp; call self%not_provided(stat); return
     end if
     call c_f_procpointer(self%cb%mixed_hessian, f)
-    call note(self, f(self%n, q, v, h, hess, self%user), 'mixed_hessian', all(ieee_is_finite(hess)), stat)
+    hess = 0.0_dp   ! defined even where a failing callback left it unwritten
+    rc = f(self%n, q, v, h, hess, self%user)
+    call self%record%note(rc, 'the C callback mixed_hessian', all(ieee_is_finite(hess)), stat)
   end subroutine cm_hessian
 
   subroutine cm_forms(self, q, omega, stat)
@@ -353,11 +499,14 @@ contains
     real(dp), intent(out) :: omega(:, :)
     integer, intent(inout) :: stat
     procedure(c_forms_fn), pointer :: f
+    integer :: rc
     if (.not. c_associated(self%cb%constraint_forms)) then
       omega = 0.0_dp; call self%not_provided(stat); return
     end if
     call c_f_procpointer(self%cb%constraint_forms, f)
-    call note(self, f(self%n, self%m, q, omega, self%user), 'constraint_forms', all(ieee_is_finite(omega)), stat)
+    omega = 0.0_dp   ! defined even where a failing callback left it unwritten
+    rc = f(self%n, self%m, q, omega, self%user)
+    call self%record%note(rc, 'the C callback constraint_forms', all(ieee_is_finite(omega)), stat)
   end subroutine cm_forms
 
   subroutine cm_dconstraint(self, base, other, h, out, stat)
@@ -366,12 +515,14 @@ contains
     real(dp), intent(out) :: out(:)
     integer, intent(inout) :: stat
     procedure(c_dconstraint_fn), pointer :: f
+    integer :: rc
     if (.not. c_associated(self%cb%discrete_constraint)) then
       out = 0.0_dp; call self%not_provided(stat); return
     end if
     call c_f_procpointer(self%cb%discrete_constraint, f)
-    call note(self, f(self%n, self%m, base, other, h, out, self%user), 'discrete_constraint', &
-              all(ieee_is_finite(out)), stat)
+    out = 0.0_dp   ! defined even where a failing callback left it unwritten
+    rc = f(self%n, self%m, base, other, h, out, self%user)
+    call self%record%note(rc, 'the C callback discrete_constraint', finite1(out), stat)
   end subroutine cm_dconstraint
 
   subroutine cm_gaps(self, q, g, stat)
@@ -380,11 +531,14 @@ contains
     real(dp), intent(out) :: g(:)
     integer, intent(inout) :: stat
     procedure(c_forms_fn), pointer :: f
+    integer :: rc
     if (.not. c_associated(self%cb%gaps)) then
       g = 0.0_dp; call self%not_provided(stat); return
     end if
     call c_f_procpointer(self%cb%gaps, f)
-    call note(self, f(self%n, self%n_gaps, q, g, self%user), 'gaps', all(ieee_is_finite(g)), stat)
+    g = 0.0_dp   ! defined even where a failing callback left it unwritten
+    rc = f(self%n, self%n_gaps, q, g, self%user)
+    call self%record%note(rc, 'the C callback gaps', finite1(g), stat)
   end subroutine cm_gaps
 
   subroutine cm_gap_grads(self, q, dg, stat)
@@ -393,11 +547,14 @@ contains
     real(dp), intent(out) :: dg(:, :)
     integer, intent(inout) :: stat
     procedure(c_forms_fn), pointer :: f
+    integer :: rc
     if (.not. c_associated(self%cb%gap_gradients)) then
       dg = 0.0_dp; call self%not_provided(stat); return
     end if
     call c_f_procpointer(self%cb%gap_gradients, f)
-    call note(self, f(self%n, self%n_gaps, q, dg, self%user), 'gap_gradients', all(ieee_is_finite(dg)), stat)
+    dg = 0.0_dp   ! defined even where a failing callback left it unwritten
+    rc = f(self%n, self%n_gaps, q, dg, self%user)
+    call self%record%note(rc, 'the C callback gap_gradients', all(ieee_is_finite(dg)), stat)
   end subroutine cm_gap_grads
 
   subroutine cm_energy(self, q, p, e, stat)
@@ -407,14 +564,150 @@ contains
     integer, intent(inout) :: stat
     procedure(c_energy_fn), pointer :: f
     real(c_double) :: tmp(1)
+    integer :: rc
     if (.not. c_associated(self%cb%energy)) then
       e = 0.0_dp; call self%not_provided(stat); return
     end if
-    tmp = 0.0_dp
     call c_f_procpointer(self%cb%energy, f)
-    call note(self, f(self%n, q, p, tmp, self%user), 'energy', ieee_is_finite(tmp(1)), stat)
+    tmp = 0.0_dp   ! defined even where a failing callback left it unwritten
+    rc = f(self%n, q, p, tmp, self%user)
+    call self%record%note(rc, 'the C callback energy', finite1(tmp), stat)
     e = tmp(1)
   end subroutine cm_energy
+
+  ! ---------------------------------------------------------------------------------------------
+  ! the C continuous model: the same pattern, with vci_lagrangian_t's procedures
+
+  !> Call f(n, q, v, out, user) (L, dL/dq, dL/dqdot, H: c_energy_fn's shape) and note its return.
+  subroutine call_qv(self, fp, name, q, v, out, stat)
+    class(c_lagrangian_t), intent(inout) :: self
+    type(c_funptr), intent(in) :: fp
+    character(len=*), intent(in) :: name
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    procedure(c_energy_fn), pointer :: f
+    integer :: rc
+    call c_f_procpointer(fp, f)
+    out = 0.0_dp   ! defined even where a failing callback left it unwritten
+    rc = f(self%n, q, v, out, self%user)
+    call self%record%note(rc, 'the C callback '//name, finite1(out), stat)
+  end subroutine call_qv
+
+  subroutine cl_value(self, q, v, l, stat)
+    class(c_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: l
+    integer, intent(inout) :: stat
+    real(dp) :: tmp(1)
+    l = 0.0_dp
+    if (.not. c_associated(self%cb%lagrangian)) then
+      call self%not_provided(stat); return
+    end if
+    call call_qv(self, self%cb%lagrangian, 'lagrangian', q, v, tmp, stat)
+    l = tmp(1)
+  end subroutine cl_value
+
+  subroutine cl_dl_dq(self, q, v, out, stat)
+    class(c_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    if (.not. c_associated(self%cb%dl_dq)) then
+      out = 0.0_dp; call self%not_provided(stat); return
+    end if
+    call call_qv(self, self%cb%dl_dq, 'dl_dq', q, v, out, stat)
+  end subroutine cl_dl_dq
+
+  subroutine cl_dl_dv(self, q, v, out, stat)
+    class(c_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    if (.not. c_associated(self%cb%dl_dv)) then
+      out = 0.0_dp; call self%not_provided(stat); return
+    end if
+    call call_qv(self, self%cb%dl_dv, 'dl_dv', q, v, out, stat)
+  end subroutine cl_dl_dv
+
+  subroutine cl_hessians(self, q, v, lqq, lqv, lvv, stat)
+    class(c_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: lqq(:, :), lqv(:, :), lvv(:, :)
+    integer, intent(inout) :: stat
+    procedure(c_lhess_fn), pointer :: f
+    integer :: rc
+    lqq = 0.0_dp; lqv = 0.0_dp; lvv = 0.0_dp   ! defined even where a failing callback left them unwritten
+    if (.not. c_associated(self%cb%hessians)) then
+      call self%not_provided(stat); return
+    end if
+    call c_f_procpointer(self%cb%hessians, f)
+    rc = f(self%n, q, v, lqq, lqv, lvv, self%user)
+    call self%record%note(rc, 'the C callback hessians', all(ieee_is_finite(lqq)) .and. &
+                          all(ieee_is_finite(lqv)) .and. all(ieee_is_finite(lvv)), stat)
+  end subroutine cl_hessians
+
+  subroutine cl_forms(self, q, omega, stat)
+    class(c_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: omega(:, :)
+    integer, intent(inout) :: stat
+    procedure(c_forms_fn), pointer :: f
+    integer :: rc
+    omega = 0.0_dp
+    if (.not. c_associated(self%cb%constraint_forms)) then
+      call self%not_provided(stat); return
+    end if
+    call c_f_procpointer(self%cb%constraint_forms, f)
+    rc = f(self%n, self%m, q, omega, self%user)
+    call self%record%note(rc, 'the C callback constraint_forms', all(ieee_is_finite(omega)), stat)
+  end subroutine cl_forms
+
+  subroutine cl_gaps(self, q, g, stat)
+    class(c_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: g(:)
+    integer, intent(inout) :: stat
+    procedure(c_forms_fn), pointer :: f
+    integer :: rc
+    g = 0.0_dp
+    if (.not. c_associated(self%cb%gaps)) then
+      call self%not_provided(stat); return
+    end if
+    call c_f_procpointer(self%cb%gaps, f)
+    rc = f(self%n, self%n_gaps, q, g, self%user)
+    call self%record%note(rc, 'the C callback gaps', finite1(g), stat)
+  end subroutine cl_gaps
+
+  subroutine cl_gap_grads(self, q, dg, stat)
+    class(c_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: dg(:, :)
+    integer, intent(inout) :: stat
+    procedure(c_forms_fn), pointer :: f
+    integer :: rc
+    dg = 0.0_dp
+    if (.not. c_associated(self%cb%gap_gradients)) then
+      call self%not_provided(stat); return
+    end if
+    call c_f_procpointer(self%cb%gap_gradients, f)
+    rc = f(self%n, self%n_gaps, q, dg, self%user)
+    call self%record%note(rc, 'the C callback gap_gradients', all(ieee_is_finite(dg)), stat)
+  end subroutine cl_gap_grads
+
+  subroutine cl_energy(self, q, p, e, stat)
+    class(c_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), p(:)
+    real(dp), intent(out) :: e
+    integer, intent(inout) :: stat
+    real(dp) :: tmp(1)
+    e = 0.0_dp
+    if (.not. c_associated(self%cb%energy)) then
+      call self%not_provided(stat); return
+    end if
+    call call_qv(self, self%cb%energy, 'energy', q, p, tmp, stat)
+    e = tmp(1)
+  end subroutine cl_energy
 
   ! ---------------------------------------------------------------------------------------------
   ! the observer behind vci_set_impact_callback and vci_open_output
@@ -425,16 +718,36 @@ contains
     real(dp), intent(in) :: q(:), p(:)
     integer, intent(inout) :: stat
     if (.not. allocated(self%output) .or. self%started) return
+    call lock_io()
     call self%output%on_start(info, q, p, stat)
+    call unlock_io()
     self%started = .true.
+    self%direction = info%direction
   end subroutine obs_start
 
+  !> An accepted step: to the output; the callback record starts afresh (a code the line search
+  !> absorbed in this step is no cause of a later failure); stop when destroyed meanwhile.
   subroutine obs_step(self, step, t, q, p, lambda, energy, stat)
     class(c_observer_t), intent(inout) :: self
     integer(i8), intent(in) :: step
     real(dp), intent(in) :: t, q(:), p(:), lambda(:), energy
     integer, intent(inout) :: stat
-    if (allocated(self%output)) call self%output%on_step(step, t, q, p, lambda, energy, stat)
+    logical :: pending
+    if (allocated(self%output)) then
+      call lock_io()
+      call self%output%on_step(step, t, q, p, lambda, energy, stat)
+      call unlock_io()
+    end if
+    if (associated(self%owner)) then
+      call self%owner%model%record%clear()
+      call lock_registry()
+      pending = self%owner%destroy_pending
+      call unlock_registry()
+      if (pending .and. stat == 0) then
+        self%stopped_by_destroy = .true.
+        stat = 1
+      end if
+    end if
   end subroutine obs_step
 
   subroutine obs_impact(self, impact, stat)
@@ -452,7 +765,11 @@ contains
         stat = 1; return
       end if
     end if
-    if (allocated(self%output) .and. stat == 0) call self%output%on_impact(impact, stat)
+    if (allocated(self%output) .and. stat == 0) then
+      call lock_io()
+      call self%output%on_impact(impact, stat)
+      call unlock_io()
+    end if
   end subroutine obs_impact
 
   !> Runs end at vci_close_output or destroy, not at the end of each vci_integrate call.
@@ -469,67 +786,241 @@ contains
     stat = 0
     if (.not. allocated(ip%obs%output)) return
     ! also when no step was written: the writer then just closes its file
-    call ip%obs%output%on_finish(ip%integ%status(), ip%integ%message(), stat)
+    call lock_io()
+    call ip%obs%output%on_finish(ip%integ%status(), trim(ip%integ%message_text()), stat)
     deallocate (ip%obs%output)
+    call unlock_io()
     ip%obs%started = .false.
+    ip%obs%direction = 0
     if (stat /= 0) stat = VCI_ERR_IO
   end function close_output
+
+  !> Close the output and release an integrator no handle names any more.
+  subroutine free_integrator(ip)
+    type(c_integrator_t), pointer, intent(inout) :: ip
+    integer :: stat
+    stat = close_output(ip)
+    if (stat /= VCI_OK) call set_thread_message('vci_integrator_destroy: the output file could not be finished')
+    deallocate (ip)
+  end subroutine free_integrator
 
   ! ---------------------------------------------------------------------------------------------
   ! the C entry points (vci.h documents each one's statuses)
 
-  !> int vci_model_create(vci_model *model, int n, int m, int ngaps, const vci_callbacks *cb, void *user)
-  integer(c_int) function vci_model_create(model, n, m, ngaps, cb, user) bind(C, name='vci_model_create')
+  !> int vci_model_create_v2(vci_model *model, int n, int m, int ngaps, const vci_callbacks *cb,
+  !> void *user): vci.h's vci_model_create. Reads cb->size bytes of the callbacks.
+  integer(c_int) function vci_model_create_v2(model, n, m, ngaps, cb, user) bind(C, name='vci_model_create_v2')
     type(c_ptr), value :: model, cb, user
     integer(c_int), value :: n, m, ngaps
-    type(c_ptr), pointer :: out
-    type(vci_callbacks_c), pointer :: fcb
-    type(c_model_t), pointer :: mp
-    character(len=64) :: what
-    vci_model_create = VCI_ERR_ARGUMENT
+    type(vci_callbacks_c), target :: local
+    integer(c_size_t), pointer :: size_field
+    integer(c_int8_t), pointer :: src(:), dst(:)
+    integer(c_size_t) :: nbytes, ours, least
+    character(len=24) :: txt
+    integer :: k
+    vci_model_create_v2 = VCI_ERR_ARGUMENT
     if (.not. c_associated(model)) then
-      global_message = 'vci_model_create: the model argument is NULL'; return
+      call set_thread_message('vci_model_create: the model argument is NULL'); return
     end if
-    call c_f_pointer(model, out)
-    out = c_null_ptr
-    if (n < 1 .or. m < 0 .or. m > n .or. ngaps < 0) then
-      write (global_message, '(a,3(i0,a))') 'vci_model_create: sizes n = ', n, ', m = ', m, ', ngaps = ', ngaps, &
-        ' invalid (need n >= 1, 0 <= m <= n, ngaps >= 0)'
+    call null_out(model)
+    if (.not. c_associated(cb)) then
+      call set_thread_message('vci_model_create: the callbacks argument is NULL'); return
+    end if
+    call c_f_pointer(cb, size_field)
+    nbytes = size_field
+    ours = c_sizeof(local)
+    least = c_sizeof(local%size) + 3 * c_sizeof(c_null_funptr)   ! up to d3_ld: the required ones
+    write (txt, '(i0)') nbytes
+    ! every header's struct is the size field and whole pointers: anything else is no vci_callbacks
+    if (nbytes < least .or. nbytes > 4096 .or. &
+        mod(nbytes - c_sizeof(local%size), c_sizeof(c_null_funptr)) /= 0) then
+      call set_thread_message('vci_model_create: cb->size = '//trim(txt)//' is not the size of a vci_callbacks '// &
+                              '(initialise it with VCI_CALLBACKS_INIT)')
       return
     end if
+    call c_f_pointer(cb, src, [nbytes])
+    if (nbytes > ours) then
+      ! built against a newer vci.h: fine as long as the members this library does not know are NULL
+      if (any(src(ours + 1:nbytes) /= 0)) then
+        call set_thread_message('vci_model_create: callbacks this library does not know are set (cb->size = '// &
+                                trim(txt)//'; the program was built against a newer vci.h)')
+        return
+      end if
+    end if
+    local = vci_callbacks_c()
+    call c_f_pointer(c_loc(local), dst, [ours])
+    k = int(min(nbytes, ours))
+    dst(1:k) = src(1:k)
+    local%size = ours
+    vci_model_create_v2 = create_model(model, n, m, ngaps, local, user)
+  end function vci_model_create_v2
+
+  !> int vci_model_create(...) as vci.h 0.1.0 declared it: the callbacks are nine pointers with no
+  !> size field. Kept (under its 0.1 symbol name) for binaries built against 0.1.
+  integer(c_int) function vci_model_create_v0_1(model, n, m, ngaps, cb, user) bind(C, name='vci_model_create')
+    type(c_ptr), value :: model, cb, user
+    integer(c_int), value :: n, m, ngaps
+    type(vci_callbacks_v0_1), pointer :: old
+    type(vci_callbacks_c) :: local
+    vci_model_create_v0_1 = VCI_ERR_ARGUMENT
+    if (.not. c_associated(model)) then
+      call set_thread_message('vci_model_create: the model argument is NULL'); return
+    end if
+    call null_out(model)
     if (.not. c_associated(cb)) then
-      global_message = 'vci_model_create: the callbacks argument is NULL'; return
+      call set_thread_message('vci_model_create: the callbacks argument is NULL'); return
     end if
-    call c_f_pointer(cb, fcb)
+    call c_f_pointer(cb, old)
+    local = vci_callbacks_c(c_sizeof(local), old%d1_ld, old%d2_ld, old%d3_ld, old%mixed_hessian, &
+                            old%constraint_forms, old%discrete_constraint, old%gaps, old%gap_gradients, old%energy)
+    vci_model_create_v0_1 = create_model(model, n, m, ngaps, local, user)
+  end function vci_model_create_v0_1
+
+  !> int vci_model_create_lagrangian(vci_model *model, int n, int m, int ngaps,
+  !> const vci_lagrangian_callbacks *cb, void *user). Reads cb->size bytes of the callbacks (the
+  !> rules of vci_model_create_v2).
+  integer(c_int) function vci_model_create_lagrangian(model, n, m, ngaps, cb, user) &
+    bind(C, name='vci_model_create_lagrangian')
+    type(c_ptr), value :: model, cb, user
+    integer(c_int), value :: n, m, ngaps
+    type(vci_lagrangian_callbacks_c) :: local
+    type(c_funptr), pointer :: fps(:)
+    integer(c_size_t), pointer :: size_field
+    integer(c_int8_t), pointer :: src(:)
+    integer(c_size_t) :: nbytes, ours, least
+    character(len=24) :: txt
+    character(len=64) :: what
+    integer :: k, i
+    vci_model_create_lagrangian = VCI_ERR_ARGUMENT
+    if (.not. c_associated(model)) then
+      call set_thread_message('vci_model_create_lagrangian: the model argument is NULL'); return
+    end if
+    call null_out(model)
+    if (.not. c_associated(cb)) then
+      call set_thread_message('vci_model_create_lagrangian: the callbacks argument is NULL'); return
+    end if
+    call c_f_pointer(cb, size_field)
+    nbytes = size_field
+    ours = c_sizeof(local)
+    least = c_sizeof(local%size) + 3 * c_sizeof(c_null_funptr)   ! up to dl_dv: the required ones
+    write (txt, '(i0)') nbytes
+    if (nbytes < least .or. nbytes > 4096) then
+      call set_thread_message('vci_model_create_lagrangian: cb->size = '//trim(txt)//' is not the size of a '// &
+                              'vci_lagrangian_callbacks (initialise it with VCI_LAGRANGIAN_CALLBACKS_INIT)')
+      return
+    end if
+    call c_f_pointer(cb, src, [nbytes])
+    if (nbytes > ours) then
+      if (any(src(ours + 1:nbytes) /= 0)) then
+        call set_thread_message('vci_model_create_lagrangian: callbacks this library does not know are set '// &
+                                '(cb->size = '//trim(txt)//'; the program was built against a newer vci.h)')
+        return
+      end if
+    end if
+    ! the members the caller's header has (those beyond its size stay NULL), one by one: a byte copy
+    ! into `local` through a second pointer was lost to gfortran's optimiser
+    k = int((min(nbytes, ours) - c_sizeof(local%size)) / c_sizeof(c_null_funptr))
+    call c_f_pointer(transfer(transfer(cb, 0_c_intptr_t) + c_sizeof(local%size), cb), fps, [k])
+    local = vci_lagrangian_callbacks_c()
+    local%size = ours
+    do i = 1, k
+      select case (i)
+      case (1); local%lagrangian = fps(i)
+      case (2); local%dl_dq = fps(i)
+      case (3); local%dl_dv = fps(i)
+      case (4); local%hessians = fps(i)
+      case (5); local%constraint_forms = fps(i)
+      case (6); local%gaps = fps(i)
+      case (7); local%gap_gradients = fps(i)
+      case (8); local%energy = fps(i)
+      end select
+    end do
     what = ''
-    if (.not. c_associated(fcb%d1_ld)) what = 'd1_ld'
-    if (.not. c_associated(fcb%d2_ld)) what = 'd2_ld'
-    if (.not. c_associated(fcb%d3_ld)) what = 'd3_ld'
-    if (m > 0 .and. .not. c_associated(fcb%constraint_forms)) what = 'constraint_forms (needed as m > 0)'
-    if (m > 0 .and. .not. c_associated(fcb%discrete_constraint)) what = 'discrete_constraint (needed as m > 0)'
-    if (ngaps > 0 .and. .not. c_associated(fcb%gaps)) what = 'gaps (needed as ngaps > 0)'
+    if (.not. c_associated(local%lagrangian)) what = 'lagrangian'
+    if (.not. c_associated(local%dl_dq)) what = 'dl_dq'
+    if (.not. c_associated(local%dl_dv)) what = 'dl_dv'
+    if (m > 0 .and. .not. c_associated(local%constraint_forms)) what = 'constraint_forms (needed as m > 0)'
+    if (ngaps > 0 .and. .not. c_associated(local%gaps)) what = 'gaps (needed as ngaps > 0)'
     if (what /= '') then
-      global_message = 'vci_model_create: callback '//trim(what)//' is NULL'; return
+      call set_thread_message('vci_model_create_lagrangian: callback '//trim(what)//' is NULL (lagrangian, '// &
+                              'dl_dq and dl_dv are required)')
+      return
     end if
-    allocate (mp)
+    ! sizes, allocation and registry as for a discrete model
+    vci_model_create_lagrangian = create_model(model, n, m, ngaps, vci_callbacks_c(), user, local)
+  end function vci_model_create_lagrangian
+
+  !> *out = NULL for the handle pointer `out` (not NULL).
+  subroutine null_out(out)
+    type(c_ptr), intent(in) :: out
+    type(c_ptr), pointer :: h
+    call c_f_pointer(out, h)
+    h = c_null_ptr
+  end subroutine null_out
+
+  !> The model_create entry points: validate, allocate, register. With lcb: a continuous model
+  !> (its callbacks already checked; fcb unused).
+  integer function create_model(model, n, m, ngaps, fcb, user, lcb) result(status)
+    type(c_ptr), intent(in) :: model, user
+    integer(c_int), intent(in) :: n, m, ngaps
+    type(vci_callbacks_c), intent(in) :: fcb
+    type(vci_lagrangian_callbacks_c), intent(in), optional :: lcb
+    type(c_ptr), pointer :: out
+    type(c_model_t), pointer :: mp
+    type(c_integrator_t), pointer :: none
+    character(len=64) :: what
+    character(len=80) :: why
+    integer :: st
+    status = VCI_ERR_ARGUMENT
+    why = vci_size_problem(int(n), int(m), int(ngaps))
+    if (why /= '') then
+      block
+        character(len=VCI_MSG_LEN) :: msg
+        write (msg, '(a,3(i0,a))') 'vci_model_create: sizes n = ', n, ', m = ', m, ', ngaps = ', ngaps, &
+          ' invalid ('//trim(why)//')'
+        call set_thread_message(msg)
+      end block
+      return
+    end if
+    what = ''
+    if (.not. present(lcb)) then
+      if (.not. c_associated(fcb%d1_ld)) what = 'd1_ld'
+      if (.not. c_associated(fcb%d2_ld)) what = 'd2_ld'
+      if (.not. c_associated(fcb%d3_ld)) what = 'd3_ld'
+      if (m > 0 .and. .not. c_associated(fcb%constraint_forms)) what = 'constraint_forms (needed as m > 0)'
+      if (m > 0 .and. .not. c_associated(fcb%discrete_constraint)) what = 'discrete_constraint (needed as m > 0)'
+      if (ngaps > 0 .and. .not. c_associated(fcb%gaps)) what = 'gaps (needed as ngaps > 0)'
+    end if
+    if (what /= '') then
+      call set_thread_message('vci_model_create: callback '//trim(what)//' is NULL'); return
+    end if
+    allocate (mp, stat=st)
+    if (st /= 0) then
+      call set_thread_message('vci_model_create: out of memory')
+      status = VCI_ERR_MEMORY; return
+    end if
     mp%n = n; mp%m = m; mp%n_gaps = ngaps
     mp%cb = fcb
     mp%user = user
-    mp%refs = 1
-    out = c_loc(mp)
-    call register(out, KIND_MODEL)
-    vci_model_create = VCI_OK
-  end function vci_model_create
+    if (present(lcb)) then
+      mp%continuous = .true.
+      mp%lcb = lcb
+    end if
+    none => null()
+    call c_f_pointer(model, out)
+    call lock_registry()
+    out = register(KIND_MODEL, mp, none)
+    call unlock_registry()
+    if (.not. c_associated(out)) then
+      deallocate (mp)
+      call set_thread_message('vci_model_create: too many live handles, or out of memory')
+      status = VCI_ERR_MEMORY; return
+    end if
+    status = VCI_OK
+  end function create_model
 
-  !> Drop one reference to a model; free it when no integrator uses it any more.
-  subroutine release_model(mp)
-    type(c_model_t), pointer, intent(inout) :: mp
-    mp%refs = mp%refs - 1
-    if (mp%refs <= 0) deallocate (mp)
-    mp => null()
-  end subroutine release_model
-
-  !> void vci_model_destroy(vci_model *model): NULL-safe, sets *model = NULL.
+  !> void vci_model_destroy(vci_model *model): NULL-safe, sets *model = NULL. Integrators made
+  !> from the model keep their own copy of it.
   subroutine vci_model_destroy(model) bind(C, name='vci_model_destroy')
     type(c_ptr), value :: model
     type(c_ptr), pointer :: h
@@ -538,13 +1029,18 @@ contains
     if (.not. c_associated(model)) return
     call c_f_pointer(model, h)
     if (.not. c_associated(h)) return
+    mp => null()
+    call lock_registry()
     i = find_live(h, KIND_MODEL)
-    if (i == 0) then
-      global_message = 'vci_model_destroy: not a live model handle (destroyed twice?); ignored'
-    else
+    if (i > 0) then
+      mp => slots(i)%model
       call unregister(i)
-      call c_f_pointer(h, mp)
-      call release_model(mp)
+    end if
+    call unlock_registry()
+    if (associated(mp)) then
+      deallocate (mp)
+    else
+      call set_thread_message('vci_model_destroy: not a live model handle (destroyed twice?); ignored')
     end if
     h = c_null_ptr
   end subroutine vci_model_destroy
@@ -554,53 +1050,93 @@ contains
     type(c_ptr), value :: integ, model
     real(c_double), value :: h
     type(c_ptr), pointer :: out
-    type(c_model_t), pointer :: mp
+    type(c_model_t), pointer :: none
     type(c_integrator_t), pointer :: ip
-    integer :: stat
+    integer :: stat, i
+    vci_integrator_create = VCI_ERR_ARGUMENT
     if (.not. c_associated(integ)) then
-      global_message = 'vci_integrator_create: the integ argument is NULL'
-      vci_integrator_create = VCI_ERR_ARGUMENT; return
+      call set_thread_message('vci_integrator_create: the integ argument is NULL'); return
     end if
     call c_f_pointer(integ, out)
     out = c_null_ptr
-    call get_model(model, 'vci_integrator_create', mp, stat)
-    if (stat /= VCI_OK) then
-      vci_integrator_create = stat; return
+    allocate (ip, stat=stat)
+    if (stat /= 0) then
+      call set_thread_message('vci_integrator_create: out of memory')
+      vci_integrator_create = VCI_ERR_MEMORY; return
     end if
-    allocate (ip)
-    call ip%integ%create(mp, real(h, dp), stat)
+    ! the integrator's own copy of the model, taken under the lock (the model may be destroyed
+    ! by another thread at the same time)
+    call lock_registry()
+    i = find_live(model, KIND_MODEL)
+    if (i > 0) ip%model = slots(i)%model
+    call unlock_registry()
+    if (i == 0) then
+      deallocate (ip)
+      if (.not. c_associated(model)) then
+        call set_thread_message('vci_integrator_create: the model handle is NULL')
+      else
+        call set_thread_message('vci_integrator_create: not a live model handle (destroyed, or not made by '// &
+                                'vci_model_create)')
+      end if
+      return
+    end if
+    call ip%model%record%clear()
+    if (ip%model%continuous) then
+      ip%lag%n = ip%model%n; ip%lag%m = ip%model%m; ip%lag%n_gaps = ip%model%n_gaps
+      ip%lag%cb = ip%model%lcb
+      ip%lag%user = ip%model%user
+      ip%lag%record => ip%model%record
+      call ip%integ%create(ip%lag, real(h, dp), stat)
+    else
+      call ip%integ%create(ip%model, real(h, dp), stat)
+    end if
     if (stat /= VCI_OK) then
-      global_message = 'vci_integrator_create: '//ip%integ%message()
+      call set_thread_message('vci_integrator_create: '//trim(ip%integ%message_text()))
       deallocate (ip)
       vci_integrator_create = stat; return
     end if
-    ip%model => mp
-    mp%refs = mp%refs + 1
-    out = c_loc(ip)
-    call register(out, KIND_INTEGRATOR)
+    ip%obs%owner => ip
+    none => null()
+    call lock_registry()
+    out = register(KIND_INTEGRATOR, none, ip)
+    call unlock_registry()
+    if (.not. c_associated(out)) then
+      deallocate (ip)
+      call set_thread_message('vci_integrator_create: too many live handles, or out of memory')
+      vci_integrator_create = VCI_ERR_MEMORY; return
+    end if
     vci_integrator_create = VCI_OK
   end function vci_integrator_create
 
-  !> void vci_integrator_destroy(vci_integrator *integ): NULL-safe, sets *integ = NULL; closes output.
+  !> void vci_integrator_destroy(vci_integrator *integ): NULL-safe, sets *integ = NULL; closes
+  !> output. The handle is dead at once; an integrator that is running a call (destroyed from one
+  !> of its callbacks, or from another thread) is freed when that call returns.
   subroutine vci_integrator_destroy(integ) bind(C, name='vci_integrator_destroy')
     type(c_ptr), value :: integ
     type(c_ptr), pointer :: h
     type(c_integrator_t), pointer :: ip
-    integer :: i, stat
+    integer :: i
+    logical :: free_now
     if (.not. c_associated(integ)) return
     call c_f_pointer(integ, h)
     if (.not. c_associated(h)) return
+    ip => null()
+    free_now = .false.
+    call lock_registry()
     i = find_live(h, KIND_INTEGRATOR)
-    if (i == 0) then
-      global_message = 'vci_integrator_destroy: not a live integrator handle (destroyed twice?); ignored'
-    else
+    if (i > 0) then
+      ip => slots(i)%integ
       call unregister(i)
-      call c_f_pointer(h, ip)
-      stat = close_output(ip)
-      if (stat /= VCI_OK) global_message = 'vci_integrator_destroy: the output file could not be finished'
-      call release_model(ip%model)
-      deallocate (ip)
+      if (ip%busy) then
+        ip%destroy_pending = .true.
+      else
+        free_now = .true.
+      end if
     end if
+    call unlock_registry()
+    if (i == 0) call set_thread_message('vci_integrator_destroy: not a live integrator handle (destroyed twice?); '// &
+                                        'ignored')
+    if (free_now) call free_integrator(ip)
     h = c_null_ptr
   end subroutine vci_integrator_destroy
 
@@ -611,8 +1147,11 @@ contains
     integer(c_int), value :: max_iterations
     type(c_integrator_t), pointer :: ip
     integer :: stat
-    call get_integ(integ, 'vci_set_tolerances', ip, stat)
-    if (stat == VCI_OK) call ip%integ%set_tolerances(real(atol, dp), real(rtol, dp), int(max_iterations), stat)
+    call enter(integ, 'vci_set_tolerances', ip, stat)
+    if (stat == VCI_OK) then
+      call ip%integ%set_tolerances(real(atol, dp), real(rtol, dp), int(max_iterations), stat)
+      call leave(ip)
+    end if
     vci_set_tolerances = stat
   end function vci_set_tolerances
 
@@ -622,8 +1161,11 @@ contains
     integer(c_int), value :: mode
     type(c_integrator_t), pointer :: ip
     integer :: stat
-    call get_integ(integ, 'vci_set_impact_energy', ip, stat)
-    if (stat == VCI_OK) call ip%integ%set_impact_energy(int(mode), stat)
+    call enter(integ, 'vci_set_impact_energy', ip, stat)
+    if (stat == VCI_OK) then
+      call ip%integ%set_impact_energy(int(mode), stat)
+      call leave(ip)
+    end if
     vci_set_impact_energy = stat
   end function vci_set_impact_energy
 
@@ -633,10 +1175,45 @@ contains
     integer(c_int), value :: max_impacts
     type(c_integrator_t), pointer :: ip
     integer :: stat
-    call get_integ(integ, 'vci_set_max_impacts', ip, stat)
-    if (stat == VCI_OK) call ip%integ%set_max_impacts(int(max_impacts), stat)
+    call enter(integ, 'vci_set_max_impacts', ip, stat)
+    if (stat == VCI_OK) then
+      call ip%integ%set_max_impacts(int(max_impacts), stat)
+      call leave(ip)
+    end if
     vci_set_max_impacts = stat
   end function vci_set_max_impacts
+
+  !> int vci_set_scheme(vci_integrator integ, int scheme, int stages): the scheme of a continuous model.
+  integer(c_int) function vci_set_scheme(integ, scheme, stages) bind(C, name='vci_set_scheme')
+    type(c_ptr), value :: integ
+    integer(c_int), value :: scheme, stages
+    type(c_integrator_t), pointer :: ip
+    integer :: stat
+    call enter(integ, 'vci_set_scheme', ip, stat)
+    if (stat == VCI_OK) then
+      if (output_blocks_init(ip, 'vci_set_scheme', stat)) then
+        continue
+      else if (.not. ip%model%continuous) then
+        stat = fail(ip, VCI_ERR_ARGUMENT, 'vci_set_scheme: the model is a discrete L_d (vci_model_create); '// &
+                    'schemes discretise a continuous one (vci_model_create_lagrangian)')
+      else
+        call ip%integ%set_scheme(int(scheme), int(stages), stat)
+      end if
+      call leave(ip)
+    end if
+    vci_set_scheme = stat
+  end function vci_set_scheme
+
+  !> An output file holds one run from one initialisation: no new start while it has rows.
+  logical function output_blocks_init(ip, who, stat)
+    type(c_integrator_t), intent(inout) :: ip
+    character(len=*), intent(in) :: who
+    integer, intent(out) :: stat
+    stat = VCI_OK
+    output_blocks_init = allocated(ip%obs%output) .and. ip%obs%started
+    if (output_blocks_init) stat = fail(ip, VCI_ERR_STATE, who//': the open output file holds the run so far; '// &
+                                        'close it (vci_close_output) or open a new one before starting again')
+  end function output_blocks_init
 
   !> int vci_init_from_pair(vci_integrator integ, double t0, const double *q0, const double *q1)
   integer(c_int) function vci_init_from_pair(integ, t0, q0, q1) bind(C, name='vci_init_from_pair')
@@ -645,16 +1222,19 @@ contains
     type(c_integrator_t), pointer :: ip
     real(c_double), pointer :: a(:), b(:)
     integer :: stat
-    call get_integ(integ, 'vci_init_from_pair', ip, stat)
+    call enter(integ, 'vci_init_from_pair', ip, stat)
     if (stat /= VCI_OK) then
       vci_init_from_pair = stat; return
     end if
     if (.not. (c_array(q0, ip%model%n, a) .and. c_array(q1, ip%model%n, b))) then
       call ip%integ%forget_state()
-      vci_init_from_pair = fail(ip, VCI_ERR_ARGUMENT, 'vci_init_from_pair: q0 or q1 is NULL'); return
+      stat = fail(ip, VCI_ERR_ARGUMENT, 'vci_init_from_pair: q0 or q1 is NULL')
+    else if (.not. output_blocks_init(ip, 'vci_init_from_pair', stat)) then
+      call ip%integ%init_from_pair(real(t0, dp), a, b, stat)
+      stat = after_call(ip, stat)
     end if
-    call ip%integ%init_from_pair(real(t0, dp), a, b, stat)
-    vci_init_from_pair = after_call(ip, stat)
+    call leave(ip)
+    vci_init_from_pair = stat
   end function vci_init_from_pair
 
   !> int vci_init_from_momentum(vci_integrator integ, double t0, const double *q0, const double *p0)
@@ -664,17 +1244,33 @@ contains
     type(c_integrator_t), pointer :: ip
     real(c_double), pointer :: a(:), b(:)
     integer :: stat
-    call get_integ(integ, 'vci_init_from_momentum', ip, stat)
+    call enter(integ, 'vci_init_from_momentum', ip, stat)
     if (stat /= VCI_OK) then
       vci_init_from_momentum = stat; return
     end if
     if (.not. (c_array(q0, ip%model%n, a) .and. c_array(p0, ip%model%n, b))) then
       call ip%integ%forget_state()
-      vci_init_from_momentum = fail(ip, VCI_ERR_ARGUMENT, 'vci_init_from_momentum: q0 or p0 is NULL'); return
+      stat = fail(ip, VCI_ERR_ARGUMENT, 'vci_init_from_momentum: q0 or p0 is NULL')
+    else if (.not. output_blocks_init(ip, 'vci_init_from_momentum', stat)) then
+      call ip%integ%init_from_momentum(real(t0, dp), a, b, stat)
+      stat = after_call(ip, stat)
     end if
-    call ip%integ%init_from_momentum(real(t0, dp), a, b, stat)
-    vci_init_from_momentum = after_call(ip, stat)
+    call leave(ip)
+    vci_init_from_momentum = stat
   end function vci_init_from_momentum
+
+  !> The output's run goes one way: refuse the other direction while it is open.
+  logical function output_blocks_direction(ip, who, direction, stat)
+    type(c_integrator_t), intent(inout) :: ip
+    character(len=*), intent(in) :: who
+    integer, intent(in) :: direction
+    integer, intent(out) :: stat
+    stat = VCI_OK
+    output_blocks_direction = allocated(ip%obs%output) .and. ip%obs%started .and. &
+                              (direction == 1 .or. direction == -1) .and. direction /= ip%obs%direction
+    if (output_blocks_direction) stat = fail(ip, VCI_ERR_STATE, who//': the open output file holds a run in the '// &
+      'other direction; close it (vci_close_output) or open a new one to integrate this way')
+  end function output_blocks_direction
 
   !> int vci_step(vci_integrator integ, int direction)
   integer(c_int) function vci_step(integ, direction) bind(C, name='vci_step')
@@ -682,48 +1278,72 @@ contains
     integer(c_int), value :: direction
     type(c_integrator_t), pointer :: ip
     integer :: stat, ostat
-    call get_integ(integ, 'vci_step', ip, stat)
+    call enter(integ, 'vci_step', ip, stat)
     if (stat /= VCI_OK) then
       vci_step = stat; return
     end if
-    ! a single step has no on_start of its own: the output's run starts with the first step
-    if (allocated(ip%obs%output) .and. .not. ip%obs%started .and. ip%integ%is_initialized() .and. abs(direction) == 1) then
+    if (.not. output_blocks_direction(ip, 'vci_step', int(direction), stat)) then
+      ! a single step has no on_start of its own: the output's run starts with the first step
       ostat = 0
-      call ip%obs%on_start(ip%integ%run_info(int(direction)), ip%integ%configuration(), ip%integ%momentum(), ostat)
+      if (allocated(ip%obs%output) .and. .not. ip%obs%started .and. ip%integ%is_initialized() .and. &
+          (direction == 1 .or. direction == -1)) call ip%obs%on_start(ip%integ%run_info(int(direction)), ip%integ%configuration(), &
+                                                    ip%integ%momentum(), ostat)
       if (ostat /= 0) then
-        vci_step = fail(ip, VCI_ERR_IO, 'vci_step: the output could not start the run'); return
+        stat = fail(ip, VCI_ERR_IO, 'vci_step: the output could not start the run: '//trim(output_message(ip)))
+      else
+        call ip%integ%step(int(direction), stat, ip%obs)
+        stat = after_call(ip, stat)
       end if
     end if
-    call ip%integ%step(int(direction), stat, ip%obs)
-    vci_step = after_call(ip, stat)
+    call leave(ip)
+    vci_step = stat
   end function vci_step
 
-  !> int vci_integrate(vci_integrator integ, long nsteps, int direction)
+  !> int vci_integrate(vci_integrator integ, int64_t nsteps, int direction)
   integer(c_int) function vci_integrate(integ, nsteps, direction) bind(C, name='vci_integrate')
     type(c_ptr), value :: integ
-    integer(c_long), value :: nsteps
+    integer(c_int64_t), value :: nsteps
     integer(c_int), value :: direction
     type(c_integrator_t), pointer :: ip
     integer :: stat
-    call get_integ(integ, 'vci_integrate', ip, stat)
+    call enter(integ, 'vci_integrate', ip, stat)
     if (stat /= VCI_OK) then
       vci_integrate = stat; return
     end if
-    call ip%integ%integrate(int(nsteps, i8), int(direction), stat, ip%obs)
-    vci_integrate = after_call(ip, stat)
+    if (.not. output_blocks_direction(ip, 'vci_integrate', int(direction), stat)) then
+      call ip%integ%integrate(int(nsteps, i8), int(direction), stat, ip%obs)
+      stat = after_call(ip, stat)
+    end if
+    call leave(ip)
+    vci_integrate = stat
   end function vci_integrate
 
-  !> Common checks of the getters: a live, initialised integrator.
-  subroutine get_ready(integ, who, ip, stat)
+  !> The output writer's own message, if it has one (fixed length: see vci_limits).
+  function output_message(ip) result(msg)
+    type(c_integrator_t), intent(in) :: ip
+    character(len=VCI_MSG_LEN) :: msg
+    msg = ''
+#ifdef VCI_HAVE_HDF5
+    if (allocated(ip%obs%output)) then
+      select type (w => ip%obs%output)
+      type is (vci_hdf5_writer_t)
+        msg = trim(w%message)
+      end select
+    end if
+#endif
+  end function output_message
+
+  !> Common checks of the getters: a live, initialised integrator (entered: leave it after).
+  subroutine enter_ready(integ, who, ip, stat)
     type(c_ptr), intent(in) :: integ
     character(len=*), intent(in) :: who
     type(c_integrator_t), pointer, intent(out) :: ip
     integer, intent(out) :: stat
-    call get_integ(integ, who, ip, stat)
+    call enter(integ, who, ip, stat)
     if (stat /= VCI_OK) return
     if (.not. ip%integ%is_initialized()) stat = fail(ip, VCI_ERR_STATE, who//': the integrator has no state yet '// &
                                                 '(call vci_init_from_pair or vci_init_from_momentum)')
-  end subroutine get_ready
+  end subroutine enter_ready
 
   !> int vci_get_state(vci_integrator integ, double *t, double *q, double *p): NULL outputs are skipped.
   integer(c_int) function vci_get_state(integ, t, q, p) bind(C, name='vci_get_state')
@@ -731,14 +1351,16 @@ contains
     type(c_integrator_t), pointer :: ip
     real(c_double), pointer :: tt, a(:)
     integer :: stat
-    call get_ready(integ, 'vci_get_state', ip, stat)
-    vci_get_state = stat
-    if (stat /= VCI_OK) return
-    if (c_associated(t)) then
-      call c_f_pointer(t, tt); tt = ip%integ%time()
+    call enter_ready(integ, 'vci_get_state', ip, stat)
+    if (stat == VCI_OK) then
+      if (c_associated(t)) then
+        call c_f_pointer(t, tt); tt = ip%integ%time()
+      end if
+      if (c_array(q, ip%model%n, a)) a = ip%integ%configuration()
+      if (c_array(p, ip%model%n, a)) a = ip%integ%momentum()
     end if
-    if (c_array(q, ip%model%n, a)) a = ip%integ%configuration()
-    if (c_array(p, ip%model%n, a)) a = ip%integ%momentum()
+    if (associated(ip)) call leave(ip)
+    vci_get_state = stat
   end function vci_get_state
 
   !> int vci_get_multipliers(vci_integrator integ, double *lambda /* [m] */)
@@ -747,14 +1369,18 @@ contains
     type(c_integrator_t), pointer :: ip
     real(c_double), pointer :: a(:)
     integer :: stat
-    call get_ready(integ, 'vci_get_multipliers', ip, stat)
-    vci_get_multipliers = stat
-    if (stat /= VCI_OK) return          ! (Fortran does not short-circuit: ip may be null)
-    if (ip%model%m == 0) return
-    if (.not. c_array(lambda, ip%model%m, a)) then
-      vci_get_multipliers = fail(ip, VCI_ERR_ARGUMENT, 'vci_get_multipliers: lambda is NULL'); return
+    call enter_ready(integ, 'vci_get_multipliers', ip, stat)
+    if (stat == VCI_OK) then
+      if (ip%model%m > 0) then
+        if (c_array(lambda, ip%model%m, a)) then
+          a = ip%integ%multipliers()
+        else
+          stat = fail(ip, VCI_ERR_ARGUMENT, 'vci_get_multipliers: lambda is NULL')
+        end if
+      end if
     end if
-    a = ip%integ%multipliers()
+    if (associated(ip)) call leave(ip)
+    vci_get_multipliers = stat
   end function vci_get_multipliers
 
   !> int vci_get_energy(vci_integrator integ, double *energy): E_d of the last step.
@@ -763,54 +1389,62 @@ contains
     type(c_integrator_t), pointer :: ip
     real(c_double), pointer :: e
     integer :: stat
-    call get_ready(integ, 'vci_get_energy', ip, stat)
-    vci_get_energy = stat
-    if (stat /= VCI_OK) return
-    if (.not. c_associated(energy)) then
-      vci_get_energy = fail(ip, VCI_ERR_ARGUMENT, 'vci_get_energy: energy is NULL'); return
+    call enter_ready(integ, 'vci_get_energy', ip, stat)
+    if (stat == VCI_OK) then
+      if (c_associated(energy)) then
+        call c_f_pointer(energy, e)
+        e = ip%integ%energy()
+      else
+        stat = fail(ip, VCI_ERR_ARGUMENT, 'vci_get_energy: energy is NULL')
+      end if
     end if
-    call c_f_pointer(energy, e)
-    e = ip%integ%energy()
+    if (associated(ip)) call leave(ip)
+    vci_get_energy = stat
   end function vci_get_energy
 
-  !> int vci_get_index(vci_integrator integ, long *k): index of the current state (t = t0 + k h).
+  !> int vci_get_index(vci_integrator integ, int64_t *k): index of the current state (t = t0 + k h).
   integer(c_int) function vci_get_index(integ, k) bind(C, name='vci_get_index')
     type(c_ptr), value :: integ, k
     type(c_integrator_t), pointer :: ip
-    integer(c_long), pointer :: kk
+    integer(c_int64_t), pointer :: kk
     integer :: stat
-    call get_ready(integ, 'vci_get_index', ip, stat)
-    vci_get_index = stat
-    if (stat /= VCI_OK) return
-    if (.not. c_associated(k)) then
-      vci_get_index = fail(ip, VCI_ERR_ARGUMENT, 'vci_get_index: k is NULL'); return
+    call enter_ready(integ, 'vci_get_index', ip, stat)
+    if (stat == VCI_OK) then
+      if (c_associated(k)) then
+        call c_f_pointer(k, kk)
+        kk = int(ip%integ%step_index(), c_int64_t)
+      else
+        stat = fail(ip, VCI_ERR_ARGUMENT, 'vci_get_index: k is NULL')
+      end if
     end if
-    call c_f_pointer(k, kk)
-    kk = int(ip%integ%step_index(), c_long)
+    if (associated(ip)) call leave(ip)
+    vci_get_index = stat
   end function vci_get_index
 
-  !> int vci_get_stats(vci_integrator integ, long *steps, long *impacts, long *newton_iterations)
+  !> int vci_get_stats(vci_integrator integ, int64_t *steps, int64_t *impacts, int64_t *newton_iterations)
   integer(c_int) function vci_get_stats(integ, steps, impacts, newton_iterations) bind(C, name='vci_get_stats')
     type(c_ptr), value :: integ, steps, impacts, newton_iterations
     type(c_integrator_t), pointer :: ip
     type(vci_stats_t) :: stats
     integer :: stat
-    call get_integ(integ, 'vci_get_stats', ip, stat)
+    call enter(integ, 'vci_get_stats', ip, stat)
+    if (stat == VCI_OK) then
+      stats = ip%integ%statistics()
+      call put_count(steps, stats%steps)
+      call put_count(impacts, stats%impacts)
+      call put_count(newton_iterations, stats%newton_iterations)
+      call leave(ip)
+    end if
     vci_get_stats = stat
-    if (stat /= VCI_OK) return
-    stats = ip%integ%statistics()
-    call put_long(steps, stats%steps)
-    call put_long(impacts, stats%impacts)
-    call put_long(newton_iterations, stats%newton_iterations)
   contains
-    subroutine put_long(p, v)
+    subroutine put_count(p, v)
       type(c_ptr), intent(in) :: p
       integer(i8), intent(in) :: v
-      integer(c_long), pointer :: l
+      integer(c_int64_t), pointer :: l
       if (.not. c_associated(p)) return
       call c_f_pointer(p, l)
-      l = int(v, c_long)
-    end subroutine put_long
+      l = int(v, c_int64_t)
+    end subroutine put_count
   end function vci_get_stats
 
   !> int vci_set_impact_callback(vci_integrator integ, vci_impact_fn fn, void *user): NULL fn removes it.
@@ -819,11 +1453,13 @@ contains
     type(c_funptr), value :: fn
     type(c_integrator_t), pointer :: ip
     integer :: stat
-    call get_integ(integ, 'vci_set_impact_callback', ip, stat)
+    call enter(integ, 'vci_set_impact_callback', ip, stat)
+    if (stat == VCI_OK) then
+      ip%obs%impact_fn = fn
+      ip%obs%user = user
+      call leave(ip)
+    end if
     vci_set_impact_callback = stat
-    if (stat /= VCI_OK) return
-    ip%obs%impact_fn = fn
-    ip%obs%user = user
   end function vci_set_impact_callback
 
   !> int vci_open_output(vci_integrator integ, const char *path): HDF5 trajectory file (replaced if
@@ -834,44 +1470,54 @@ contains
     character(kind=c_char), pointer :: chars(:)
     character(len=:), allocatable :: fpath
     integer :: stat, i, nc
-    call get_integ(integ, 'vci_open_output', ip, stat)
+    call enter(integ, 'vci_open_output', ip, stat)
     if (stat /= VCI_OK) then
       vci_open_output = stat; return
     end if
+    nc = 0
     if (.not. c_associated(path)) then
-      vci_open_output = fail(ip, VCI_ERR_ARGUMENT, 'vci_open_output: path is NULL'); return
+      stat = fail(ip, VCI_ERR_ARGUMENT, 'vci_open_output: path is NULL')
+    else
+      nc = int(min(c_strlen(path), int(huge(1), c_size_t)))
+      if (nc == 0) stat = fail(ip, VCI_ERR_ARGUMENT, 'vci_open_output: path is empty')
     end if
-    nc = int(c_strlen(path))
-    if (nc == 0) then
-      vci_open_output = fail(ip, VCI_ERR_ARGUMENT, 'vci_open_output: path is empty'); return
+    if (stat == VCI_OK) then
+      call c_f_pointer(path, chars, [nc])
+      allocate (character(len=nc) :: fpath)
+      do i = 1, nc
+        fpath(i:i) = chars(i)
+      end do
+      stat = close_output(ip)
+      if (stat /= VCI_OK) stat = fail(ip, stat, 'vci_open_output: the previous output file could not be finished')
     end if
-    call c_f_pointer(path, chars, [nc])
-    allocate (character(len=nc) :: fpath)
-    do i = 1, nc
-      fpath(i:i) = chars(i)
-    end do
-    stat = close_output(ip)
-    if (stat /= VCI_OK) then
-      vci_open_output = fail(ip, stat, 'vci_open_output: the previous output file could not be finished'); return
-    end if
+    if (stat == VCI_OK) then
 #ifdef VCI_HAVE_HDF5
-    block
-      type(vci_hdf5_writer_t), allocatable :: w
-      allocate (w)
-      call w%open(fpath, stat, overwrite=.true.)
-      if (stat /= VCI_OK) then
-        vci_open_output = fail(ip, VCI_ERR_IO, 'vci_open_output: '//trim(w%message)); return
-      end if
-      call w%attach(ip%integ)   ! checkpoints in the file: restarts continue bit for bit
-      call move_alloc(w, ip%obs%output)
-    end block
-    ip%obs%started = .false.
-    call ip%integ%report_failure(VCI_OK, '')
-    vci_open_output = VCI_OK
+      block
+        type(vci_hdf5_writer_t), allocatable :: w
+        allocate (w, stat=stat)
+        if (stat /= 0) then
+          stat = fail(ip, VCI_ERR_MEMORY, 'vci_open_output: out of memory')
+        else
+          call lock_io()
+          call w%open(fpath, stat, overwrite=.true.)
+          call unlock_io()
+          if (stat /= VCI_OK) then
+            stat = fail(ip, VCI_ERR_IO, 'vci_open_output: '//trim(w%message))
+          else
+            call w%attach(ip%integ)   ! checkpoints in the file: restarts continue bit for bit
+            call move_alloc(w, ip%obs%output)
+            ip%obs%started = .false.
+            ip%obs%direction = 0
+          end if
+        end if
+      end block
 #else
-    vci_open_output = fail(ip, VCI_ERR_IO, 'vci_open_output: cannot write '//fpath// &
-                           ': this vci library was built without HDF5 (configure with -DVCI_WITH_HDF5=ON)')
+      stat = fail(ip, VCI_ERR_IO, 'vci_open_output: cannot write '//fpath// &
+                  ': this vci library was built without HDF5 (configure with -DVCI_WITH_HDF5=ON)')
 #endif
+    end if
+    call leave(ip)
+    vci_open_output = stat
   end function vci_open_output
 
   !> int vci_close_output(vci_integrator integ): finish and close the output file (no-op without one).
@@ -879,36 +1525,46 @@ contains
     type(c_ptr), value :: integ
     type(c_integrator_t), pointer :: ip
     integer :: stat
-    call get_integ(integ, 'vci_close_output', ip, stat)
+    character(len=VCI_MSG_LEN) :: why
+    call enter(integ, 'vci_close_output', ip, stat)
     if (stat == VCI_OK) then
+      why = output_message(ip)
       stat = close_output(ip)
-      if (stat /= VCI_OK) stat = fail(ip, stat, 'vci_close_output: the output file could not be finished')
+      if (stat /= VCI_OK) stat = fail(ip, stat, 'vci_close_output: the output file could not be finished: '//trim(why))
+      call leave(ip)
     end if
     vci_close_output = stat
   end function vci_close_output
 
   !> int vci_last_error(vci_integrator integ, char *buffer, int size): the message of the last
-  !> call on integ (empty after success), or with integ == NULL the last failure that had no live
-  !> integrator to hold it. Truncated to size - 1 characters and NUL-terminated.
+  !> call on integ (empty after success), or with integ == NULL the calling thread's last failure
+  !> that had no live integrator to hold it. Truncated to size - 1 characters and NUL-terminated.
   integer(c_int) function vci_last_error(integ, buffer, size) bind(C, name='vci_last_error')
     type(c_ptr), value :: integ, buffer
     integer(c_int), value :: size
     character(kind=c_char), pointer :: out(:)
     character(len=VCI_MSG_LEN) :: msg
-    type(c_integrator_t), pointer :: ip
     integer :: i, nc
     if (.not. c_associated(buffer) .or. size < 1) then
       vci_last_error = VCI_ERR_ARGUMENT; return
     end if
     vci_last_error = VCI_OK
     if (.not. c_associated(integ)) then
-      msg = global_message
-    else if (find_live(integ, KIND_INTEGRATOR) == 0) then
-      msg = 'vci_last_error: not a live integrator handle (destroyed, or not made by vci_integrator_create)'
-      vci_last_error = VCI_ERR_ARGUMENT
+      msg = thread_message()
     else
-      call c_f_pointer(integ, ip)
-      msg = ip%integ%message()
+      ! under the lock: no call on it can start (and write its message) while it is copied
+      call lock_registry()
+      i = find_live(integ, KIND_INTEGRATOR)
+      if (i == 0) then
+        msg = 'vci_last_error: not a live integrator handle (destroyed, or not made by vci_integrator_create)'
+        vci_last_error = VCI_ERR_ARGUMENT
+      else if (slots(i)%integ%busy) then
+        msg = 'vci_last_error: the integrator is busy (a call on it is running)'
+        vci_last_error = VCI_ERR_STATE
+      else
+        msg = slots(i)%integ%integ%message_text()
+      end if
+      call unlock_registry()
     end if
     call c_f_pointer(buffer, out, [size])
     nc = min(len_trim(msg), size - 1)
@@ -922,14 +1578,8 @@ contains
   type(c_ptr) function vci_status_string(status) bind(C, name='vci_status_string')
     integer(c_int), value :: status
     integer :: i
-    if (.not. status_text_ready) then
-      do i = lbound(status_text, 1), ubound(status_text, 1)
-        status_text(i) = vci_status_name(i)//c_null_char
-      end do
-      status_text_ready = .true.
-    end if
-    i = ubound(status_text, 1)    ! 'unknown status'
-    if (status >= VCI_OK .and. status < ubound(status_text, 1)) i = int(status)
+    i = N_STATUS + 1    ! 'unknown status'
+    if (status >= 0 .and. status <= N_STATUS) i = int(status)
     vci_status_string = c_loc(status_text(i))
   end function vci_status_string
 

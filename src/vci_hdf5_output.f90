@@ -11,12 +11,16 @@
 !> run bit for bit, and `open(..., append=.true.)` continues the same file.
 !>
 !> Nothing here stops or prints (HDF5's own error printing is switched off); failures give
-!> VCI_ERR_IO and a message naming the file and the cause.
+!> VCI_ERR_IO and a message naming the file and the cause. Files are input like any other: every
+!> rank, shape, size and type read from one is checked before it is used (a foreign or damaged
+!> file gives VCI_ERR_IO, never a crash or an allocation the file's numbers dictate).
 module vci_hdf5_output
   use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
   use hdf5
   use vci_kinds, only: dp, i8
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use vci_status, only: VCI_OK, VCI_ERR_IO, VCI_MSG_LEN
+  use vci_limits, only: vci_size_problem
   use vci_observer, only: vci_observer_t, vci_run_info_t, vci_impact_t
   use vci_integrator, only: vci_integrator_t
   use vci_checkpoint, only: vci_checkpoint_t, vci_checkpoint_from_state, VCI_CHECKPOINT_VERSION
@@ -61,6 +65,7 @@ module vci_hdf5_output
     real(dp), allocatable, private :: it(:), ia(:), iq(:, :), ii(:)
     integer(i8), allocatable, private :: is(:)
     integer, allocatable, private :: ig(:)
+    real(dp), allocatable, private :: cp_rec(:)   !< the file's checkpoint, when it is valid (reading)
   contains
     procedure :: open => w_open
     procedure :: attach => w_attach
@@ -187,27 +192,55 @@ contains
     character(len=:), allocatable :: dirname
     integer :: err
     logical :: ex
+    integer(i8) :: rows_t, rows_q, rows_p, rows_e, rows_l, row_cp
     call get_attr_int(self, self%file, 'n', self%n, stat)
     call get_attr_int(self, self%file, 'm', self%m, stat)
     call get_attr_int(self, self%file, 'n_gaps', self%n_gaps, stat)
     call get_attr_real(self, self%file, 'h', self%h, stat)
     call get_attr_str(self, self%file, 'direction', dirname, stat)
     if (stat /= VCI_OK) return
+    if (dirname /= 'forward' .and. dirname /= 'backward') then
+      call fail(self, 'attribute direction is neither forward nor backward', stat); return
+    end if
     self%direction = merge(-1, 1, dirname == 'backward')
+    if (vci_size_problem(self%n, self%m, self%n_gaps) /= '') then
+      call fail(self, 'attributes n, m, n_gaps are no model sizes ('//trim(vci_size_problem(self%n, self%m, &
+                self%n_gaps))//')', stat); return
+    end if
+    if (.not. (ieee_is_finite(self%h) .and. self%h > 0.0_dp)) then
+      call fail(self, 'attribute h is not a positive finite step length', stat); return
+    end if
     call open_dset(self, self%file, 't', self%d_t, stat)
     call open_dset(self, self%file, 'q', self%d_q, stat)
     call open_dset(self, self%file, 'p', self%d_p, stat)
     call open_dset(self, self%file, 'energy', self%d_e, stat)
     if (self%m > 0) call open_dset(self, self%file, 'lambda', self%d_l, stat)
+    ! shapes: rows of n values (Fortran order: the row index is the last dimension)
+    rows_t = dset_rows(self, self%d_t, 't', 0, stat)
+    rows_q = dset_rows(self, self%d_q, 'q', self%n, stat)
+    rows_p = dset_rows(self, self%d_p, 'p', self%n, stat)
+    rows_e = dset_rows(self, self%d_e, 'energy', 0, stat)
+    rows_l = huge(1_i8)
+    if (self%m > 0) rows_l = dset_rows(self, self%d_l, 'lambda', self%m, stat)
     if (stat /= VCI_OK) return
     ! Trust the steps that steps_completed (written last at every flush) vouches for: a file whose
     ! run was killed during a flush may hold a few more rows, which are dropped here.
     call get_attr_i8(self, self%file, 'steps_completed', self%steps, stat)
     if (stat /= VCI_OK) return
-    self%steps = min(self%steps, extent(self%d_e), extent(self%d_t) - 1)
-    if (self%m > 0) self%steps = min(self%steps, extent(self%d_l))
+    self%steps = min(self%steps, rows_e, rows_t - 1, rows_q - 1, rows_p - 1, rows_l)
     if (self%steps < 0) then
       call fail(self, 'the file holds no state (/t is empty)', stat); return
+    end if
+    ! A checkpoint that is the state of a row on disk decides where the file ends: the run
+    ! continues from it bit for bit. A kill between the checkpoint and steps_completed (written
+    ! together at every flush, in an order HDF5 decides) leaves the checkpoint one flush ahead of
+    ! or behind steps_completed; either way its row and every row before it are complete.
+    call h5lexists_f(self%file, 'checkpoint', ex, err)
+    if (err == 0 .and. ex) call h5gopen_f(self%file, 'checkpoint', self%g_cp, err)
+    if (allocated(self%cp_rec)) deallocate (self%cp_rec)
+    if (self%g_cp >= 0) then
+      row_cp = checkpoint_row(self, min(rows_t, rows_q, rows_p) - 1, min(rows_e, rows_l))
+      if (row_cp >= 0) self%steps = row_cp
     end if
     self%rows = self%steps + 1
     if (self%n_gaps > 0) then
@@ -223,25 +256,70 @@ contains
       call open_dset(self, self%g_imp, 'impulse', self%d_ii, stat)
       if (stat /= VCI_OK) return
       self%impacts = trusted_impacts(self, stat)
+      if (stat /= VCI_OK) return
     end if
     if (self%append) call truncate_to_trusted(self, stat)
-    call h5lexists_f(self%file, 'checkpoint', ex, err)
-    if (err == 0 .and. ex) call h5gopen_f(self%file, 'checkpoint', self%g_cp, err)
   end subroutine open_existing
+
+  !> The row of /checkpoint/record when it is a valid checkpoint of that row (its q and p are the
+  !> row's, the row is within max_row and its step within max_steps), else -1; kept in cp_rec.
+  integer(i8) function checkpoint_row(self, max_row, max_steps) result(row)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer(i8), intent(in) :: max_row, max_steps
+    real(dp), allocatable :: rec(:), qr(:, :), pr(:, :)
+    integer :: n, s, st
+    row = -1
+    n = self%n
+    allocate (rec(7 + 3 * n + self%m), qr(n, 1), pr(n, 1), stat=st)
+    if (st /= 0) return
+    s = VCI_OK
+    call get_vector(self, self%g_cp, 'record', rec, s)
+    if (s /= VCI_OK) then
+      self%message = ''; return      ! no usable checkpoint: not an error, the last row serves
+    end if
+    ! [row, k, t0, h, energy, e_arrive, e_dir, q(n), p(n), vel(n), lambda(m)]; energy and e_arrive
+    ! may be NaN (not known yet), everything else is finite; row, k, e_dir are integers
+    if (.not. (all(ieee_is_finite(rec(1:4))) .and. ieee_is_finite(rec(7)) .and. all(ieee_is_finite(rec(8:))))) return
+    if (rec(1) /= aint(rec(1)) .or. rec(2) /= aint(rec(2)) .or. abs(rec(2)) > 2.0_dp**62) return
+    if (rec(1) < 0.0_dp .or. rec(1) > real(min(max_row, max_steps), dp)) return
+    if (rec(7) /= -1.0_dp .and. rec(7) /= 0.0_dp .and. rec(7) /= 1.0_dp) return
+    if (rec(4) /= self%h) return
+    call read_rows(self, self%d_q, n, int(rec(1), i8), qr, s)
+    call read_rows(self, self%d_p, n, int(rec(1), i8), pr, s)
+    if (s /= VCI_OK) then
+      self%message = ''; return
+    end if
+    if (any(qr(:, 1) /= rec(8:7 + n)) .or. any(pr(:, 1) /= rec(8 + n:7 + 2 * n))) return
+    row = int(rec(1), i8)
+    call move_alloc(rec, self%cp_rec)
+  end function checkpoint_row
 
   !> Impacts within the trusted steps (their step starts before the last trusted row).
   integer(i8) function trusted_impacts(self, stat) result(k)
     type(vci_hdf5_writer_t), intent(inout) :: self
     integer, intent(inout) :: stat
     integer(i8), allocatable :: steps(:)
+    integer(i8) :: n_step
     integer :: err
-    k = extent(self%d_is)
-    allocate (steps(k))
-    if (k > 0) call h5dread_f(self%d_is, h5kind_to_type(i8, H5_INTEGER_KIND), steps, [int(k, hsize_t)], err)
-    if (k > 0 .and. err /= 0) then
+    k = 0
+    n_step = dset_rows(self, self%d_is, 'impacts/step', 0, stat)
+    k = min(n_step, dset_rows(self, self%d_it, 'impacts/time', 0, stat), &
+            dset_rows(self, self%d_ia, 'impacts/alpha', 0, stat), dset_rows(self, self%d_ig, 'impacts/gap_index', 0, stat), &
+            dset_rows(self, self%d_iq, 'impacts/q', self%n, stat), dset_rows(self, self%d_ii, 'impacts/impulse', 0, stat))
+    if (stat /= VCI_OK) then
+      k = 0; return
+    end if
+    allocate (steps(n_step), stat=err)
+    if (err /= 0) then
+      k = 0
+      call fail(self, '/impacts/step is too long to read', stat); return
+    end if
+    err = 0
+    if (n_step > 0) call h5dread_f(self%d_is, h5kind_to_type(i8, H5_INTEGER_KIND), steps, [int(n_step, hsize_t)], err)
+    if (err /= 0) then
+      k = 0
       call fail(self, 'cannot read /impacts/step', stat); return
     end if
-    k = min(k, extent(self%d_it), extent(self%d_ia), extent(self%d_ig), extent(self%d_iq), extent(self%d_ii))
     k = count(steps(1:k) < self%rows - 1)
   end function trusted_impacts
 
@@ -521,7 +599,7 @@ contains
     real(dp), intent(out), optional :: t_first
     integer, intent(out), optional :: direction
     type(vci_hdf5_writer_t) :: r   ! reuses the writer's helpers for reading
-    integer :: err, n, s
+    integer :: err, n, s, st
     logical :: ex, use_cp
     real(dp), allocatable :: rec(:)
     real(dp) :: buf(1)
@@ -545,26 +623,19 @@ contains
     if (stat == VCI_OK .and. present(t_first)) call read_rows(r, r%d_t, 0, 0_i8, buf, stat)
     if (stat == VCI_OK .and. present(t_first)) t_first = buf(1)
     if (present(direction)) direction = r%direction
-    ! the checkpoint counts only if it is the state of the last trusted row
-    use_cp = .false.
-    if (stat == VCI_OK .and. r%g_cp >= 0) then
+    ! the checkpoint counts only if it is the state of a row on disk (open_existing checked it)
+    use_cp = stat == VCI_OK .and. allocated(r%cp_rec)
+    if (use_cp) then
       n = r%n
-      allocate (rec(7 + 3 * n + r%m), row(n, 1))
-      call get_vector(r, r%g_cp, 'record', rec, stat)
-      if (stat == VCI_OK) use_cp = nint(rec(1), i8) == r%rows - 1
-      if (use_cp) call cp%from_record(rec(2:), n, r%m, VCI_CHECKPOINT_VERSION, s)
-      if (use_cp) use_cp = s == VCI_OK
-      if (use_cp) call read_rows(r, r%d_q, n, r%rows - 1, row, stat)
-      if (use_cp .and. stat == VCI_OK) use_cp = all(row(:, 1) == cp%q)
-      if (use_cp) call read_rows(r, r%d_p, n, r%rows - 1, row, stat)
-      if (use_cp .and. stat == VCI_OK) use_cp = all(row(:, 1) == cp%p)
-      deallocate (row)
-      if (stat /= VCI_OK) then   ! an unreadable checkpoint: fall back to the last row
-        stat = VCI_OK; use_cp = .false.
-      end if
+      call move_alloc(r%cp_rec, rec)
+      call cp%from_record(rec(2:), n, r%m, VCI_CHECKPOINT_VERSION, s)
+      use_cp = s == VCI_OK
     end if
     if (.not. use_cp .and. stat == VCI_OK) then
-      allocate (row(max(r%n, r%m, 1), 3))
+      allocate (row(max(r%n, r%m, 1), 3), stat=st)
+      if (st /= 0) call fail(r, 'out of memory', stat)
+    end if
+    if (.not. use_cp .and. stat == VCI_OK) then
       call read_rows(r, r%d_t, 0, r%rows - 1, buf, stat)
       call read_rows(r, r%d_q, r%n, r%rows - 1, row(1:r%n, 1:1), stat)
       call read_rows(r, r%d_p, r%n, r%rows - 1, row(1:r%n, 2:2), stat)
@@ -660,19 +731,37 @@ contains
     if (err /= 0) call fail(self, 'dataset '//name//' missing', stat)
   end subroutine open_dset
 
-  !> Number of rows (the last Fortran dimension) of a dataset.
-  integer(i8) function extent(dset)
+  !> Number of rows of a dataset of rows of `width` values (width 0: a 1-D dataset), after checking
+  !> its shape: rank 1 (width 0) or rank 2 with `width` values in the first (Fortran) dimension.
+  !> 0 and a failure (stat) when the shape is another one; nothing done if stat is set already.
+  integer(i8) function dset_rows(self, dset, name, width, stat) result(rows)
+    type(vci_hdf5_writer_t), intent(inout) :: self
     integer(hid_t), intent(in) :: dset
+    character(len=*), intent(in) :: name
+    integer, intent(in) :: width
+    integer, intent(inout) :: stat
     integer(hid_t) :: space
     integer(hsize_t) :: dims(2), maxdims(2)
-    integer :: rank, err
-    extent = 0
+    integer :: rank, want, err, e2
+    rows = 0
+    if (stat /= VCI_OK) return
+    want = merge(2, 1, width > 0)
     call h5dget_space_f(dset, space, err)
-    call h5sget_simple_extent_ndims_f(space, rank, err)
-    call h5sget_simple_extent_dims_f(space, dims(1:rank), maxdims(1:rank), err)
-    call h5sclose_f(space, err)
-    extent = int(dims(rank), i8)
-  end function extent
+    if (err == 0) call h5sget_simple_extent_ndims_f(space, rank, err)
+    if (err == 0 .and. rank /= want) err = -1
+    if (err == 0) call h5sget_simple_extent_dims_f(space, dims(1:want), maxdims(1:want), err)
+    call h5sclose_f(space, e2)
+    if (err >= 0 .and. width > 0) then
+      if (dims(1) /= int(width, hsize_t)) err = -1
+    end if
+    if (err < 0) then
+      call fail(self, 'dataset '//name//' is not a list of rows of the expected width', stat); return
+    end if
+    if (dims(want) > int(huge(1_i8), hsize_t)) then
+      call fail(self, 'dataset '//name//' has too many rows', stat); return
+    end if
+    rows = int(dims(want), i8)
+  end function dset_rows
 
   !> Extend a dataset to first + count rows and select rows first.. in the file; a matching memory space.
   subroutine select_rows(self, dset, width, first, count, fspace, mspace, stat)
@@ -784,13 +873,24 @@ contains
     real(dp), intent(in) :: v(:)
     integer, intent(inout) :: stat
     integer(hid_t) :: space, dset
-    integer :: err, e2
+    integer :: err, e2, s
     logical :: ex
     if (stat /= VCI_OK) return
     call h5lexists_f(loc, name, ex, err)
     if (err == 0 .and. ex) then
       call h5dopen_f(loc, name, dset, err)
-    else if (err == 0) then
+      ! a dataset of another shape (a damaged or foreign file being appended to) is replaced
+      s = VCI_OK
+      if (err == 0) then
+        if (dset_rows(self, dset, name, 0, s) /= size(v) .or. s /= VCI_OK) then
+          call h5dclose_f(dset, e2)
+          call h5ldelete_f(loc, name, err)
+          ex = .false.
+          self%message = ''
+        end if
+      end if
+    end if
+    if (err == 0 .and. .not. ex) then
       call h5screate_simple_f(1, [int(size(v), hsize_t)], space, err)
       if (err == 0) call h5dcreate_f(loc, name, H5T_IEEE_F64LE, space, dset, err)
       call h5sclose_f(space, e2)
@@ -808,14 +908,17 @@ contains
     integer, intent(inout) :: stat
     integer(hid_t) :: dset
     integer :: err, e2
+    integer :: s
     if (stat /= VCI_OK) return
     call h5dopen_f(loc, name, dset, err)
     if (err == 0) then
-      if (extent(dset) /= size(v)) err = -1
+      s = VCI_OK
+      if (dset_rows(self, dset, 'checkpoint/'//name, 0, s) /= size(v) .or. s /= VCI_OK) err = -1
     end if
     if (err == 0) call h5dread_f(dset, H5T_NATIVE_DOUBLE, v, [int(size(v), hsize_t)], err)
     call h5dclose_f(dset, e2)
-    if (err /= 0) call fail(self, 'cannot read checkpoint '//name, stat)
+    if (err /= 0) call fail(self, 'cannot read checkpoint '//name//' (missing, or not a vector of the expected '// &
+                            'length)', stat)
   end subroutine get_vector
 
   !> A scalar attribute of type ftype, returned open: an existing one is reused (numbers are
@@ -917,6 +1020,27 @@ contains
     call h5tclose_f(stype, e2)
   end subroutine put_attr_str
 
+  !> err = 0 when the attribute holds exactly one value of type class `class`, else -1.
+  subroutine check_attr(attr, class, err)
+    integer(hid_t), intent(in) :: attr
+    integer, intent(in) :: class
+    integer, intent(out) :: err
+    integer(hid_t) :: space, ftype
+    integer(hsize_t) :: npoints
+    integer :: c, e2
+    call h5aget_space_f(attr, space, err)
+    if (err == 0) call h5sget_simple_extent_npoints_f(space, npoints, err)
+    if (err == 0 .and. npoints /= 1) err = -1
+    call h5sclose_f(space, e2)
+    if (err == 0) call h5aget_type_f(attr, ftype, err)
+    if (err == 0) then
+      call h5tget_class_f(ftype, c, err)
+      if (err == 0 .and. c /= class) err = -1
+      call h5tclose_f(ftype, e2)
+    end if
+    if (err /= 0) err = -1
+  end subroutine check_attr
+
   subroutine get_attr_real(self, loc, name, v, stat)
     type(vci_hdf5_writer_t), intent(inout) :: self
     integer(hid_t), intent(in) :: loc
@@ -928,9 +1052,10 @@ contains
     v = 0.0_dp
     if (stat /= VCI_OK) return
     call h5aopen_f(loc, name, attr, err)
+    if (err == 0) call check_attr(attr, H5T_FLOAT_F, err)
     if (err == 0) call h5aread_f(attr, H5T_NATIVE_DOUBLE, v, [1_hsize_t], err)
     call h5aclose_f(attr, e2)
-    if (err /= 0) call fail(self, 'attribute '//name//' missing or unreadable', stat)
+    if (err /= 0) call fail(self, 'attribute '//name//' missing, unreadable, or not one real number', stat)
   end subroutine get_attr_real
 
   subroutine get_attr_int(self, loc, name, v, stat)
@@ -944,9 +1069,10 @@ contains
     v = 0
     if (stat /= VCI_OK) return
     call h5aopen_f(loc, name, attr, err)
+    if (err == 0) call check_attr(attr, H5T_INTEGER_F, err)
     if (err == 0) call h5aread_f(attr, H5T_NATIVE_INTEGER, v, [1_hsize_t], err)
     call h5aclose_f(attr, e2)
-    if (err /= 0) call fail(self, 'attribute '//name//' missing or unreadable', stat)
+    if (err /= 0) call fail(self, 'attribute '//name//' missing, unreadable, or not one integer', stat)
   end subroutine get_attr_int
 
   subroutine get_attr_i8(self, loc, name, v, stat)
@@ -960,9 +1086,10 @@ contains
     v = 0
     if (stat /= VCI_OK) return
     call h5aopen_f(loc, name, attr, err)
+    if (err == 0) call check_attr(attr, H5T_INTEGER_F, err)
     if (err == 0) call h5aread_f(attr, h5kind_to_type(i8, H5_INTEGER_KIND), v, [1_hsize_t], err)
     call h5aclose_f(attr, e2)
-    if (err /= 0) call fail(self, 'attribute '//name//' missing or unreadable', stat)
+    if (err /= 0) call fail(self, 'attribute '//name//' missing, unreadable, or not one integer', stat)
   end subroutine get_attr_i8
 
   subroutine get_attr_str(self, loc, name, v, stat)
@@ -977,8 +1104,13 @@ contains
     v = ''
     if (stat /= VCI_OK) return
     call h5aopen_f(loc, name, attr, err)
+    if (err == 0) call check_attr(attr, H5T_STRING_F, err)
     if (err == 0) call h5aget_type_f(attr, ftype, err)
     if (err == 0) call h5tget_size_f(ftype, sz, err)
+    if (err == 0 .and. (sz < 1 .or. sz > 4096)) then   ! no allocation the file dictates
+      call h5tclose_f(ftype, e2)
+      err = -1
+    end if
     if (err == 0) then
       deallocate (v)
       allocate (character(len=sz) :: v)

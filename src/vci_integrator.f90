@@ -15,7 +15,8 @@ module vci_integrator
   use vci_model_base, only: vci_model_base_t
   use vci_model, only: vci_model_t
   use vci_lagrangian, only: vci_lagrangian_t
-  use vci_stepper, only: vci_stepper_t, vci_settings_t, vci_solver_stats_t
+  use vci_limits, only: vci_size_problem
+  use vci_stepper, only: vci_stepper_t, vci_settings_t, vci_solver_stats_t, vci_reserve_impacts
   use vci_scheme, only: vci_scheme_t, VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN, VCI_SCHEME_DISCRETE, &
                         VCI_SCHEME_LEFT, VCI_SCHEME_MIDPOINT, VCI_SCHEME_LOBATTO
   use vci_scheme_discrete, only: vci_scheme_discrete_t
@@ -33,6 +34,7 @@ module vci_integrator
   !> Counters over the integrator's life.
   type, public :: vci_stats_t
     integer(i8) :: steps = 0, impacts = 0, newton_solves = 0, newton_iterations = 0, fallbacks = 0
+    integer(i8) :: factorisations = 0   !< LU factorisations of Newton matrices
   end type vci_stats_t
 
   type, public :: vci_integrator_t
@@ -89,8 +91,10 @@ module vci_integrator
     procedure :: impact_count
     procedure :: impact
     procedure :: statistics
+    procedure :: set_solver_paths
     procedure :: status
     procedure :: message
+    procedure :: message_text
     procedure :: settings
     procedure :: scheme
     procedure :: stages
@@ -137,8 +141,8 @@ contains
     ! which procedures the model supplies (the values at these probe points are discarded)
     allocate (q(model%n), v(model%n), hq(model%n, model%n), hv(model%n, model%n), hw(model%n, model%n), stat=ierr)
     if (ierr /= 0) then
-      self%last_message = 'create: out of memory'
-      call finish(self, VCI_ERR_ARGUMENT, stat); return
+      self%last_message = 'create: cannot allocate the probes of the model (out of memory)'
+      call finish(self, VCI_ERR_MEMORY, stat); return
     end if
     q = 0.0_dp; v = 0.0_dp
     missing = ''
@@ -167,11 +171,14 @@ contains
     class(vci_model_base_t), target, intent(inout) :: model
     real(dp), intent(in) :: h
     integer, intent(out) :: stat
+    character(len=80) :: why
     self%created = .false.; self%initialized = .false.
     self%steps_taken = 0_i8; self%impacts_found = 0_i8; self%n_impacts = 0
-    if (model%n < 1 .or. model%m < 0 .or. model%m > model%n .or. model%n_gaps < 0) then
+    ! sizes checked before anything is allocated (vci_limits)
+    why = vci_size_problem(model%n, model%m, model%n_gaps)
+    if (why /= '') then
       write (self%last_message, '(a,3(i0,a))') 'create: model sizes invalid (n = ', model%n, ', m = ', model%m, &
-        ', n_gaps = ', model%n_gaps, '; need n >= 1, 0 <= m <= n, n_gaps >= 0)'
+        ', n_gaps = ', model%n_gaps, '; '//trim(why)//')'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
     if (.not. (ieee_is_finite(h) .and. h > 0.0_dp)) then
@@ -183,7 +190,10 @@ contains
     if (allocated(self%q)) deallocate (self%q, self%p, self%lambda, self%velocity, self%q_next, self%p_next, &
                                        self%lambda_next)
     allocate (self%q(model%n), self%p(model%n), self%lambda(model%m), self%velocity(model%n), &
-              self%q_next(model%n), self%p_next(model%n), self%lambda_next(model%m))
+              self%q_next(model%n), self%p_next(model%n), self%lambda_next(model%m), stat=stat)
+    if (stat /= 0) then
+      call out_of_memory(self, model, stat); return
+    end if
     self%lambda = 0.0_dp; self%q = 0.0_dp; self%p = 0.0_dp; self%velocity = 0.0_dp
     stat = VCI_OK
   end subroutine bind_sizes
@@ -198,35 +208,51 @@ contains
     stat = VCI_OK
     select case (self%scheme_id)
     case (VCI_SCHEME_DISCRETE)
-      allocate (vci_scheme_discrete_t :: sch)
-      select type (sch)
-      type is (vci_scheme_discrete_t)
-        call sch%setup(self%discrete)
-      end select
+      allocate (vci_scheme_discrete_t :: sch, stat=stat)
+      if (stat == 0) then
+        select type (sch)
+        type is (vci_scheme_discrete_t)
+          call sch%setup(self%discrete, stat)
+        end select
+      end if
+      if (stat /= 0) stat = VCI_ERR_MEMORY
     case (VCI_SCHEME_LEFT, VCI_SCHEME_MIDPOINT)
       rule = merge(RETRACTION_LEFT, RETRACTION_MIDPOINT, self%scheme_id == VCI_SCHEME_LEFT)
-      if (.not. associated(self%retraction)) allocate (self%retraction)
-      call self%retraction%bind(self%lag, rule, self%lag_hessians, self%lag_energy)
-      allocate (vci_scheme_discrete_t :: sch)
-      select type (sch)
-      type is (vci_scheme_discrete_t)
-        call sch%setup(self%retraction)
-        sch%has_hessian = self%lag_hessians
-      end select
+      if (.not. associated(self%retraction)) allocate (self%retraction, stat=stat)
+      if (stat == 0) call self%retraction%bind(self%lag, rule, self%lag_hessians, self%lag_energy, stat)
+      if (stat == 0) allocate (vci_scheme_discrete_t :: sch, stat=stat)
+      if (stat == 0) then
+        select type (sch)
+        type is (vci_scheme_discrete_t)
+          call sch%setup(self%retraction, stat)
+          sch%has_hessian = self%lag_hessians
+        end select
+      end if
+      if (stat /= 0) stat = VCI_ERR_MEMORY
     case (VCI_SCHEME_LOBATTO)
-      allocate (vci_scheme_lobatto_t :: sch)
-      select type (sch)
-      type is (vci_scheme_lobatto_t)
-        call sch%setup(self%lag, self%n_stages, self%lag_hessians, self%lag_energy, stat)
-      end select
+      allocate (vci_scheme_lobatto_t :: sch, stat=stat)
+      if (stat == 0) then
+        select type (sch)
+        type is (vci_scheme_lobatto_t)
+          call sch%setup(self%lag, self%n_stages, self%lag_hessians, self%lag_energy, stat)
+        end select
+      else
+        stat = VCI_ERR_MEMORY
+      end if
+      if (stat /= VCI_OK .and. stat /= VCI_ERR_MEMORY) then
+        write (self%last_message, '(a,i0,a)') 'create: could not set up the lobatto scheme with s = ', self%n_stages, ''
+        call finish(self, VCI_ERR_ARGUMENT, stat); return
+      end if
     end select
-    if (stat /= VCI_OK) then
-      write (self%last_message, '(a,i0,a)') 'create: could not set up the lobatto scheme with s = ', self%n_stages, ''
-      call finish(self, VCI_ERR_ARGUMENT, stat); return
-    end if
-    call self%stepper%setup(sch)
+    if (stat == VCI_OK) call self%stepper%setup(sch, stat)
+    ! records for the impacts of one step, grown on demand up to the bound (which may be huge)
     settings = self%stepper%current_settings()
-    call reserve_impacts(self, settings%max_impacts_per_step)
+    self%n_impacts = 0
+    if (stat == VCI_OK) call vci_reserve_impacts(self%impacts, min(settings%max_impacts_per_step, 16), &
+                                                 self%model%n, stat)
+    if (stat /= VCI_OK) then
+      call out_of_memory(self, self%model, stat); return
+    end if
     self%created = .true.
     self%initialized = .false.
     self%last_message = ''
@@ -293,10 +319,11 @@ contains
     integer, intent(in) :: max_iterations
     integer, intent(out) :: stat
     type(vci_settings_t) :: settings
+    ! rtol >= 1 accepts any iterate whose residual is smaller than its terms: even the initial guess
     if (.not. (ieee_is_finite(atol) .and. atol >= 0.0_dp .and. ieee_is_finite(rtol) .and. rtol >= 0.0_dp &
-               .and. atol + rtol > 0.0_dp .and. max_iterations >= 1)) then
+               .and. rtol < 1.0_dp .and. atol + rtol > 0.0_dp .and. max_iterations >= 1)) then
       write (self%last_message, '(a,es10.3,a,es10.3,a,i0,a)') 'set_tolerances: atol = ', atol, ', rtol = ', rtol, &
-        ', max_iterations = ', max_iterations, ' (need atol, rtol >= 0, not both 0, max_iterations >= 1)'
+        ', max_iterations = ', max_iterations, ' (need atol >= 0, 0 <= rtol < 1, not both 0, max_iterations >= 1)'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
     settings = self%stepper%current_settings()
@@ -354,8 +381,7 @@ contains
     end if
     settings = self%stepper%current_settings()
     settings%max_impacts_per_step = max_impacts
-    call self%stepper%configure(settings)
-    if (self%created) call reserve_impacts(self, max_impacts)
+    call self%stepper%configure(settings)   ! the impact records grow on demand up to it
     call finish(self, VCI_OK, stat)
   end subroutine set_max_impacts
 
@@ -367,9 +393,14 @@ contains
     integer, intent(out) :: stat
     call check_init(self, 'init_from_pair', t0, q0, q1, stat, q1)
     if (stat /= VCI_OK) return
+    if (.not. ieee_is_finite(t0 + self%h)) then
+      self%initialized = .false.
+      write (self%last_message, '(a,es12.4,a,es12.4,a)') 'init_from_pair: t0 + h = ', t0, ' + ', self%h, ' overflows'
+      call finish(self, VCI_ERR_ARGUMENT, stat); return
+    end if
     call self%stepper%pair_momentum(q0, q1, self%h, self%p, self%step_energy, stat)
     if (stat /= VCI_OK) then
-      self%last_message = 'init_from_pair: '//self%stepper%failure_cause()
+      self%last_message = 'init_from_pair: '//trim(self%stepper%failure_cause())
       call keep_failure(self, stat); return
     end if
     self%t0 = t0; self%k = 1_i8
@@ -424,7 +455,11 @@ contains
     end if
     ! optional procedures: each is probed once (vci_model_base: not_provided)
     allocate (hess(n, n), omega(n, max(1, self%model%m)), g(self%model%n_gaps), w(self%model%m), &
-              dg(n, self%model%n_gaps), w2(self%model%n_gaps))
+              dg(n, self%model%n_gaps), w2(self%model%n_gaps), stat=s)
+    if (s /= 0) then
+      self%last_message = who//': cannot allocate the probes of the model (out of memory)'
+      call finish(self, VCI_ERR_MEMORY, stat); return
+    end if
     if (associated(self%discrete)) then
       call self%model%clear_not_provided(); s = 0
       call self%discrete%mixed_hessian(q0, v0, self%h, hess, s)
@@ -437,6 +472,11 @@ contains
         write (self%last_message, '(a,i0,a)') who//': the model has m = ', self%model%m, &
           ' constraints but does not supply constraint_forms'
         call finish(self, VCI_ERR_ARGUMENT, stat); return
+      end if
+      if (s /= 0) then
+        write (self%last_message, '(a,i0,a)') who//': callback constraint_forms failed at the initial '// &
+          'configuration (stat = ', s, ')'
+        call finish(self, VCI_ERR_CALLBACK, stat); return
       end if
       call self%model%clear_not_provided(); s = 0
       if (associated(self%discrete)) call self%discrete%discrete_constraint(q0, q0, self%h, w, s)
@@ -500,6 +540,11 @@ contains
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
     t = self%time()
+    if (.not. ieee_is_finite(self%t0 + real(self%k + direction, dp) * self%h)) then
+      write (self%last_message, '(a,i0,a,es14.7,a,es10.3,a)') 'step from index ', self%k, ' (t = ', t, &
+        '): the time of the next state overflows (h = ', self%h, ')'
+      call finish(self, VCI_ERR_NONFINITE, stat); return
+    end if
     if (self%arriving_direction /= direction) self%arriving_energy = ieee_value(1.0_dp, ieee_quiet_nan)
     call self%stepper%advance(direction, self%h, t, self%q, self%p, self%lambda, self%velocity, &
                               self%arriving_energy, self%q_next, self%p_next, self%lambda_next, self%step_energy, &
@@ -508,7 +553,7 @@ contains
       dname = 'forward'
       if (direction < 0) dname = 'backward'
       write (self%last_message, '(a,i0,a,es14.7,a)') 'step from index ', self%k, ' (t = ', t, ', '// &
-        trim(dname)//'): '//self%stepper%failure_cause()
+        trim(dname)//'): '//trim(self%stepper%failure_cause())
       self%arriving_direction = 0
       call keep_failure(self, stat); return
     end if
@@ -582,6 +627,7 @@ contains
       end if
     end if
     self%last_status = stat
+    if (stat == VCI_OK) self%last_message = ''   ! also after 0 steps: no message of an earlier call
   end subroutine integrate
 
   !> The current state and solver memory, for restarts that continue bit for bit.
@@ -636,20 +682,15 @@ contains
     info%impact_energy = settings%impact_energy
   end function run_info
 
-  !> Room for the impact records of one step (the bound on impacts per step).
-  subroutine reserve_impacts(self, max_impacts)
+  !> An allocation for the model's sizes failed: VCI_ERR_MEMORY naming the sizes.
+  subroutine out_of_memory(self, model, stat)
     class(vci_integrator_t), intent(inout) :: self
-    integer, intent(in) :: max_impacts
-    integer :: i, n
-    n = self%model%n
-    if (allocated(self%impacts)) deallocate (self%impacts)
-    allocate (self%impacts(max(1, max_impacts)))
-    do i = 1, size(self%impacts)
-      allocate (self%impacts(i)%q(n), self%impacts(i)%p_before(n), self%impacts(i)%p_after(n), &
-                self%impacts(i)%grad_g(n))
-    end do
-    self%n_impacts = 0
-  end subroutine reserve_impacts
+    class(vci_model_base_t), intent(in) :: model
+    integer, intent(out) :: stat
+    write (self%last_message, '(a,3(i0,a))') 'create: cannot allocate the workspace for n = ', model%n, ', m = ', &
+      model%m, ', n_gaps = ', model%n_gaps, ' (out of memory)'
+    call finish(self, VCI_ERR_MEMORY, stat)
+  end subroutine out_of_memory
 
   !> A failure detected by a boundary layer on a call into this integrator (a NULL array, a
   !> callback's return code): it becomes the status and message read back by status()/message().
@@ -751,8 +792,18 @@ contains
     solver = self%stepper%solver_stats()
     stats%steps = self%steps_taken; stats%impacts = self%impacts_found
     stats%newton_solves = solver%newton_solves; stats%newton_iterations = solver%newton_iterations
+    stats%factorisations = self%stepper%factorisations()
     stats%fallbacks = solver%fallbacks
   end function statistics
+
+  !> Linear-algebra paths of Newton (docs/DESIGN.md §6): the in-line LU for systems of at most
+  !> small_lu_max unknowns (0: LAPACK always), factor reuse for systems of at least reuse_min
+  !> unknowns (huge: full Newton always). For tests and benchmarks that compare the paths.
+  subroutine set_solver_paths(self, small_lu_max, reuse_min)
+    class(vci_integrator_t), intent(inout) :: self
+    integer, intent(in) :: small_lu_max, reuse_min
+    call self%stepper%set_solver_paths(small_lu_max, reuse_min)
+  end subroutine set_solver_paths
 
   !> Status of the last call (VCI_OK or a VCI_ERR_*).
   pure integer function status(self)
@@ -769,6 +820,14 @@ contains
     character(len=len_trim(self%last_message)) :: msg
     msg = self%last_message
   end function message
+
+  !> message() with trailing blanks, for the boundary layers called from several threads (a
+  !> fixed-length result: gfortran's deferred-length function results are not thread-safe).
+  pure function message_text(self) result(msg)
+    class(vci_integrator_t), intent(in) :: self
+    character(len=VCI_MSG_LEN) :: msg
+    msg = self%last_message
+  end function message_text
 
   !> The settings in force (tolerances, impact bound, impact condition).
   pure function settings(self) result(s)

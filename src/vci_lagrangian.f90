@@ -7,7 +7,8 @@
 !>
 !> Required: lagrangian (the value of L), dl_dq, dl_dv. A C or legacy adapter that lacks one of them
 !> answers "not provided" (`not_provided`); the integrator then refuses the model with VCI_ERR_ARGUMENT.
-!> Callbacks receive `stat` preset to 0 and set it nonzero to report failure.
+!> Callbacks receive `stat` preset to 0 and follow the callback contract of vci_model: 0 success,
+!> > 0 a recoverable failure, < 0 an unrecoverable one.
 module vci_lagrangian
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use vci_kinds, only: dp
@@ -45,6 +46,7 @@ module vci_lagrangian
   !> Workspace for differenced Hessians and the Legendre inversion (sized once, never per step).
   type, public :: vci_lagrangian_work_t
     logical :: has_hessians = .false.
+    integer :: code = 0   !< stat of the last callback that failed here (its sign: recoverable or not)
     real(dp), allocatable :: qp(:), vp(:), fp(:), fm(:), w(:), dw(:), lv(:), lvv(:, :), lqq(:, :), lqv(:, :)
     integer, allocatable :: ipiv(:)
   end type vci_lagrangian_work_t
@@ -65,17 +67,20 @@ contains
     call self%not_provided(stat)
   end subroutine not_provided_hessians
 
-  subroutine lagrangian_work_setup(work, n)
+  !> Size the workspace for n coordinates; stat /= 0: out of memory.
+  subroutine lagrangian_work_setup(work, n, stat)
     type(vci_lagrangian_work_t), intent(inout) :: work
     integer, intent(in) :: n
+    integer, intent(out) :: stat
     if (allocated(work%qp)) deallocate (work%qp, work%vp, work%fp, work%fm, work%w, work%dw, work%lv, &
                                         work%lvv, work%lqq, work%lqv, work%ipiv)
     allocate (work%qp(n), work%vp(n), work%fp(n), work%fm(n), work%w(n), work%dw(n), work%lv(n), &
-              work%lvv(n, n), work%lqq(n, n), work%lqv(n, n), work%ipiv(n))
+              work%lvv(n, n), work%lqq(n, n), work%lqv(n, n), work%ipiv(n), stat=stat)
   end subroutine lagrangian_work_setup
 
   !> The three Hessian blocks at (q, v): the model's own when it has them (work%has_hessians), else
-  !> central differences of dl_dq and dl_dv. stat: VCI_OK, VCI_ERR_CALLBACK or VCI_ERR_NONFINITE.
+  !> central differences of dl_dq and dl_dv. stat: VCI_OK, VCI_ERR_CALLBACK (the callback's own code
+  !> in work%code) or VCI_ERR_NONFINITE.
   subroutine lagrangian_hessians(lag, work, q, v, lqq, lqv, lvv, stat)
     class(vci_lagrangian_t), intent(inout) :: lag
     type(vci_lagrangian_work_t), intent(inout) :: work
@@ -90,6 +95,7 @@ contains
       s = 0
       call lag%hessians(q, v, lqq, lqv, lvv, s)
       if (s /= 0) then
+        work%code = s
         stat = VCI_ERR_CALLBACK; return
       end if
       if (.not. (all(ieee_is_finite(lqq)) .and. all(ieee_is_finite(lqv)) .and. all(ieee_is_finite(lvv)))) &
@@ -101,30 +107,31 @@ contains
       ! columns in q: d(dL/dq)/dq_i
       d = fd_rel * max(abs(q(i)), 1.0_dp)
       work%qp(i) = q(i) + d
-      call partial(lag, .true., work%qp(1:n), v, work%fp(1:n), stat); if (stat /= VCI_OK) return
+      call partial(lag, work, .true., work%qp(1:n), v, work%fp(1:n), stat); if (stat /= VCI_OK) return
       work%qp(i) = q(i) - d
-      call partial(lag, .true., work%qp(1:n), v, work%fm(1:n), stat); if (stat /= VCI_OK) return
+      call partial(lag, work, .true., work%qp(1:n), v, work%fm(1:n), stat); if (stat /= VCI_OK) return
       work%qp(i) = q(i)
       lqq(:, i) = (work%fp(1:n) - work%fm(1:n)) / (2.0_dp * d)
       ! columns in v: d(dL/dq)/dv_i and d(dL/dv)/dv_i
       d = fd_rel * max(abs(v(i)), 1.0_dp)
       work%vp(i) = v(i) + d
-      call partial(lag, .true., q, work%vp(1:n), work%fp(1:n), stat); if (stat /= VCI_OK) return
+      call partial(lag, work, .true., q, work%vp(1:n), work%fp(1:n), stat); if (stat /= VCI_OK) return
       work%vp(i) = v(i) - d
-      call partial(lag, .true., q, work%vp(1:n), work%fm(1:n), stat); if (stat /= VCI_OK) return
+      call partial(lag, work, .true., q, work%vp(1:n), work%fm(1:n), stat); if (stat /= VCI_OK) return
       lqv(:, i) = (work%fp(1:n) - work%fm(1:n)) / (2.0_dp * d)
       work%vp(i) = v(i) + d
-      call partial(lag, .false., q, work%vp(1:n), work%fp(1:n), stat); if (stat /= VCI_OK) return
+      call partial(lag, work, .false., q, work%vp(1:n), work%fp(1:n), stat); if (stat /= VCI_OK) return
       work%vp(i) = v(i) - d
-      call partial(lag, .false., q, work%vp(1:n), work%fm(1:n), stat); if (stat /= VCI_OK) return
+      call partial(lag, work, .false., q, work%vp(1:n), work%fm(1:n), stat); if (stat /= VCI_OK) return
       work%vp(i) = v(i)
       lvv(:, i) = (work%fp(1:n) - work%fm(1:n)) / (2.0_dp * d)
     end do
   end subroutine lagrangian_hessians
 
   !> dL/dq (wrt_q) or dL/dqdot at (q, v), with the callback's status checked.
-  subroutine partial(lag, wrt_q, q, v, out, stat)
+  subroutine partial(lag, work, wrt_q, q, v, out, stat)
     class(vci_lagrangian_t), intent(inout) :: lag
+    type(vci_lagrangian_work_t), intent(inout) :: work
     logical, intent(in) :: wrt_q
     real(dp), intent(in) :: q(:), v(:)
     real(dp), intent(out) :: out(:)
@@ -138,6 +145,7 @@ contains
     end if
     stat = VCI_OK
     if (s /= 0) then
+      work%code = s
       stat = VCI_ERR_CALLBACK
     else if (.not. all(ieee_is_finite(out))) then
       stat = VCI_ERR_NONFINITE
@@ -154,11 +162,12 @@ contains
     integer :: s, n
     real(dp) :: l
     n = size(q)
-    call partial(lag, .false., q, v, work%lv(1:n), stat)
+    call partial(lag, work, .false., q, v, work%lv(1:n), stat)
     if (stat /= VCI_OK) return
     s = 0
     call lag%lagrangian(q, v, l, s)
     if (s /= 0) then
+      work%code = s
       stat = VCI_ERR_CALLBACK; return
     end if
     e = dot_product(work%lv(1:n), v) - l
@@ -182,13 +191,17 @@ contains
     work%w(1:n) = v_guess
     size_p = maxval(abs(p))
     do it = 1, 30
-      call partial(lag, .false., q, work%w(1:n), work%lv(1:n), stat)
+      call partial(lag, work, .false., q, work%w(1:n), work%lv(1:n), stat)
       if (stat /= VCI_OK) return
       work%dw(1:n) = work%lv(1:n) - p
       if (it > 1 .and. maxval(abs(work%dw(1:n))) <= 4.0_dp * epsilon(1.0_dp) * max(size_p, &
           maxval(abs(work%lv(1:n))), tiny(1.0_dp))) exit
       call lagrangian_hessians(lag, work, q, work%w(1:n), work%lqq, work%lqv, work%lvv, stat)
       if (stat /= VCI_OK) return
+      ! differenced blocks of huge but finite values can overflow: nothing non-finite goes to LAPACK
+      if (.not. (all(ieee_is_finite(work%lvv)) .and. all(ieee_is_finite(work%dw(1:n))))) then
+        stat = VCI_ERR_NONFINITE; return
+      end if
       call dgetrf(n, n, work%lvv, n, work%ipiv, info)
       if (info /= 0) then
         stat = VCI_ERR_NEWTON; return

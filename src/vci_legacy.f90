@@ -11,6 +11,7 @@
 !> is an integer-handle interface over the same integrator:
 !>
 !>     VCINEW(MODEL, N, M, NG, IOPT, H, RPAR, IPAR, IH, ISTAT)   create; IH > 0 names it
+!>     VCISCH(IH, ISCH, NSTG, ISTAT)                             scheme of a continuous model
 !>     VCITOL(IH, ATOL, RTOL, MAXIT, ISTAT)                      Newton tolerances
 !>     VCIENG(IH, MODE, ISTAT)                                   impact energy: 0 discrete, 1 hamiltonian
 !>     VCIINP(IH, T0, Q0, Q1, ISTAT)                             start from a pair
@@ -26,37 +27,65 @@
 !>     INTEGER TASK, N, M, NG, IPAR(*), IERR
 !>     DOUBLE PRECISION Q(N), V(N), H, OUT(*), RPAR(*)
 !>
+!> A discrete Lagrangian L_d(Q, V, H) (IOPT without bit 8):
+!>
 !>     TASK 1: OUT(1:N)    = D1 L_d(Q, V, H)          2: OUT(1:N) = D2 L_d(Q, V, H)
 !>     TASK 3: OUT(1)      = D3 L_d(Q, V, H)
 !>     TASK 4: OUT(1:N*N)  = d2 L_d/dQ_i dV_j at (Q, V, H), column-major        (IOPT bit 1)
-!>     TASK 5: OUT(1:N*M)  = one-forms Omega(Q), column mu = omega^mu            (M > 0)
 !>     TASK 6: OUT(1:M)    = omega_d(Q, V, H) with Q the base, V the other point (M > 0)
+!>
+!> A continuous Lagrangian L(Q, V), V the velocity (IOPT bit 8; the library discretises it by the
+!> scheme VCISCH chooses, midpoint by default; H is passed as 0):
+!>
+!>     TASK 10: OUT(1)       = L(Q, V)
+!>     TASK 11: OUT(1:N)     = dL/dQ(Q, V)            12: OUT(1:N) = dL/dV(Q, V)
+!>     TASK 13: OUT(1:3*N*N) = the blocks d2L/dQ dQ, d2L/dQ dV, d2L/dV dV, each N x N column-major
+!>              (block (i, j) = d2L/dx_i dy_j), one after the other                (IOPT bit 1)
+!>
+!> Both kinds:
+!>
+!>     TASK 5: OUT(1:N*M)  = one-forms Omega(Q), column mu = omega^mu            (M > 0)
 !>     TASK 7: OUT(1:NG)   = gap functions g(Q)                                  (NG > 0)
 !>     TASK 8: OUT(1:N*NG) = gap gradients at Q, column j = grad g_j            (IOPT bit 2)
 !>     TASK 9: OUT(1)      = energy H(Q, P) with P passed in V                   (IOPT bit 4)
 !>
-!> IERR arrives 0; set it nonzero to stop the step (ISTAT = 2). IOPT declares the optional tasks
-!> the routine supplies (sum of 1: mixed Hessian, 2: gap gradients, 4: energy); the others are
-!> differenced or not needed, and the routine is never called for them. ISTAT takes the values of
-!> the C enum (0 ok, 1 argument, 2 callback, 3 non-finite, 4 Newton, 5 impact, 6 too many impacts,
-!> 7 inadmissible, 8 I/O, 9 call out of order).
+!> IERR arrives 0; the callback contract of the C interface holds: IERR > 0 is a recoverable
+!> failure (at a trial point of Newton's line search the solver backs off, elsewhere the step
+!> stops with ISTAT = 2), IERR < 0 an unrecoverable one (the step stops at once, ISTAT = 2). The
+!> message then names the TASK and the IERR. IERR = -999 (IERR_NOT_PROVIDED, and only that value)
+!> answers "this TASK is not provided": on the library's probe of an optional TASK it does without
+!> it (differences it, or uses the Legendre inversion for H), on a required TASK VCINEW fails with
+!> ISTAT = 1 naming it, and anywhere else it is an unrecoverable failure. IOPT declares the optional
+!> tasks the routine supplies (sum of 1: Hessian(s), 2: gap gradients, 4: energy) and the kind of
+!> model (8: continuous); the routine is never called for an optional task IOPT leaves out. ISTAT
+!> takes the values of the C enum (0 ok, 1 argument, 2 callback, 3 non-finite, 4 Newton, 5 impact,
+!> 6 too many impacts, 7 inadmissible, 8 I/O, 9 call out of order).
 module vci_legacy
   use, intrinsic :: iso_c_binding, only: c_ptr, c_f_pointer, c_null_ptr
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use vci_kinds, only: dp, i8
   use vci_status
+  use vci_model_base, only: vci_model_base_t
   use vci_model, only: vci_model_t
+  use vci_lagrangian, only: vci_lagrangian_t
   use vci_observer, only: vci_observer_t, vci_impact_t
   use vci_integrator, only: vci_integrator_t
+  use vci_callback_adapter, only: vci_callback_record_t
+  use vci_limits, only: vci_size_problem
   implicit none
   private
 
   public :: vci_legacy_model_fn, legacy_new, legacy_get, legacy_after, legacy_delete, legacy_advance, legacy_message
+  public :: legacy_set_scheme
 
-  !> TASK codes of the model routine.
+  !> TASK codes of the model routine: a discrete L_d (1-4, 6), a continuous L (10-13), both (5, 7-9).
   integer, parameter, public :: TASK_D1 = 1, TASK_D2 = 2, TASK_D3 = 3, TASK_HESSIAN = 4, TASK_FORMS = 5, &
-                                TASK_DCONSTRAINT = 6, TASK_GAPS = 7, TASK_GAP_GRADS = 8, TASK_ENERGY = 9
-  !> IOPT bits: which optional tasks the model routine supplies.
-  integer, parameter, public :: IOPT_HESSIAN = 1, IOPT_GAP_GRADS = 2, IOPT_ENERGY = 4
+                                TASK_DCONSTRAINT = 6, TASK_GAPS = 7, TASK_GAP_GRADS = 8, TASK_ENERGY = 9, &
+                                TASK_LAGRANGIAN = 10, TASK_DL_DQ = 11, TASK_DL_DV = 12, TASK_L_HESSIANS = 13
+  !> IOPT bits: which optional tasks the model routine supplies, and whether it is a continuous L.
+  integer, parameter, public :: IOPT_HESSIAN = 1, IOPT_GAP_GRADS = 2, IOPT_ENERGY = 4, IOPT_CONTINUOUS = 8
+  !> IERR with which the model routine answers "this TASK is not provided" (no other value means it).
+  integer, parameter, public :: IERR_NOT_PROVIDED = -999
 
   !> The model routine's interface as the library sees it (the caller needs no interface).
   abstract interface
@@ -71,12 +100,18 @@ module vci_legacy
     end subroutine vci_legacy_model_fn
   end interface
 
-  !> A model made of the caller's EXTERNAL routine and its RPAR/IPAR (which must outlive it).
-  type, extends(vci_model_t) :: legacy_model_t
+  !> The caller's EXTERNAL routine with its RPAR/IPAR (which must outlive it), its IOPT, and the
+  !> record of its last failing TASK: the one TASK dispatch of both kinds of legacy model.
+  type :: legacy_routine_t
     procedure(vci_legacy_model_fn), pointer, nopass :: fn => null()
     integer :: iopt = 0
     type(c_ptr) :: rpar = c_null_ptr, ipar = c_null_ptr
-    integer :: last_ierr = 0, last_task = 0   !< the last nonzero IERR and its TASK (0: none)
+    type(vci_callback_record_t) :: record     !< the last failing TASK and its IERR
+  end type legacy_routine_t
+
+  !> A discrete model (L_d) made of the routine.
+  type, extends(vci_model_t) :: legacy_model_t
+    type(legacy_routine_t) :: routine
   contains
     procedure :: d1 => lm_d1
     procedure :: d2 => lm_d2
@@ -89,18 +124,36 @@ module vci_legacy
     procedure :: energy => lm_energy
   end type legacy_model_t
 
-  !> Records the impact times of one VCIADV call.
+  !> A continuous model (L) made of the routine (IOPT bit 8).
+  type, extends(vci_lagrangian_t) :: legacy_lagrangian_t
+    type(legacy_routine_t) :: routine
+    real(dp), allocatable :: hwork(:)   !< OUT of TASK 13 (3 n^2), when IOPT has bit 1
+  contains
+    procedure :: lagrangian => ll_value
+    procedure :: dl_dq => ll_dl_dq
+    procedure :: dl_dv => ll_dl_dv
+    procedure :: hessians => ll_hessians
+    procedure :: constraint_forms => ll_forms
+    procedure :: gaps => ll_gaps
+    procedure :: gap_gradients => ll_gap_grads
+    procedure :: energy => ll_energy
+  end type legacy_lagrangian_t
+
+  !> Records the impact times of one VCIADV call; clears the callback record after every step.
   type, extends(vci_observer_t) :: impact_log_t
     integer :: count = 0
     real(dp), allocatable :: times(:)
+    type(vci_callback_record_t), pointer :: record => null()
   contains
     procedure :: on_impact => log_impact
+    procedure :: on_step => log_step
   end type impact_log_t
 
-  !> One live integrator of the handle interface.
+  !> One live integrator of the handle interface, over one of the two kinds of model.
   type :: slot_t
     integer :: id = 0
     type(legacy_model_t), pointer :: model => null()
+    type(legacy_lagrangian_t), pointer :: lag => null()
     type(vci_integrator_t), pointer :: integ => null()
   end type slot_t
 
@@ -111,32 +164,65 @@ module vci_legacy
 
 contains
 
-  !> Call the model routine for one task: IERR nonzero becomes a failure (never "not provided").
-  subroutine call_task(self, task, q, v, h, out, stat)
-    class(legacy_model_t), intent(inout) :: self
-    integer, intent(in) :: task
+  !> Call the model routine for one task (nout outputs) of a model with sizes n, m, ng; IERR goes
+  !> through the callback adapter. declined: the routine answered IERR_NOT_PROVIDED (the caller
+  !> marks its model; stat keeps the code, a failure wherever the answer was not a probe's).
+  subroutine call_task(r, n, m, ng, task, q, v, h, out, nout, stat, declined)
+    type(legacy_routine_t), intent(inout) :: r
+    integer, intent(in) :: n, m, ng, task, nout
     real(dp), intent(in) :: q(:), v(:), h
     real(dp), intent(inout) :: out(*)
     integer, intent(inout) :: stat
+    logical, intent(out) :: declined
     real(dp), pointer, contiguous :: rp(:)
     integer, pointer, contiguous :: ip(:)
     integer :: ierr
-    call c_f_pointer(self%rpar, rp, [1])
-    call c_f_pointer(self%ipar, ip, [1])
+    character(len=48) :: name
+    call c_f_pointer(r%rpar, rp, [1])
+    call c_f_pointer(r%ipar, ip, [1])
     ierr = 0
-    call self%fn(task, self%n, self%m, self%n_gaps, q, v, h, out(1), rp, ip, ierr)   ! out(1): sequence association
-    if (ierr /= 0) then
-      stat = 1
-      self%last_ierr = ierr; self%last_task = task
+    out(1:nout) = 0.0_dp   ! defined even where a failing routine left it unwritten
+    call r%fn(task, n, m, ng, q, v, h, out(1), rp, ip, ierr)   ! out(1): sequence association
+    declined = ierr == IERR_NOT_PROVIDED
+    if (declined) then
+      write (name, '(a,i0,a)') 'MODEL with TASK = ', task, ' (not provided)'
+    else
+      write (name, '(a,i0)') 'MODEL with TASK = ', task
     end if
+    call r%record%note(ierr, trim(name), all(ieee_is_finite(out(1:nout))), stat)
   end subroutine call_task
+
+  !> The model's answer "not provided" (its mark), keeping the failure code in stat.
+  subroutine decline(model, stat)
+    class(vci_model_base_t), intent(inout) :: model
+    integer, intent(inout) :: stat
+    integer :: code
+    code = stat
+    call model%not_provided(stat)
+    stat = code
+  end subroutine decline
+
+  ! ---------------------------------------------------------------------------------------------
+  ! the discrete model: L_d's tasks
+
+  !> One task of the discrete model, with the not-provided answer marked on it.
+  subroutine lm_task(self, task, q, v, h, out, nout, stat)
+    class(legacy_model_t), intent(inout) :: self
+    integer, intent(in) :: task, nout
+    real(dp), intent(in) :: q(:), v(:), h
+    real(dp), intent(inout) :: out(*)
+    integer, intent(inout) :: stat
+    logical :: declined
+    call call_task(self%routine, self%n, self%m, self%n_gaps, task, q, v, h, out, nout, stat, declined)
+    if (declined) call decline(self, stat)
+  end subroutine lm_task
 
   subroutine lm_d1(self, q, v, h, out, stat)
     class(legacy_model_t), intent(inout) :: self
     real(dp), intent(in) :: q(:), v(:), h
     real(dp), intent(out) :: out(:)
     integer, intent(inout) :: stat
-    call call_task(self, TASK_D1, q, v, h, out, stat)
+    call lm_task(self, TASK_D1, q, v, h, out, size(out), stat)
   end subroutine lm_d1
 
   subroutine lm_d2(self, q, v, h, out, stat)
@@ -144,7 +230,7 @@ contains
     real(dp), intent(in) :: q(:), v(:), h
     real(dp), intent(out) :: out(:)
     integer, intent(inout) :: stat
-    call call_task(self, TASK_D2, q, v, h, out, stat)
+    call lm_task(self, TASK_D2, q, v, h, out, size(out), stat)
   end subroutine lm_d2
 
   subroutine lm_d3(self, q, v, h, out, stat)
@@ -154,7 +240,7 @@ contains
     integer, intent(inout) :: stat
     real(dp) :: tmp(1)
     tmp = 0.0_dp
-    call call_task(self, TASK_D3, q, v, h, tmp, stat)
+    call lm_task(self, TASK_D3, q, v, h, tmp, 1, stat)
     out = tmp(1)
   end subroutine lm_d3
 
@@ -163,10 +249,10 @@ contains
     real(dp), intent(in) :: q(:), v(:), h
     real(dp), intent(out) :: hess(:, :)
     integer, intent(inout) :: stat
-    if (iand(self%iopt, IOPT_HESSIAN) == 0) then
+    if (iand(self%routine%iopt, IOPT_HESSIAN) == 0) then
       hess = 0.0_dp; call self%not_provided(stat); return
     end if
-    call call_task(self, TASK_HESSIAN, q, v, h, hess, stat)
+    call lm_task(self, TASK_HESSIAN, q, v, h, hess, size(hess), stat)
   end subroutine lm_hessian
 
   subroutine lm_forms(self, q, omega, stat)
@@ -174,7 +260,7 @@ contains
     real(dp), intent(in) :: q(:)
     real(dp), intent(out) :: omega(:, :)
     integer, intent(inout) :: stat
-    call call_task(self, TASK_FORMS, q, q, 0.0_dp, omega, stat)
+    call lm_task(self, TASK_FORMS, q, q, 0.0_dp, omega, size(omega), stat)
   end subroutine lm_forms
 
   subroutine lm_dconstraint(self, base, other, h, out, stat)
@@ -182,7 +268,7 @@ contains
     real(dp), intent(in) :: base(:), other(:), h
     real(dp), intent(out) :: out(:)
     integer, intent(inout) :: stat
-    call call_task(self, TASK_DCONSTRAINT, base, other, h, out, stat)
+    call lm_task(self, TASK_DCONSTRAINT, base, other, h, out, size(out), stat)
   end subroutine lm_dconstraint
 
   subroutine lm_gaps(self, q, g, stat)
@@ -190,7 +276,7 @@ contains
     real(dp), intent(in) :: q(:)
     real(dp), intent(out) :: g(:)
     integer, intent(inout) :: stat
-    call call_task(self, TASK_GAPS, q, q, 0.0_dp, g, stat)
+    call lm_task(self, TASK_GAPS, q, q, 0.0_dp, g, size(g), stat)
   end subroutine lm_gaps
 
   subroutine lm_gap_grads(self, q, dg, stat)
@@ -198,10 +284,10 @@ contains
     real(dp), intent(in) :: q(:)
     real(dp), intent(out) :: dg(:, :)
     integer, intent(inout) :: stat
-    if (iand(self%iopt, IOPT_GAP_GRADS) == 0) then
+    if (iand(self%routine%iopt, IOPT_GAP_GRADS) == 0) then
       dg = 0.0_dp; call self%not_provided(stat); return
     end if
-    call call_task(self, TASK_GAP_GRADS, q, q, 0.0_dp, dg, stat)
+    call lm_task(self, TASK_GAP_GRADS, q, q, 0.0_dp, dg, size(dg), stat)
   end subroutine lm_gap_grads
 
   subroutine lm_energy(self, q, p, e, stat)
@@ -210,13 +296,119 @@ contains
     real(dp), intent(out) :: e
     integer, intent(inout) :: stat
     real(dp) :: tmp(1)
-    if (iand(self%iopt, IOPT_ENERGY) == 0) then
+    if (iand(self%routine%iopt, IOPT_ENERGY) == 0) then
       e = 0.0_dp; call self%not_provided(stat); return
     end if
     tmp = 0.0_dp
-    call call_task(self, TASK_ENERGY, q, p, 0.0_dp, tmp, stat)
+    call lm_task(self, TASK_ENERGY, q, p, 0.0_dp, tmp, 1, stat)
     e = tmp(1)
   end subroutine lm_energy
+
+  ! ---------------------------------------------------------------------------------------------
+  ! the continuous model: L's tasks, through the same dispatch and record (H is passed as 0)
+
+  !> One task of the continuous model, with the not-provided answer marked on it.
+  subroutine ll_task(self, task, q, v, out, nout, stat)
+    class(legacy_lagrangian_t), intent(inout) :: self
+    integer, intent(in) :: task, nout
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(inout) :: out(*)
+    integer, intent(inout) :: stat
+    logical :: declined
+    call call_task(self%routine, self%n, self%m, self%n_gaps, task, q, v, 0.0_dp, out, nout, stat, declined)
+    if (declined) call decline(self, stat)
+  end subroutine ll_task
+
+  subroutine ll_value(self, q, v, l, stat)
+    class(legacy_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: l
+    integer, intent(inout) :: stat
+    real(dp) :: tmp(1)
+    tmp = 0.0_dp
+    call ll_task(self, TASK_LAGRANGIAN, q, v, tmp, 1, stat)
+    l = tmp(1)
+  end subroutine ll_value
+
+  subroutine ll_dl_dq(self, q, v, out, stat)
+    class(legacy_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    call ll_task(self, TASK_DL_DQ, q, v, out, size(out), stat)
+  end subroutine ll_dl_dq
+
+  subroutine ll_dl_dv(self, q, v, out, stat)
+    class(legacy_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    call ll_task(self, TASK_DL_DV, q, v, out, size(out), stat)
+  end subroutine ll_dl_dv
+
+  !> The three blocks come back one after the other in one OUT(1:3*N*N) (hwork, sized at VCINEW).
+  subroutine ll_hessians(self, q, v, lqq, lqv, lvv, stat)
+    class(legacy_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: lqq(:, :), lqv(:, :), lvv(:, :)
+    integer, intent(inout) :: stat
+    integer :: nn
+    logical :: declined
+    lqq = 0.0_dp; lqv = 0.0_dp; lvv = 0.0_dp
+    if (iand(self%routine%iopt, IOPT_HESSIAN) == 0) then
+      call self%not_provided(stat); return
+    end if
+    nn = self%n * self%n
+    call call_task(self%routine, self%n, self%m, self%n_gaps, TASK_L_HESSIANS, q, v, 0.0_dp, self%hwork, 3 * nn, &
+                   stat, declined)
+    if (declined) call decline(self, stat)
+    lqq = reshape(self%hwork(1:nn), [self%n, self%n])
+    lqv = reshape(self%hwork(nn + 1:2 * nn), [self%n, self%n])
+    lvv = reshape(self%hwork(2 * nn + 1:3 * nn), [self%n, self%n])
+  end subroutine ll_hessians
+
+  subroutine ll_forms(self, q, omega, stat)
+    class(legacy_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: omega(:, :)
+    integer, intent(inout) :: stat
+    call ll_task(self, TASK_FORMS, q, q, omega, size(omega), stat)
+  end subroutine ll_forms
+
+  subroutine ll_gaps(self, q, g, stat)
+    class(legacy_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: g(:)
+    integer, intent(inout) :: stat
+    call ll_task(self, TASK_GAPS, q, q, g, size(g), stat)
+  end subroutine ll_gaps
+
+  subroutine ll_gap_grads(self, q, dg, stat)
+    class(legacy_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: dg(:, :)
+    integer, intent(inout) :: stat
+    if (iand(self%routine%iopt, IOPT_GAP_GRADS) == 0) then
+      dg = 0.0_dp; call self%not_provided(stat); return
+    end if
+    call ll_task(self, TASK_GAP_GRADS, q, q, dg, size(dg), stat)
+  end subroutine ll_gap_grads
+
+  !> H(Q, P); without it (IOPT bit 4 unset, or answered not provided) the library inverts dL/dV.
+  subroutine ll_energy(self, q, p, e, stat)
+    class(legacy_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), p(:)
+    real(dp), intent(out) :: e
+    integer, intent(inout) :: stat
+    real(dp) :: tmp(1)
+    e = 0.0_dp
+    if (iand(self%routine%iopt, IOPT_ENERGY) == 0) then
+      call self%not_provided(stat); return
+    end if
+    tmp = 0.0_dp
+    call ll_task(self, TASK_ENERGY, q, p, tmp, 1, stat)
+    e = tmp(1)
+  end subroutine ll_energy
 
   subroutine log_impact(self, impact, stat)
     class(impact_log_t), intent(inout) :: self
@@ -226,10 +418,20 @@ contains
     if (self%count <= size(self%times)) self%times(self%count) = impact%t
   end subroutine log_impact
 
+  !> An accepted step: a failure the line search absorbed in it is no cause of a later failure.
+  subroutine log_step(self, step, t, q, p, lambda, energy, stat)
+    class(impact_log_t), intent(inout) :: self
+    integer(i8), intent(in) :: step
+    real(dp), intent(in) :: t, q(:), p(:), lambda(:), energy
+    integer, intent(inout) :: stat
+    if (associated(self%record)) call self%record%clear()
+  end subroutine log_step
+
   ! ---------------------------------------------------------------------------------------------
   ! the handle table behind the external routines
 
   !> Create model and integrator; ih > 0 on success, 0 on failure (message for VCIMSG(0, ...)).
+  !> IOPT bit 8: the routine is a continuous L (scheme midpoint until VCISCH), else a discrete L_d.
   subroutine legacy_new(fn, n, m, ng, iopt, h, rpar, ipar, ih, stat)
     procedure(vci_legacy_model_fn) :: fn
     integer, intent(in) :: n, m, ng, iopt
@@ -237,31 +439,69 @@ contains
     type(c_ptr), intent(in) :: rpar, ipar
     integer, intent(out) :: ih, stat
     type(slot_t), allocatable :: grown(:)
+    type(legacy_routine_t) :: routine
     integer :: i
     ih = 0
-    if (iopt < 0 .or. iopt > IOPT_HESSIAN + IOPT_GAP_GRADS + IOPT_ENERGY) then
+    if (iopt < 0 .or. iopt > IOPT_HESSIAN + IOPT_GAP_GRADS + IOPT_ENERGY + IOPT_CONTINUOUS) then
       write (global_message, '(a,i0,a)') 'VCINEW: IOPT = ', iopt, &
-        ' (need a sum of 1: mixed Hessian, 2: gap gradients, 4: energy)'
+        ' (need a sum of 1: Hessian, 2: gap gradients, 4: energy, 8: continuous L)'
       stat = VCI_ERR_ARGUMENT; return
     end if
-    if (.not. allocated(slots)) allocate (slots(4))
+    if (iand(iopt, IOPT_CONTINUOUS + IOPT_HESSIAN) == IOPT_CONTINUOUS + IOPT_HESSIAN .and. &
+        vci_size_problem(n, m, ng) == '' .and. 3 * int(n, i8) * n > int(huge(1), i8)) then
+      write (global_message, '(a,i0,a)') 'VCINEW: N = ', n, ' too large for TASK 13 (need 3*N*N < 2**31)'
+      stat = VCI_ERR_ARGUMENT; return
+    end if
+    routine%fn => fn
+    routine%iopt = iopt
+    routine%rpar = rpar; routine%ipar = ipar
+    if (.not. allocated(slots)) then
+      allocate (slots(4), stat=stat)
+      if (stat /= 0) then
+        global_message = 'VCINEW: cannot allocate the handle table (out of memory)'
+        stat = VCI_ERR_MEMORY; return
+      end if
+    end if
     i = findloc(slots%id, 0, dim=1)
     if (i == 0) then
-      allocate (grown(2 * size(slots)))
+      allocate (grown(2 * size(slots)), stat=stat)
+      if (stat /= 0) then
+        global_message = 'VCINEW: cannot grow the handle table (out of memory)'
+        stat = VCI_ERR_MEMORY; return
+      end if
       grown(1:size(slots)) = slots
       i = size(slots) + 1
       call move_alloc(grown, slots)
     end if
-    allocate (slots(i)%model, slots(i)%integ)
-    slots(i)%model%n = n; slots(i)%model%m = m; slots(i)%model%n_gaps = ng
-    slots(i)%model%fn => fn
-    slots(i)%model%iopt = iopt
-    slots(i)%model%rpar = rpar; slots(i)%model%ipar = ipar
-    call slots(i)%integ%create(slots(i)%model, h, stat)
+    if (iand(iopt, IOPT_CONTINUOUS) /= 0) then
+      allocate (slots(i)%lag, slots(i)%integ, stat=stat)
+      if (stat == 0 .and. iand(iopt, IOPT_HESSIAN) /= 0 .and. vci_size_problem(n, m, ng) == '') &
+        allocate (slots(i)%lag%hwork(3 * n * n), stat=stat)
+    else
+      allocate (slots(i)%model, slots(i)%integ, stat=stat)
+    end if
+    if (stat /= 0) then
+      global_message = 'VCINEW: cannot allocate the model (out of memory)'
+      call free_slot(i)
+      stat = VCI_ERR_MEMORY; return
+    end if
+    if (associated(slots(i)%lag)) then
+      slots(i)%lag%n = n; slots(i)%lag%m = m; slots(i)%lag%n_gaps = ng
+      slots(i)%lag%routine = routine
+      call slots(i)%integ%create(slots(i)%lag, h, stat)
+    else
+      slots(i)%model%n = n; slots(i)%model%m = m; slots(i)%model%n_gaps = ng
+      slots(i)%model%routine = routine
+      call slots(i)%integ%create(slots(i)%model, h, stat)
+    end if
     if (stat /= VCI_OK) then
-      global_message = 'VCINEW: '//slots(i)%integ%message()
-      deallocate (slots(i)%model, slots(i)%integ)
-      if (all(slots%id == 0)) deallocate (slots)
+      global_message = 'VCINEW: '//trim(slots(i)%integ%message_text())
+      ! a required TASK answered "not provided": name it
+      if (associated(slots(i)%lag)) then
+        if (slots(i)%lag%routine%record%code == IERR_NOT_PROVIDED) &
+          global_message = trim(global_message)//' ('//trim(slots(i)%lag%routine%record%failed)//')'
+      end if
+      call free_slot(i)
       return
     end if
     last_id = last_id + 1
@@ -269,75 +509,119 @@ contains
     ih = last_id
   end subroutine legacy_new
 
+  !> Free what slot i holds and mark it free; the table goes when nothing is left in it.
+  subroutine free_slot(i)
+    integer, intent(in) :: i
+    if (associated(slots(i)%integ)) deallocate (slots(i)%integ)
+    if (associated(slots(i)%model)) deallocate (slots(i)%model)
+    if (associated(slots(i)%lag)) deallocate (slots(i)%lag)
+    slots(i)%id = 0
+    if (all(slots%id == 0)) deallocate (slots)   ! nothing left behind at exit
+  end subroutine free_slot
+
+  !> The slot of handle ih (0 if none).
+  integer function slot_of(ih)
+    integer, intent(in) :: ih
+    slot_of = 0
+    if (ih > 0 .and. allocated(slots)) slot_of = findloc(slots%id, ih, dim=1)
+  end function slot_of
+
+  !> The callback record of slot i's model, whichever kind it is.
+  function slot_record(i) result(record)
+    integer, intent(in) :: i
+    type(vci_callback_record_t), pointer :: record
+    if (associated(slots(i)%lag)) then
+      record => slots(i)%lag%routine%record
+    else
+      record => slots(i)%model%routine%record
+    end if
+  end function slot_record
+
   !> The integrator named ih; null (stat = VCI_ERR_ARGUMENT, message for VCIMSG(0, ...)) if none.
   subroutine legacy_get(ih, who, integ, stat)
     integer, intent(in) :: ih
     character(len=*), intent(in) :: who
     type(vci_integrator_t), pointer, intent(out) :: integ
     integer, intent(out) :: stat
+    type(vci_callback_record_t), pointer :: record
     integer :: i
     integ => null()
-    i = 0
-    if (ih > 0 .and. allocated(slots)) i = findloc(slots%id, ih, dim=1)
+    i = slot_of(ih)
     if (i == 0) then
       write (global_message, '(a,i0,a)') who//': IH = ', ih, ' names no live integrator (deleted, or VCINEW failed)'
       stat = VCI_ERR_ARGUMENT; return
     end if
     integ => slots(i)%integ
-    slots(i)%model%last_ierr = 0; slots(i)%model%last_task = 0
+    call integ%report_failure(VCI_OK, '')
+    record => slot_record(i)
+    call record%clear()
     stat = VCI_OK
   end subroutine legacy_get
 
-  !> After a call into the integrator: name the failing TASK and its IERR. The Newton line search
-  !> backtracks from trial points where the model routine fails, so a routine that keeps failing
-  !> ends as VCI_ERR_NEWTON; it is reported as VCI_ERR_CALLBACK, the Newton message kept.
+  !> After a call into the integrator: name the failing TASK and its IERR (the shared adapter).
   subroutine legacy_after(ih, stat)
     integer, intent(in) :: ih
     integer, intent(inout) :: stat
+    type(vci_callback_record_t), pointer :: record
     integer :: i
-    character(len=48) :: what
-    i = 0
-    if (ih > 0 .and. allocated(slots)) i = findloc(slots%id, ih, dim=1)
+    character(len=VCI_MSG_LEN) :: msg
+    i = slot_of(ih)
     if (i == 0) return
-    associate (md => slots(i)%model, integ => slots(i)%integ)
-      if ((stat == VCI_ERR_CALLBACK .or. stat == VCI_ERR_NEWTON) .and. md%last_ierr /= 0) then
-        write (what, '(a,i0,a,i0,a)') ' (MODEL returned IERR = ', md%last_ierr, ' for TASK = ', md%last_task, ')'
-        stat = VCI_ERR_CALLBACK
-        call integ%report_failure(stat, integ%message()//trim(what))
-      end if
-    end associate
+    msg = slots(i)%integ%message_text()
+    record => slot_record(i)
+    call record%annotate(stat, msg)
+    call slots(i)%integ%report_failure(stat, msg)
   end subroutine legacy_after
+
+  !> Choose the scheme of the continuous model named ih (live: legacy_get succeeded).
+  subroutine legacy_set_scheme(ih, scheme, stages, stat)
+    integer, intent(in) :: ih, scheme, stages
+    integer, intent(out) :: stat
+    integer :: i
+    i = slot_of(ih)
+    if (.not. associated(slots(i)%lag)) then
+      call slots(i)%integ%report_failure(VCI_ERR_ARGUMENT, 'VCISCH: the model is a discrete L_d (IOPT without '// &
+                                         'bit 8); schemes discretise a continuous L (IOPT + 8 at VCINEW)')
+      stat = VCI_ERR_ARGUMENT; return
+    end if
+    call slots(i)%integ%set_scheme(scheme, stages, stat)
+    if (stat /= VCI_OK) call slots(i)%integ%report_failure(stat, 'VCISCH: '//trim(slots(i)%integ%message_text()))
+  end subroutine legacy_set_scheme
 
   !> Free the integrator named ih (no-op if none); ih becomes 0.
   subroutine legacy_delete(ih)
     integer, intent(inout) :: ih
     integer :: i
-    i = 0
-    if (ih > 0 .and. allocated(slots)) i = findloc(slots%id, ih, dim=1)
-    if (i > 0) then
-      deallocate (slots(i)%integ, slots(i)%model)
-      slots(i)%id = 0
-      if (all(slots%id == 0)) deallocate (slots)   ! nothing left behind at exit
-    end if
+    i = slot_of(ih)
+    if (i > 0) call free_slot(i)
     ih = 0
   end subroutine legacy_delete
 
-  !> nsteps steps in direction idir; the state and the impact times of this call out.
-  subroutine legacy_advance(integ, nsteps, idir, t, q, p, nimp, timp, stat)
-    type(vci_integrator_t), intent(inout) :: integ
-    integer, intent(in) :: nsteps, idir
+  !> nsteps steps in direction idir on the integrator named ih (live: legacy_get succeeded); the
+  !> state and the impact times of this call out.
+  subroutine legacy_advance(ih, nsteps, idir, t, q, p, nimp, timp, stat)
+    integer, intent(in) :: ih, nsteps, idir
     real(dp), intent(inout) :: t, q(:), p(:), timp(:)
     integer, intent(out) :: nimp, stat
     type(impact_log_t) :: log
-    integer :: k
-    allocate (log%times(size(timp)))
-    call integ%integrate(int(nsteps, i8), idir, stat, log)
-    nimp = log%count
-    k = min(nimp, size(timp))
-    timp(1:k) = log%times(1:k)
-    if (integ%is_initialized()) then
-      t = integ%time(); q = integ%configuration(); p = integ%momentum()
+    integer :: k, i
+    i = slot_of(ih)
+    allocate (log%times(size(timp)), stat=stat)
+    if (stat /= 0) then
+      nimp = 0
+      call slots(i)%integ%report_failure(VCI_ERR_MEMORY, 'VCIADV: cannot allocate the impact log (out of memory)')
+      stat = VCI_ERR_MEMORY; return
     end if
+    log%record => slot_record(i)
+    associate (integ => slots(i)%integ)
+      call integ%integrate(int(nsteps, i8), idir, stat, log)
+      nimp = log%count
+      k = min(nimp, size(timp))
+      timp(1:k) = log%times(1:k)
+      if (integ%is_initialized()) then
+        t = integ%time(); q = integ%configuration(); p = integ%momentum()
+      end if
+    end associate
   end subroutine legacy_advance
 
   !> The message of the last call on ih, or of the last failure without a live handle.
@@ -346,9 +630,8 @@ contains
     character(len=VCI_MSG_LEN) :: msg
     integer :: i
     msg = global_message
-    i = 0
-    if (ih > 0 .and. allocated(slots)) i = findloc(slots%id, ih, dim=1)
-    if (i > 0) msg = slots(i)%integ%message()
+    i = slot_of(ih)
+    if (i > 0) msg = slots(i)%integ%message_text()
   end function legacy_message
 end module vci_legacy
 
@@ -386,7 +669,8 @@ subroutine vcitol(ih, atol, rtol, maxit, istat)
   if (istat == VCI_OK) call integ%set_tolerances(atol, rtol, maxit, istat)
 end subroutine vcitol
 
-!> Impact energy condition: MODE 0 discrete (the paper's, default), 1 hamiltonian (IOPT bit 4).
+!> Impact energy condition: MODE 0 discrete (the paper's, default), 1 hamiltonian (IOPT bit 4, or
+!> any continuous model: H by Legendre inversion of dL/dV without it).
 subroutine vcieng(ih, mode, istat)
   use vci_status, only: VCI_OK
   use vci_integrator, only: vci_integrator_t
@@ -398,6 +682,23 @@ subroutine vcieng(ih, mode, istat)
   call legacy_get(ih, 'VCIENG', integ, istat)
   if (istat == VCI_OK) call integ%set_impact_energy(mode, istat)
 end subroutine vcieng
+
+!> Scheme of a continuous model (IOPT bit 8): ISCH 1 left (order 1), 2 midpoint (order 2, the
+!> default), 3 lobatto with NSTG = s stages (1 <= s <= 8, order 2s, M = 0 only); NSTG is ignored
+!> except for lobatto. Call after VCINEW and before VCIINP/VCIINM (the state is reset).
+subroutine vcisch(ih, isch, nstg, istat)
+  use vci_status, only: VCI_OK
+  use vci_integrator, only: vci_integrator_t
+  use vci_legacy, only: legacy_get, legacy_set_scheme, legacy_after
+  implicit none
+  integer, intent(in) :: ih, isch, nstg
+  integer, intent(out) :: istat
+  type(vci_integrator_t), pointer :: integ
+  call legacy_get(ih, 'VCISCH', integ, istat)
+  if (istat /= VCI_OK) return
+  call legacy_set_scheme(ih, isch, nstg, istat)
+  call legacy_after(ih, istat)
+end subroutine vcisch
 
 !> Start from Q0 at T0 and Q1 at T0 + H: the state becomes (T0 + H, Q1, D2 L_d(Q0, Q1, H)).
 subroutine vciinp(ih, t0, q0, q1, istat)
@@ -455,7 +756,7 @@ subroutine vciadv(ih, nsteps, idir, t, q, p, nimp, timp, ltimp, istat)
     call integ%report_failure(VCI_ERR_ARGUMENT, msg); istat = VCI_ERR_ARGUMENT; return
   end if
   n = integ%n_coordinates()
-  call legacy_advance(integ, nsteps, idir, t, q(1:n), p(1:n), nimp, timp(1:ltimp), istat)
+  call legacy_advance(ih, nsteps, idir, t, q(1:n), p(1:n), nimp, timp(1:ltimp), istat)
   call legacy_after(ih, istat)
 end subroutine vciadv
 

@@ -7,8 +7,12 @@
 !> no multipliers; n_gaps = 0: no impact detection) or differences it (mixed Hessian, gap gradients).
 !> Sizes, constraint forms, gaps and energy come from `vci_model_base_t`.
 !>
-!> Every procedure receives `stat` preset to 0; set it nonzero to report a failure, which stops
-!> the step with VCI_ERR_CALLBACK. Never stop the program from a callback.
+!> Every procedure receives `stat` preset to 0. The callback contract (as SUNDIALS'): leave it 0 on
+!> success; set it > 0 for a recoverable failure (at a trial point of Newton's line search the
+!> solver backs off to a shorter step; anywhere else the step fails with VCI_ERR_CALLBACK); set it
+!> < 0 for an unrecoverable one (the step fails at once with VCI_ERR_CALLBACK). NaN or Inf outputs
+!> count as recoverable failures (VCI_ERR_NONFINITE if they end the step). Never stop the program
+!> from a callback.
 module vci_model
   use vci_kinds, only: dp
   use vci_model_base, only: vci_model_base_t

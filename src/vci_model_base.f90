@@ -6,8 +6,9 @@
 !> The optional procedures answer "not provided" until overridden, on a channel of their own: they
 !> call `self%not_provided(stat)`, which marks the model; the library probes an optional procedure
 !> once (`clear_not_provided`, call, `answered_not_provided`) and then does without it (m = 0,
-!> n_gaps = 0) or differences it (gap gradients). `stat` only ever means success (0) or failure
-!> (nonzero), so a model that reports failure with any value, -1 included, is read as failing.
+!> n_gaps = 0) or differences it (gap gradients). `stat` only ever carries the callback contract
+!> (vci_model: 0 success, > 0 recoverable failure, < 0 unrecoverable), so a model that reports
+!> failure with any value, -1 included, is read as failing, never as "not provided".
 !> Every procedure receives `stat` preset to 0 and never stops the program.
 module vci_model_base
   use vci_kinds, only: dp

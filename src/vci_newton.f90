@@ -6,13 +6,22 @@
 !> of the row-equilibrated Jacobian; when
 !> that matrix is singular, a rank-revealing least-squares solve (dgelsd) gives the minimum-norm
 !> step instead. All workspace is allocated by `reserve`, so `solve` allocates nothing.
+!>
+!> Nothing non-finite reaches LAPACK: a residual, scale or Jacobian with NaN/Inf (a callback's
+!> huge but finite values overflow in differences) ends the solve with VCI_ERR_NONFINITE, or, at a
+!> trial point of the line search, is backed off from like a failed evaluation. (With NaN input,
+!> OpenBLAS's dgelsd can loop forever and reference LAPACK's prints through XERBLA.)
 module vci_newton
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
-  use vci_kinds, only: dp
-  use vci_status, only: VCI_OK, VCI_ERR_NEWTON, VCI_ERR_NONFINITE
+  use vci_kinds, only: dp, i8
+  use vci_status, only: VCI_OK, VCI_ERR_NEWTON, VCI_ERR_NONFINITE, VCI_ERR_MEMORY
   use vci_lapack, only: dgetrf, dgetrs, dgelsd
   implicit none
   private
+
+  interface all_finite
+    module procedure all_finite_1, all_finite_2
+  end interface all_finite
 
   !> Why a solve stopped.
   integer, parameter, public :: NEWTON_CONVERGED = 0
@@ -20,13 +29,22 @@ module vci_newton
   integer, parameter, public :: NEWTON_NO_DESCENT = 2      !< backtracking found no decrease
   integer, parameter, public :: NEWTON_SINGULAR = 3        !< even the least-squares solve failed
   integer, parameter, public :: NEWTON_EVALUATION = 4      !< the residual or Jacobian reported failure
+  integer, parameter, public :: NEWTON_NONFINITE = 5       !< residual, scale or Jacobian not finite (overflow)
 
-  !> A nonlinear system as Newton sees it.
+  !> Systems of at least this many unknowns are "large": they reuse the Newton matrix's factors across
+  !> iterations and solves (simplified Newton, below) and schemes size their rows in O(n) per residual.
+  integer, parameter, public :: vci_large_system = 16
+
+  !> A nonlinear system as Newton sees it. A residual that fails (stat /= 0) at a trial point of
+  !> the line search is backed off from, unless the system sets `unrecoverable` (a callback's
+  !> negative return): then the solve ends at once with that status.
   type, abstract, public :: vci_system_t
+    logical :: unrecoverable = .false.
   contains
     procedure(residual_iface), deferred :: residual
     procedure(jacobian_iface), deferred :: jacobian
     procedure :: admissible => always_admissible
+    procedure :: reuse_key => never_reuse
   end type vci_system_t
 
   abstract interface
@@ -63,6 +81,21 @@ module vci_newton
     integer :: max_iterations = 30
     integer :: max_backtracks = 12
     logical :: polish = .true.         !< one extra step with the last factorisation: ~ machine precision
+    !> Systems of at most this many unknowns are factorised by the in-line LU below (partial
+    !> pivoting, the same elimination as LAPACK's unblocked dgetf2) instead of dgetrf/dgetrs: for a
+    !> 3x3 matrix a LAPACK call through OpenBLAS costs ~10x its arithmetic (locks, dispatch). 0: always
+    !> LAPACK. docs/bench/throughput.md measures the difference; test_newton compares both paths.
+    integer :: small_lu_max = 8
+    !> Simplified Newton for systems of at least reuse_min unknowns: a solve whose system has the
+    !> same nonzero reuse_key as the one the factors were computed for starts with chord steps on
+    !> those factors, and evaluates and factorises a new Jacobian only when a chord step contracts
+    !> the scaled residual by less than reuse_contraction (or fails). Huge(1): never.
+    integer :: reuse_min = vci_large_system
+    real(dp) :: reuse_contraction = 0.25_dp
+    integer(i8) :: factorisations = 0     !< LU factorisations of Newton matrices so far
+    logical, private :: have_lu = .false.
+    integer, private :: lu_n = 0
+    real(dp), private :: lu_key = 0.0_dp
     integer :: capacity = 0
     real(dp), allocatable, private :: jac(:, :), lu(:, :), r(:), sc(:), dx(:), xt(:), rt(:), sct(:)
     real(dp), allocatable, private :: sv(:), work(:), rw(:)
@@ -75,6 +108,13 @@ module vci_newton
 
 contains
 
+  !> A nonzero key names a family of systems whose Jacobians are close enough to share factors
+  !> (e.g. regular sub-steps of one length and direction); 0: never reuse.
+  real(dp) function never_reuse(self)
+    class(vci_system_t), intent(inout) :: self
+    never_reuse = 0.0_dp
+  end function never_reuse
+
   logical function always_admissible(self, x)
     class(vci_system_t), intent(inout) :: self
     real(dp), intent(in) :: x(:)
@@ -82,22 +122,35 @@ contains
   end function always_admissible
 
   !> Allocate workspace for systems of up to nmax unknowns (call once, outside the step loop).
-  subroutine reserve(self, nmax)
+  !> stat (optional): VCI_ERR_MEMORY when an allocation fails (the solver then has no workspace).
+  subroutine reserve(self, nmax, stat)
     class(vci_newton_t), intent(inout) :: self
     integer, intent(in) :: nmax
+    integer, intent(out), optional :: stat
     real(dp) :: query(1), a(1, 1), b(1, 1), s(1)
-    integer :: iq(1), rank, info, lwork, liwork, nlvl
+    integer :: iq(1), rank, info, lwork, liwork, nlvl, st
+    if (present(stat)) stat = VCI_OK
     if (self%capacity >= nmax) return
-    self%capacity = nmax
+    self%capacity = 0
     if (allocated(self%jac)) deallocate (self%jac, self%lu, self%r, self%sc, self%dx, self%xt, &
-                                         self%rt, self%sct, self%sv, self%work, self%ipiv, self%iwork, self%rw)
+                                         self%rt, self%sct, self%sv, self%ipiv, self%rw)
+    if (allocated(self%work)) deallocate (self%work, self%iwork)
     allocate (self%jac(nmax, nmax), self%lu(nmax, nmax), self%r(nmax), self%sc(nmax), self%dx(nmax), &
-              self%xt(nmax), self%rt(nmax), self%sct(nmax), self%sv(nmax), self%ipiv(nmax), self%rw(nmax))
-    call dgelsd(nmax, nmax, 1, a, nmax, b, nmax, s, -1.0_dp, rank, query, -1, iq, info)
-    lwork = max(1, int(query(1)))
-    nlvl = max(0, int(log(real(nmax, dp) / 26.0_dp) / log(2.0_dp)) + 1)
-    liwork = max(1, 3 * nmax * nlvl + 11 * nmax, iq(1))
-    allocate (self%work(lwork), self%iwork(liwork))
+              self%xt(nmax), self%rt(nmax), self%sct(nmax), self%sv(nmax), self%ipiv(nmax), self%rw(nmax), stat=st)
+    if (st == 0) then
+      call dgelsd(nmax, nmax, 1, a, nmax, b, nmax, s, -1.0_dp, rank, query, -1, iq, info)
+      lwork = max(1, int(query(1)))
+      nlvl = max(0, int(log(real(nmax, dp) / 26.0_dp) / log(2.0_dp)) + 1)
+      liwork = max(1, 3 * nmax * nlvl + 11 * nmax, iq(1))
+      allocate (self%work(lwork), self%iwork(liwork), stat=st)
+    end if
+    if (st /= 0) then
+      if (allocated(self%jac)) deallocate (self%jac, self%lu, self%r, self%sc, self%dx, self%xt, &
+                                           self%rt, self%sct, self%sv, self%ipiv, self%rw)
+      if (present(stat)) stat = VCI_ERR_MEMORY
+      return
+    end if
+    self%capacity = nmax
   end subroutine reserve
 
   !> Solve sys%residual(x) = 0 for x(1:n), starting from the given x. On failure x holds the best
@@ -107,19 +160,54 @@ contains
     class(vci_system_t), intent(inout) :: sys
     real(dp), intent(inout) :: x(:)
     type(vci_newton_result_t), intent(out) :: res
-    integer :: n, stat, it, ib, trial_stat
-    real(dp) :: phi, phit, step
+    integer :: n, stat, it, ib, trial_stat, i
+    real(dp) :: phi, phit, step, key
     logical :: factored
 
     n = size(x)
     res = vci_newton_result_t()
     factored = .false.
+    sys%unrecoverable = .false.
+    key = 0.0_dp
+    if (n >= self%reuse_min) key = sys%reuse_key()
     call sys%residual(x, self%r(1:n), self%sc(1:n), stat)
     if (stat /= VCI_OK) then
       call fail_eval(res, stat); return
     end if
+    if (.not. (all_finite(self%r(1:n)) .and. all_finite(self%sc(1:n)))) then
+      call fail_nonfinite(res); return
+    end if
     phi = merit(self, self%r(1:n), self%sc(1:n))
     res%scaled_residual = phi
+
+    ! Simplified Newton: chord steps on the factors of an earlier solve of the same family, kept
+    ! while each contracts the scaled residual by reuse_contraction or better; if they stop above
+    ! the tolerance, full Newton (a new Jacobian and factors) takes over from there
+    if (key /= 0.0_dp .and. self%have_lu .and. self%lu_n == n .and. key == self%lu_key) then
+      factored = .true.
+      do it = 1, self%max_iterations
+        ! cheap steps: go on below the tolerance, to about round-off (chord steps converge linearly)
+        if (phi <= 1.0e-3_dp) exit
+        do i = 1, n
+          self%dx(i) = self%r(i) * self%rw(i)
+        end do
+        call lu_solve(self, n, self%dx)
+        self%xt(1:n) = x - self%dx(1:n)
+        if (.not. sys%admissible(self%xt(1:n))) exit
+        call sys%residual(self%xt(1:n), self%rt(1:n), self%sct(1:n), stat)
+        if (stat /= VCI_OK) exit
+        phit = merit(self, self%rt(1:n), self%sct(1:n))
+        ! above the tolerance a chord step must contract well (else new factors pay); below it,
+        ! any decrease is taken on the way to round-off
+        if (.not. (phit <= self%reuse_contraction * phi .or. (phi <= 1.0_dp .and. phit < phi))) exit
+        res%iterations = res%iterations + 1
+        x = self%xt(1:n)
+        self%r(1:n) = self%rt(1:n)
+        self%sc(1:n) = self%sct(1:n)
+        phi = phit
+        res%scaled_residual = phi
+      end do
+    end if
 
     do it = 1, self%max_iterations
       if (phi <= 1.0_dp) exit
@@ -128,7 +216,15 @@ contains
       if (stat /= VCI_OK) then
         call fail_eval(res, stat); return
       end if
+      if (.not. all_finite(self%jac(1:n, 1:n))) then
+        call fail_nonfinite(res); return
+      end if
       call newton_direction(self, n, factored, res)
+      if (res%reason == NEWTON_NONFINITE) then
+        res%status = VCI_ERR_NONFINITE; return
+      end if
+      self%have_lu = factored .and. key /= 0.0_dp
+      self%lu_n = n; self%lu_key = key
       if (res%reason == NEWTON_SINGULAR) then
         res%status = VCI_ERR_NEWTON; return
       end if
@@ -139,6 +235,12 @@ contains
         self%xt(1:n) = x - step * self%dx(1:n)
         if (sys%admissible(self%xt(1:n))) then
           call sys%residual(self%xt(1:n), self%rt(1:n), self%sct(1:n), stat)
+          ! an overflowing trial point is backed off from like a failed evaluation
+          if (stat == VCI_OK .and. .not. (all_finite(self%rt(1:n)) .and. all_finite(self%sct(1:n)))) &
+            stat = VCI_ERR_NONFINITE
+          if (stat /= VCI_OK .and. sys%unrecoverable) then
+            call fail_eval(res, stat); return
+          end if
           if (stat /= VCI_OK) trial_stat = stat
           if (stat == VCI_OK) then
             phit = merit(self, self%rt(1:n), self%sct(1:n))
@@ -172,6 +274,7 @@ contains
   end subroutine solve
 
   !> Solve the small dense system a x = b in place (b becomes x), with the solver's workspace.
+  !> info /= 0: singular even for least squares, or a or b not finite (LAPACK is then not called).
   subroutine linear_solve(self, n, a, b, info)
     class(vci_newton_t), intent(inout) :: self
     integer, intent(in) :: n
@@ -179,18 +282,28 @@ contains
     real(dp), intent(inout) :: b(:)
     integer, intent(out) :: info
     integer :: rank
+    if (.not. (all_finite(a(1:n, 1:n)) .and. all_finite(b(1:n)))) then
+      info = -1; return
+    end if
+    self%rt(1:n) = b(1:n)                  ! the right-hand side, for the fallback
+    self%have_lu = .false.            ! the factors below are not a Newton matrix's
     self%lu(1:n, 1:n) = a(1:n, 1:n)
     call lu_factor(self, n, info)
     if (info == 0) then
       call lu_solve(self, n, b)
-      if (all(ieee_is_finite(b(1:n)))) return
+      if (all_finite(b(1:n))) return
     end if
     ! singular: the minimum-norm least-squares solution, as in the Newton direction
     self%jac(1:n, 1:n) = a(1:n, 1:n)
-    self%dx(1:n) = b(1:n)
+    self%dx(1:n) = self%rt(1:n)
     call dgelsd(n, n, 1, self%jac, self%capacity, self%dx, self%capacity, self%sv, 1.0e-12_dp, rank, &
                 self%work, size(self%work), self%iwork, info)
-    if (info == 0) b(1:n) = self%dx(1:n)
+    if (info == 0 .and. all_finite(self%dx(1:n))) then
+      b(1:n) = self%dx(1:n)
+    else
+      b(1:n) = self%rt(1:n)
+      if (info == 0) info = -1
+    end if
   end subroutine linear_solve
 
   !> Newton direction dx = J^{-1} r on the row-equilibrated system; least squares when singular.
@@ -213,8 +326,14 @@ contains
       self%dx(i) = self%r(i) * w
       self%rw(i) = w
     end do
+    factored = .false.
+    ! r w overflows when r is huge and the row's entries tiny: nothing non-finite goes to LAPACK
+    if (.not. (all_finite(self%lu(1:n, 1:n)) .and. all_finite(self%dx(1:n)))) then
+      res%reason = NEWTON_NONFINITE; return
+    end if
     self%jac(1:n, 1:n) = self%lu(1:n, 1:n)   ! keep the equilibrated matrix for the fallback
     call lu_factor(self, n, info)
+    self%factorisations = self%factorisations + 1
     factored = .false.
     if (info == 0) then
       dmin = huge(1.0_dp); dmax = 0.0_dp
@@ -250,11 +369,13 @@ contains
     do i = 1, n
       self%dx(i) = self%r(i) * self%rw(i)
     end do
+    if (.not. all_finite(self%dx(1:n))) return
     call lu_solve(self, n, self%dx)
     self%xt(1:n) = x - self%dx(1:n)
     if (.not. sys%admissible(self%xt(1:n))) return
     call sys%residual(self%xt(1:n), self%rt(1:n), self%sct(1:n), stat)
     if (stat /= VCI_OK) return
+    if (.not. (all_finite(self%rt(1:n)) .and. all_finite(self%sct(1:n)))) return
     phit = merit(self, self%rt(1:n), self%sct(1:n))
     res%iterations = res%iterations + 1
     if (phit <= phi) then
@@ -263,12 +384,17 @@ contains
     end if
   end subroutine polish_step
 
-  !> LU factorisation with partial pivoting of lu(1:n, 1:n) in place (LAPACK dgetrf).
+  !> LU factorisation with partial pivoting of lu(1:n, 1:n) in place (LAPACK dgetrf, or the in-line
+  !> elimination for n <= small_lu_max); info as dgetrf's (k > 0: U(k, k) = 0).
   subroutine lu_factor(self, n, info)
     type(vci_newton_t), intent(inout) :: self
     integer, intent(in) :: n
     integer, intent(out) :: info
-    call dgetrf(n, n, self%lu, self%capacity, self%ipiv, info)
+    if (n <= self%small_lu_max) then
+      call small_lu(n, self%lu, self%ipiv, info)
+    else
+      call dgetrf(n, n, self%lu, self%capacity, self%ipiv, info)
+    end if
   end subroutine lu_factor
 
   !> b := A^{-1} b with the factors of lu_factor (dgetrs 'N' with one right-hand side).
@@ -277,8 +403,77 @@ contains
     integer, intent(in) :: n
     real(dp), intent(inout) :: b(:)
     integer :: info
-    call dgetrs('N', n, 1, self%lu, self%capacity, self%ipiv, b, size(b), info)
+    if (n <= self%small_lu_max) then
+      call small_lu_solve(n, self%lu, self%ipiv, b)
+    else
+      call dgetrs('N', n, 1, self%lu, self%capacity, self%ipiv, b, size(b), info)
+    end if
   end subroutine lu_solve
+
+  !> Right-looking LU with partial pivoting (the pivot is the first largest |entry| of the column, as
+  !> LAPACK's idamax picks it); ipiv as LAPACK's. Stops at an exact zero pivot (info = its column).
+  pure subroutine small_lu(n, a, ipiv, info)
+    integer, intent(in) :: n
+    real(dp), intent(inout) :: a(:, :)
+    integer, intent(inout) :: ipiv(:)
+    integer, intent(out) :: info
+    integer :: i, j, k, p
+    real(dp) :: t, piv_inv
+    info = 0
+    do j = 1, n
+      p = j
+      do i = j + 1, n
+        if (abs(a(i, j)) > abs(a(p, j))) p = i
+      end do
+      ipiv(j) = p
+      if (a(p, j) == 0.0_dp) then
+        if (info == 0) info = j
+        cycle
+      end if
+      if (p /= j) then
+        do k = 1, n
+          t = a(j, k); a(j, k) = a(p, k); a(p, k) = t
+        end do
+      end if
+      piv_inv = 1.0_dp / a(j, j)
+      do i = j + 1, n
+        a(i, j) = a(i, j) * piv_inv
+      end do
+      do k = j + 1, n
+        t = a(j, k)
+        do i = j + 1, n
+          a(i, k) = a(i, k) - a(i, j) * t
+        end do
+      end do
+    end do
+  end subroutine small_lu
+
+  pure subroutine small_lu_solve(n, a, ipiv, b)
+    integer, intent(in) :: n
+    real(dp), intent(in) :: a(:, :)
+    integer, intent(in) :: ipiv(:)
+    real(dp), intent(inout) :: b(:)
+    integer :: i, k
+    real(dp) :: t
+    do i = 1, n
+      if (ipiv(i) /= i) then
+        t = b(i); b(i) = b(ipiv(i)); b(ipiv(i)) = t
+      end if
+    end do
+    do k = 1, n                 ! L y = b (unit diagonal), column by column
+      t = b(k)
+      do i = k + 1, n
+        b(i) = b(i) - a(i, k) * t
+      end do
+    end do
+    do k = n, 1, -1             ! U x = y
+      b(k) = b(k) / a(k, k)
+      t = b(k)
+      do i = 1, k - 1
+        b(i) = b(i) - a(i, k) * t
+      end do
+    end do
+  end subroutine small_lu_solve
 
 
   pure real(dp) function merit(self, r, sc)
@@ -291,6 +486,34 @@ contains
     end do
     if (.not. ieee_is_finite(merit)) merit = huge(1.0_dp)
   end function merit
+
+  !> No NaN or Inf in a (any rank: assumed-rank is F2018, so vectors and matrices separately).
+  pure logical function all_finite_1(a) result(ok)
+    real(dp), intent(in) :: a(:)
+    integer :: i
+    ok = .true.
+    do i = 1, size(a)
+      if (.not. (abs(a(i)) <= huge(1.0_dp))) then
+        ok = .false.; return
+      end if
+    end do
+  end function all_finite_1
+
+  pure logical function all_finite_2(a) result(ok)
+    real(dp), intent(in) :: a(:, :)
+    integer :: j
+    ok = .true.
+    do j = 1, size(a, 2)
+      ok = all_finite_1(a(:, j))
+      if (.not. ok) return
+    end do
+  end function all_finite_2
+
+  subroutine fail_nonfinite(res)
+    type(vci_newton_result_t), intent(inout) :: res
+    res%reason = NEWTON_NONFINITE
+    res%status = VCI_ERR_NONFINITE
+  end subroutine fail_nonfinite
 
   subroutine fail_eval(res, stat)
     type(vci_newton_result_t), intent(inout) :: res

@@ -7,9 +7,15 @@
 !> velocity. The mixed Hessian comes from the Hessian blocks of L (the model's, or none: the discrete
 !> scheme then differences D1). H(q, p) is the model's when it supplies one, else the Legendre
 !> inversion of dL/dqdot (vci_lagrangian).
+!>
+!> Increments (DESIGN.md §6, round-off): the discrete scheme solves a retraction's sub-step for the
+!> increment d = b - a from the known point a rather than for b, through the `*_inc` procedures
+!> below. The velocity is then w = s d/h exactly: forming b and subtracting a again would round the
+!> increment to ulps of |q|, an error the new momentum carries as eps |q| / h (it dominated long
+!> fine-step runs: docs/bench/roundoff.md).
 module vci_retraction
   use vci_kinds, only: dp
-  use vci_status, only: VCI_OK
+  use vci_status, only: VCI_OK, VCI_ERR_CALLBACK
   use vci_model, only: vci_model_t
   use vci_lagrangian, only: vci_lagrangian_t, vci_lagrangian_work_t, lagrangian_work_setup, &
                             lagrangian_hessians, lagrangian_hamiltonian
@@ -27,28 +33,31 @@ module vci_retraction
   contains
     procedure :: bind
     procedure :: d1, d2, d3, mixed_hessian, constraint_forms, discrete_constraint, gaps, gap_gradients, energy
+    procedure :: d1s_inc, pout_inc, energy_inc, jacobian_inc, constraint_inc
   end type vci_retraction_model_t
 
 contains
 
   !> Wrap lag with rule (RETRACTION_LEFT or RETRACTION_MIDPOINT); has_hessians and has_energy say
-  !> which optional procedures the model supplies (probed by the integrator).
-  subroutine bind(self, lag, rule, has_hessians, has_energy)
+  !> which optional procedures the model supplies (probed by the integrator). stat /= 0: out of memory.
+  subroutine bind(self, lag, rule, has_hessians, has_energy, stat)
     class(vci_retraction_model_t), intent(inout) :: self
     class(vci_lagrangian_t), target, intent(inout) :: lag
     integer, intent(in) :: rule
     logical, intent(in) :: has_hessians, has_energy
+    integer, intent(out) :: stat
     integer :: n
     self%lag => lag
     self%rule = rule
     self%n = lag%n; self%m = lag%m; self%n_gaps = lag%n_gaps
     n = lag%n
-    call lagrangian_work_setup(self%work, n)
+    call lagrangian_work_setup(self%work, n, stat)
+    if (stat /= 0) return
     self%work%has_hessians = has_hessians
     self%has_model_energy = has_energy
     if (allocated(self%pt)) deallocate (self%pt, self%w, self%lq, self%lv, self%lqq, self%lqv, self%lvv, self%om)
     allocate (self%pt(n), self%w(n), self%lq(n), self%lv(n), self%lqq(n, n), self%lqv(n, n), self%lvv(n, n), &
-              self%om(n, max(1, lag%m)))
+              self%om(n, max(1, lag%m)), stat=stat)
   end subroutine bind
 
   !> The evaluation point and velocity of the segment (q, v, h).
@@ -129,7 +138,7 @@ contains
     call point_velocity(self, q, v, h)
     call lagrangian_hessians(self%lag, self%work, self%pt, self%w, self%lqq, self%lqv, self%lvv, s)
     if (s /= VCI_OK) then
-      stat = 1; return
+      stat = failure_code(self, s); return
     end if
     if (self%rule == RETRACTION_LEFT) then
       hess = self%lqv - self%lvv / h
@@ -160,6 +169,124 @@ contains
     end do
   end subroutine discrete_constraint
 
+  !> The segment of the sub-step from the known point a with increment d (dir = +1: from a to a + d;
+  !> -1: from a + d to a): its evaluation point and velocity, w = dir d / h exactly.
+  subroutine segment_inc(self, a, d, h, dir)
+    class(vci_retraction_model_t), intent(inout) :: self
+    real(dp), intent(in) :: a(:), d(:), h
+    integer, intent(in) :: dir
+    self%w = (real(dir, dp) / h) * d
+    if (self%rule == RETRACTION_MIDPOINT) then
+      self%pt = a + 0.5_dp * d
+    else if (dir > 0) then
+      self%pt = a
+    else
+      self%pt = a + d
+    end if
+  end subroutine segment_inc
+
+  !> s D1 L^s of the sub-step (forward D1 L_d(a, b), backward -D2 L_d(b, a)) from the increment.
+  subroutine d1s_inc(self, a, d, h, dir, out, stat)
+    class(vci_retraction_model_t), intent(inout) :: self
+    real(dp), intent(in) :: a(:), d(:), h
+    integer, intent(in) :: dir
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    real(dp) :: c
+    call segment_inc(self, a, d, h, dir)
+    call self%lag%dl_dq(self%pt, self%w, self%lq, stat)
+    if (stat /= 0) return
+    call self%lag%dl_dv(self%pt, self%w, self%lv, stat)
+    c = h
+    if (self%rule == RETRACTION_MIDPOINT) c = 0.5_dp * h
+    if (dir > 0) then
+      out = c * self%lq - self%lv                     ! D1 L_d(a, b)
+    else if (self%rule == RETRACTION_MIDPOINT) then
+      out = -(c * self%lq + self%lv)                  ! -D2 L_d(b, a), midpoint
+    else
+      out = -self%lv                                  ! -D2 L_d(b, a), left
+    end if
+  end subroutine d1s_inc
+
+  !> The momentum at the unknown end (forward D2 L_d(a, b), backward -D1 L_d(b, a)).
+  subroutine pout_inc(self, a, d, h, dir, out, stat)
+    class(vci_retraction_model_t), intent(inout) :: self
+    real(dp), intent(in) :: a(:), d(:), h
+    integer, intent(in) :: dir
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    call segment_inc(self, a, d, h, dir)
+    call self%lag%dl_dq(self%pt, self%w, self%lq, stat)
+    if (stat /= 0) return
+    call self%lag%dl_dv(self%pt, self%w, self%lv, stat)
+    if (self%rule == RETRACTION_MIDPOINT) then
+      out = real(dir, dp) * 0.5_dp * h * self%lq + self%lv   ! D2 L_d(a, b) or -D1 L_d(b, a), midpoint
+    else if (dir > 0) then
+      out = self%lv                                          ! D2 L_d(a, b), left
+    else
+      out = self%lv - h * self%lq                            ! -D1 L_d(b, a), left
+    end if
+  end subroutine pout_inc
+
+  !> E_d = -D3 L_d = Lv . w - L at the segment (both directions).
+  subroutine energy_inc(self, a, d, h, dir, e, stat)
+    class(vci_retraction_model_t), intent(inout) :: self
+    real(dp), intent(in) :: a(:), d(:), h
+    integer, intent(in) :: dir
+    real(dp), intent(out) :: e
+    integer, intent(inout) :: stat
+    real(dp) :: l
+    call segment_inc(self, a, d, h, dir)
+    call self%lag%dl_dv(self%pt, self%w, self%lv, stat)
+    if (stat /= 0) return
+    call self%lag%lagrangian(self%pt, self%w, l, stat)
+    e = dot_product(self%lv, self%w) - l
+  end subroutine energy_inc
+
+  !> d(s D1 L^s)/db of the sub-step: forward the mixed Hessian of L_d(a, b), backward minus the
+  !> transpose of that of L_d(b, a) (the formulas of mixed_hessian at the segment's point and velocity).
+  subroutine jacobian_inc(self, a, d, h, dir, jac, stat)
+    class(vci_retraction_model_t), intent(inout) :: self
+    real(dp), intent(in) :: a(:), d(:), h
+    integer, intent(in) :: dir
+    real(dp), intent(out) :: jac(:, :)
+    integer, intent(inout) :: stat
+    integer :: s
+    if (.not. self%work%has_hessians) then
+      jac = 0.0_dp
+      call self%not_provided(stat); return
+    end if
+    call segment_inc(self, a, d, h, dir)
+    call lagrangian_hessians(self%lag, self%work, self%pt, self%w, self%lqq, self%lqv, self%lvv, s)
+    if (s /= VCI_OK) then
+      stat = failure_code(self, s); return
+    end if
+    if (self%rule == RETRACTION_LEFT) then
+      jac = self%lqv - self%lvv / h
+    else
+      jac = 0.25_dp * h * self%lqq + 0.5_dp * (self%lqv - transpose(self%lqv)) - self%lvv / h
+    end if
+    if (dir < 0) jac = -transpose(jac)
+  end subroutine jacobian_inc
+
+  !> omega_d(a, b, h) = Omega(point)^T d / h with the rule's point of the segment based at a.
+  subroutine constraint_inc(self, a, d, h, out, stat)
+    class(vci_retraction_model_t), intent(inout) :: self
+    real(dp), intent(in) :: a(:), d(:), h
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    integer :: mu
+    if (self%rule == RETRACTION_LEFT) then
+      call self%lag%constraint_forms(a, self%om(:, 1:self%m), stat)
+    else
+      self%pt = a + 0.5_dp * d
+      call self%lag%constraint_forms(self%pt, self%om(:, 1:self%m), stat)
+    end if
+    do mu = 1, self%m
+      out(mu) = dot_product(self%om(:, mu), d) / h
+    end do
+  end subroutine constraint_inc
+
   subroutine gaps(self, q, g, stat)
     class(vci_retraction_model_t), intent(inout) :: self
     real(dp), intent(in) :: q(:)
@@ -189,6 +316,16 @@ contains
     end if
     self%w = 0.0_dp
     call lagrangian_hamiltonian(self%lag, self%work, q, p, self%w, e, s)
-    if (s /= VCI_OK) stat = 1
+    if (s /= VCI_OK) stat = failure_code(self, s)
   end subroutine energy
+
+  !> The stat to report for a failed derived quantity: the callback's own code when one failed
+  !> (so an unrecoverable code stays unrecoverable), else 1 (NaN/Inf or a Legendre inversion that
+  !> did not converge: recoverable at a trial point).
+  integer function failure_code(self, status)
+    class(vci_retraction_model_t), intent(in) :: self
+    integer, intent(in) :: status
+    failure_code = 1
+    if (status == VCI_ERR_CALLBACK .and. self%work%code /= 0) failure_code = self%work%code
+  end function failure_code
 end module vci_retraction

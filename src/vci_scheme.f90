@@ -46,6 +46,7 @@ module vci_scheme
     real(dp), allocatable :: b_target(:) !< KIND_PAIR: the given end of the segment
     real(dp) :: e_minus = 0.0_dp         !< E_d of the arriving sub-step, or H(qt, p_minus)
     character(len=32) :: failed_callback = ''   !< which callback failed in the last evaluation
+    integer :: failed_stat = 0           !< the stat that callback set (> 0 recoverable, < 0 not)
     real(dp), allocatable :: pplus(:)
     real(dp), allocatable, private :: gp(:), gm(:), qp(:), vout(:), xsave(:), ip(:), im(:), isp(:), ism(:)
   contains
@@ -53,7 +54,7 @@ module vci_scheme
     procedure(rows_iface), deferred :: scheme_residual
     procedure(jac_iface), deferred :: scheme_jacobian
     procedure(put_endpoint_iface), deferred :: put_endpoint
-    procedure(get_vec_iface), deferred :: get_endpoint
+    procedure(get_endpoint_iface), deferred :: get_endpoint
     procedure(put_vec_iface), deferred :: put_multipliers
     procedure(get_vec_iface), deferred :: get_multipliers
     procedure(momentum_rhs_iface), deferred :: momentum_rhs
@@ -61,6 +62,7 @@ module vci_scheme
     procedure(out_scalar_iface), deferred :: energy_out
     procedure(hamiltonian_iface), deferred :: hamiltonian
     procedure :: needs_pair_solve
+    procedure :: endpoint_direction
     procedure :: forget_jacobian
     procedure :: setup_common
     procedure :: extra_index
@@ -69,10 +71,12 @@ module vci_scheme
     procedure :: residual => dispatch_residual
     procedure :: jacobian => dispatch_jacobian
     procedure :: admissible => wall_admissible
+    procedure :: reuse_key => substep_key
     procedure :: eval_gaps
     procedure :: eval_gap_gradients
     procedure :: eval_forms
     procedure :: check
+    procedure :: note_failure
     procedure :: check_matrix
   end type vci_scheme_t
 
@@ -110,6 +114,13 @@ module vci_scheme
       real(dp), intent(in) :: x(:)
       real(dp), intent(out) :: v(:)
     end subroutine get_vec_iface
+    !> The endpoint of the unknowns x (inout: a scheme may remember the rounding of the last one).
+    subroutine get_endpoint_iface(self, x, v)
+      import :: vci_scheme_t, dp
+      class(vci_scheme_t), intent(inout) :: self
+      real(dp), intent(in) :: x(:)
+      real(dp), intent(out) :: v(:)
+    end subroutine get_endpoint_iface
     subroutine put_vec_iface(self, x, v)
       import :: vci_scheme_t, dp
       class(vci_scheme_t), intent(in) :: self
@@ -153,10 +164,11 @@ module vci_scheme
 
 contains
 
-  !> Sizes and the workspace every scheme shares (once, before the step loop).
-  subroutine setup_common(self, base)
+  !> Sizes and the workspace every scheme shares (once, before the step loop); stat /= 0: out of memory.
+  subroutine setup_common(self, base, stat)
     class(vci_scheme_t), intent(inout) :: self
     class(vci_model_base_t), target, intent(inout) :: base
+    integer, intent(out) :: stat
     integer :: n, m, ng
     self%base => base
     n = base%n; m = base%m; ng = max(1, base%n_gaps)
@@ -166,7 +178,8 @@ contains
                                        self%im, self%isp, self%ism)
     allocate (self%a(n), self%pa(n), self%omega(n, m), self%grad(n), self%gscale(n), self%b_target(n), &
               self%pplus(n), self%gp(ng), self%gm(ng), self%qp(n), self%vout(n), self%xsave(m + 1), &
-              self%ip(m + 1), self%im(m + 1), self%isp(m + 1), self%ism(m + 1))
+              self%ip(m + 1), self%im(m + 1), self%isp(m + 1), self%ism(m + 1), stat=stat)
+    if (stat /= 0) return
     self%omega = 0.0_dp
     self%a = 0.0_dp; self%pa = 0.0_dp; self%grad = 0.0_dp; self%gscale = 0.0_dp
   end subroutine setup_common
@@ -176,6 +189,15 @@ contains
     class(vci_scheme_t), intent(in) :: self
     needs_pair_solve = .false.
   end function needs_pair_solve
+
+  !> The endpoint's part of a change dx of the unknowns (a sensitivity, e.g. d x / d mu). Layouts
+  !> that store the endpoint itself return get_endpoint(dx); those storing an increment override.
+  subroutine endpoint_direction(self, x, v)
+    class(vci_scheme_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:)
+    real(dp), intent(out) :: v(:)
+    call self%get_endpoint(x, v)
+  end subroutine endpoint_direction
 
   !> A new solve starts (schemes that size rows from the last Jacobian reset that memory here).
   subroutine forget_jacobian(self)
@@ -233,6 +255,14 @@ contains
       call self%scheme_jacobian(x, r, jac, stat)
     end if
   end subroutine dispatch_jacobian
+
+  !> Regular sub-steps of one length and direction share Newton factors (large systems, vci_newton);
+  !> the systems of an impact never do.
+  real(dp) function substep_key(self)
+    class(vci_scheme_t), intent(inout) :: self
+    substep_key = 0.0_dp
+    if (self%kind == KIND_SUBSTEP) substep_key = real(self%dir, dp) * self%tau
+  end function substep_key
 
   !> Stage 1 keeps the impact fraction inside (0, 1].
   logical function wall_admissible(self, x)
@@ -293,8 +323,7 @@ contains
     stat = 0
     if (self%m == 0) return
     call self%base%constraint_forms(q, omega, stat)
-    if (stat == VCI_OK) call self%check_matrix(stat, omega, 'constraint forms')
-    if (stat /= VCI_OK .and. self%failed_callback == '') self%failed_callback = 'constraint forms'
+    call self%check_matrix(stat, omega, 'constraint forms')   ! a nonzero stat is VCI_ERR_CALLBACK
   end subroutine eval_forms
 
   !> The Hamiltonian impact: energy row and, with constraints, the outgoing velocity dH/dp(qt, p+)
@@ -363,7 +392,8 @@ contains
     end do
   end subroutine impulse_jacobian
 
-  !> Turn a callback's return into a library status: nonzero -> VCI_ERR_CALLBACK, NaN/Inf -> NONFINITE.
+  !> Turn a callback's return into a library status: nonzero -> VCI_ERR_CALLBACK (negative:
+  !> unrecoverable, Newton must not back off from it), NaN/Inf -> NONFINITE (recoverable).
   subroutine check(self, stat, values, what)
     class(vci_scheme_t), intent(inout) :: self
     integer, intent(inout) :: stat
@@ -371,19 +401,31 @@ contains
     character(len=*), intent(in) :: what
     integer :: i
     if (stat /= 0) then
+      call self%note_failure(stat, what)
       stat = VCI_ERR_CALLBACK
-      self%failed_callback = what
       return
     end if
     stat = VCI_OK
+    if (abs(sum(values)) <= huge(1.0_dp)) return          ! all finite (one test on the sum)
     do i = 1, size(values)
       if (.not. (abs(values(i)) <= huge(1.0_dp))) then   ! NaN or +-Inf
         stat = VCI_ERR_NONFINITE
+        self%failed_stat = 0
         self%failed_callback = what
         return
       end if
     end do
   end subroutine check
+
+  !> A callback named `what` set stat = code /= 0: remember it; a negative code is unrecoverable.
+  subroutine note_failure(self, code, what)
+    class(vci_scheme_t), intent(inout) :: self
+    integer, intent(in) :: code
+    character(len=*), intent(in) :: what
+    self%failed_stat = code
+    if (code < 0) self%unrecoverable = .true.
+    self%failed_callback = what
+  end subroutine note_failure
 
   !> check() for a matrix, without the temporary a reshape would allocate.
   subroutine check_matrix(self, stat, values, what)

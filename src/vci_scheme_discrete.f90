@@ -9,11 +9,16 @@
 !>              omega_d(qt, b, tau) = 0,  E_d(qt, b, tau) = E_minus             (unknown mu)
 !>              or, for the Hamiltonian condition, H(qt, p_minus + mu grad g_j) = H(qt, p_minus).
 !>
-!> The new momentum is p_b = s D2 L^s(a, b, tau). Layout: x = [b(n), lambda(m), extra].
+!> The new momentum is p_b = s D2 L^s(a, b, tau). Layout: x = [b(n), lambda(m), extra] for a user's
+!> L_d; x = [d(n), lambda(m), extra] with the increment d = b - a for a retraction of a continuous L
+!> (`increments`), whose closed form takes d itself (vci_retraction: no round-off of b - a).
 module vci_scheme_discrete
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use vci_kinds, only: dp
   use vci_status, only: VCI_OK
   use vci_model, only: vci_model_t
+  use vci_retraction, only: vci_retraction_model_t, RETRACTION_LEFT
+  use vci_newton, only: vci_large_system
   use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_STAGE1, KIND_STAGE2, KIND_IMPULSE, KIND_PAIR, &
                         VCI_IMPACT_HAMILTONIAN, vci_fd_rel
   implicit none
@@ -21,8 +26,14 @@ module vci_scheme_discrete
 
   type, extends(vci_scheme_t), public :: vci_scheme_discrete_t
     class(vci_model_t), pointer :: model => null()
+    class(vci_retraction_model_t), pointer :: ret => null()   !< the model, when it is a retraction
+    logical :: increments = .false.   !< x(1:n) is the increment d = b - a (retractions)
+    !> Compensated positions (increments only): end_key is the endpoint get_endpoint returned last
+    !> and end_lo the part of a + d its rounding dropped; start_* the same for the current start
+    real(dp), allocatable, private :: start_key(:), start_lo(:), end_key(:), end_lo(:)
+    logical, private :: have_end = .false.
     logical :: has_hessian = .false.
-    real(dp), allocatable, private :: d1(:), hess(:, :), g(:), rp(:), rm(:), sp(:), sm(:), xp(:)
+    real(dp), allocatable, private :: d1(:), hess(:, :), g(:), rp(:), rm(:), sp(:), sm(:), xp(:), bb(:)
     !> sum_j |dR_i/dx_j| |x_j| from the last Jacobian: the round-off floor of row i (positions are
     !> often large next to their change over a step), added to each row's scale
     real(dp), allocatable, private :: jscale(:)
@@ -31,34 +42,57 @@ module vci_scheme_discrete
     !> the row's value alone does not show when it cancels the force term (a body released from
     !> rest: p_a = 0 and D1 -> 0 at the solution, so the row would have no size at all)
     real(dp), allocatable, private :: jabs(:, :)
+    logical, private :: jac_known = .false.   !< jabs holds this solve's Jacobian
+    !> Large systems (vci_large_system unknowns or more): sum_j |dR_i/db_j| |b_j - a_j| is taken at
+    !> the last Jacobian's point (kin) instead of at every residual: O(n) per residual, not O(n^2)
+    real(dp), allocatable, private :: kin(:)
+    !> Scan every callback's values for NaN/Inf (set only to name the culprit after the residual,
+    !> checked once as a whole, turned out non-finite: the hot path checks one sum per residual)
+    logical, private :: scan_values = .false.
   contains
     procedure :: setup
     procedure :: unknowns
     procedure :: scheme_residual => step_residual
     procedure :: scheme_jacobian => step_jacobian
     procedure :: put_endpoint, get_endpoint, put_multipliers, get_multipliers, momentum_rhs
+    procedure :: endpoint_direction
     procedure :: momentum_out, energy_out, hamiltonian
     procedure :: forget_jacobian
   end type vci_scheme_discrete_t
 
 contains
 
-  !> Bind to a model and size the workspace (once, before the step loop).
-  subroutine setup(self, model)
+  !> Bind to a model and size the workspace (once, before the step loop); stat /= 0: out of memory.
+  subroutine setup(self, model, stat)
     class(vci_scheme_discrete_t), intent(inout) :: self
     class(vci_model_t), target, intent(inout) :: model
+    integer, intent(out) :: stat
     integer :: n, m, nx
-    call self%setup_common(model)
+    call self%setup_common(model, stat)
+    if (stat /= 0) return
     self%model => model
+    self%ret => null()
+    self%increments = .false.
+    select type (model)
+    class is (vci_retraction_model_t)
+      self%ret => model
+      self%increments = .true.
+    end select
     n = model%n; m = model%m
     nx = n + m + 1
     if (allocated(self%d1)) deallocate (self%d1, self%hess, self%g, self%rp, self%rm, self%sp, self%sm, &
-                                        self%xp, self%jscale, self%jabs)
-    allocate (self%d1(n), self%hess(n, n), self%g(max(1, model%n_gaps)), &
+                                        self%xp, self%jscale, self%jabs, self%bb, self%start_key, &
+                                        self%start_lo, self%end_key, self%end_lo, self%kin)
+    allocate (self%d1(n), self%hess(n, n), self%g(max(1, model%n_gaps)), self%bb(n), self%start_key(n), self%start_lo(n), &
+              self%end_key(n), self%end_lo(n), self%kin(n), &
               self%rp(nx), self%rm(nx), self%sp(nx), self%sm(nx), self%xp(nx), self%jscale(nx), &
-              self%jabs(nx, nx))
+              self%jabs(nx, nx), stat=stat)
+    if (stat /= 0) return
     self%jscale = 0.0_dp
     self%jabs = 0.0_dp
+    self%jac_known = .false.
+    self%have_end = .false.
+    self%start_key = huge(1.0_dp); self%start_lo = 0.0_dp
   end subroutine setup
 
   pure integer function unknowns(self, kind)
@@ -75,15 +109,76 @@ contains
     class(vci_scheme_discrete_t), intent(in) :: self
     real(dp), intent(inout) :: x(:)
     real(dp), intent(in) :: a(:), b(:)
-    x(1:self%n) = b
+    if (self%increments) then
+      x(1:self%n) = b - a
+    else
+      x(1:self%n) = b
+    end if
   end subroutine put_endpoint
 
+  !> The endpoint of x. For increments, b = a + d from the sub-step's start a set by the stepper,
+  !> summed with compensation: when a is an endpoint this procedure returned, the part of it that
+  !> rounding dropped is added back to the increment, and the new rounding error is kept (TwoSum).
+  !> Positions then carry one rounding instead of one per step (docs/bench/roundoff.md).
   subroutine get_endpoint(self, x, v)
-    class(vci_scheme_discrete_t), intent(in) :: self
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:)
+    real(dp), intent(out) :: v(:)
+    integer :: i, n
+    real(dp) :: s, bv
+    n = self%n
+    if (.not. self%increments) then
+      v = x(1:n)
+      return
+    end if
+    if (.not. all(self%a == self%start_key)) then
+      if (self%have_end .and. all(self%a == self%end_key)) then   ! the last endpoint starts this sub-step
+        self%start_lo = self%end_lo
+      else                                                        ! a point from elsewhere: no low part
+        self%start_lo = 0.0_dp
+      end if
+      self%start_key = self%a
+    end if
+    do i = 1, n
+      s = x(i) + self%start_lo(i)
+      v(i) = self%a(i) + s
+      bv = v(i) - self%a(i)
+      self%end_lo(i) = (self%a(i) - (v(i) - bv)) + (s - bv)     ! TwoSum: a + s = v + end_lo exactly
+    end do
+    self%end_key = v
+    self%have_end = .true.
+  end subroutine get_endpoint
+
+  !> The endpoint's part of a change of the unknowns (a sensitivity), both layouts.
+  subroutine endpoint_direction(self, x, v)
+    class(vci_scheme_discrete_t), intent(inout) :: self
     real(dp), intent(in) :: x(:)
     real(dp), intent(out) :: v(:)
     v = x(1:self%n)
-  end subroutine get_endpoint
+  end subroutine endpoint_direction
+
+  !> The endpoint b of the unknowns x into bb (both layouts).
+  subroutine endpoint_of(self, x)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:)
+    if (self%increments) then
+      self%bb = self%a + x(1:self%n)
+    else
+      self%bb = x(1:self%n)
+    end if
+  end subroutine endpoint_of
+
+  !> |b - a| for the row sizes, both layouts.
+  pure real(dp) function motion(self, x, j)
+    class(vci_scheme_discrete_t), intent(in) :: self
+    real(dp), intent(in) :: x(:)
+    integer, intent(in) :: j
+    if (self%increments) then
+      motion = abs(x(j))
+    else
+      motion = abs(x(j) - self%a(j))
+    end if
+  end function motion
 
   subroutine put_multipliers(self, x, v)
     class(vci_scheme_discrete_t), intent(in) :: self
@@ -115,21 +210,37 @@ contains
     if (self%kind == KIND_STAGE1) step_length = x(self%n + self%m + 1) * self%tau
   end function step_length
 
-  !> out = s D1 L^s(a, b, tau)  (forward: D1 L_d(a, b); backward: -D2 L_d(b, a)).
+  !> out = s D1 L^s(a, b, tau)  (forward: D1 L_d(a, b); backward: -D2 L_d(b, a)); b (or the
+  !> increment, for retractions) is x(1:n).
   subroutine d1s(self, a, b, tau, out, stat)
     class(vci_scheme_discrete_t), intent(inout) :: self
     real(dp), intent(in) :: a(:), b(:), tau
     real(dp), intent(out) :: out(:)
     integer, intent(out) :: stat
     stat = 0
-    if (self%dir > 0) then
+    if (self%increments) then
+      call self%ret%d1s_inc(a, b, tau, self%dir, out, stat)
+    else if (self%dir > 0) then
       call self%model%d1(a, b, tau, out, stat)
     else
       call self%model%d2(b, a, tau, out, stat)
       out = -out
     end if
-    call self%check(stat, out, 'D1/D2 of L_d')
+    call check_fast(self, stat, out, 'D1/D2 of L_d')
   end subroutine d1s
+
+  !> A callback's status (nonzero: VCI_ERR_CALLBACK); its values are scanned only when scan_values.
+  subroutine check_fast(self, stat, values, what)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    integer, intent(inout) :: stat
+    real(dp), intent(in) :: values(:)
+    character(len=*), intent(in) :: what
+    if (self%scan_values .or. stat /= 0) then
+      call self%check(stat, values, what)
+    else
+      stat = VCI_OK
+    end if
+  end subroutine check_fast
 
   !> p_b = s D2 L^s(a, b, tau)  (forward: D2 L_d(a, b); backward: -D1 L_d(b, a)), b = endpoint of x.
   subroutine momentum_out(self, x, a, tau, p, stat)
@@ -138,7 +249,9 @@ contains
     real(dp), intent(out) :: p(:)
     integer, intent(out) :: stat
     stat = 0
-    if (self%dir > 0) then
+    if (self%increments) then
+      call self%ret%pout_inc(a, x(1:self%n), tau, self%dir, p, stat)
+    else if (self%dir > 0) then
       call self%model%d2(a, x(1:self%n), tau, p, stat)
     else
       call self%model%d1(x(1:self%n), a, tau, p, stat)
@@ -155,7 +268,10 @@ contains
     integer, intent(out) :: stat
     real(dp) :: tmp(1)
     stat = 0
-    if (self%dir > 0) then
+    if (self%increments) then
+      call self%ret%energy_inc(a, x(1:self%n), tau, self%dir, e, stat)
+      e = -e
+    else if (self%dir > 0) then
       call self%model%d3(a, x(1:self%n), tau, e, stat)
     else
       call self%model%d3(x(1:self%n), a, tau, e, stat)
@@ -214,20 +330,33 @@ contains
     end if
     if (m > 0) then
       stat = 0
-      call self%model%discrete_constraint(self%a, x(1:n), tau, r(n + 1:n + m), stat)
-      call self%check(stat, r(n + 1:n + m), 'discrete constraint')
+      if (self%increments) then
+        call self%ret%constraint_inc(self%a, x(1:n), tau, r(n + 1:n + m), stat)
+      else
+        call self%model%discrete_constraint(self%a, x(1:n), tau, r(n + 1:n + m), stat)
+      end if
+      call check_fast(self, stat, r(n + 1:n + m), 'discrete constraint')
       if (stat /= VCI_OK) return
       do mu = 1, m
-        sc(n + mu) = abs(r(n + mu)) + sum(abs(self%omega(:, mu)) * abs(x(1:n) - self%a)) / tau
+        ol = 0.0_dp
+        do i = 1, n
+          ol = ol + abs(self%omega(i, mu)) * motion(self, x, i)
+        end do
+        sc(n + mu) = abs(r(n + mu)) + ol / tau
       end do
     end if
     select case (self%kind)
     case (KIND_STAGE1)
-      call self%eval_gaps(x(1:n), self%g(1:self%n_gaps), stat)
+      call endpoint_of(self, x)
+      call self%eval_gaps(self%bb, self%g(1:self%n_gaps), stat)
       if (stat /= VCI_OK) return
       r(last) = self%g(self%gap)
       ! g's size: its value, its terms (grad g . q) and its change over the sub-step
-      sc(last) = abs(r(last)) + sum(self%gscale * (abs(x(1:n)) + abs(x(1:n) - self%a)))
+      ol = 0.0_dp
+      do i = 1, n
+        ol = ol + self%gscale(i) * (abs(self%bb(i)) + motion(self, x, i))
+      end do
+      sc(last) = abs(r(last)) + ol
     case (KIND_STAGE2)
       if (self%impact_energy == VCI_IMPACT_HAMILTONIAN) then
         self%pplus = self%pa + x(last) * self%grad
@@ -241,7 +370,11 @@ contains
         r(last) = e - self%e_minus
         sc(last) = abs(e) + abs(self%e_minus)
       end if
-      sc(last) = sc(last) + sum(abs(self%pa) * abs(x(1:n) - self%a)) / tau
+      ol = 0.0_dp
+      do i = 1, n
+        ol = ol + abs(self%pa(i)) * motion(self, x, i)
+      end do
+      sc(last) = sc(last) + ol / tau
     end select
   end subroutine rows
 
@@ -250,17 +383,34 @@ contains
     real(dp), intent(in) :: x(:)
     real(dp), intent(out) :: r(:), scale(:)
     integer, intent(out) :: stat
-    integer :: j
+    integer :: j, n
+    real(dp) :: fl
+    n = self%n
     call rows(self, x, r, scale, .true., stat)
+    if (stat /= VCI_OK) return
     ! size of the kinetic terms of the momentum rows, from the current solve's Jacobian
-    if (stat == VCI_OK) then
-      do j = 1, self%n
-        scale(1:self%n) = scale(1:self%n) + self%jabs(1:self%n, j) * abs(x(j) - self%a(j))
+    if (self%jac_known .and. size(x) >= vci_large_system) then
+      scale(1:n) = scale(1:n) + self%kin
+    else if (self%jac_known) then
+      do j = 1, n
+        self%kin(j) = motion(self, x, j)
+      end do
+      do j = 1, n
+        scale(1:n) = scale(1:n) + self%jabs(1:n, j) * self%kin(j)
       end do
     end if
     ! round-off floor of each row: a few ulps of sum_j |dR_i/dx_j| |x_j|, in units of rtol
-    if (stat == VCI_OK) scale = scale + (8.0_dp * epsilon(1.0_dp) / max(self%rtol, epsilon(1.0_dp))) * &
-                                self%jscale(1:size(x))
+    fl = 8.0_dp * epsilon(1.0_dp) / max(self%rtol, epsilon(1.0_dp))
+    do j = 1, size(x)
+      scale(j) = scale(j) + fl * self%jscale(j)
+    end do
+    ! one finiteness check for all the callbacks' values; when it fails, evaluate again scanning
+    ! each callback's values so that the failure names the culprit
+    if (.not. ieee_is_finite(sum(r) + sum(scale))) then
+      self%scan_values = .true.
+      call rows(self, x, r, scale, .true., stat)
+      self%scan_values = .false.
+    end if
   end subroutine step_residual
 
   !> Jacobian: the momentum block from the model's mixed Hessian when it has one, multiplier and
@@ -277,7 +427,12 @@ contains
     tau = step_length(self, x)
     ! columns of b
     if (self%has_hessian) then
-      if (self%dir > 0) then
+      if (self%increments) then
+        call self%ret%jacobian_inc(self%a, x(1:n), tau, self%dir, self%hess, stat)
+        call self%check_matrix(stat, self%hess, 'mixed Hessian')
+        if (stat /= VCI_OK) return
+        jac(1:n, 1:n) = self%hess
+      else if (self%dir > 0) then
         call self%model%mixed_hessian(self%a, x(1:n), tau, self%hess, stat)
         call self%check_matrix(stat, self%hess, 'mixed Hessian')
         if (stat /= VCI_OK) return
@@ -288,15 +443,26 @@ contains
         if (stat /= VCI_OK) return
         jac(1:n, 1:n) = -transpose(self%hess)
       end if
-      if (nx > n) then
+      if (nx > n .and. self%kind == KIND_SUBSTEP .and. self%increments .and. self%ret%rule == RETRACTION_LEFT) then
+        ! left retraction: omega_d = Omega(a)^T d / tau is linear in d, its Jacobian Omega(a)^T / tau
         do j = 1, n
-          call fd_column(self, x, j, fd_step(x(j), x(j) - self%a(j)), .false., jac(:, j), stat)
+          jac(n + 1:n + m, j) = self%omega(j, 1:m) / tau
+        end do
+      else if (nx > n .and. self%kind == KIND_SUBSTEP) then
+        ! only the m constraint rows depend on b besides the momentum block
+        do j = 1, n
+          call fd_constraint_column(self, x, j, tau, fd_step(position(self, x, j), motion(self, x, j)), jac(n + 1:n + m, j), stat)
+          if (stat /= VCI_OK) return
+        end do
+      else if (nx > n) then
+        do j = 1, n
+          call fd_column(self, x, j, fd_step(position(self, x, j), motion(self, x, j)), .false., jac(:, j), stat)
           if (stat /= VCI_OK) return
         end do
       end if
     else
       do j = 1, n
-        call fd_column(self, x, j, fd_step(x(j), x(j) - self%a(j)), .true., jac(:, j), stat)
+        call fd_column(self, x, j, fd_step(position(self, x, j), motion(self, x, j)), .true., jac(:, j), stat)
         if (stat /= VCI_OK) return
       end do
     end if
@@ -319,23 +485,75 @@ contains
         jac(last, last) = (hp - hm) / (2.0_dp * d)
       end if
     end select
+    ! the round-off floor is sized on positions in both layouts (a user's L_d rounds b - a to ulps of
+    ! |b|; a retraction rounds a + d/2 where forces are evaluated)
+    call endpoint_of(self, x)
     do j = 1, nx
-      self%jscale(j) = sum(abs(jac(j, 1:nx)) * abs(x(1:nx)))
+      self%jscale(j) = sum(abs(jac(j, 1:n)) * abs(self%bb)) + sum(abs(jac(j, n + 1:nx)) * abs(x(n + 1:nx)))
     end do
     self%jabs(1:nx, 1:nx) = abs(jac(1:nx, 1:nx))
+    self%jac_known = .true.
+    if (nx >= vci_large_system) then
+      self%kin = 0.0_dp
+      do j = 1, n
+        self%kin = self%kin + self%jabs(1:n, j) * motion(self, x, j)
+      end do
+    end if
   end subroutine step_jacobian
 
   !> A new solve starts: its Jacobian is not known yet (see jabs).
   subroutine forget_jacobian(self)
     class(vci_scheme_discrete_t), intent(inout) :: self
-    self%jabs = 0.0_dp
+    self%jac_known = .false.
   end subroutine forget_jacobian
 
-  pure real(dp) function fd_step(xj, motion)
-    real(dp), intent(in) :: xj, motion
-    fd_step = vci_fd_rel * max(abs(xj), abs(motion))
+  !> b_j, both layouts.
+  pure real(dp) function position(self, x, j)
+    class(vci_scheme_discrete_t), intent(in) :: self
+    real(dp), intent(in) :: x(:)
+    integer, intent(in) :: j
+    if (self%increments) then
+      position = self%a(j) + x(j)
+    else
+      position = x(j)
+    end if
+  end function position
+
+  pure real(dp) function fd_step(xj, change)
+    real(dp), intent(in) :: xj, change
+    fd_step = vci_fd_rel * max(abs(xj), abs(change))
     if (fd_step == 0.0_dp) fd_step = vci_fd_rel
   end function fd_step
+
+  !> Central difference of the discrete constraint omega_d(a, b, tau) along b_j.
+  subroutine fd_constraint_column(self, x, j, tau, d, col, stat)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:), tau, d
+    integer, intent(in) :: j
+    real(dp), intent(out) :: col(:)
+    integer, intent(out) :: stat
+    integer :: n, m
+    n = self%n; m = self%m
+    self%xp(1:n) = x(1:n)
+    self%xp(j) = x(j) + d
+    stat = 0
+    if (self%increments) then
+      call self%ret%constraint_inc(self%a, self%xp(1:n), tau, self%rp(1:m), stat)
+    else
+      call self%model%discrete_constraint(self%a, self%xp(1:n), tau, self%rp(1:m), stat)
+    end if
+    call self%check(stat, self%rp(1:m), 'discrete constraint')
+    if (stat /= VCI_OK) return
+    self%xp(j) = x(j) - d
+    if (self%increments) then
+      call self%ret%constraint_inc(self%a, self%xp(1:n), tau, self%rm(1:m), stat)
+    else
+      call self%model%discrete_constraint(self%a, self%xp(1:n), tau, self%rm(1:m), stat)
+    end if
+    call self%check(stat, self%rm(1:m), 'discrete constraint')
+    if (stat /= VCI_OK) return
+    col = (self%rp(1:m) - self%rm(1:m)) / (2.0_dp * d)
+  end subroutine fd_constraint_column
 
   !> Central difference of the residual along unknown j (all rows, or only the non-momentum rows).
   subroutine fd_column(self, x, j, d, all_rows, col, stat)

@@ -19,10 +19,10 @@
 !>   dF_j/dy_k = tau b_j Lqq_j d_jk + dir b_j D_jk Lqv_j + dir b_k D_kj Lqv_k^T + (1/tau) sum_i b_i D_ij D_ik Lvv_i.
 module vci_scheme_lobatto
   use vci_kinds, only: dp
-  use vci_status, only: VCI_OK, VCI_ERR_CALLBACK, VCI_ERR_NONFINITE
+  use vci_status, only: VCI_OK, VCI_ERR_CALLBACK, VCI_ERR_NONFINITE, VCI_ERR_ARGUMENT, VCI_ERR_MEMORY
   use vci_lagrangian, only: vci_lagrangian_t, vci_lagrangian_work_t, lagrangian_work_setup, &
                             lagrangian_hessians, lagrangian_hamiltonian
-  use vci_lobatto_rule, only: vci_lobatto_rule_t, lobatto_rule
+  use vci_lobatto_rule, only: vci_lobatto_rule_t, lobatto_rule, VCI_LOBATTO_MAX_STAGES
   use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_STAGE1, KIND_STAGE2, KIND_IMPULSE, KIND_PAIR
   implicit none
   private
@@ -49,7 +49,8 @@ module vci_scheme_lobatto
 
 contains
 
-  !> Bind lag with s stages (1 <= s <= VCI_LOBATTO_MAX_STAGES); stat /= 0 for s out of range.
+  !> Bind lag with s stages (1 <= s <= VCI_LOBATTO_MAX_STAGES); stat = VCI_ERR_ARGUMENT for s out
+  !> of range, VCI_ERR_MEMORY when an allocation fails.
   subroutine setup(self, lag, s, has_hessians, has_energy, stat)
     class(vci_scheme_lobatto_t), intent(inout) :: self
     class(vci_lagrangian_t), target, intent(inout) :: lag
@@ -57,13 +58,21 @@ contains
     logical, intent(in) :: has_hessians, has_energy
     integer, intent(out) :: stat
     integer :: n, nx
+    if (s < 1 .or. s > VCI_LOBATTO_MAX_STAGES) then
+      stat = VCI_ERR_ARGUMENT; return
+    end if
     call lobatto_rule(s, self%rule, stat)
-    if (stat /= 0) return
-    call self%setup_common(lag)
+    if (stat == 0) call self%setup_common(lag, stat)
+    if (stat /= 0) then
+      stat = VCI_ERR_MEMORY; return
+    end if
     self%lag => lag
     self%s = s
     n = lag%n
-    call lagrangian_work_setup(self%work, n)
+    call lagrangian_work_setup(self%work, n, stat)
+    if (stat /= 0) then
+      stat = VCI_ERR_MEMORY; return
+    end if
     self%work%has_hessians = has_hessians
     self%has_model_energy = has_energy
     nx = s * n + lag%m + 1
@@ -72,7 +81,9 @@ contains
     allocate (self%y(n, 0:s), self%v(n, 0:s), self%lq(n, 0:s), self%lv(n, 0:s), self%lval(0:s), self%f(n, 0:s), &
               self%fs(n, 0:s), self%hqq(n, n, 0:s), self%hqv(n, n, 0:s), self%hvv(n, n, 0:s), &
               self%g(max(1, lag%n_gaps)), self%dg(n, max(1, lag%n_gaps)), self%tmp(n), self%jscale(nx), stat=stat)
-    if (stat /= 0) return
+    if (stat /= 0) then
+      stat = VCI_ERR_MEMORY; return
+    end if
     self%jscale = 0.0_dp
   end subroutine setup
 
@@ -112,7 +123,7 @@ contains
   end subroutine put_endpoint
 
   subroutine get_endpoint(self, x, v)
-    class(vci_scheme_lobatto_t), intent(in) :: self
+    class(vci_scheme_lobatto_t), intent(inout) :: self
     real(dp), intent(in) :: x(:)
     real(dp), intent(out) :: v(:)
     v = x((self%s - 1) * self%n + 1:self%s * self%n)
@@ -263,7 +274,7 @@ contains
       call lagrangian_hessians(self%lag, self%work, self%y(:, i), self%v(:, i), self%hqq(:, :, i), &
                                self%hqv(:, :, i), self%hvv(:, :, i), stat)
       if (stat /= VCI_OK) then
-        self%failed_callback = 'Hessian blocks of L'
+        call lagrangian_failure(self, stat, 'Hessian blocks of L')
         return
       end if
     end do
@@ -366,6 +377,20 @@ contains
     end if
     self%tmp = 0.0_dp
     call lagrangian_hamiltonian(self%lag, self%work, q, p, self%tmp, e, stat)
-    if (stat /= VCI_OK) self%failed_callback = 'Legendre inversion for H(q,p)'
+    if (stat /= VCI_OK) call lagrangian_failure(self, stat, 'Legendre inversion for H(q,p)')
   end subroutine hamiltonian
+
+  !> A derived quantity of L failed with status: name it, and when a callback failed keep its code
+  !> (a negative one is unrecoverable).
+  subroutine lagrangian_failure(self, status, what)
+    class(vci_scheme_lobatto_t), intent(inout) :: self
+    integer, intent(in) :: status
+    character(len=*), intent(in) :: what
+    if (status == VCI_ERR_CALLBACK .and. self%work%code /= 0) then
+      call self%note_failure(self%work%code, what)
+    else
+      self%failed_stat = 0
+      self%failed_callback = what
+    end if
+  end subroutine lagrangian_failure
 end module vci_scheme_lobatto

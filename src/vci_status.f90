@@ -13,30 +13,29 @@ module vci_status
   integer, parameter, public :: VCI_ERR_INADMISSIBLE = 7      !< a state lies outside the admissible set
   integer, parameter, public :: VCI_ERR_IO = 8                !< output could not be written
   integer, parameter, public :: VCI_ERR_STATE = 9             !< call out of order (e.g. step before init)
+  integer, parameter, public :: VCI_ERR_MEMORY = 10           !< an allocation failed (sizes too large for this machine)
 
   !> Longest message kept by the library.
   integer, parameter, public :: VCI_MSG_LEN = 512
+
+  !> The descriptions of VCI_OK .. VCI_ERR_MEMORY (vci_status_name, and C's vci_status_string).
+  character(len=*), parameter, public :: VCI_STATUS_NAMES(0:10) = [character(len=36) :: &
+    'ok', 'invalid argument', 'user callback failed', 'non-finite value', &
+    'Newton iteration did not converge', 'impact could not be resolved', 'too many impacts in one step', &
+    'state outside the admissible set', 'input/output error', 'call out of order', 'out of memory']
 
   public :: vci_status_name
 
 contains
 
-  !> A short, fixed description of a status code.
+  !> A short, fixed description of a status code ('unknown status' for other values).
   pure function vci_status_name(status) result(name)
     integer, intent(in) :: status
     character(len=:), allocatable :: name
-    select case (status)
-    case (VCI_OK);                   name = 'ok'
-    case (VCI_ERR_ARGUMENT);         name = 'invalid argument'
-    case (VCI_ERR_CALLBACK);         name = 'user callback failed'
-    case (VCI_ERR_NONFINITE);        name = 'non-finite value'
-    case (VCI_ERR_NEWTON);           name = 'Newton iteration did not converge'
-    case (VCI_ERR_IMPACT);           name = 'impact could not be resolved'
-    case (VCI_ERR_TOO_MANY_IMPACTS); name = 'too many impacts in one step'
-    case (VCI_ERR_INADMISSIBLE);     name = 'state outside the admissible set'
-    case (VCI_ERR_IO);               name = 'input/output error'
-    case (VCI_ERR_STATE);            name = 'call out of order'
-    case default;                    name = 'unknown status'
-    end select
+    if (status >= lbound(VCI_STATUS_NAMES, 1) .and. status <= ubound(VCI_STATUS_NAMES, 1)) then
+      name = trim(VCI_STATUS_NAMES(status))
+    else
+      name = 'unknown status'
+    end if
   end function vci_status_name
 end module vci_status

@@ -11,7 +11,7 @@ module vci_stepper
   use vci_kinds, only: dp, i8
   use vci_status
   use vci_newton, only: vci_newton_t, vci_newton_result_t, NEWTON_MAX_ITERATIONS, NEWTON_NO_DESCENT, &
-                        NEWTON_SINGULAR, NEWTON_EVALUATION
+                        NEWTON_SINGULAR, NEWTON_EVALUATION, NEWTON_NONFINITE
   use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_STAGE1, KIND_STAGE2, KIND_IMPULSE, KIND_PAIR, &
                         VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN
   use vci_scheme_discrete, only: vci_scheme_discrete_t
@@ -75,21 +75,26 @@ module vci_stepper
     procedure :: configure
     procedure :: current_settings
     procedure :: solver_stats
+    procedure :: set_solver_paths
+    procedure :: factorisations
     procedure :: failure_cause
     procedure :: use_model_derivatives
     procedure :: advance
     procedure :: pair_momentum
   end type vci_stepper_t
 
+  public :: vci_reserve_impacts
+
   real(dp), parameter :: landing_fraction = 1.0e-10_dp  ! stage 1 within this of the step's end: landed on the wall
 
 contains
 
   !> Take over a scheme already bound to its model (the integrator builds it) and size the workspace.
-  !> The settings stay as configured.
-  subroutine setup(self, scheme)
+  !> The settings stay as configured. stat = VCI_ERR_MEMORY when an allocation fails.
+  subroutine setup(self, scheme, stat)
     class(vci_stepper_t), intent(inout) :: self
     class(vci_scheme_t), allocatable, intent(inout) :: scheme
+    integer, intent(out) :: stat
     integer :: n, m, ng, nx, ngw
     n = scheme%n; m = scheme%m; ng = scheme%n_gaps; ngw = max(1, ng)
     self%n = n; self%m = m; self%ng = ng
@@ -98,7 +103,8 @@ contains
     call move_alloc(scheme, self%sys)
     self%nsub = self%sys%unknowns(KIND_SUBSTEP)
     nx = max(self%sys%unknowns(KIND_STAGE1), self%sys%unknowns(KIND_STAGE2), self%sys%unknowns(KIND_IMPULSE))
-    call self%newton%reserve(nx)
+    call self%newton%reserve(nx, stat)
+    if (stat /= VCI_OK) return
     call self%configure(self%settings)
     if (allocated(self%x)) deallocate (self%x, self%x_stage1, self%x_saved, self%x_low, self%x_high, self%jac, &
                                        self%rhs, self%res, self%res_scale, self%q_start, self%p_start, self%q_end, &
@@ -109,7 +115,10 @@ contains
               self%rhs(nx), self%res(nx), self%res_scale(nx), self%q_start(n), self%p_start(n), self%q_end(n), &
               self%q_wall(n), self%p_arrive(n), self%p_leave(n), self%chord_velocity(n), self%q_guess(n), &
               self%q_trial(n), self%gaps_start(ngw), self%gaps_end(ngw), self%gaps_trial(ngw), self%gap_grads(n, ngw), &
-              self%lambda_start(m), self%zero_lambda(m), self%constraint_impulse(m))
+              self%lambda_start(m), self%zero_lambda(m), self%constraint_impulse(m), stat=stat)
+    if (stat /= 0) then
+      stat = VCI_ERR_MEMORY; return
+    end if
     self%x = 0.0_dp; self%zero_lambda = 0.0_dp
   end subroutine setup
 
@@ -138,11 +147,27 @@ contains
     stats = self%stats
   end function solver_stats
 
+  !> Which linear-algebra paths Newton may take: the in-line LU up to small_lu_max unknowns, factor
+  !> reuse from reuse_min unknowns (tests and benchmarks compare each path with LAPACK / full Newton).
+  subroutine set_solver_paths(self, small_lu_max, reuse_min)
+    class(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: small_lu_max, reuse_min
+    self%newton%small_lu_max = small_lu_max
+    self%newton%reuse_min = reuse_min
+  end subroutine set_solver_paths
+
+  !> LU factorisations of Newton matrices so far.
+  pure integer(i8) function factorisations(self)
+    class(vci_stepper_t), intent(in) :: self
+    factorisations = self%newton%factorisations
+  end function factorisations
+
   !> Why the last advance or pair_momentum failed.
+  !> (Fixed length, trailing blanks: gfortran's deferred-length results are not thread-safe.)
   pure function failure_cause(self) result(cause)
     class(vci_stepper_t), intent(in) :: self
-    character(len=:), allocatable :: cause
-    cause = trim(self%cause)
+    character(len=VCI_MSG_LEN) :: cause
+    cause = self%cause
   end function failure_cause
 
   !> Which optional derivatives the model supplies (probed by the driver): the mixed Hessian of a
@@ -163,14 +188,15 @@ contains
   !> vel: forward-time velocity estimate (initial guesses; updated). e_arrive: E_d of the sub-step
   !> that arrived at q in this direction (needed only when q is on a wall and the motion goes into it).
   !> On success qn, pn, lambdan hold the new state, e_step the E_d of the step's last sub-step and
-  !> impacts(1:n_impacts) the impacts of the step (room for settings%max_impacts_per_step of them).
+  !> impacts(1:n_impacts) the impacts of the step (the records grow on demand, up to
+  !> settings%max_impacts_per_step of them, which may be huge).
   subroutine advance(self, dir, h, t, q, p, lambda, vel, e_arrive, qn, pn, lambdan, e_step, impacts, n_impacts, stat)
     class(vci_stepper_t), intent(inout) :: self
     integer, intent(in) :: dir
     real(dp), intent(in) :: h, t, q(:), p(:), lambda(:)
     real(dp), intent(inout) :: vel(:), e_arrive
     real(dp), intent(out) :: qn(:), pn(:), lambdan(:), e_step
-    type(vci_impact_t), intent(inout) :: impacts(:)
+    type(vci_impact_t), allocatable, intent(inout) :: impacts(:)
     integer, intent(out) :: n_impacts
     integer, intent(out) :: stat
     integer :: n, m, j, jstar, last_gap
@@ -199,7 +225,7 @@ contains
         call set_cause(self, 'gap evaluation'); return
       end if
       if (all(self%gaps_end(1:self%ng) >= 0.0_dp)) exit
-      if (n_impacts >= min(self%settings%max_impacts_per_step, size(impacts))) then
+      if (n_impacts >= self%settings%max_impacts_per_step) then
         stat = VCI_ERR_TOO_MANY_IMPACTS
         write (self%cause, '(a,i0,a)') 'more than ', self%settings%max_impacts_per_step, &
           ' impacts in one step (persistent contact or chatter)'
@@ -279,6 +305,12 @@ contains
       end if
 
       ! Stage 2: reflect from (qt, p_minus) over the rest of the sub-step.
+      if (n_impacts == size(impacts)) then
+        call vci_reserve_impacts(impacts, min(2 * size(impacts), self%settings%max_impacts_per_step), n, stat)
+        if (stat /= VCI_OK) then
+          self%cause = 'cannot allocate the record of another impact'; return
+        end if
+      end if
       self%chord_velocity = (self%q_end - self%q_start) / tau
       call stage_reflect(self, jstar, (1.0_dp - alpha) * tau, e_minus, stat)
       if (stat /= VCI_OK) return
@@ -527,7 +559,7 @@ contains
       self%q_trial = -self%sys%grad
       call self%sys%momentum_rhs(self%q_trial, self%rhs(1:nx0))
       call self%newton%linear_solve(nx0, self%jac, self%rhs, info)
-      call self%sys%get_endpoint(self%rhs(1:nx0), self%q_trial)
+      call self%sys%endpoint_direction(self%rhs(1:nx0), self%q_trial)   ! a sensitivity, not a point
       den = dot_product(self%sys%grad, self%q_trial)
       if (info /= 0 .or. .not. (abs(den) > 0.0_dp) .or. .not. ieee_is_finite(den)) then
         stat = VCI_ERR_IMPACT
@@ -707,6 +739,7 @@ contains
     integer, intent(out) :: stat
     type(vci_newton_result_t) :: res
     self%sys%failed_callback = ''
+    self%sys%failed_stat = 0
     call self%sys%forget_jacobian()
     call self%newton%solve(self%sys, self%x(1:nx), res)
     self%stats%newton_solves = self%stats%newton_solves + 1
@@ -724,11 +757,14 @@ contains
         res%scaled_residual, ')'
     case (NEWTON_SINGULAR)
       self%cause = what//': Newton matrix singular and least-squares solve failed'
+    case (NEWTON_NONFINITE)
+      self%cause = what//': residual or Newton matrix not finite (callback values overflow)'
     case (NEWTON_EVALUATION)
       if (stat == VCI_ERR_NONFINITE) then
         self%cause = what//': callback '//trim(self%sys%failed_callback)//' returned NaN or Inf'
       else
-        self%cause = what//': callback '//trim(self%sys%failed_callback)//' reported failure'
+        self%cause = what//': callback '//trim(self%sys%failed_callback)//' reported failure'// &
+                     trim(stat_text(self%sys%failed_stat))
       end if
     end select
   end subroutine run_newton
@@ -736,10 +772,59 @@ contains
   subroutine set_cause(self, what)
     type(vci_stepper_t), intent(inout) :: self
     character(len=*), intent(in) :: what
-    if (len_trim(self%sys%failed_callback) > 0) then
+    if (len_trim(self%sys%failed_callback) > 0 .and. self%sys%failed_stat /= 0) then
+      self%cause = what//': callback '//trim(self%sys%failed_callback)//' reported failure'// &
+                   trim(stat_text(self%sys%failed_stat))
+    else if (len_trim(self%sys%failed_callback) > 0) then
       self%cause = what//': callback '//trim(self%sys%failed_callback)//' failed or returned NaN/Inf'
     else
       self%cause = what//' failed'
     end if
   end subroutine set_cause
+
+  !> " (stat = k, recoverable)" or " (stat = k, unrecoverable)": the callback's own code. Fixed
+  !> length: gfortran's deferred-length function results are not thread-safe.
+  function stat_text(stat) result(text)
+    integer, intent(in) :: stat
+    character(len=48) :: text
+    character(len=16) :: k
+    text = ''
+    if (stat == 0) return
+    write (k, '(i0)') stat
+    text = ' (stat = '//trim(k)//trim(merge(', recoverable  ', ', unrecoverable', stat > 0))//')'
+  end function stat_text
+
+  !> Room for at least `count` impact records of n coordinates, keeping those already recorded.
+  !> stat = VCI_ERR_MEMORY when an allocation fails (the records are then unchanged).
+  subroutine vci_reserve_impacts(impacts, count, n, stat)
+    type(vci_impact_t), allocatable, intent(inout) :: impacts(:)
+    integer, intent(in) :: count, n
+    integer, intent(out) :: stat
+    type(vci_impact_t), allocatable :: grown(:)
+    integer :: i, k
+    stat = VCI_OK
+    k = 0
+    if (allocated(impacts)) k = size(impacts)
+    if (k >= max(1, count)) return
+    allocate (grown(max(1, count)), stat=stat)
+    do i = k + 1, size(grown)
+      if (stat /= 0) exit
+      allocate (grown(i)%q(n), grown(i)%p_before(n), grown(i)%p_after(n), grown(i)%grad_g(n), stat=stat)
+    end do
+    if (stat /= 0) then
+      stat = VCI_ERR_MEMORY; return
+    end if
+    do i = 1, k
+      call move_alloc(impacts(i)%q, grown(i)%q)
+      call move_alloc(impacts(i)%p_before, grown(i)%p_before)
+      call move_alloc(impacts(i)%p_after, grown(i)%p_after)
+      call move_alloc(impacts(i)%grad_g, grown(i)%grad_g)
+      grown(i)%t = impacts(i)%t; grown(i)%step = impacts(i)%step; grown(i)%alpha = impacts(i)%alpha
+      grown(i)%gap = impacts(i)%gap; grown(i)%impulse = impacts(i)%impulse
+      grown(i)%energy_before = impacts(i)%energy_before; grown(i)%energy_after = impacts(i)%energy_after
+      grown(i)%leave_rate = impacts(i)%leave_rate
+      grown(i)%stage1_residual = impacts(i)%stage1_residual; grown(i)%stage2_residual = impacts(i)%stage2_residual
+    end do
+    call move_alloc(grown, impacts)
+  end subroutine vci_reserve_impacts
 end module vci_stepper

@@ -11,3 +11,11 @@ ctest --preset default
 cmake --preset mpi
 cmake --build --preset mpi
 ctest --preset mpi
+# The C and core suites and the random-input harness (60 s) under AddressSanitizer and
+# UndefinedBehaviorSanitizer; the threads test under ThreadSanitizer (docs/TESTING.md).
+cmake --preset asan
+cmake --build --preset asan
+ctest --preset asan
+cmake --preset tsan
+cmake --build --preset tsan
+ctest --preset tsan

@@ -9,6 +9,7 @@
 module funit
   use, intrinsic :: iso_fortran_env, only: real64, output_unit
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+  use, intrinsic :: iso_c_binding, only: c_int, c_funptr, c_funloc
   implicit none
   private
 
@@ -59,6 +60,22 @@ module funit
   integer :: failures_in_test = 0
   character(len=:), allocatable :: first_failure
   integer :: n_passed = 0, n_failed = 0
+
+  ! Exit guard: code under test that ends the process (a STOP in a library, LAPACK's XERBLA)
+  ! must not pass for a success. An atexit handler turns any exit before funit_summary into a
+  ! failure with status 70.
+  logical :: guard_registered = .false., summary_done = .false.
+  character(len=:), allocatable :: running_test
+  interface
+    integer(c_int) function c_atexit(handler) bind(C, name='atexit')
+      import :: c_int, c_funptr
+      type(c_funptr), value :: handler
+    end function c_atexit
+    subroutine c_exit_now(code) bind(C, name='_exit')
+      import :: c_int
+      integer(c_int), value :: code
+    end subroutine c_exit_now
+  end interface
 
 contains
 
@@ -337,6 +354,10 @@ contains
     procedure(funit_test_proc) :: test
     procedure(funit_test_proc), optional :: before, after
 
+    if (.not. guard_registered) then
+      guard_registered = c_atexit(c_funloc(exit_guard)) == 0
+    end if
+    running_test = name
     failures_in_test = 0
     first_failure = ''
     if (present(before)) call before()
@@ -358,9 +379,19 @@ contains
 
   !> Print "N passed, M failed"; a nonzero exit status tells CTest about failures.
   subroutine funit_summary()
+    summary_done = .true.
     write (output_unit, '(i0, a, i0, a)') n_passed, ' passed, ', n_failed, ' failed'
     flush (output_unit)
     if (n_failed > 0) error stop 1
   end subroutine funit_summary
+
+  !> atexit handler: an exit before the summary is a failure (the test under way ended the process).
+  subroutine exit_guard() bind(C)
+    if (summary_done) return
+    write (output_unit, '(a)') 'FAIL the process exited during test '//running_test// &
+      ' (a STOP or exit in the code under test)'
+    flush (output_unit)
+    call c_exit_now(70_c_int)
+  end subroutine exit_guard
 
 end module funit

@@ -20,7 +20,7 @@ int main(int argc, char **argv) {
   vci_callbacks cb = ellipse_callbacks();
   vci_model model = NULL;
   vci_integrator integ = NULL;
-  long steps, impacts, iterations, nsteps;
+  int64_t steps, impacts, iterations, nsteps;
   int count = 0, status;
   char msg[512];
 
@@ -32,7 +32,7 @@ int main(int argc, char **argv) {
   if (status == VCI_OK) status = vci_init_from_pair(integ, t0, q0, q1);
   if (status == VCI_OK) {
     vci_get_state(integ, &t, NULL, NULL);
-    nsteps = (long)ceil((t_final - t) / h - 1e-9);
+    nsteps = (int64_t)ceil((t_final - t) / h - 1e-9);
     status = vci_integrate(integ, nsteps, +1);
   }
   if (status != VCI_OK) {
@@ -41,7 +41,7 @@ int main(int argc, char **argv) {
   } else {
     vci_get_state(integ, &t, q, p);
     vci_get_stats(integ, &steps, &impacts, &iterations);
-    printf("impacts: %ld\nsteps: %ld   t = %.6f\nq = %.15e %.15e %.15e\n", impacts, steps, t, q[0], q[1], q[2]);
+    printf("impacts: %lld\nsteps: %lld   t = %.6f\nq = %.15e %.15e %.15e\n", (long long)impacts, (long long)steps, t, q[0], q[1], q[2]);
   }
   vci_integrator_destroy(&integ);
   vci_model_destroy(&model);

@@ -21,7 +21,7 @@ int main(int argc, char **argv) {
   vci_callbacks cb = pendulum_callbacks();
   vci_model model = NULL;
   vci_integrator integ = NULL;
-  long steps, impacts, iterations;
+  int64_t steps, impacts, iterations;
   int count = 0, status;
   char msg[512];
 
@@ -33,7 +33,7 @@ int main(int argc, char **argv) {
   if (status == VCI_OK) status = vci_init_from_pair(integ, 0.0, q0, q1);
   if (status == VCI_OK) {
     vci_get_state(integ, &t, NULL, NULL);
-    status = vci_integrate(integ, (long)ceil((t_final - t) / h - 1e-9), +1);
+    status = vci_integrate(integ, (int64_t)ceil((t_final - t) / h - 1e-9), +1);
   }
   if (status != VCI_OK) {
     vci_last_error(integ, msg, sizeof msg);
@@ -42,7 +42,7 @@ int main(int argc, char **argv) {
     vci_get_state(integ, &t, q, p);
     vci_get_multipliers(integ, lambda);
     vci_get_stats(integ, &steps, &impacts, &iterations);
-    printf("impacts: %ld\nsteps: %ld   t = %.6f\nq = %.15e %.15e\nlambda = %.15e\n", impacts, steps, t, q[0], q[1],
+    printf("impacts: %lld\nsteps: %lld   t = %.6f\nq = %.15e %.15e\nlambda = %.15e\n", (long long)impacts, (long long)steps, t, q[0], q[1],
            lambda[0]);
   }
   vci_integrator_destroy(&integ);

@@ -79,7 +79,7 @@ static int ellipse_energy(int n, const double *q, const double *p, double *en, v
 
 /* All of the ellipse's callbacks (the optional ones included). */
 static vci_callbacks ellipse_callbacks(void) {
-  vci_callbacks cb = {0};
+  vci_callbacks cb = VCI_CALLBACKS_INIT;
   cb.d1_ld = ellipse_d1; cb.d2_ld = ellipse_d2; cb.d3_ld = ellipse_d3;
   cb.mixed_hessian = ellipse_hessian;
   cb.gaps = ellipse_gaps; cb.gap_gradients = ellipse_gap_grads;
@@ -176,7 +176,7 @@ static int pendulum_gap_grads(int n, int ngaps, const double *q, double *dg, voi
 }
 
 static vci_callbacks pendulum_callbacks(void) {
-  vci_callbacks cb = {0};
+  vci_callbacks cb = VCI_CALLBACKS_INIT;
   cb.d1_ld = pendulum_d1; cb.d2_ld = pendulum_d2; cb.d3_ld = pendulum_d3;
   cb.mixed_hessian = pendulum_hessian;
   cb.constraint_forms = pendulum_forms; cb.discrete_constraint = pendulum_dconstraint;

@@ -298,6 +298,7 @@ contains
     else
       call integ%init_from_momentum(cp%time(), cp%q, cp%p, stat)
     end if
+    if (stat /= VCI_OK) call die(name//': '//opts%from//': '//integ%message())
 #else
     t_first = 0.0_dp; stat = VCI_ERR_IO
     call die(name//': built without HDF5, cannot read '//opts%from//' (use a .csv file)')

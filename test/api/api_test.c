@@ -3,13 +3,27 @@
  * NaN from callbacks). Usage: vci_api_test <suite>; one CTest entry per suite (CMakeLists.txt).
  * Each check prints what it compared; the exit status is the number of failed checks. */
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
+#include <unistd.h>
 #include "vci.h"
 #include "scenes.h"
+#include "lapack_guard.h"
 
 static int failures = 0;
+
+/* Library code must never end the process: an exit() before main returns (a Fortran STOP, LAPACK's
+ * XERBLA) is a failure with status 70, not a silent success. */
+static int finished = 0;
+static void exit_guard(void) {
+  if (finished) return;
+  printf("FAIL: the process exited inside a test (exit or STOP in library code)\n");
+  fflush(stdout);
+  _exit(70);
+}
 
 #define CHECK(cond) check((cond), #cond, __FILE__, __LINE__)
 #define CHECK_STATUS(call, expected) check_status((call), (expected), #call, __LINE__)
@@ -93,11 +107,11 @@ static void suite_version(void) {
   static const char *names[] = {"ok", "invalid argument", "user callback failed", "non-finite value",
                                 "Newton iteration did not converge", "impact could not be resolved",
                                 "too many impacts in one step", "state outside the admissible set",
-                                "input/output error", "call out of order"};
+                                "input/output error", "call out of order", "out of memory"};
   int s;
   CHECK(vci_version() == VCI_VERSION_NUMBER);
-  CHECK(vci_version() == 100); /* 0.1.0, as project(VERSION) in CMakeLists.txt */
-  for (s = VCI_OK; s <= VCI_ERR_STATE; ++s) {
+  CHECK(vci_version() == 200); /* 0.2.0, as project(VERSION) in CMakeLists.txt */
+  for (s = VCI_OK; s <= VCI_ERR_MEMORY; ++s) {
     CHECK(vci_status_string(s) != NULL);
     if (strcmp(vci_status_string(s), names[s]) != 0) {
       ++failures;
@@ -105,9 +119,26 @@ static void suite_version(void) {
     }
   }
   CHECK(strcmp(vci_status_string(-1), "unknown status") == 0);
-  CHECK(strcmp(vci_status_string(10), "unknown status") == 0);
+  CHECK(strcmp(vci_status_string(11), "unknown status") == 0);
   CHECK(strcmp(vci_status_string(123456), "unknown status") == 0);
-  CHECK(VCI_ERR_STATE == 9 && VCI_ERR_IO == 8 && VCI_ERR_ARGUMENT == 1);
+  CHECK(VCI_ERR_STATE == 9 && VCI_ERR_IO == 8 && VCI_ERR_ARGUMENT == 1 && VCI_ERR_MEMORY == 10);
+}
+
+/* An impact callback that calls back into its own integrator: mode 0 tries vci_step, mode 1
+ * destroys it. */
+typedef struct { vci_integrator integ; int mode, calls, status; char message[256]; } reentry;
+
+static int reenter_on_impact(double t, double alpha, int gap, const double *q, double impulse, void *user) {
+  reentry *r = (reentry *)user;
+  (void)t; (void)alpha; (void)gap; (void)q; (void)impulse;
+  ++r->calls;
+  if (r->mode == 0) {
+    r->status = vci_step(r->integ, 1);
+    vci_last_error(NULL, r->message, sizeof r->message);
+  } else {
+    vci_integrator_destroy(&r->integ);
+  }
+  return 0;
 }
 
 /* ================================================================================================ */
@@ -116,7 +147,7 @@ static void suite_handles(void) {
   vci_model model = NULL, model_copy, null_model = NULL;
   vci_integrator integ = NULL, copy, null_integ = NULL;
   double t, q[3], p[3], lambda[1], e;
-  long k, steps, impacts, iters;
+  int64_t k, steps, impacts, iters;
   char buf[256];
 
   /* destroy functions are NULL-safe */
@@ -192,6 +223,46 @@ static void suite_handles(void) {
   vci_integrator_destroy(&copy); /* double destroy through the copy: ignored */
   CHECK(copy == NULL);
 
+  /* a stale copy stays dead after a new integrator is made (glibc hands the freed memory out
+   * again at once: with handles that were addresses, the copy named the new integrator) */
+  {
+    vci_model m2 = NULL;
+    vci_integrator a = NULL, stale, b = NULL;
+    a = make_ellipse(&m2, &cb, 1e-2);
+    stale = a;
+    vci_integrator_destroy(&a);
+    CHECK_STATUS(vci_integrator_create(&b, m2, 1e-2), VCI_OK);
+    CHECK(b != stale);
+    CHECK_STATUS(vci_set_max_impacts(stale, 3), VCI_ERR_ARGUMENT);
+    CHECK_STATUS(vci_step(stale, 1), VCI_ERR_ARGUMENT);
+    vci_integrator_destroy(&stale); /* ignored: must not destroy b */
+    CHECK_STATUS(vci_set_max_impacts(b, 3), VCI_OK);
+    vci_integrator_destroy(&b);
+    vci_model_destroy(&m2);
+    /* garbage that is no handle at all */
+    CHECK_STATUS(vci_step((vci_integrator)(uintptr_t)0x1234, 1), VCI_ERR_ARGUMENT);
+    CHECK_STATUS(vci_step((vci_integrator)(uintptr_t)-8, 1), VCI_ERR_ARGUMENT);
+  }
+
+  /* calls on an integrator from its own callback: refused (busy); destroying it there is carried
+   * out when the running call returns, which stops after the step under way */
+  {
+    vci_model m2 = NULL;
+    reentry r;
+    r.integ = make_ellipse(&m2, &cb, 1e-2);
+    r.mode = 0; r.calls = 0; r.status = -1;
+    CHECK_STATUS(vci_set_impact_callback(r.integ, reenter_on_impact, &r), VCI_OK);
+    CHECK_STATUS(vci_integrate(r.integ, 200, 1), VCI_OK);
+    CHECK(r.calls == 2);
+    CHECK_STATUS(r.status, VCI_ERR_STATE);      /* vci_step from inside the impact callback */
+    CHECK(strstr(r.message, "busy") != NULL);
+    r.mode = 1; r.calls = 0;
+    CHECK_STATUS(vci_integrate(r.integ, 200, 1), VCI_ERR_STATE); /* destroyed at its first impact */
+    CHECK(r.integ == NULL);
+    CHECK_MESSAGE(NULL, "destroyed during the call");
+    vci_model_destroy(&m2);
+  }
+
   /* many handles at once (the registry grows), destroyed in another order */
   {
     vci_model models[20];
@@ -216,7 +287,7 @@ static void suite_arguments(void) {
   vci_model model = (vci_model)&cb; /* garbage that create must overwrite with NULL on failure */
   vci_integrator integ = NULL;
   double t0, q0[3], q1[3], bad[3], t, q[3], e, lambda[1];
-  long k;
+  int64_t k;
   char buf[16];
   int i;
 
@@ -406,13 +477,13 @@ static int energy_f(int n, const double *q, const double *p, double *e, void *us
  * the status, the message and that the state is a state of the clean run (the last accepted one). */
 static void run_failing(int which, int nan, int from, int hamiltonian, int expected, const char *part, int line) {
   failing_params f;
-  vci_callbacks cb = {0};
+  vci_callbacks cb = VCI_CALLBACKS_INIT;
   vci_model model = NULL;
   vci_integrator integ = NULL, clean = NULL;
   vci_model clean_model = NULL;
   vci_callbacks clean_cb = ellipse_callbacks();
   double t0, q0[3], q1[3], q[3], qc[3], t, tc;
-  long k = -1, kc;
+  int64_t k = -1, kc;
   int status, i;
   char msg[512];
 
@@ -504,7 +575,7 @@ static void suite_ellipse(void) {
   vci_integrator integ;
   impact_log log;
   double h = 1e-2, t0, q0[3], q1[3], t, q[3], p[3], p1[3], e, e1, qf[3], pf[3];
-  long k, steps, impacts, iters;
+  int64_t k, steps, impacts, iters;
   int i;
 
   integ = make_ellipse(&model, &cb, h);
@@ -605,7 +676,7 @@ static void suite_hamiltonian(void) {
   for (mode = VCI_IMPACT_DISCRETE; mode <= VCI_IMPACT_HAMILTONIAN; ++mode) {
     vci_model model = NULL;
     vci_integrator integ = make_ellipse(&model, &cb, 1e-2);
-    long impacts;
+    int64_t impacts;
     CHECK_STATUS(vci_set_impact_energy(integ, mode), VCI_OK);
     CHECK_STATUS(vci_get_state(integ, NULL, q, p), VCI_OK);
     ellipse_energy(3, q, p, &h0, &ellipse_par);
@@ -614,7 +685,7 @@ static void suite_hamiltonian(void) {
     CHECK(impacts >= 5);
     CHECK_STATUS(vci_get_state(integ, NULL, q, p), VCI_OK);
     ellipse_energy(3, q, p, mode == VCI_IMPACT_DISCRETE ? &hd : &hh, &ellipse_par);
-    printf("  impact energy %s: %ld impacts, H - H0 = %.3e\n", mode ? "hamiltonian" : "discrete", impacts,
+    printf("  impact energy %s: %lld impacts, H - H0 = %.3e\n", mode ? "hamiltonian" : "discrete", (long long)impacts,
            (mode ? hh : hd) - h0);
     vci_integrator_destroy(&integ);
     vci_model_destroy(&model);
@@ -634,7 +705,7 @@ static void suite_pendulum(void) {
   vci_model model = NULL;
   vci_integrator integ = NULL;
   double h = 1e-3, q0[2], q1[2], q[2], p[2], qn[2], lambda[1] = {NAN}, w, omega[2], d1[2], pn[2];
-  long impacts;
+  int64_t impacts;
   int i;
 
   /* a constrained model needs both constraint callbacks */
@@ -692,7 +763,7 @@ static void suite_output(void) {
   vci_callbacks cb = ellipse_callbacks();
   vci_model model = NULL;
   vci_integrator integ = make_ellipse(&model, &cb, 1e-2);
-  long k;
+  int64_t k;
 #ifdef VCI_TEST_HDF5
   {
     const char *path = "capi_output_test.h5";
@@ -732,13 +803,378 @@ static void suite_output(void) {
 }
 
 /* ================================================================================================ */
+/* Callbacks that return huge finite values (1e308, whose differences overflow) or NaN now and then:
+ * every run ends with a status (never a hang), and no NaN/Inf ever reaches LAPACK (lapack_guard.c
+ * counts LAPACK calls with non-finite input). The faults hit from the `from`-th call of one
+ * callback on, at the calls a fixed linear congruential sequence picks (one in four). */
+typedef struct { ellipse_params e; int which, mode, calls, from; unsigned seed; } erratic_params;
+
+static double erratic_value(const erratic_params *p) {
+  static const double values[] = {1e308, -1e308, 1e200, NAN, INFINITY};
+  return values[p->mode];
+}
+
+static int erratic_hit(erratic_params *p, int which) {
+  if (p->which != which || ++p->calls < p->from) return 0;
+  p->seed = p->seed * 1103515245u + 12345u;
+  return ((p->seed >> 16) & 3u) == 0;
+}
+
+static int erratic_d1(int n, const double *q, const double *v, double h, double *o, void *u) {
+  erratic_params *p = (erratic_params *)u;
+  int rc = ellipse_d1(n, q, v, h, o, &p->e);
+  if (erratic_hit(p, 1)) o[p->calls % 3] = erratic_value(p);
+  return rc;
+}
+static int erratic_d2(int n, const double *q, const double *v, double h, double *o, void *u) {
+  erratic_params *p = (erratic_params *)u;
+  int rc = ellipse_d2(n, q, v, h, o, &p->e);
+  if (erratic_hit(p, 2)) o[p->calls % 3] = erratic_value(p);
+  return rc;
+}
+static int erratic_d3(int n, const double *q, const double *v, double h, double *o, void *u) {
+  erratic_params *p = (erratic_params *)u;
+  int rc = ellipse_d3(n, q, v, h, o, &p->e);
+  if (erratic_hit(p, 3)) o[0] = erratic_value(p);
+  return rc;
+}
+static int erratic_gaps(int n, int ng, const double *q, double *g, void *u) {
+  erratic_params *p = (erratic_params *)u;
+  int rc = ellipse_gaps(n, ng, q, g, &p->e);
+  if (erratic_hit(p, 4)) g[0] = erratic_value(p);
+  return rc;
+}
+
+static void suite_erratic(void) {
+  int which, mode, from, seed, runs = 0, failed_runs = 0;
+  int64_t before = vci_test_lapack_calls();
+  for (which = 1; which <= 4; ++which)
+    for (mode = 0; mode < 5; ++mode)
+      for (from = 1; from < 200; from += 19)
+        for (seed = 0; seed < 2; ++seed) {
+          erratic_params p;
+          vci_callbacks cb = VCI_CALLBACKS_INIT;
+          vci_model model = NULL;
+          vci_integrator integ = NULL;
+          double t0, q0[3], q1[3], t;
+          int status;
+          p.e = ellipse_default; p.which = which; p.mode = mode; p.calls = 0; p.from = from; p.seed = (unsigned)seed;
+          cb.d1_ld = erratic_d1; cb.d2_ld = erratic_d2; cb.d3_ld = erratic_d3; cb.gaps = erratic_gaps;
+          CHECK_STATUS(vci_model_create(&model, 3, 0, 1, &cb, &p), VCI_OK);
+          CHECK_STATUS(vci_integrator_create(&integ, model, 1e-2), VCI_OK);
+          ellipse_initial_pair(1e-2, &t0, q0, q1);
+          status = vci_init_from_pair(integ, t0, q0, q1);
+          if (status == VCI_OK) status = vci_integrate(integ, 150, 1);
+          ++runs;
+          if (status != VCI_OK) {
+            char msg[512];
+            ++failed_runs;
+            vci_last_error(integ, msg, sizeof msg);
+            CHECK(msg[0] != '\0'); /* a failure always says why */
+          } else {
+            CHECK_STATUS(vci_get_state(integ, &t, NULL, NULL), VCI_OK);
+            CHECK(isfinite(t));
+          }
+          vci_integrator_destroy(&integ);
+          vci_model_destroy(&model);
+        }
+  printf("  %d erratic runs, %d ended with an error status, %ld LAPACK calls\n", runs, failed_runs,
+         vci_test_lapack_calls() - before);
+  CHECK(vci_test_lapack_calls() > before); /* the guard sees vci's LAPACK calls (else this suite proves nothing) */
+  CHECK(vci_test_lapack_nonfinite_calls() == 0);
+}
+
+/* ================================================================================================ */
+/* Sizes the library cannot handle are refused; allocations that fail give VCI_ERR_MEMORY (the
+ * Fortran runtime would otherwise print "Error allocating" and exit). RLIMIT_AS makes the
+ * allocation fail deterministically. */
+static int one_gap(int n, int ng, const double *q, double *g, void *u) {
+  int j;
+  (void)n; (void)u;
+  for (j = 0; j < ng; ++j) g[j] = q[0] + 10.0;
+  return 0;
+}
+
+static void suite_limits(void) {
+  vci_callbacks cb = ellipse_callbacks();
+  vci_model model = NULL;
+  vci_integrator integ = NULL;
+  struct rlimit old, tight;
+  ellipse_par = ellipse_default;
+  /* dense Newton matrices of (n + m + 1)^2 entries with 32-bit LAPACK indices */
+  CHECK_STATUS(vci_model_create(&model, 100000, 0, 1, &cb, &ellipse_par), VCI_ERR_ARGUMENT);
+  CHECK_MESSAGE(NULL, "46340");
+  CHECK_STATUS(vci_model_create(&model, 46340, 0, 1, &cb, &ellipse_par), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_model_create(&model, 30000, 16340, 1, &cb, &ellipse_par), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_model_create(&model, 2147483647, 0, 0, &cb, &ellipse_par), VCI_ERR_ARGUMENT);
+  /* gradients of ngaps walls indexed dg[i + n*j] with int */
+  CHECK_STATUS(vci_model_create(&model, 3, 0, 1000000000, &cb, &ellipse_par), VCI_ERR_ARGUMENT);
+  CHECK_MESSAGE(NULL, "n_gaps");
+  CHECK(model == NULL);
+
+  /* within the limits but beyond the memory: VCI_ERR_MEMORY, and the process goes on */
+  cb.gaps = one_gap;
+  cb.gap_gradients = NULL;
+  CHECK_STATUS(vci_model_create(&model, 1, 0, 1000000000, &cb, &ellipse_par), VCI_OK);
+  if (getrlimit(RLIMIT_AS, &old) == 0) {
+    tight = old;
+    tight.rlim_cur = 1024UL * 1024UL * 1024UL * 4UL; /* 4 GB: the workspace needs 8 GB per gap array */
+    if (old.rlim_cur != RLIM_INFINITY && old.rlim_cur < tight.rlim_cur) tight.rlim_cur = old.rlim_cur;
+    if (getenv("VCI_TEST_NO_RLIMIT") == NULL && setrlimit(RLIMIT_AS, &tight) == 0) {
+      CHECK_STATUS(vci_integrator_create(&integ, model, 1e-2), VCI_ERR_MEMORY);
+      CHECK_MESSAGE(NULL, "out of memory");
+      CHECK(integ == NULL);
+      setrlimit(RLIMIT_AS, &old);
+    } else {
+      printf("  (RLIMIT_AS not set: the allocation failure is not exercised)\n");
+    }
+  }
+  vci_model_destroy(&model);
+
+  /* a huge bound on impacts per step allocates nothing up front */
+  cb = ellipse_callbacks();
+  integ = make_ellipse(&model, &cb, 1e-2);
+  CHECK_STATUS(vci_set_max_impacts(integ, 2147483647), VCI_OK);
+  CHECK_STATUS(vci_integrate(integ, 200, 1), VCI_OK);
+  vci_integrator_destroy(&integ);
+  vci_model_destroy(&model);
+}
+
+/* ================================================================================================ */
+/* The callback return contract: 0 success, > 0 recoverable (Newton backs off at a trial point of
+ * its line search), < 0 unrecoverable (the step fails at once). d1_ld fails at exactly one call,
+ * number `fail_at`, of a 150-step ellipse run, with code `rc`. */
+typedef struct { ellipse_params e; int calls, fail_at, rc, noisy_from; } contract_params;
+
+static int contract_d1(int n, const double *q, const double *v, double h, double *o, void *u) {
+  contract_params *c = (contract_params *)u;
+  int rc = ellipse_d1(n, q, v, h, o, &c->e);
+  ++c->calls;
+  if (c->noisy_from > 0 && c->calls >= c->noisy_from) o[2] += 1e-3 * (double)((c->calls * 7919) % 13 - 6);
+  return c->calls == c->fail_at ? c->rc : rc;
+}
+static int contract_d2(int n, const double *q, const double *v, double h, double *o, void *u) {
+  return ellipse_d2(n, q, v, h, o, &((contract_params *)u)->e);
+}
+static int contract_d3(int n, const double *q, const double *v, double h, double *o, void *u) {
+  return ellipse_d3(n, q, v, h, o, &((contract_params *)u)->e);
+}
+static int contract_gaps(int n, int ng, const double *q, double *g, void *u) {
+  return ellipse_gaps(n, ng, q, g, &((contract_params *)u)->e);
+}
+
+/* One run; its status, its message in msg[512]. */
+static int contract_run(int fail_at, int rc, int noisy_from, char *msg, int64_t *k) {
+  contract_params c;
+  vci_callbacks cb = VCI_CALLBACKS_INIT;
+  vci_model model = NULL;
+  vci_integrator integ = NULL;
+  double t0, q0[3], q1[3];
+  int status;
+  c.e = ellipse_default; c.calls = 0; c.fail_at = fail_at; c.rc = rc; c.noisy_from = noisy_from;
+  cb.d1_ld = contract_d1; cb.d2_ld = contract_d2; cb.d3_ld = contract_d3; cb.gaps = contract_gaps;
+  vci_model_create(&model, 3, 0, 1, &cb, &c);
+  vci_integrator_create(&integ, model, 1e-2);
+  ellipse_initial_pair(1e-2, &t0, q0, q1);
+  status = vci_init_from_pair(integ, t0, q0, q1);
+  if (status == VCI_OK) status = vci_integrate(integ, 150, 1);
+  vci_last_error(integ, msg, 512);
+  *k = -1;
+  vci_get_index(integ, k);
+  vci_integrator_destroy(&integ);
+  vci_model_destroy(&model);
+  return status;
+}
+
+static void suite_contract(void) {
+  int fail_at, pos_ok = 0, pos_failed = 0, neg_ok = 0, neg_failed = 0, absorbed_then_newton = 0;
+  char msg[512];
+  int64_t k;
+  for (fail_at = 3; fail_at < 400; fail_at += 3) {
+    int sp = contract_run(fail_at, 3, 0, msg, &k), sn;
+    if (sp == VCI_OK) {
+      ++pos_ok; /* the failing call was a trial point: Newton backed off */
+    } else {
+      ++pos_failed;
+      CHECK_STATUS(sp, VCI_ERR_CALLBACK);
+      if (!strstr(msg, "the C callback d1_ld returned 3")) printf("FAIL: positive code, message \"%s\"\n", msg), ++failures;
+    }
+    sn = contract_run(fail_at, -3, 0, msg, &k);
+    if (sn == VCI_OK) {
+      ++neg_ok;
+    } else {
+      ++neg_failed;
+      CHECK_STATUS(sn, VCI_ERR_CALLBACK);
+      if (!strstr(msg, "the C callback d1_ld returned -3")) printf("FAIL: negative code, message \"%s\"\n", msg), ++failures;
+      if (!strstr(msg, "unrecoverable")) printf("FAIL: negative code, message \"%s\"\n", msg), ++failures;
+    }
+    /* a recoverable failure absorbed early, a genuine Newton failure (noisy D1) 100+ calls later:
+     * the later failure is Newton's, and the absorbed code is not reported for it */
+    if (sp == VCI_OK) {
+      int s2 = contract_run(fail_at, 3, fail_at + 300, msg, &k);
+      if (s2 == VCI_ERR_NEWTON) ++absorbed_then_newton;
+      CHECK(s2 != VCI_ERR_CALLBACK);
+      if (strstr(msg, "returned 3")) printf("FAIL: stale code in \"%s\"\n", msg), ++failures;
+    }
+  }
+  printf("  positive code: %d runs completed (absorbed), %d failed; negative code: %d completed, %d failed; "
+         "%d absorbed-then-Newton-failure runs\n", pos_ok, pos_failed, neg_ok, neg_failed, absorbed_then_newton);
+  CHECK(pos_ok > 0);            /* recoverable failures at trial points are backed off from */
+  CHECK(neg_ok == 0);           /* unrecoverable ones always end the run */
+  CHECK(neg_failed > 0);
+  CHECK(absorbed_then_newton > 0);
+}
+
+/* ================================================================================================ */
+/* Statuses and messages are those of the call just made: stale messages, step lengths that make
+ * time overflow, a failing constraint_forms. */
+static int free_d1(int n, const double *q, const double *v, double h, double *o, void *u) {
+  int i;
+  (void)u;
+  for (i = 0; i < n; ++i) o[i] = -(v[i] - q[i]) / h;
+  return 0;
+}
+static int free_d2(int n, const double *q, const double *v, double h, double *o, void *u) {
+  int i;
+  (void)u;
+  for (i = 0; i < n; ++i) o[i] = (v[i] - q[i]) / h;
+  return 0;
+}
+static int free_d3(int n, const double *q, const double *v, double h, double *o, void *u) {
+  int i;
+  (void)u;
+  o[0] = 0.0;
+  for (i = 0; i < n; ++i) o[0] -= 0.5 * (v[i] - q[i]) * (v[i] - q[i]) / (h * h);
+  return 0;
+}
+static int failing_forms(int n, int m, const double *q, double *omega, void *u) {
+  (void)n; (void)m; (void)q; (void)omega; (void)u;
+  return 5;
+}
+
+static void suite_status(void) {
+  vci_callbacks cb = ellipse_callbacks();
+  vci_model model = NULL;
+  vci_integrator integ = make_ellipse(&model, &cb, 1e-2);
+  double t;
+  int64_t k, steps;
+  char msg[512];
+
+  /* after a failure, every successful call leaves an empty message */
+  CHECK_STATUS(vci_step(integ, 7), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_integrate(integ, 0, 1), VCI_OK);
+  vci_last_error(integ, msg, sizeof msg);
+  CHECK(msg[0] == '\0');
+#define CLEARS(call)                                                                   \
+  do {                                                                                 \
+    CHECK_STATUS(vci_step(integ, 7), VCI_ERR_ARGUMENT);                               \
+    CHECK_STATUS(call, VCI_OK);                                                        \
+    vci_last_error(integ, msg, sizeof msg);                                            \
+    if (msg[0] != '\0') printf("FAIL: after %s the message is \"%s\"\n", #call, msg), ++failures; \
+  } while (0)
+  CLEARS(vci_get_state(integ, &t, NULL, NULL));
+  CLEARS(vci_get_index(integ, &k));
+  CLEARS(vci_get_stats(integ, &steps, NULL, NULL));
+  CLEARS(vci_set_impact_callback(integ, NULL, NULL));
+  CLEARS(vci_close_output(integ));
+  CLEARS(vci_set_max_impacts(integ, 16));
+#undef CLEARS
+  vci_integrator_destroy(&integ);
+  vci_model_destroy(&model);
+
+  /* h = 1e308: the time of the second state overflows; refused, never t = Inf with VCI_OK */
+  {
+    vci_callbacks fcb = VCI_CALLBACKS_INIT;
+    double q0[1] = {0.0}, q1[1] = {0.0};
+    int status;
+    fcb.d1_ld = free_d1; fcb.d2_ld = free_d2; fcb.d3_ld = free_d3;
+    CHECK_STATUS(vci_model_create(&model, 1, 0, 0, &fcb, NULL), VCI_OK);
+    CHECK_STATUS(vci_integrator_create(&integ, model, 1e308), VCI_OK);
+    CHECK_STATUS(vci_init_from_pair(integ, 1e308, q0, q1), VCI_ERR_ARGUMENT); /* t0 + h overflows */
+    CHECK_MESSAGE(integ, "overflows");
+    CHECK_STATUS(vci_init_from_pair(integ, 0.0, q0, q1), VCI_OK);
+    status = vci_step(integ, 1);
+    CHECK_STATUS(status, VCI_ERR_NONFINITE);
+    CHECK_MESSAGE(integ, "overflows");
+    CHECK_STATUS(vci_get_state(integ, &t, NULL, NULL), VCI_OK);
+    CHECK(isfinite(t));
+    vci_integrator_destroy(&integ);
+    vci_model_destroy(&model);
+  }
+
+  /* constraint_forms returning 5: a callback failure naming it and its code */
+  {
+    pendulum_params par = pendulum_default;
+    vci_callbacks pcb = pendulum_callbacks();
+    double q0[2], q1[2];
+    pcb.constraint_forms = failing_forms;
+    CHECK_STATUS(vci_model_create(&model, 2, 1, 1, &pcb, &par), VCI_OK);
+    CHECK_STATUS(vci_integrator_create(&integ, model, 1e-3), VCI_OK);
+    pendulum_initial_pair(1e-3, q0, q1);
+    CHECK_STATUS(vci_init_from_pair(integ, 0.0, q0, q1), VCI_ERR_CALLBACK);
+    CHECK_MESSAGE(integ, "the C callback constraint_forms returned 5");
+    vci_integrator_destroy(&integ);
+    vci_model_destroy(&model);
+  }
+}
+
+/* ================================================================================================ */
+/* The versioned callbacks struct: the library reads cb->size bytes. A struct from an older header
+ * (smaller size) has its missing members taken as NULL; one from a newer header is accepted when
+ * the members this library does not know are NULL and refused otherwise; an uninitialised size is
+ * refused. (test/api/compat_v0_1.c runs a client built against the 0.1 header.) */
+static void suite_abi(void) {
+  vci_callbacks cb = ellipse_callbacks();
+  vci_model model = NULL;
+  vci_integrator integ = NULL;
+  struct { vci_callbacks cb; void (*later)(void); } newer;
+  double t0, q0[3], q1[3];
+  ellipse_par = ellipse_default;
+  CHECK(cb.size == sizeof(vci_callbacks));
+
+  /* an older header without `energy`: the energy member (set here) lies beyond size, unread */
+  cb.size = offsetof(vci_callbacks, energy);
+  CHECK_STATUS(vci_model_create(&model, 3, 0, 1, &cb, &ellipse_par), VCI_OK);
+  CHECK_STATUS(vci_integrator_create(&integ, model, 1e-2), VCI_OK);
+  CHECK_STATUS(vci_set_impact_energy(integ, VCI_IMPACT_HAMILTONIAN), VCI_ERR_ARGUMENT); /* no energy */
+  ellipse_initial_pair(1e-2, &t0, q0, q1);
+  CHECK_STATUS(vci_init_from_pair(integ, t0, q0, q1), VCI_OK);
+  CHECK_STATUS(vci_integrate(integ, 100, 1), VCI_OK);
+  vci_integrator_destroy(&integ);
+  vci_model_destroy(&model);
+
+  /* size 0 (a struct zeroed with {0}) and sizes that are no vci_callbacks */
+  cb.size = 0;
+  CHECK_STATUS(vci_model_create(&model, 3, 0, 1, &cb, &ellipse_par), VCI_ERR_ARGUMENT);
+  CHECK_MESSAGE(NULL, "VCI_CALLBACKS_INIT");
+  cb.size = 1u << 20;
+  CHECK_STATUS(vci_model_create(&model, 3, 0, 1, &cb, &ellipse_par), VCI_ERR_ARGUMENT);
+  cb.size = offsetof(vci_callbacks, energy) + 3; /* part of a pointer: no header has that size */
+  CHECK_STATUS(vci_model_create(&model, 3, 0, 1, &cb, &ellipse_par), VCI_ERR_ARGUMENT);
+
+  /* a newer header with one more member: NULL is fine, set is refused */
+  memset(&newer, 0, sizeof newer);
+  newer.cb = ellipse_callbacks();
+  newer.cb.size = sizeof newer;
+  CHECK_STATUS(vci_model_create(&model, 3, 0, 1, &newer.cb, &ellipse_par), VCI_OK);
+  vci_model_destroy(&model);
+  newer.later = (void (*)(void))exit_guard;
+  CHECK_STATUS(vci_model_create(&model, 3, 0, 1, &newer.cb, &ellipse_par), VCI_ERR_ARGUMENT);
+  CHECK_MESSAGE(NULL, "newer vci.h");
+  CHECK(model == NULL);
+}
+
+/* ================================================================================================ */
 int main(int argc, char **argv) {
   static const struct { const char *name; void (*run)(void); } suites[] = {
       {"version", suite_version},     {"handles", suite_handles},   {"arguments", suite_arguments},
       {"callbacks", suite_callbacks}, {"ellipse", suite_ellipse},   {"hamiltonian", suite_hamiltonian},
-      {"pendulum", suite_pendulum},   {"output", suite_output}};
+      {"pendulum", suite_pendulum},   {"output", suite_output},     {"erratic", suite_erratic},
+      {"limits", suite_limits},       {"contract", suite_contract}, {"status", suite_status},
+      {"abi", suite_abi}};
   size_t i, n = sizeof suites / sizeof suites[0];
   int ran = 0;
+  atexit(exit_guard);
   for (i = 0; i < n; ++i) {
     if (argc < 2 || strcmp(argv[1], suites[i].name) == 0 || strcmp(argv[1], "all") == 0) {
       int before = failures;
@@ -747,9 +1183,15 @@ int main(int argc, char **argv) {
       ++ran;
     }
   }
+  finished = 1;
   if (!ran) {
     fprintf(stderr, "unknown suite %s\n", argv[1]);
     return 2;
+  }
+  /* whatever ran: no NaN/Inf ever reached LAPACK */
+  if (vci_test_lapack_nonfinite_calls() != 0) {
+    ++failures;
+    printf("FAIL: %ld LAPACK calls with NaN/Inf input\n", vci_test_lapack_nonfinite_calls());
   }
   return failures ? 1 : 0;
 }

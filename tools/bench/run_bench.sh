@@ -1,7 +1,11 @@
 #!/bin/sh
-# Throughput benchmark of vci against hand-specialised loops (issue 2 item 9, issue 6).
-# Builds the benchmark in Release, runs it (one process: trajectory check, timed repeats, peak
-# memory) and writes docs/bench/throughput.md with the machine it ran on.
+# Throughput benchmark of vci against hand-written loops (issue 2 item 9, issue 6, issue 14).
+# Builds the benchmarks in Release, runs them (one process each: trajectory check, timed repeats,
+# peak memory; callgrind instruction counts; the chain against n) and writes docs/bench/throughput.md
+# with the machine it ran on. The ratios that issue 14 asks for: library / same-algorithm loop and
+# library / closed-form loop per regular step, impact step / regular step, and for the chain the
+# step against one LU factorisation. OpenBLAS runs single-threaded in the chain table (vci's Newton
+# matrices are small; the threaded run is shown beside it).
 #
 #   tools/bench/run_bench.sh                 # full run (~30 s), writes docs/bench/throughput.md
 #   tools/bench/run_bench.sh --quick         # short repeats, for a smoke test
@@ -15,7 +19,7 @@ OUT=${OUT:-$ROOT/docs/bench/throughput.md}
 
 cmake -S "$ROOT" -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release \
   -DVCI_BUILD_BENCH=ON -DVCI_BUILD_TESTS=OFF -DVCI_BUILD_EXAMPLES=OFF >/dev/null
-cmake --build "$BUILD_DIR" -j"$(nproc 2>/dev/null || echo 2)" --target vci_bench_throughput >/dev/null
+cmake --build "$BUILD_DIR" -j"$(nproc 2>/dev/null || echo 2)" --target vci_bench_throughput vci_bench_chain >/dev/null
 
 EXE="$BUILD_DIR/bin/vci_bench_throughput"
 TMP=$(mktemp)
@@ -33,19 +37,22 @@ if [ "${CALLGRIND:-1}" != 0 ] && command -v valgrind >/dev/null 2>&1; then
     echo "### Instructions per step (callgrind)"
     echo
     echo "Counted by \`valgrind --tool=callgrind --toggle-collect='*run_timed*'\` on \`vci_bench_throughput --profile\`"
-    echo "(episodes: particle 20, ellipse 20, pendulum 2). Ratio = library / hand loop."
+    echo "(episodes: particle and ellipse 20, pendulum 2). Ratios: library / closed-form hand loop (the floor),"
+    echo "library / same-algorithm hand loop (the yardstick)."
     echo
-    echo "| scene | library, analytic H | library, differenced H | hand loop | ratio analytic | ratio differenced |"
-    echo "|---|---:|---:|---:|---:|---:|"
-    for spec in particle:300:20 ellipse:200:20 pendulum:4999:2; do
+    echo "| scene | library, analytic H | library, differenced H | closed-form loop | same-algorithm loop | analytic / closed form | analytic / same alg. | differenced / same alg. |"
+    echo "|---|---:|---:|---:|---:|---:|---:|---:|"
+    for spec in particle:300:20 ellipse:200:20 pendulum:4999:2 ellipse-free:200:20 pendulum-free:4999:2; do
       name=${spec%%:*}; rest=${spec#*:}; nst=${rest%%:*}; eps=${rest#*:}
       set_counts=""
-      for v in 1 2 3; do
+      for v in 1 2 3 4; do
+        if [ "$name" = particle ] && [ "$v" = 4 ]; then set_counts="$set_counts 0"; continue; fi
         ir=$(valgrind --tool=callgrind --callgrind-out-file=/dev/null --toggle-collect='*run_timed*' \
                "$EXE" --profile "$name" "$v" "$eps" 2>&1 | awk '/Collected/ {print $4}')
         set_counts="$set_counts $(( ir / (nst * eps) ))"
       done
-      echo "$set_counts" | awk -v s="$name" '{printf "| %s | %d | %d | %d | %.1f | %.1f |\n", s, $1, $2, $3, $1/$3, $2/$3}'
+      echo "$set_counts" | awk -v s="$name" '{ if ($4 > 0) printf "| %s | %d | %d | %d | %d | %.1f | %.2f | %.2f |\n", s, $1, $2, $3, $4, $1/$3, $1/$4, $2/$4;
+                                               else printf "| %s | %d | %d | %d | n/a | %.1f | n/a | n/a |\n", s, $1, $2, $3, $1/$3 }'
     done
     echo
   } >"$CG"
@@ -74,6 +81,19 @@ mkdir -p "$(dirname "$OUT")"
   echo
   cat "$TMP"
   if [ -n "$CG" ]; then echo; cat "$CG"; fi
+  echo
+  echo "### Cost per step against n (FPU-beta chain, midpoint, analytic Hessians)"
+  echo
+  echo "\`OPENBLAS_NUM_THREADS=1 vci_bench_chain\` (bench/chain.f90): an FPU-beta chain of n unit masses between"
+  echo "fixed ends, walls on every particle (2n gaps, not reached), h = 0.05; each row times the step and one"
+  echo "dgetrf of a dense n x n matrix in the same process (medians of 5 interleaved repeats). From n = 16 the"
+  echo "Newton matrix's factors are reused across steps (simplified Newton, src/vci_newton.f90)."
+  echo
+  OPENBLAS_NUM_THREADS=1 "$BUILD_DIR/bin/vci_bench_chain"
+  echo
+  echo "The same with OpenBLAS's default threads ($(nproc 2>/dev/null || echo '?') cores, shared):"
+  echo
+  env -u OPENBLAS_NUM_THREADS "$BUILD_DIR/bin/vci_bench_chain"
 } >"$OUT"
 cat "$OUT"
 if [ "$status" -ne 0 ]; then

@@ -43,8 +43,8 @@ int main(void) {
   const double h = 1e-2, t_ref = 7.50564104356950312e-01, pi = acos(-1.0);
   double q0[3] = {pi / 2 + 0.5 * h * 3.0, -0.5 * h * 2.0, 3.5}, q1[3] = {pi / 2 - 0.5 * h * 3.0, 0.5 * h * 2.0, 3.5};
   double first = NAN, t;
-  long impacts = -1;
-  vci_callbacks cb = {0};
+  int64_t impacts = -1;
+  vci_callbacks cb = VCI_CALLBACKS_INIT;
   vci_model model = NULL;
   vci_integrator integ = NULL;
   int s;
@@ -61,8 +61,8 @@ int main(void) {
   vci_last_error(integ, msg, sizeof msg);
   vci_integrator_destroy(&integ);
   vci_model_destroy(&model);
-  printf("vci %d: status %d %s, %ld impacts, first at t = %.15f (expected %.15f, off by %.1e)\n", vci_version(), s,
-         msg, impacts, first, t_ref, fabs(first - t_ref));
+  printf("vci %d: status %d %s, %lld impacts, first at t = %.15f (expected %.15f, off by %.1e)\n", vci_version(), s,
+         msg, (long long)impacts, first, t_ref, fabs(first - t_ref));
   if (s != VCI_OK || impacts != 2 || !(fabs(first - t_ref) <= 1e-12) || !(fabs(t - 2.005) <= 1e-13) ||
       vci_version() != VCI_VERSION_NUMBER || model != NULL || integ != NULL) {
     printf("FAILED\n");

@@ -57,7 +57,7 @@ int main(void) {
   static const double expected[3] = {1.232288308117, 2.547498996101, 3.862275285217};
   const double h = 1e-3, pi = acos(-1.0);
   double q0[2] = {0.75 * pi, 0.0}, q1[2], times[9] = {0}, qa[2], qb[2], w, lambda;
-  vci_callbacks cb = {0};
+  vci_callbacks cb = VCI_CALLBACKS_INIT;
   vci_model model = NULL;
   vci_integrator integ = NULL;
   int s, k, bad = 0;

@@ -1,0 +1,223 @@
+/* Continuous-Lagrangian models through the C ABI (vci_model_create_lagrangian, vci_set_scheme).
+ * Usage: vci_lagrangian_test run REF_FILE | bad.
+ *  run: the walled pendulum (theta'' = -9.8 sin theta, walls at +-1 rad, theta(0) = 0,
+ *       theta'(0) = 4, 10 s) with lobatto s = 4 from C, against REF_FILE written by vci_lagrangian_ref
+ *       (the same run through the Fortran API with the scene's Fortran model, and the exact state).
+ *  bad: missing required callbacks, unknown scheme, s out of range, a scheme for a discrete model,
+ *       and the return contract (a negative code from dl_dq fails the step and is named). */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+#include "vci.h"
+
+static int failures = 0;
+#define CHECK(c) do { if (!(c)) { printf("  line %d: CHECK(%s) failed\n", __LINE__, #c); failures++; } } while (0)
+
+static int fail_dl_dq_after = -1; /* dl_dq returns fail_code from this call on (-1: never) */
+static int fail_code = 0;
+static int dl_dq_calls = 0;
+
+static int l_value(int n, const double *q, const double *v, double *l, void *user) {
+  (void)n; (void)user;
+  l[0] = 0.5 * v[0] * v[0] + 9.8 * cos(q[0]);
+  return 0;
+}
+static int l_dq(int n, const double *q, const double *v, double *out, void *user) {
+  (void)n; (void)v; (void)user;
+  out[0] = -9.8 * sin(q[0]);
+  dl_dq_calls++;
+  if (fail_dl_dq_after >= 0 && dl_dq_calls > fail_dl_dq_after) return fail_code;
+  return 0;
+}
+static int l_dv(int n, const double *q, const double *v, double *out, void *user) {
+  (void)n; (void)q; (void)user;
+  out[0] = v[0];
+  return 0;
+}
+static int l_hess(int n, const double *q, const double *v, double *lqq, double *lqv, double *lvv, void *user) {
+  (void)n; (void)v; (void)user;
+  lqq[0] = -9.8 * cos(q[0]); lqv[0] = 0.0; lvv[0] = 1.0;
+  return 0;
+}
+static int walls(int n, int ng, const double *q, double *g, void *user) {
+  (void)n; (void)ng; (void)user;
+  g[0] = 1.0 - q[0]; g[1] = q[0] + 1.0;
+  return 0;
+}
+static int wall_grads(int n, int ng, const double *q, double *dg, void *user) {
+  (void)n; (void)ng; (void)q; (void)user;
+  dg[0] = -1.0; dg[1] = 1.0;
+  return 0;
+}
+
+static vci_lagrangian_callbacks pendulum_callbacks(int hessians) {
+  vci_lagrangian_callbacks cb = VCI_LAGRANGIAN_CALLBACKS_INIT;
+  cb.lagrangian = l_value; cb.dl_dq = l_dq; cb.dl_dv = l_dv;
+  if (hessians) cb.hessians = l_hess;
+  cb.gaps = walls; cb.gap_gradients = wall_grads;
+  return cb;
+}
+
+/* 200 steps of h = 0.05 with lobatto s = 4, rtol 1e-15 (examples/pendulum_walls.f90's defaults). */
+static int run(const vci_lagrangian_callbacks *cb, double *t, double *q, double *p, int64_t *impacts) {
+  vci_model model = NULL;
+  vci_integrator it = NULL;
+  double q0 = 0.0, p0 = 4.0;
+  int st = vci_model_create_lagrangian(&model, 1, 0, 2, cb, NULL);
+  if (st == VCI_OK) st = vci_integrator_create(&it, model, 0.05);
+  vci_model_destroy(&model);
+  if (st == VCI_OK) st = vci_set_scheme(it, VCI_SCHEME_LOBATTO, 4);
+  if (st == VCI_OK) st = vci_set_tolerances(it, 0.0, 1e-15, 30);
+  if (st == VCI_OK) st = vci_init_from_momentum(it, 0.0, &q0, &p0);
+  if (st == VCI_OK) st = vci_integrate(it, 200, 1);
+  if (st == VCI_OK) st = vci_get_state(it, t, q, p);
+  if (st == VCI_OK) st = vci_get_stats(it, NULL, impacts, NULL);
+  if (st != VCI_OK) {
+    char msg[512];
+    vci_last_error(it, msg, sizeof msg);
+    printf("  run failed: %s: %s\n", vci_status_string(st), msg);
+  }
+  vci_integrator_destroy(&it);
+  return st;
+}
+
+static void suite_run(const char *ref_path) {
+  double t_ref, q_ref, p_ref, theta_exact, omega_exact, t, q, p;
+  long long imp_ref, imp_exact;
+  int64_t impacts = -1;
+  FILE *f = fopen(ref_path, "r");
+  CHECK(f != NULL);
+  if (!f) return;
+  CHECK(fscanf(f, "%lf %lf %lf %lf %lf %lld %lld", &t_ref, &q_ref, &p_ref, &theta_exact, &omega_exact, &imp_ref,
+               &imp_exact) == 7);
+  fclose(f);
+  vci_lagrangian_callbacks cb = pendulum_callbacks(1);
+  CHECK(run(&cb, &t, &q, &p, &impacts) == VCI_OK);
+  printf("  C: t = %.17g theta = %.17g p = %.17g impacts = %lld\n", t, q, p, (long long)impacts);
+  printf("  C - Fortran: %.3e %.3e   C - exact: %.3e %.3e\n", q - q_ref, p - p_ref, q - theta_exact,
+         p - omega_exact);
+  /* the same scheme on the same L through the two interfaces: equal to round-off */
+  CHECK(t == t_ref);
+  CHECK(fabs(q - q_ref) <= 1e-12);
+  CHECK(fabs(p - p_ref) <= 1e-12);
+  CHECK(impacts == imp_ref && impacts == imp_exact && imp_exact == 18);
+  /* and the exact solution: build/bin/pendulum_walls measures errors 2.5e-11 (theta) and 6.4e-11
+   * (theta') for this order-8 run; 1e-9 leaves room for round-off, not for a lower order (h^6 at
+   * h = 0.05 is 1.6e-8) */
+  CHECK(fabs(q - theta_exact) <= 1e-9);
+  CHECK(fabs(p - omega_exact) <= 1e-9);
+  /* without the Hessian callback the blocks are differenced: the same solution to the solver's
+   * tolerance, the same impacts */
+  cb = pendulum_callbacks(0);
+  CHECK(run(&cb, &t, &q, &p, &impacts) == VCI_OK);
+  printf("  differenced Hessians - exact: %.3e %.3e\n", q - theta_exact, p - omega_exact);
+  CHECK(impacts == 18);
+  CHECK(fabs(q - theta_exact) <= 1e-9);
+  CHECK(fabs(p - omega_exact) <= 1e-9);
+}
+
+/* a free particle, L_d = (v - q)^2 / (2 h) */
+static int free_d1(int n, const double *q, const double *v, double h, double *out, void *user) {
+  (void)n; (void)user; out[0] = -(v[0] - q[0]) / h; return 0;
+}
+static int free_d2(int n, const double *q, const double *v, double h, double *out, void *user) {
+  (void)n; (void)user; out[0] = (v[0] - q[0]) / h; return 0;
+}
+static int free_d3(int n, const double *q, const double *v, double h, double *out, void *user) {
+  (void)n; (void)user; out[0] = -0.5 * (v[0] - q[0]) * (v[0] - q[0]) / (h * h); return 0;
+}
+
+static int contains(const char *s, const char *part) { return strstr(s, part) != NULL; }
+
+static void suite_bad(void) {
+  vci_model model = NULL, discrete = NULL;
+  vci_integrator it = NULL;
+  char msg[512];
+  double t, q, p, q0 = 0.0, p0 = 4.0;
+  int64_t impacts;
+  vci_lagrangian_callbacks cb = pendulum_callbacks(1);
+  /* a required callback missing: a clear status and a message naming it */
+  cb.dl_dv = NULL;
+  CHECK(vci_model_create_lagrangian(&model, 1, 0, 2, &cb, NULL) == VCI_ERR_ARGUMENT);
+  CHECK(model == NULL);
+  vci_last_error(NULL, msg, sizeof msg);
+  printf("  %s\n", msg);
+  CHECK(contains(msg, "dl_dv"));
+  cb = pendulum_callbacks(1);
+  cb.lagrangian = NULL;
+  CHECK(vci_model_create_lagrangian(&model, 1, 0, 2, &cb, NULL) == VCI_ERR_ARGUMENT);
+  cb = pendulum_callbacks(1);
+  cb.size = 3; /* not initialised with VCI_LAGRANGIAN_CALLBACKS_INIT */
+  CHECK(vci_model_create_lagrangian(&model, 1, 0, 2, &cb, NULL) == VCI_ERR_ARGUMENT);
+  cb = pendulum_callbacks(1);
+  cb.gaps = NULL; /* ngaps > 0 needs gaps */
+  CHECK(vci_model_create_lagrangian(&model, 1, 0, 2, &cb, NULL) == VCI_ERR_ARGUMENT);
+  CHECK(vci_model_create_lagrangian(NULL, 1, 0, 2, &cb, NULL) == VCI_ERR_ARGUMENT);
+  CHECK(vci_model_create_lagrangian(&model, 1, 0, 2, NULL, NULL) == VCI_ERR_ARGUMENT);
+
+  cb = pendulum_callbacks(1);
+  CHECK(vci_model_create_lagrangian(&model, 1, 0, 2, &cb, NULL) == VCI_OK);
+  CHECK(vci_integrator_create(&it, model, 0.05) == VCI_OK);
+  /* unknown scheme, stages out of range: refused, the integrator keeps its scheme and works */
+  CHECK(vci_set_scheme(it, 7, 1) == VCI_ERR_ARGUMENT);
+  vci_last_error(it, msg, sizeof msg);
+  printf("  %s\n", msg);
+  CHECK(contains(msg, "unknown scheme"));
+  CHECK(vci_set_scheme(it, VCI_SCHEME_DISCRETE, 1) == VCI_ERR_ARGUMENT);
+  CHECK(vci_set_scheme(it, VCI_SCHEME_LOBATTO, 0) == VCI_ERR_ARGUMENT);
+  CHECK(vci_set_scheme(it, VCI_SCHEME_LOBATTO, VCI_LOBATTO_MAX_STAGES + 1) == VCI_ERR_ARGUMENT);
+  vci_last_error(it, msg, sizeof msg);
+  printf("  %s\n", msg);
+  CHECK(contains(msg, "stages"));
+  CHECK(vci_set_scheme(it, VCI_SCHEME_LOBATTO, VCI_LOBATTO_MAX_STAGES) == VCI_OK);
+  CHECK(vci_set_scheme(it, VCI_SCHEME_LEFT, 0) == VCI_OK); /* stages ignored */
+  CHECK(vci_set_scheme(it, VCI_SCHEME_MIDPOINT, 0) == VCI_OK);
+  CHECK(vci_init_from_momentum(it, 0.0, &q0, &p0) == VCI_OK);
+  CHECK(vci_integrate(it, 10, 1) == VCI_OK);
+  CHECK(vci_set_scheme(NULL, VCI_SCHEME_MIDPOINT, 1) == VCI_ERR_ARGUMENT);
+  vci_integrator_destroy(&it);
+
+  /* a discrete model has no schemes to choose */
+  {
+    vci_callbacks dcb = VCI_CALLBACKS_INIT;
+    dcb.d1_ld = free_d1; dcb.d2_ld = free_d2; dcb.d3_ld = free_d3;
+    CHECK(vci_model_create(&discrete, 1, 0, 0, &dcb, NULL) == VCI_OK);
+    CHECK(vci_integrator_create(&it, discrete, 0.05) == VCI_OK);
+    CHECK(vci_set_scheme(it, VCI_SCHEME_MIDPOINT, 1) == VCI_ERR_ARGUMENT);
+    vci_integrator_destroy(&it);
+    vci_model_destroy(&discrete);
+  }
+
+  /* the contract: dl_dq returning a negative code fails the step at once, named with its code;
+   * the state stays at the last accepted step */
+  fail_dl_dq_after = 2000; fail_code = -3; dl_dq_calls = 0;
+  CHECK(run(&cb, &t, &q, &p, &impacts) == VCI_ERR_CALLBACK);
+  {
+    vci_integrator it2 = NULL;
+    CHECK(vci_integrator_create(&it2, model, 0.05) == VCI_OK);
+    CHECK(vci_set_scheme(it2, VCI_SCHEME_LOBATTO, 4) == VCI_OK);
+    CHECK(vci_init_from_momentum(it2, 0.0, &q0, &p0) == VCI_OK);
+    dl_dq_calls = 0;
+    CHECK(vci_integrate(it2, 200, 1) == VCI_ERR_CALLBACK);
+    vci_last_error(it2, msg, sizeof msg);
+    printf("  %s\n", msg);
+    CHECK(contains(msg, "dl_dq returned -3"));
+    CHECK(contains(msg, "unrecoverable"));
+    vci_integrator_destroy(&it2);
+  }
+  fail_dl_dq_after = -1;
+  vci_model_destroy(&model);
+}
+
+int main(int argc, char **argv) {
+  if (argc >= 3 && strcmp(argv[1], "run") == 0) {
+    suite_run(argv[2]);
+  } else if (argc >= 2 && strcmp(argv[1], "bad") == 0) {
+    suite_bad();
+  } else {
+    printf("usage: vci_lagrangian_test run REF_FILE | bad\n");
+    return 2;
+  }
+  printf("%s: %d failure(s)\n", argv[1], failures);
+  return failures == 0 ? 0 : 1;
+}

@@ -1,0 +1,214 @@
+C     The walled pendulum as a continuous Lagrangian through vci's
+C     legacy entry points (IOPT bit 8, TASKs 10-13, VCISCH), written as
+C     a Fortran 77 program. L = TH'**2/2 + G COS(TH) (m = l = 1, G =
+C     9.8), walls G1 = TW - TH >= 0, G2 = TH + TW >= 0 (TW = 1 rad),
+C     TH(0) = 0, TH'(0) = 4, h = 0.05, 200 steps (10 s), lobatto with
+C     s = 4 and the hamiltonian impact condition. The expected state
+C     and impact count come from pendw77_ref.f90 (the exact solution,
+C     test/support/vci_ref_pendulum_walls.f90), read from the file
+C     pendw77_ref.txt. Stops with code 1 if a number is off.
+      PROGRAM PENDW
+      IMPLICIT NONE
+      EXTERNAL PWMOD
+      INTEGER N, M, NG, LTIMP, NSTG
+      PARAMETER (N = 1, M = 0, NG = 2, LTIMP = 40, NSTG = 4)
+      DOUBLE PRECISION H, T, Q(N), P(N), TIMP(LTIMP), RPAR(2)
+      DOUBLE PRECISION TREF, QREF, PREF, Q0(N), P0(N)
+      INTEGER IPAR(1), NIMP, NREF, ISTAT, IH, NBAD, K, IOPT(3)
+      CHARACTER*300 MSG
+      DATA RPAR /9.8D0, 1.0D0/
+C     all optional TASKs (Hessians, gap gradients, H); only L, dL/dq,
+C     dL/dv and gaps; all declared but TASKs 13 and 9 answered "not
+C     provided" (IPAR(1) = 5)
+      DATA IOPT /15, 8, 15/
+      NBAD = 0
+      H = 5.0D-2
+      Q0(1) = 0.0D0
+      P0(1) = 4.0D0
+      OPEN (UNIT = 10, FILE = 'pendw77_ref.txt', STATUS = 'OLD',
+     &      ERR = 900)
+      READ (10, *, ERR = 900, END = 900) TREF, QREF, PREF, NREF
+      CLOSE (10)
+C
+C     1. The run, three ways of supplying the optional TASKs
+      DO 10 K = 1, 3
+        IPAR(1) = 0
+        IF (K .EQ. 3) IPAR(1) = 5
+        CALL VCINEW(PWMOD, N, M, NG, IOPT(K), H, RPAR, IPAR, IH,
+     &              ISTAT)
+        CALL CHECKI('VCINEW', ISTAT, 0, NBAD)
+        CALL VCISCH(IH, 3, NSTG, ISTAT)
+        CALL CHECKI('VCISCH lobatto', ISTAT, 0, NBAD)
+        CALL VCITOL(IH, 0.0D0, 1.0D-15, 30, ISTAT)
+        CALL CHECKI('VCITOL', ISTAT, 0, NBAD)
+        CALL VCIENG(IH, 1, ISTAT)
+        CALL CHECKI('VCIENG hamiltonian', ISTAT, 0, NBAD)
+        CALL VCIINM(IH, 0.0D0, Q0, P0, ISTAT)
+        CALL CHECKI('VCIINM', ISTAT, 0, NBAD)
+        CALL VCIADV(IH, 200, 1, T, Q, P, NIMP, TIMP, LTIMP, ISTAT)
+        IF (ISTAT .NE. 0) THEN
+          CALL VCIMSG(IH, MSG)
+          WRITE (*, '(2A)') ' VCIADV: ', MSG(1:200)
+        END IF
+        CALL CHECKI('VCIADV', ISTAT, 0, NBAD)
+        WRITE (*, '(A, I3, A, I3, A, 2ES10.2)') ' IOPT =', IOPT(K),
+     &    '  impacts:', NIMP, '  |q - exact|, |p - exact|:',
+     &    ABS(Q(1) - QREF), ABS(P(1) - PREF)
+        CALL CHECKI('impacts = exact count', NIMP, NREF, NBAD)
+        CALL CHECKI('impacts in 10 s', NIMP, 18, NBAD)
+        CALL CHECKR('final time', T, TREF, 1.0D-12, NBAD)
+C       lobatto s = 4 (order 8) is ~1e-11 from exact at h = 0.05
+C       (docs/SCHEMES.md); 1e-9 leaves room for round-off, not for
+C       a lower order (s = 3 is ~3e-8 off)
+        CALL CHECKR('theta = exact', Q(1), QREF, 1.0D-9, NBAD)
+        CALL CHECKR('p = exact', P(1), PREF, 1.0D-9, NBAD)
+        CALL VCIDEL(IH)
+   10 CONTINUE
+C
+C     2. Bad input. A routine without dL/dv (IPAR(1) = 3: TASK 12
+C        answered "not provided") is refused by VCINEW, naming it
+      IPAR(1) = 3
+      CALL VCINEW(PWMOD, N, M, NG, 8, H, RPAR, IPAR, IH, ISTAT)
+      CALL CHECKI('VCINEW without dL/dv', ISTAT, 1, NBAD)
+      CALL CHECKI('VCINEW without dL/dv: IH', IH, 0, NBAD)
+      CALL VCIMSG(0, MSG)
+      WRITE (*, '(2A)') ' no dL/dv: ', MSG(1:160)
+      CALL CHECKS('no dL/dv names dl_dv', MSG, 'dl_dv', NBAD)
+      CALL CHECKS('no dL/dv names TASK 12', MSG, 'TASK = 12', NBAD)
+      IPAR(1) = 0
+C     unknown IOPT bits
+      CALL VCINEW(PWMOD, N, M, NG, 16, H, RPAR, IPAR, IH, ISTAT)
+      CALL CHECKI('VCINEW with IOPT = 16', ISTAT, 1, NBAD)
+C     unknown scheme, stages out of range (the model stays usable)
+      CALL VCINEW(PWMOD, N, M, NG, 8, H, RPAR, IPAR, IH, ISTAT)
+      CALL CHECKI('VCINEW', ISTAT, 0, NBAD)
+      CALL VCISCH(IH, 7, 1, ISTAT)
+      CALL CHECKI('VCISCH unknown scheme', ISTAT, 1, NBAD)
+      CALL VCIMSG(IH, MSG)
+      WRITE (*, '(2A)') ' unknown scheme: ', MSG(1:80)
+      CALL CHECKS('unknown scheme message', MSG, 'unknown scheme',
+     &            NBAD)
+      CALL VCISCH(IH, 3, 0, ISTAT)
+      CALL CHECKI('VCISCH lobatto s = 0', ISTAT, 1, NBAD)
+      CALL VCISCH(IH, 3, 9, ISTAT)
+      CALL CHECKI('VCISCH lobatto s = 9', ISTAT, 1, NBAD)
+      CALL VCISCH(IH, 1, 0, ISTAT)
+      CALL CHECKI('VCISCH left (stages ignored)', ISTAT, 0, NBAD)
+      CALL VCIDEL(IH)
+C     a TASK failing in mid-run (IPAR(1) = 2: TASK 11 gives IERR = -5
+C     once Q > 0.5) stops the run with ISTAT = 2 naming it. (IPAR is
+C     set before VCINEW: the compiler need not store into an array
+C     that no later call of this program unit receives.)
+      IPAR(1) = 2
+      CALL VCINEW(PWMOD, N, M, NG, 8, H, RPAR, IPAR, IH, ISTAT)
+      CALL CHECKI('VCINEW', ISTAT, 0, NBAD)
+      CALL VCISCH(IH, 3, NSTG, ISTAT)
+      CALL CHECKI('VCISCH lobatto', ISTAT, 0, NBAD)
+      CALL VCIINM(IH, 0.0D0, Q0, P0, ISTAT)
+      CALL CHECKI('VCIINM', ISTAT, 0, NBAD)
+      CALL VCIADV(IH, 200, 1, T, Q, P, NIMP, TIMP, LTIMP, ISTAT)
+      CALL CHECKI('failing TASK 11', ISTAT, 2, NBAD)
+      CALL VCIMSG(IH, MSG)
+      WRITE (*, '(2A)') ' failing TASK 11: ', MSG(1:160)
+      CALL CHECKS('failing TASK 11 message', MSG, 'TASK = 11', NBAD)
+      CALL VCIDEL(IH)
+      IPAR(1) = 0
+C     a scheme for a discrete model (IOPT without bit 8)
+      CALL VCINEW(PWMOD, N, M, NG, 2, H, RPAR, IPAR, IH, ISTAT)
+      CALL CHECKI('VCINEW discrete', ISTAT, 0, NBAD)
+      CALL VCISCH(IH, 3, NSTG, ISTAT)
+      CALL CHECKI('VCISCH on a discrete model', ISTAT, 1, NBAD)
+      CALL VCIDEL(IH)
+      CALL VCISCH(IH, 3, NSTG, ISTAT)
+      CALL CHECKI('VCISCH on a deleted handle', ISTAT, 1, NBAD)
+C
+      IF (NBAD .NE. 0) THEN
+        WRITE (*, '(A, I3, A)') ' legacy pendulum:', NBAD, ' FAILED'
+        STOP 1
+      END IF
+      WRITE (*, '(A)') ' legacy pendulum: all checks passed'
+      STOP
+  900 WRITE (*, '(A)') ' FAIL: cannot read pendw77_ref.txt'
+      STOP 1
+      END
+C
+      SUBROUTINE CHECKI(WHAT, IVAL, IEXP, NBAD)
+      CHARACTER*(*) WHAT
+      INTEGER IVAL, IEXP, NBAD
+      IF (IVAL .NE. IEXP) THEN
+        WRITE (*, '(3A, I6, A, I6)') ' FAIL ', WHAT, ':', IVAL,
+     &    ' expected', IEXP
+        NBAD = NBAD + 1
+      END IF
+      END
+C
+      SUBROUTINE CHECKR(WHAT, VAL, EXP, TOL, NBAD)
+      CHARACTER*(*) WHAT
+      DOUBLE PRECISION VAL, EXP, TOL
+      INTEGER NBAD
+      IF (.NOT. (ABS(VAL - EXP) .LE. TOL)) THEN
+        WRITE (*, '(3A, 2ES25.17)') ' FAIL ', WHAT, ':', VAL, EXP
+        NBAD = NBAD + 1
+      END IF
+      END
+C
+      SUBROUTINE CHECKS(WHAT, MSG, PART, NBAD)
+      CHARACTER*(*) WHAT, MSG, PART
+      INTEGER NBAD
+      IF (INDEX(MSG, PART) .EQ. 0) THEN
+        WRITE (*, '(5A)') ' FAIL ', WHAT, ': no "', PART, '"'
+        NBAD = NBAD + 1
+      END IF
+      END
+C
+C     The walled pendulum as a continuous L(Q, V), V = dQ/dt. RPAR =
+C     (gravity, wall angle). IPAR(1) = 2: TASK 11 fails (IERR = -5)
+C     once Q has passed 0.5; 3: TASK 12 is not provided; 5: TASKs 13
+C     and 9 are not provided. IERR = -999 answers "not provided".
+      SUBROUTINE PWMOD(TASK, N, M, NG, Q, V, H, OUT, RPAR, IPAR, IERR)
+      IMPLICIT NONE
+      INTEGER TASK, N, M, NG, IPAR(*), IERR
+      DOUBLE PRECISION Q(N), V(N), H, OUT(*), RPAR(*)
+      DOUBLE PRECISION G, TW
+      G = RPAR(1)
+      TW = RPAR(2)
+      IF (TASK .EQ. 10) THEN
+        OUT(1) = 0.5D0 * V(1)**2 + G * COS(Q(1))
+      ELSE IF (TASK .EQ. 11) THEN
+        IF (IPAR(1) .EQ. 2 .AND. Q(1) .GT. 0.5D0) THEN
+          IERR = -5
+          RETURN
+        END IF
+        OUT(1) = -G * SIN(Q(1))
+      ELSE IF (TASK .EQ. 12) THEN
+        IF (IPAR(1) .EQ. 3) THEN
+          IERR = -999
+          RETURN
+        END IF
+        OUT(1) = V(1)
+      ELSE IF (TASK .EQ. 13) THEN
+        IF (IPAR(1) .EQ. 5) THEN
+          IERR = -999
+          RETURN
+        END IF
+C       d2L/dq2, d2L/dq dv, d2L/dv2 (each 1 x 1)
+        OUT(1) = -G * COS(Q(1))
+        OUT(2) = 0.0D0
+        OUT(3) = 1.0D0
+      ELSE IF (TASK .EQ. 7) THEN
+        OUT(1) = TW - Q(1)
+        OUT(2) = Q(1) + TW
+      ELSE IF (TASK .EQ. 8) THEN
+        OUT(1) = -1.0D0
+        OUT(2) = 1.0D0
+      ELSE IF (TASK .EQ. 9) THEN
+        IF (IPAR(1) .EQ. 5) THEN
+          IERR = -999
+          RETURN
+        END IF
+C       H(Q, P) with P passed in V
+        OUT(1) = 0.5D0 * V(1)**2 - G * COS(Q(1))
+      ELSE
+        IERR = -999
+      END IF
+      END

@@ -1,0 +1,100 @@
+"""Malformed restart files: every rank, shape, size and type the reader takes from a file is
+checked before use. A good file from each example is damaged one way at a time (h5py), then
+`--from FILE` and `--from FILE --append` must end cleanly: refused with exit status 1 and a message
+naming the file, or (where the damage only costs the checkpoint) accepted. Never a signal, a hang,
+a runtime error or an allocation the file dictates.
+
+Usage: malformed_files.py ELLIPSE_EXE PENDULUM_EXE WORKDIR
+"""
+import os
+import shutil
+import subprocess
+import sys
+
+import h5py
+import numpy as np
+
+ellipse, pendulum, work = sys.argv[1:4]
+os.makedirs(work, exist_ok=True)
+os.chdir(work)
+
+def run(cmd):
+    try:
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    except subprocess.TimeoutExpired:
+        return None, "", "timeout"
+    return p.returncode, p.stdout, p.stderr
+
+def good(exe, name, t_final):
+    rc, out, err = run([exe, "--t-final", t_final, "--flush-every", "1", "--quiet", "--output", name])
+    assert rc == 0, (exe, rc, out, err)
+    return name
+
+ELL = good(ellipse, "good_ellipse.h5", "3")
+PEN = good(pendulum, "good_pendulum.h5", "1.5")
+
+def replace(f, name, data, dtype=None):
+    del f[name]
+    f.create_dataset(name, data=data, dtype=dtype)
+
+def set_attr(f, name, value):
+    del f.attrs[name]
+    f.attrs[name] = value
+
+# (label, source file, damage, expected): "refuse" = exit status 1 naming the file; "accept" = runs
+CASES = [
+    ("impacts/step shape (3, 1000)", ELL, lambda f: replace(f, "impacts/step", np.zeros((1000, 3), np.int64)), "refuse"),
+    ("impacts/q wrong width", ELL, lambda f: replace(f, "impacts/q", np.zeros((2, 5))), "refuse"),
+    ("checkpoint/record 14 x 14", ELL, lambda f: replace(f, "checkpoint/record", np.zeros((14, 14))), "accept"),
+    ("checkpoint/record with NaN", ELL, lambda f: f["checkpoint/record"].__setitem__(8, np.nan), "accept"),
+    ("checkpoint/record row 1e300", ELL, lambda f: f["checkpoint/record"].__setitem__(0, 1e300), "accept"),
+    ("checkpoint/record too short", ELL, lambda f: replace(f, "checkpoint/record", np.zeros(3)), "accept"),
+    ("/t scalar", ELL, lambda f: replace(f, "t", 1.0), "refuse"),
+    ("/t rank 3", ELL, lambda f: replace(f, "t", np.zeros((2, 2, 2))), "refuse"),
+    ("/t empty", ELL, lambda f: replace(f, "t", np.zeros(0)), "refuse"),
+    ("/t strings", ELL, lambda f: replace(f, "t", np.array([b"abc"] * 301)), "refuse"),
+    ("/q wrong width", ELL, lambda f: replace(f, "q", np.zeros((301, 4))), "refuse"),
+    ("/q rank 1", ELL, lambda f: replace(f, "q", np.zeros(903)), "refuse"),
+    ("/energy missing", ELL, lambda f: f.__delitem__("energy"), "refuse"),
+    ("attribute h with 50 values", ELL, lambda f: set_attr(f, "h", np.full(50, 0.01)), "refuse"),
+    ("attribute h NaN", ELL, lambda f: set_attr(f, "h", np.nan), "refuse"),
+    ("attribute h negative", ELL, lambda f: set_attr(f, "h", -0.01), "refuse"),
+    ("attribute n an array", ELL, lambda f: set_attr(f, "n", np.array([3, 3, 3, 3], np.int32)), "refuse"),
+    ("attribute n = 2^31 - 1", ELL, lambda f: set_attr(f, "n", np.int32(2**31 - 1)), "refuse"),
+    ("attribute n = 0", ELL, lambda f: set_attr(f, "n", np.int32(0)), "refuse"),
+    ("attribute n a string", ELL, lambda f: set_attr(f, "n", np.bytes_(b"3")), "refuse"),
+    ("attribute m > n", ELL, lambda f: set_attr(f, "m", np.int32(7)), "refuse"),
+    ("attribute n_gaps = -1", ELL, lambda f: set_attr(f, "n_gaps", np.int32(-1)), "refuse"),
+    ("attribute direction unknown", ELL, lambda f: set_attr(f, "direction", np.bytes_(b"sideways")), "refuse"),
+    ("attribute direction an integer", ELL, lambda f: set_attr(f, "direction", np.int32(1)), "refuse"),
+    ("attribute direction 10 kB", ELL, lambda f: set_attr(f, "direction", np.bytes_(b"f" * 10000)), "refuse"),
+    ("steps_completed negative", ELL, lambda f: set_attr(f, "steps_completed", np.int64(-5)), "refuse"),
+    ("steps_completed 2^62", ELL, lambda f: set_attr(f, "steps_completed", np.int64(2**62)), "accept"),
+    ("steps_completed a real", ELL, lambda f: set_attr(f, "steps_completed", 3.5), "refuse"),
+    ("/lambda wrong width", PEN, lambda f: replace(f, "lambda", np.zeros((1500, 3))), "refuse"),
+    ("/lambda missing", PEN, lambda f: f.__delitem__("lambda"), "refuse"),
+    ("attribute m = 0 (the pendulum has 1)", PEN, lambda f: set_attr(f, "m", np.int32(0)), "refuse"),
+]
+
+failures = 0
+for label, src, damage, expected in CASES:
+    exe = ellipse if src == ELL else pendulum
+    t_more = "4" if src == ELL else "2"
+    for mode in ("from", "append"):
+        path = "bad.h5"
+        shutil.copyfile(src, path)
+        with h5py.File(path, "r+") as f:
+            damage(f)
+        cmd = [exe, "--from", path, "--t-final", t_more, "--quiet"]
+        cmd += ["--append"] if mode == "append" else ["--no-output"]
+        rc, out, err = run(cmd)
+        text = out + err
+        ok = rc is not None and rc in (0, 1) and "runtime error" not in text.lower() and "error allocating" not in text.lower()
+        if expected == "refuse":
+            ok = ok and rc == 1 and path in err
+        else:
+            ok = ok and rc == 0
+        print("%-4s %-34s --%-6s exit %s: %s" % ("ok" if ok else "FAIL", label, mode, rc, err.strip()[:110]))
+        failures += not ok
+print("%d of %d runs wrong" % (failures, 2 * len(CASES)))
+sys.exit(1 if failures else 0)
