@@ -19,7 +19,7 @@ module vci_scene_ellipse
   type, extends(vci_lagrangian_t), public :: ellipse_lagrangian_t
     real(dp) :: mass = 1.0_dp, grav = 9.8_dp, a = 1.0_dp, b = 0.5_dp
   contains
-    procedure :: lagrangian => el_lagrangian, dl_dq => el_dl_dq, dl_dv => el_dl_dv
+    procedure :: lagrangian => el_lagrangian, dl_dq => el_dl_dq, dl_dv => el_dl_dv, hessians => el_hessians
     procedure :: gaps => el_gaps, gap_gradients => el_gap_grads, energy => el_energy
   end type ellipse_lagrangian_t
 
@@ -134,6 +134,17 @@ contains
     integer, intent(inout) :: stat
     out = [self%mass * (self%a**2 + self%b**2) / 4.0_dp * v(1), self%mass * v(2), self%mass * v(3)]
   end subroutine el_dl_dv
+
+  !> Constant blocks: L_qq = L_qv = 0, L_vv = diag(I, m, m).
+  subroutine el_hessians(self, q, v, lqq, lqv, lvv, stat)
+    class(ellipse_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: lqq(:, :), lqv(:, :), lvv(:, :)
+    integer, intent(inout) :: stat
+    lqq = 0.0_dp; lqv = 0.0_dp; lvv = 0.0_dp
+    lvv(1, 1) = self%mass * (self%a**2 + self%b**2) / 4.0_dp
+    lvv(2, 2) = self%mass; lvv(3, 3) = self%mass
+  end subroutine el_hessians
 
   subroutine el_gaps(self, q, g, stat)
     class(ellipse_lagrangian_t), intent(inout) :: self

@@ -4,9 +4,12 @@
 !> - V_total((q + v)/2) ]. Walls on every particle, |x_i| <= w: gaps g_i = w - x_i and
 !> g_{n+i} = w + x_i (2n of them). Many degrees of freedom, many walls, nonlinear free flight.
 !> Reference: test/support/vci_ref_fpu_walls.f90. Used by tools/results.
+!> `fpu_walls_lagrangian_t`: the same chain as a continuous model, L = |v|^2/2 - V_total(q), with
+!> analytic Hessian blocks (L_qq = -Hess V tridiagonal, L_qv = 0, L_vv = I), for the library's schemes.
 module vci_scene_fpu_walls
   use vci_kinds, only: dp
   use vci_model, only: vci_model_t
+  use vci_lagrangian, only: vci_lagrangian_t
   implicit none
   private
 
@@ -16,7 +19,14 @@ module vci_scene_fpu_walls
     procedure :: d1, d2, d3, mixed_hessian, gaps, gap_gradients, energy
   end type fpu_walls_t
 
-  public :: fpu_walls_model
+  type, extends(vci_lagrangian_t), public :: fpu_walls_lagrangian_t
+    real(dp) :: beta = 1.0_dp, w = 0.6_dp
+  contains
+    procedure :: lagrangian => fl_lagrangian, dl_dq => fl_dl_dq, dl_dv => fl_dl_dv, hessians => fl_hessians
+    procedure :: gaps => fl_gaps, gap_gradients => fl_gap_grads, energy => fl_energy
+  end type fpu_walls_lagrangian_t
+
+  public :: fpu_walls_model, fpu_walls_lagrangian_model
 
 contains
 
@@ -27,6 +37,14 @@ contains
     model%n = n; model%n_gaps = 2 * n
     model%beta = beta; model%w = w
   end function fpu_walls_model
+
+  function fpu_walls_lagrangian_model(n, beta, w) result(model)
+    integer, intent(in) :: n
+    real(dp), intent(in) :: beta, w
+    type(fpu_walls_lagrangian_t) :: model
+    model%n = n; model%n_gaps = 2 * n
+    model%beta = beta; model%w = w
+  end function fpu_walls_lagrangian_model
 
   !> Stretches r_0..r_n of the chain at x.
   pure function stretches(x) result(r)
@@ -43,13 +61,27 @@ contains
   pure function grad_v(self, x) result(gv)
     class(fpu_walls_t), intent(in) :: self
     real(dp), intent(in) :: x(:)
+    real(dp) :: gv(size(x))
+    gv = potential_gradient(self%beta, x)
+  end function grad_v
+
+  pure function potential_gradient(beta, x) result(gv)
+    real(dp), intent(in) :: beta, x(:)
     real(dp) :: gv(size(x)), r(0:size(x)), f(0:size(x))
     integer :: n
     n = size(x)
     r = stretches(x)
-    f = r + self%beta * r**3
+    f = r + beta * r**3
     gv = f(0:n - 1) - f(1:n)
-  end function grad_v
+  end function potential_gradient
+
+  !> Total potential sum_j (r_j^2/2 + beta r_j^4/4).
+  pure real(dp) function potential(beta, x) result(v)
+    real(dp), intent(in) :: beta, x(:)
+    real(dp) :: r(0:size(x))
+    r = stretches(x)
+    v = sum(0.5_dp * r**2 + 0.25_dp * beta * r**4)
+  end function potential
 
   subroutine d1(self, q, v, h, out, stat)
     class(fpu_walls_t), intent(inout) :: self
@@ -132,4 +164,83 @@ contains
     r = stretches(q)
     e = 0.5_dp * sum(p**2) + sum(0.5_dp * r**2 + 0.25_dp * self%beta * r**4)
   end subroutine energy
+
+  subroutine fl_lagrangian(self, q, v, l, stat)
+    class(fpu_walls_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: l
+    integer, intent(inout) :: stat
+    l = 0.5_dp * sum(v**2) - potential(self%beta, q)
+  end subroutine fl_lagrangian
+
+  subroutine fl_dl_dq(self, q, v, out, stat)
+    class(fpu_walls_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    out = -potential_gradient(self%beta, q)
+  end subroutine fl_dl_dq
+
+  subroutine fl_dl_dv(self, q, v, out, stat)
+    class(fpu_walls_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    out = v
+  end subroutine fl_dl_dv
+
+  !> L_qq = -Hess V: tridiagonal with K_j = 1 + 3 beta r_j^2 on the springs; L_qv = 0; L_vv = I.
+  subroutine fl_hessians(self, q, v, lqq, lqv, lvv, stat)
+    class(fpu_walls_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: lqq(:, :), lqv(:, :), lvv(:, :)
+    integer, intent(inout) :: stat
+    real(dp) :: k(0:size(q))
+    integer :: i, n
+    n = size(q)
+    k = 1.0_dp + 3.0_dp * self%beta * stretches(q)**2
+    lqq = 0.0_dp; lqv = 0.0_dp; lvv = 0.0_dp
+    do i = 1, n
+      lqq(i, i) = -(k(i - 1) + k(i))
+      if (i < n) then
+        lqq(i, i + 1) = k(i)
+        lqq(i + 1, i) = k(i)
+      end if
+      lvv(i, i) = 1.0_dp
+    end do
+  end subroutine fl_hessians
+
+  subroutine fl_gaps(self, q, g, stat)
+    class(fpu_walls_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: g(:)
+    integer, intent(inout) :: stat
+    integer :: n
+    n = size(q)
+    g(1:n) = self%w - q
+    g(n + 1:2 * n) = self%w + q
+  end subroutine fl_gaps
+
+  subroutine fl_gap_grads(self, q, dg, stat)
+    class(fpu_walls_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: dg(:, :)
+    integer, intent(inout) :: stat
+    integer :: i, n
+    n = size(q)
+    dg = 0.0_dp
+    do i = 1, n
+      dg(i, i) = -1.0_dp
+      dg(i, n + i) = 1.0_dp
+    end do
+  end subroutine fl_gap_grads
+
+  !> H(q, p) = |p|^2/2 + V_total(q).
+  subroutine fl_energy(self, q, p, e, stat)
+    class(fpu_walls_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), p(:)
+    real(dp), intent(out) :: e
+    integer, intent(inout) :: stat
+    e = 0.5_dp * sum(p**2) + potential(self%beta, q)
+  end subroutine fl_energy
 end module vci_scene_fpu_walls

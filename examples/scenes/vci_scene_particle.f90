@@ -24,7 +24,7 @@ module vci_scene_particle
     real(dp) :: mass = 1.0_dp, grav = 9.8_dp
     real(dp), allocatable :: normal(:, :), offset(:)
   contains
-    procedure :: lagrangian => pl_lagrangian, dl_dq => pl_dl_dq, dl_dv => pl_dl_dv
+    procedure :: lagrangian => pl_lagrangian, dl_dq => pl_dl_dq, dl_dv => pl_dl_dv, hessians => pl_hessians
     procedure :: gaps => pl_gaps, gap_gradients => pl_gap_grads, energy => pl_energy
   end type particle_lagrangian_t
 
@@ -158,6 +158,16 @@ contains
     integer, intent(inout) :: stat
     out = self%mass * v
   end subroutine pl_dl_dv
+
+  !> Constant blocks: L_qq = L_qv = 0, L_vv = m I.
+  subroutine pl_hessians(self, q, v, lqq, lqv, lvv, stat)
+    class(particle_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: lqq(:, :), lqv(:, :), lvv(:, :)
+    integer, intent(inout) :: stat
+    lqq = 0.0_dp; lqv = 0.0_dp; lvv = 0.0_dp
+    lvv(1, 1) = self%mass; lvv(2, 2) = self%mass
+  end subroutine pl_hessians
 
   subroutine pl_gaps(self, q, g, stat)
     class(particle_lagrangian_t), intent(inout) :: self

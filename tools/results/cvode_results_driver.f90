@@ -4,7 +4,7 @@
 !> fixed-point iteration (non-stiff) and BDF with Newton and a dense difference-quotient Jacobian.
 !>
 !>   cvode_results_driver sweep FILE          tolerance sweep rtol = atol = 1e-3 .. 1e-12 -> CSV
-!>   cvode_results_driver long SCENE DIR RTOL  ellipse (1.1e5 s) or walled pendulum (6e4 s),
+!>   cvode_results_driver long SCENE DIR RTOL [adams]  ellipse (1.1e5 s) or walled pendulum (6e4 s),
 !>                                             >= 10^5 impacts: |E - E0| over time
 !>
 !> Timing and error measures as in vci_results_driver (see vci_results_common); the energy is
@@ -178,7 +178,7 @@ program cvode_results_driver
   real(c_double) :: rtol_long
 
   if (command_argument_count() < 2) then
-    write (error_unit, '(a)') 'usage: cvode_results_driver sweep FILE | long SCENE DIR RTOL'
+    write (error_unit, '(a)') 'usage: cvode_results_driver sweep FILE | long SCENE DIR RTOL [adams]'
     stop 2
   end if
   call get_command_argument(1, mode)
@@ -190,7 +190,9 @@ program cvode_results_driver
     call get_command_argument(3, dir)
     call get_command_argument(4, arg)
     read (arg, *) rtol_long
-    call long_run(trim(path), trim(dir), rtol_long)
+    arg = 'both'
+    if (command_argument_count() >= 5) call get_command_argument(5, arg)
+    call long_run(trim(path), trim(dir), rtol_long, trim(arg) == 'adams')
   case default
     write (error_unit, '(a)') 'unknown mode '//trim(mode)
     stop 2
@@ -364,12 +366,13 @@ contains
     close (unit)
   end subroutine sweep
 
-  !> Long run (ellipse 1.1e5 s, walled pendulum 6e4 s; >= 10^5 impacts), both variants at one
-  !> tolerance: the largest |E - E0| of each 10 s window, and the cost (energy evaluated at every
-  !> internal step, inside the timing).
-  subroutine long_run(scene_name, dir, tol)
+  !> Long run (ellipse 1.1e5 s, walled pendulum 6e4 s; >= 10^5 impacts), both variants (or Adams
+  !> only) at one tolerance: the largest |E - E0| of each 10 s window, and the cost (energy
+  !> evaluated at every internal step, inside the timing).
+  subroutine long_run(scene_name, dir, tol, adams_only)
     character(len=*), intent(in) :: scene_name, dir
     real(c_double), intent(in) :: tol
+    logical, intent(in) :: adams_only
     type(run_result_t) :: res
     real(c_double) :: w0, c0, wall, cpu, t_end
     integer :: iv, unit, sunit, i
@@ -386,7 +389,7 @@ contains
     open (newunit=sunit, file=dir//'/long_'//scene_name//'_cvode_'//trim(adjustl(tag))//'.csv', &
           status='replace', action='write')
     write (sunit, '(a)') 'scene,method,param,wall,cpu,max_energy_error,final_energy_error,n_impacts,t_end,status'
-    do iv = 1, 2
+    do iv = 1, merge(1, 2, adams_only)
       name = merge('cvode-adams', 'cvode-bdf  ', iv == 1)
       w0 = wall_now(); c0 = cpu_now()
       call run_cvode(iv == 1, tol, t_end, max_step_of(scene), exact_energy0(scene), res, 10.0_c_double)

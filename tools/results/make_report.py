@@ -34,6 +34,16 @@ STYLE = {
     "scipy-dop853": dict(color="tab:green", marker="D", ls="-."),
     "scipy-radau": dict(color="olive", marker="P", ls="-."),
     "siconos-moreau-jean": dict(color="tab:purple", marker="X", ls="-."),
+    # the schemes from the continuous L: colour per scheme, dotted = the paper's impact condition
+    "vci-left-discrete": dict(color="gray", marker="<", ls=":"),
+    "vci-midpoint-discrete": dict(color="tab:cyan", marker="o", ls=":"),
+    "vci-midpoint-hamiltonian": dict(color="tab:cyan", marker="s", ls="-"),
+    "vci-lobatto2-discrete": dict(color="tab:brown", marker="o", ls=":"),
+    "vci-lobatto2-hamiltonian": dict(color="tab:brown", marker="s", ls="-"),
+    "vci-lobatto3-discrete": dict(color="goldenrod", marker="o", ls=":"),
+    "vci-lobatto3-hamiltonian": dict(color="goldenrod", marker="s", ls="-"),
+    "vci-lobatto4-discrete": dict(color="deeppink", marker="o", ls=":"),
+    "vci-lobatto4-hamiltonian": dict(color="deeppink", marker="s", ls="-"),
 }
 AUTO = ["tab:cyan", "tab:brown", "tab:pink", "tab:gray", "teal", "darkgoldenrod", "slateblue"]
 FLOOR = 1e-16   # errors below this are plotted at this value (exact to rounding)
@@ -129,7 +139,7 @@ def plot_scene(rows, scene, figdir):
         ax.set_ylabel(label)
         ax.grid(True, which="major", alpha=0.4)
         ax.set_title(label, fontsize=10)
-    axes[0].legend(fontsize=8, loc="best")
+    axes[0].legend(fontsize=7, loc="best", ncol=2)
     fig.suptitle(f"{TITLE[scene]}: error against CPU time, every method from the exact (q(0), q̇(0)) "
                  f"(-pair: vci from the paper's initial pair); errors below {FLOOR:g} drawn at {FLOOR:g}",
                  fontsize=11)
@@ -191,10 +201,15 @@ def lsq(xs, ys):
 
 
 def order_fit(rows, scene, method, hmin=1e-3, hmax=2.1e-2):
-    """Least-squares slope of log(final error) against log(h) over hmin <= h <= hmax."""
+    """Least-squares slope of log(final error) against log(h) over hmin <= h <= hmax, errors above
+    1e-10 (Lobatto rows: h <= 0.2, whose asymptotic range lies at large steps, and errors above 1e-9,
+    two decades above their round-off floor, which their small steps reach)."""
+    floor = 1e-10
+    if "lobatto" in method:
+        hmin, hmax, floor = 0.0, 0.21, 1e-9
     pts = [(math.log(r["param"]), math.log(r["err_final"])) for r in rows
            if r["scene"] == scene and r["method"] == method and r["status"] == 0
-           and hmin * 0.9 <= r["param"] <= hmax and r["err_final"] > 1e-10]
+           and hmin * 0.9 <= r["param"] <= hmax and r["err_final"] > floor]
     return lsq([p[0] for p in pts], [p[1] for p in pts]), len(pts)
 
 
@@ -272,8 +287,8 @@ def plot_long(outdir, scene, shown, figdir):
                         f"{s['n_impacts']} impacts)")
     ax.set_xlabel("time t [s]")
     ax.set_ylabel("largest |E − E0| up to t")
-    ax.set_title(f"{TITLE[scene]}: energy error over a long run, vci (h = 1e-2) and each peer's best run "
-                 "costing ≤ 1.1× vci-ld-hamiltonian's CPU time (else its cheapest)", fontsize=9)
+    ax.set_title(f"{TITLE[scene]}: energy error over a long run, vci (ld rows h = 1e-2, Lobatto h = 0.1) and "
+                 "each peer's best run costing ≤ 1.1× vci-ld-hamiltonian's CPU time (else its cheapest)", fontsize=9)
     ax.grid(True, which="major", alpha=0.4)
     ax.legend(fontsize=8, loc="lower right")
     fig.tight_layout()
@@ -314,12 +329,15 @@ def main(outdir, root):
     w(f"Last run: {meta['date']} on {meta['nproc']} cores ({meta['cpu']}); the whole command took "
       f"**{meta['elapsed_s'] / 60:.1f} min**; vci at commit {meta.get('commit', '?')}. "
       f"Versions: {meta['versions']}.\n")
-    w("> **Not yet in this edition:** the vci schemes built from a continuous Lagrangian (`left`, "
-      "`midpoint`, `lobatto` s = 2, 3, 4; issue \"Schemes built from L\") are still being added to "
-      "the library. Every vci row below is the scene's own user-written discrete Lagrangian "
-      "(`vci-ld-*`: the midpoint rule, second order, except the nonholonomic pendulum, whose paper "
-      "L_d is the first-order left-point rule). The driver's EXTENSION POINT "
-      "(tools/results/vci_results_driver.f90) adds the schemes as extra rows.\n")
+    w("> **vci rows.** `vci-ld-*`: the scene's own hand-written discrete Lagrangian (the midpoint rule, "
+      "second order; the nonholonomic pendulum's is the paper's first-order left-point rule). "
+      "`vci-left-*`, `vci-midpoint-*`, `vci-lobattoS-*`: the library's schemes built from the scene's "
+      "continuous L (docs/SCHEMES.md; `integ%set_scheme`), orders 1, 2 and 2s. The suffix is the impact "
+      "condition: `discrete` the paper's E_d(αh) = E_d((1−α)h), `hamiltonian` H(q̃, p⁺) = H(q̃, p⁻). "
+      "`left` runs only with `discrete` (with `hamiltonian` its first-order momenta make the energy at the "
+      "wall drift, docs/SCHEMES.md); Lobatto is refused by the library for nonholonomic constraints (m > 0), "
+      "so the pendulum in the cylinder has `left` and `midpoint` only; on the FPU chain midpoint and "
+      "Lobatto s = 2, 4 with `hamiltonian` (time budget).\n")
 
     # --- summary
     w("## Summary\n")
@@ -341,9 +359,10 @@ def main(outdir, root):
                 if n >= 3:
                     fits.append(f"{m} {o:.2f}")
                 else:
-                    fits.append(f"{m} — (error ≤ 1e-10 at every h: exact to round-off, no order)")
+                    fits.append(f"{m} — (error at round-off at every h: no order)")
         if fits:
-            w("Least-squares order of vci's final error in h (h = 2e-2 … 1e-3, errors above 1e-10): " + "; ".join(fits) + ".\n")
+            w("Least-squares order of vci's final error in h (h = 2e-2 … 1e-3, errors above 1e-10; Lobatto "
+              "rows: h ≤ 0.2, errors above 1e-9): " + "; ".join(fits) + ".\n")
         w("Cheapest run (CPU time, with its step size or tolerance) of each method that reaches each "
           "level of final error at T; **bold**: the cheapest overall.\n")
         w(cheapest_table(rows, scene) + "\n")
@@ -462,7 +481,8 @@ def summary_text(rows, summaries, outdir):
             v = best_vci(rows, scene, lev)
             c = best_at(rows, scene, "cvode-adams", lev)
             if v and c:
-                cells.append(f"{v['cpu_median'] / c['cpu_median']:.2g} ({v['method'].replace('vci-ld-', '')})")
+                cells.append(f"{v['cpu_median'] / c['cpu_median']:.2g} ({v['method'].replace('vci-', '')}, "
+                             f"h {fmt(v['param'], 1)})")
             elif v:
                 cells.append("vci only")
             elif c:
@@ -471,7 +491,7 @@ def summary_text(rows, summaries, outdir):
                 cells.append("neither")
         lines.append(f"| {scene} | " + " | ".join(cells) + " |")
     lines.append("")
-    lines.append("Long runs (h = 1e-2 for vci; drift slope = log-log slope of the windowed |E − E0| over "
+    lines.append("Long runs (vci-ld rows at h = 1e-2, the Lobatto row at h = 0.1; drift slope = log-log slope of the windowed |E − E0| over "
                  "the last two decades of time; 0 bounded, ½ random walk, 1 linear drift):\n")
     for scene in ("pendulum_walls", "ellipse"):
         parts = []
@@ -521,24 +541,34 @@ MEASURED = """\
   vci and CVODE are Fortran, timed in-process; SciPy and Siconos are timed from Python around the
   integration loop (interpreter overhead is part of what a user of them pays). The machine may be
   shared: CPU time is the measure.
-- **Methods.** `vci-ld-discrete`: vci with the paper's impact condition (E_d(αh) = E_d((1−α)h));
-  `vci-ld-hamiltonian`: vci with H(q̃, p⁺) = H(q̃, p⁻) at the wall; Newton rtol 1e-12; nominal
-  steps 1e-1 … 1e-5 (FPU: 5e-2 … 1e-4). `cvode-adams` (Adams, fixed point), `cvode-bdf` (BDF,
+- **Methods.** `vci-ld-discrete`: vci on the scene's hand-written L_d with the paper's impact
+  condition (E_d(αh) = E_d((1−α)h)); `vci-ld-hamiltonian`: the same with H(q̃, p⁺) = H(q̃, p⁻) at
+  the wall; Newton rtol 1e-12; nominal steps 1e-1 … 1e-5 (FPU: 5e-2 … 1e-4). The schemes from the
+  scenes' continuous L (`examples/scenes/`, analytic Hessian blocks): `vci-left-discrete`,
+  `vci-midpoint-*` (rtol 1e-12, steps 1e-1 … 1e-4; the ld rows cover the smaller ones) and
+  `vci-lobattoS-*` (rtol 1e-14, steps 0.4 … 1e-3; FPU 0.2 … 2e-3, s = 4 down to 5e-2 only; larger
+  steps fail, listed at the end). The OpenBLAS used by vci's Newton, CVODE-BDF and SciPy runs
+  single-threaded (`OPENBLAS_NUM_THREADS=1`). `cvode-adams` (Adams, fixed point), `cvode-bdf` (BDF,
   Newton, dense difference-quotient Jacobian): SUNDIALS CVODE {sundials} through its Fortran 2003
   interface, root finding on every gap (decreasing crossings), elastic impact map and CVodeReInit
   at each root. `scipy-dop853`, `scipy-radau`: `solve_ivp` with a terminal event per wall and the
-  impact map between restarts. The ODE peers sweep rtol = atol = 1e-3 … 1e-13; on the ellipse
+  impact map between restarts. The ODE peers sweep rtol = atol = 1e-3 … 1e-13 (SciPy's Radau at
+  every other power of ten); on the ellipse
   they get max_step = 0.05 s so that a short dip of the gap cannot be stepped over unseen.
-  `siconos-moreau-jean`: Siconos Moreau–Jean (θ = ½, Newton impact law e = 1, LCP), one relation
-  per wall, nonlinear forces and the ellipse's floor as C plugins; not on the nonholonomic
+  `siconos-moreau-jean`: Siconos Moreau–Jean (θ = ½, Newton impact law e = 1, LCP), steps
+  1e-1 … 5e-5 (FPU: … 5e-4), one relation per wall, nonlinear forces and the ellipse's floor as C plugins; not on the nonholonomic
   pendulum (not a Siconos relation). The pendulum's ODE peers integrate the Lagrange–d'Alembert
   system in (θ, φ) with the multiplier eliminated.
 """
 
 LONG_INTRO = """\
 The walled pendulum over 6·10⁴ s and the ellipse over 1.1·10⁵ s (each ≥ 10⁵ impacts) from the same
-exact start. vci at h = 1e-2, both impact conditions, timed with its energy observer (the peers
-also evaluate the energy at every step). CVODE at rtol 1e-6 … 1e-12 over the same horizon.
+exact start. vci's hand-written L_d at h = 1e-2 with both impact conditions, and the best Lobatto
+row of the scene's sweep with the Hamiltonian condition at h = 0.1 (s = 4 on the walled pendulum,
+s = 2 on the ellipse: a cost near CVODE-Adams's), each timed with its energy observer (the peers
+also evaluate the energy at every step); vci's long runs allow up to 64 impacts per step (the
+ellipse's chaotic run has bursts of chatter that a 0.1 s step would otherwise refuse).
+CVODE-Adams at rtol 1e-6 … 1e-12 and CVODE-BDF at 1e-6 and 1e-10 over the same horizon.
 SciPy (DOP853, rtol 1e-10) and Siconos (h = 1e-2) pay about a millisecond of Python per impact
 or per few steps, so they run over a tenth of the horizon (~10⁴ impacts) to keep the page under
 15 minutes; their drift slope is over that shorter run. Each peer is plotted at its best run
@@ -550,61 +580,82 @@ through them.
 """
 
 SUMMARY_READING = """\
-**In short** (the tables above are this run's numbers; the high-order vci schemes are not in
-this edition yet):
+**In short** (numbers from the tables above; CPU times of runs under a millisecond move by tens of
+percent with the machine's load, so factors below ~1.5 are not robust):
 
-- **Where vci wins.** When the discrete Lagrangian is exact for the free flight — uniform gravity
-  with the midpoint L_d, the particle and the ellipse — and the impact uses the Hamiltonian
-  condition, vci from the exact start is exact up to round-off for *any* step: its coarsest step
-  (h = 0.1, 30 steps) gives the final error the peers only reach at their tightest tolerance.
-  On the ellipse that makes vci-ld-hamiltonian about 2× cheaper than CVODE-Adams at every level
-  1e-2 … 1e-9 and the only method reaching 1e-10 and below; on the particle it is within ~10–20 %
-  of CVODE-Adams (both well under 0.1 ms). The paper's set-up (initial pair, paper's impact
-  condition) costs this: the `-pair` rows and `vci-ld-discrete` are second order there.
-- **Where a peer wins.** When the free flight is nonlinear (walled pendulum, FPU chain,
-  nonholonomic pendulum) a second-order fixed-step method cannot compete with CVODE-Adams's
-  variable order (up to 12) and step: on the walled pendulum vci's best midpoint variant costs
-  4× CVODE-Adams's time at 1e-4 and ~90× at 1e-8, and does not reach 1e-9 (its round-off floor,
-  ~3e-9, see the first edition); on the FPU chain 2–5× at 1e-2 … 1e-6, ~40× at 1e-8. The
-  nonholonomic pendulum's paper L_d is first order: CVODE wins by ~30× at 1e-2 and vci does not
-  reach 1e-6. **The issue's goal is therefore met on the ellipse but not on the walled pendulum**
-  (table above: 4–90× short, with 1e-9 and 1e-10 out of reach); closing it needs the high-order
-  Lobatto schemes, which are not in this edition.
-- **Long runs.** On the walled pendulum over ~10⁵ impacts the Hamiltonian-condition vci keeps the
-  energy error bounded (drift slope 0: the O(h²) oscillation of the midpoint rule, no growth),
-  while every CVODE run drifts linearly (slope 1) — at the same CPU time CVODE-Adams (rtol 1e-6)
-  ends 10³–10⁴× worse; at 1.8–2.6× vci's time (rtol 1e-10, 1e-12) it ends below vci but still
-  growing linearly. The paper's impact condition random-walks upwards. On the ellipse the
-  Hamiltonian-condition vci is not bounded: its energy moves in jumps at isolated impacts
-  (round-off of the momentum after an impact, first edition), and CVODE-Adams at rtol 1e-12,
-  cheaper than vci there, ends with a smaller (linearly growing) error. SciPy's ellipse run fell
-  through the floor (a missed event) even at rtol 1e-10.
+- **Where vci wins.** *Walled pendulum* (nonlinear flight, 18 impacts in 10 s): Lobatto s = 3, 4
+  (order 6, 8, kept through the impacts because the impact time and the reflection are solved
+  with the same scheme) take long steps: lobatto4 ends 3.5e-9 off with 100 steps (h = 0.1) and
+  1e-11 off with 200, while CVODE-Adams restarts at order 1 after each of the 18 impacts
+  (CVodeReInit). vci is 1.3–2.0× cheaper than CVODE-Adams at every level 1e-4 … 1e-9, 2.3× at
+  1e-2, and the only one of the two reaching 1e-10 (lobatto4, h = 0.05, either condition; SciPy's
+  DOP853 gets there at 12× the cost). *Ellipse* (flight exact for every scheme, uniform
+  gravity): vci-ld-hamiltonian from the exact start is exact to round-off at any step, so its
+  coarsest run (h = 0.1, 30 steps) is 1.3–1.5× cheaper than CVODE-Adams at every level
+  1e-2 … 1e-9, and below 1e-10 only vci and SciPy's DOP853 (76× dearer) arrive. **The issue's sweep goal (vci at its best
+  scheme cheaper than CVODE-Adams at every level 1e-4 … 1e-10) is met on both scenes in this run.**
+- **Where a peer wins.** *Particle*: CVODE-Adams is 1.3–1.6× cheaper (0.04 against 0.06 ms: both
+  exact, vci's per-run set-up dominates). *Nonholonomic pendulum*: CVODE is 2–7× cheaper at
+  1e-2 … 1e-4 and 75× at 1e-6; vci's best there is `midpoint` from L (second order; the paper's
+  L_d and `left` are first order) and its sweep (h ≥ 1e-4) stops at 2e-7; Lobatto, which would
+  close the gap, is refused by the library for nonholonomic constraints (m > 0). *FPU chain*
+  (32 DOF, 64 walls, 41 impacts in 2 s): CVODE-Adams is 2.3–8× cheaper at 1e-4 … 1e-10. vci's
+  cost there is the impacts: each one brackets the impact time and solves the stage-1 and
+  stage-2 systems of s·n + 1 unknowns with dense LU factorisations, so lobatto4 costs ~0.13 s
+  whatever the step (it is at round-off, 1.4e-11, already at h = 0.2, 10 steps), while explicit
+  Adams pays O(n) per step and a cheap restart per impact.
+- **Long runs (≥ 10⁵ impacts).** *Walled pendulum*: vci-lobatto4-hamiltonian (h = 0.1, 9 s CPU)
+  keeps |E − E0| at ~2e-9 for most of the run, with isolated jumps to 2.4e-8 at the end (a
+  random walk of round-off, slope ½, not a drift); vci-ld-hamiltonian (h = 1e-2) is bounded at
+  2.2e-4 (slope 0, the midpoint rule's O(h²) oscillation). Every CVODE run drifts linearly
+  (slope 1): CVODE-Adams ends at 6.8e-2 at 8 s, 3.9e-5 at 11 s and 1.6e-5 at 18 s (rtol 1e-8,
+  1e-10, 1e-12) — ~670× above the Lobatto run at twice its cost. *Ellipse*: **not met.** vci's
+  energy error does not drift in time but moves in isolated jumps at a few impacts (the first
+  edition traced such jumps to the momentum after an impact being a position difference over the
+  short remaining sub-step (1 − α)h, which amplifies round-off): vci-lobatto2-hamiltonian (h = 0.1, 5.4 s) ends
+  at 3.8e-5, vci-ld-hamiltonian at 2.8e-4, while CVODE-Adams at rtol 1e-12 (4.0 s) ends at
+  2.3e-6, growing linearly at 2e-11 per second — it would reach vci's level only after a ~17×
+  longer run. The paper's impact condition grows on both scenes (slopes 0.3–0.7). SciPy's ellipse
+  run fell through the floor (a missed event) even at rtol 1e-10; Siconos keeps the walled
+  pendulum's energy bounded (4e-4) but is first order.
 """
 
 READING = """\
 - **Same start.** From `init_from_momentum` the particle and the ellipse are integrated exactly
-  by vci-ld-hamiltonian at every h (errors 1e-14 … 1e-11 at h ≥ 5e-3, growing as h shrinks, to
-  ~1e-6 at h = 1e-5 on the ellipse: round-off accumulated over more steps and impact sub-steps —
-  the negative "order" in the ellipse's fit is that, not truncation). From the paper's initial pair (rows `-pair`) the same model is
-  second order, because the pair is O(h²) off the exact trajectory: the first edition's
-  conclusion that CVODE is cheaper on these scenes was mostly that set-up.
+  by every `-hamiltonian` row at every h (errors 1e-14 … 1e-11 at h ≥ 5e-3). Below that the
+  hand-written L_d's error grows with the number of steps (round-off: ~1e-7 at h = 1e-4 and 2e-5
+  at h = 1e-5 on the ellipse — the negative "order" in the ellipse's fits is that, not
+  truncation); `midpoint` from L, which solves for the increment and carries the rounding of the
+  positions over (docs/SCHEMES.md), stays below 3e-11 down to h = 1e-4. From the paper's initial
+  pair (rows `-pair`) the same model is second order, because the pair is O(h²) off the exact
+  trajectory.
+- **Orders through impacts** (walled pendulum, fits in its section): midpoint 2, Lobatto
+  s = 2, 3, 4: 3.9–4.1, 5.7–6.3, 7.1–8.0 (the paper's condition first, then the Hamiltonian
+  one), down to a round-off floor of ~1e-11 … 1e-12 that lobatto4 reaches at h = 0.05. The
+  `midpoint` rows from L give the hand-written midpoint L_d's trajectory (the same numbers to the
+  printed digits on the walled pendulum and the FPU chain) at about the same cost.
 - **The paper's impact condition** (E_d(αh) = E_d((1−α)h)) is second order at best even where the
-  flight is exact, and not monotone in h (docs/DESIGN.md §8); with nonlinear flight (walled pendulum)
-  it is sometimes more accurate than the Hamiltonian condition at the same h, but its energy over
-  10⁵ impacts random-walks, while the Hamiltonian condition's stays bounded.
-- **Nonlinear flight.** For the walled pendulum and the FPU chain vci's error follows h² (order
-  fits in each scene's section) with a round-off floor near 1e-9; CVODE-Adams and DOP853 reach
-  1e-10 … 1e-12 at a few milliseconds. Until the Lobatto schemes land, vci is not the cheap way to
-  a small trajectory error on these scenes; its case there is the bounded long-time energy.
+  flight is exact, and not monotone in h (docs/DESIGN.md §8); with Lobatto it keeps the scheme's
+  order on average but scatters with α; over 10⁵ impacts its energy random-walks, while the
+  Hamiltonian condition's does not drift.
+- **`left`** (the paper's retraction) is first order on every scene; on the chaotic ellipse it
+  leaves the exact impact sequence (final errors ~0.1–1) at every step tried.
+- **Pendulum energy column.** For the nonholonomic pendulum the energy is computed from the
+  discrete momentum p_θ as m ℓ² θ̇; that column converges with order 1 for every vci row, also
+  `midpoint`, whose positions converge with order 2.
 - **Siconos Moreau–Jean** is first order on every scene (its impacts are smeared over a step)
   and the most expensive per accuracy everywhere; on the walled pendulum its energy stays bounded
   (θ = ½ scheme) but its positions carry an O(h) error.
-- **SciPy** reaches the smallest errors on the nonlinear scenes (DOP853, order 8) but pays Python
-  per step and per restart: ~1 ms per impact. On the ellipse's long run its event detection
-  missed an impact and the body flew on below the floor (40 impacts in 1.1·10⁴ s instead of
-  ~10⁴), so that run is not a valid trajectory.
-- **Failures.** The nonholonomic pendulum at h = 0.1 fails in Newton (listed below with the
-  message): that step is too long for the paper's L_d at θ near π.
+- **SciPy** reaches small errors on the nonlinear scenes (DOP853, order 8) but pays Python per
+  step and per restart: ~1 ms per impact. On the ellipse's long run its event detection missed an
+  impact and the body flew on below the floor (40 impacts in 1.1·10⁴ s instead of ~10⁴), so that
+  run is not a valid trajectory.
+- **Failures** (listed below with the messages). The nonholonomic pendulum at h = 0.1 with the
+  first-order L_d (the scene's and `left`): Newton fails at θ near π, the step is too long for it.
+  `left` on the ellipse at h = 0.05: Newton fails at an impact. Every Lobatto row on the walled
+  pendulum at h = 0.4 (0.7 of the ~0.55 s between impacts): stage 2 finds that the reflected
+  motion does not leave the wall, and the library refuses the step; h ≤ 0.3 runs. On the FPU
+  chain Lobatto at h ≥ 0.25 exceeds the 8 impacts allowed per step, so its sweep starts at 0.2.
 """
 
 
