@@ -852,7 +852,7 @@ contains
     k = int(min(nbytes, ours))
     dst(1:k) = src(1:k)
     local%size = ours
-    vci_model_create_v2 = create_model(model, n, m, ngaps, local, user)
+    vci_model_create_v2 = create_model('vci_model_create', model, n, m, ngaps, local, user)
   end function vci_model_create_v2
 
   !> int vci_model_create(...) as vci.h 0.1.0 declared it: the callbacks are nine pointers with no
@@ -873,7 +873,7 @@ contains
     call c_f_pointer(cb, old)
     local = vci_callbacks_c(c_sizeof(local), old%d1_ld, old%d2_ld, old%d3_ld, old%mixed_hessian, &
                             old%constraint_forms, old%discrete_constraint, old%gaps, old%gap_gradients, old%energy)
-    vci_model_create_v0_1 = create_model(model, n, m, ngaps, local, user)
+    vci_model_create_v0_1 = create_model('vci_model_create', model, n, m, ngaps, local, user)
   end function vci_model_create_v0_1
 
   !> int vci_model_create_lagrangian(vci_model *model, int n, int m, int ngaps,
@@ -947,7 +947,7 @@ contains
       return
     end if
     ! sizes, allocation and registry as for a discrete model
-    vci_model_create_lagrangian = create_model(model, n, m, ngaps, vci_callbacks_c(), user, local)
+    vci_model_create_lagrangian = create_model('vci_model_create_lagrangian', model, n, m, ngaps, vci_callbacks_c(), user, local)
   end function vci_model_create_lagrangian
 
   !> *out = NULL for the handle pointer `out` (not NULL).
@@ -958,9 +958,10 @@ contains
     h = c_null_ptr
   end subroutine null_out
 
-  !> The model_create entry points: validate, allocate, register. With lcb: a continuous model
-  !> (its callbacks already checked; fcb unused).
-  integer function create_model(model, n, m, ngaps, fcb, user, lcb) result(status)
+  !> The model_create entry points (`caller`: the one called): validate, allocate, register.
+  !> With lcb: a continuous model (its callbacks already checked; fcb unused).
+  integer function create_model(caller, model, n, m, ngaps, fcb, user, lcb) result(status)
+    character(len=*), intent(in) :: caller   !< the C entry point called, named in messages
     type(c_ptr), intent(in) :: model, user
     integer(c_int), intent(in) :: n, m, ngaps
     type(vci_callbacks_c), intent(in) :: fcb
@@ -976,7 +977,7 @@ contains
     if (why /= '') then
       block
         character(len=VCI_MSG_LEN) :: msg
-        write (msg, '(a,3(i0,a))') 'vci_model_create: sizes n = ', n, ', m = ', m, ', ngaps = ', ngaps, &
+        write (msg, '(a,3(i0,a))') caller//': sizes n = ', n, ', m = ', m, ', ngaps = ', ngaps, &
           ' invalid ('//trim(why)//')'
         call set_thread_message(msg)
       end block
@@ -992,11 +993,11 @@ contains
       if (ngaps > 0 .and. .not. c_associated(fcb%gaps)) what = 'gaps (needed as ngaps > 0)'
     end if
     if (what /= '') then
-      call set_thread_message('vci_model_create: callback '//trim(what)//' is NULL'); return
+      call set_thread_message(caller//': callback '//trim(what)//' is NULL'); return
     end if
     allocate (mp, stat=st)
     if (st /= 0) then
-      call set_thread_message('vci_model_create: out of memory')
+      call set_thread_message(caller//': out of memory')
       status = VCI_ERR_MEMORY; return
     end if
     mp%n = n; mp%m = m; mp%n_gaps = ngaps
@@ -1013,7 +1014,7 @@ contains
     call unlock_registry()
     if (.not. c_associated(out)) then
       deallocate (mp)
-      call set_thread_message('vci_model_create: too many live handles, or out of memory')
+      call set_thread_message(caller//': too many live handles, or out of memory')
       status = VCI_ERR_MEMORY; return
     end if
     status = VCI_OK
@@ -1076,7 +1077,7 @@ contains
         call set_thread_message('vci_integrator_create: the model handle is NULL')
       else
         call set_thread_message('vci_integrator_create: not a live model handle (destroyed, or not made by '// &
-                                'vci_model_create)')
+                                'vci_model_create or vci_model_create_lagrangian)')
       end if
       return
     end if

@@ -3,7 +3,8 @@
 !> Trajectories go to HDF5 (.h5) when built with it (VCI_HAVE_HDF5), else to CSV; `.csv` names
 !> always give CSV. `--from` reads either; `--append` continues the `--from` file itself.
 module vci_example_cli
-  use, intrinsic :: iso_c_binding, only: c_int
+  use, intrinsic :: iso_c_binding, only: c_int, c_char, c_null_char
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
   use vci
 #ifdef VCI_HAVE_HDF5
@@ -48,7 +49,18 @@ module vci_example_cli
       integer(c_int), value :: fd
       integer(c_int) :: r
     end function c_isatty
+    !> 0: nothing at path, 1: a regular file, 2: anything else (common/vci_example_path.c).
+    function c_path_kind(path) bind(C, name='vci_example_path_kind') result(r)
+      import :: c_int, c_char
+      character(kind=c_char), intent(in) :: path(*)
+      integer(c_int) :: r
+    end function c_path_kind
   end interface
+
+  ! The accepted ranges of the numeric flags (printed by --help, checked by parse_options).
+  real(dp), parameter :: max_abs_time = 1.0e9_dp     !< |--t-final| (seconds)
+  real(dp), parameter :: max_rtol = 1.0e-2_dp        !< --rtol in (0, max_rtol]
+  real(dp), parameter :: max_steps = 1.0e15_dp       !< steps one run may take (|T - t0| / h)
 
   public :: parse_options, run_example, read_last_state, create_integrator, scheme_id
 
@@ -61,12 +73,15 @@ module vci_example_cli
 contains
 
   !> Parse the command line. `usage` is the program-specific help text (printed by --help).
+  !> Every number is read strictly (the whole token, finite, in its range); a bad command line
+  !> ends the program with exit status 2 and a message on stderr naming the flag.
   subroutine parse_options(opts, name, usage)
     type(example_options_t), intent(inout) :: opts
     character(len=*), intent(in) :: name, usage
     integer :: i, nargs
     logical :: exists
     character(len=:), allocatable :: arg, val
+    character(len=24) :: txt
     nargs = command_argument_count()
     i = 1
     do while (i <= nargs)
@@ -74,46 +89,55 @@ contains
       select case (arg)
       case ('--help', '-h')
         write (output_unit, '(a)') usage
-        write (output_unit, '(a)') 'Common flags:'
-        write (output_unit, '(a)') '  --h H                 step length'
-        write (output_unit, '(a)') '  --t-final T           integrate up to time T (backward: down to T)'
-        write (output_unit, '(a)') '  --output FILE         trajectory file: .h5 (default when built with HDF5) or .csv'
+        write (output_unit, '(a)') 'Common flags (a bad value or an unknown flag: exit status 2):'
+        write (output_unit, '(a)') '  --h H                 step length, finite, > 0'
+        write (output_unit, '(a)') '  --t-final T           integrate up to time T (backward: down to T), |T| <= 1e9,'
+        write (output_unit, '(a)') '                        at most 1e15 steps'
+        write (output_unit, '(a)') '  --output FILE         trajectory file: .h5 (default when built with HDF5) or .csv;'
+        write (output_unit, '(a)') '                        not a directory or a device'
         write (output_unit, '(a)') '  --no-output           write no trajectory'
         write (output_unit, '(a)') '  --backward            integrate backward in time with the (-) scheme'
         write (output_unit, '(a)') '  --from FILE           start from the last state written by a previous run (.h5 or .csv)'
         write (output_unit, '(a)') '  --append              continue the --from file (.h5, same direction) instead of a new one'
-        write (output_unit, '(a)') '  --flush-every K       HDF5: write and flush every K steps (4096) and after every impact'
+        write (output_unit, '(a)') '  --flush-every K       HDF5: write and flush every K steps (4096) and after every impact;'
+        write (output_unit, '(a)') '                        an integer >= 1'
         write (output_unit, '(a)') '  --impact-energy MODE  discrete (paper, default) or hamiltonian'
-        write (output_unit, '(a)') '  --rtol R              Newton tolerance relative to term sizes (1e-12)'
-        write (output_unit, '(a)') '  --max-impacts K       impacts allowed in one step (16)'
+        write (output_unit, '(a)') '  --rtol R              Newton tolerance relative to term sizes (1e-12), 0 < R <= 1e-2'
+        write (output_unit, '(a)') '  --max-impacts K       impacts allowed in one step (16), an integer >= 1'
         write (output_unit, '(a)') '  --differenced-hessian let the library difference the mixed Hessian'
         write (output_unit, '(a)') '  --scheme S            discretise the scene''s continuous L: left, midpoint or lobatto'
         write (output_unit, '(a)') '                        (default: the scene''s hand-derived L_d, as in the paper)'
-        write (output_unit, '(a)') '  --stages s            lobatto: s stages, order 2s (2)'
+        write (output_unit, '(a,i0,a)') '  --stages s            lobatto: s stages, order 2s (2), an integer in 1..', &
+          VCI_LOBATTO_MAX_STAGES, ''
         write (output_unit, '(a)') '  --quiet               print the summary only'
         stop
       case ('--h', '--t-final', '--output', '--from', '--impact-energy', '--rtol', '--max-impacts', '--flush-every', &
             '--scheme', '--stages')
-        if (i == nargs) call die(name//': '//arg//' needs a value')
+        if (i == nargs) call usage_error(name//': '//arg//' needs a value')
         i = i + 1
         val = get_arg(i)
         select case (arg)
-        case ('--h'); opts%h = to_real(val, arg); opts%h_given = .true.
-        case ('--flush-every'); opts%flush_every = nint(to_real(val, arg))
-        case ('--t-final'); opts%t_final = to_real(val, arg); opts%t_final_given = .true.
-        case ('--output'); opts%output = val
-        case ('--from'); opts%from = val
-        case ('--rtol'); opts%rtol = to_real(val, arg)
-        case ('--max-impacts'); opts%max_impacts = nint(to_real(val, arg))
-        case ('--stages'); opts%stages = nint(to_real(val, arg))
+        case ('--h')
+          opts%h = real_in(name, arg, val, 0.0_dp, huge(1.0_dp), 'a finite step length > 0', open_low=.true.)
+          opts%h_given = .true.
+        case ('--flush-every'); opts%flush_every = int_in(name, arg, val, 1, huge(1))
+        case ('--t-final')
+          opts%t_final = real_in(name, arg, val, -max_abs_time, max_abs_time, 'a time with |T| <= 1e9')
+          opts%t_final_given = .true.
+        case ('--output'); opts%output = path_arg(name, arg, val)
+        case ('--from'); opts%from = path_arg(name, arg, val)
+        case ('--rtol'); opts%rtol = real_in(name, arg, val, 0.0_dp, max_rtol, 'in (0, 1e-2]', open_low=.true.)
+        case ('--max-impacts'); opts%max_impacts = int_in(name, arg, val, 1, huge(1))
+        case ('--stages'); opts%stages = int_in(name, arg, val, 1, VCI_LOBATTO_MAX_STAGES)
         case ('--scheme')
-          if (scheme_id(val) < 0) call die(name//': --scheme must be left, midpoint or lobatto')
+          if (scheme_id(val) < 0) call usage_error(name//': --scheme must be left, midpoint or lobatto (not "'// &
+                                                   val//'")')
           opts%scheme = val
         case ('--impact-energy')
           select case (val)
           case ('discrete'); opts%impact_energy = VCI_IMPACT_DISCRETE
           case ('hamiltonian'); opts%impact_energy = VCI_IMPACT_HAMILTONIAN
-          case default; call die(name//': --impact-energy must be discrete or hamiltonian')
+          case default; call usage_error(name//': --impact-energy must be discrete or hamiltonian (not "'//val//'")')
           end select
         end select
       case ('--backward'); opts%backward = .true.
@@ -122,14 +146,18 @@ contains
       case ('--no-output'); opts%no_output = .true.
       case ('--differenced-hessian'); opts%analytic_hessian = .false.
       case default
-        call die(name//': unknown flag '//arg//' (see --help)')
+        call usage_error(name//': unknown flag "'//arg//'" (see --help)')
       end select
       i = i + 1
     end do
-    if (.not. (opts%h > 0.0_dp)) call die(name//': --h must be positive')
-    if (opts%append .and. .not. allocated(opts%from)) call die(name//': --append needs --from FILE')
-    if (opts%append .and. opts%no_output) call die(name//': --append and --no-output exclude each other')
-    if (opts%flush_every < 1) call die(name//': --flush-every must be >= 1')
+    if (.not. (opts%h > 0.0_dp .and. ieee_is_finite(opts%h))) call usage_error(name//': --h must be finite and > 0')
+    ! the step count |T - t0| / h must fit an integer(i8) comfortably (t0 = 0 unless --from)
+    if (abs(opts%t_final) / opts%h > max_steps) then
+      write (txt, '(es10.3)') abs(opts%t_final) / opts%h
+      call usage_error(name//': --t-final / --h = '//trim(adjustl(txt))//' steps, more than 1e15')
+    end if
+    if (opts%append .and. .not. allocated(opts%from)) call usage_error(name//': --append needs --from FILE')
+    if (opts%append .and. opts%no_output) call usage_error(name//': --append and --no-output exclude each other')
     ! --output FILE without an extension writes FILE plus the default extension; read it back the same way
     if (allocated(opts%from)) then
       inquire (file=opts%from, exist=exists)
@@ -222,7 +250,7 @@ contains
     e_first = integ%energy()   ! NaN when starting from (q, p): no step taken yet
     write (output_unit, '(a)') 'scene: '//name//'   direction: '//trim(merge('backward', 'forward ', opts%backward))// &
       '   impact energy: '//trim(merge('hamiltonian', 'discrete   ', opts%impact_energy == VCI_IMPACT_HAMILTONIAN))
-    if (allocated(opts%scheme)) write (output_unit, '(a,i0,a)') 'scheme: '//vci_scheme_name(integ%scheme())// &
+    if (allocated(opts%scheme)) write (output_unit, '(a,i0,a)') 'scheme: '//trim(vci_scheme_name(integ%scheme()))// &
       '   stages: ', integ%stages(), ''
     write (output_unit, '(a,es10.3,a,f0.6,a,f0.6,a,i0)') 'h = ', opts%h, '   t from ', integ%time(), ' to ', &
       integ%time() + dir * nsteps * opts%h, '   steps: ', nsteps
@@ -421,12 +449,97 @@ contains
     call get_command_argument(i, s)
   end function get_arg
 
-  real(dp) function to_real(s, flag)
-    character(len=*), intent(in) :: s, flag
+  !> A real flag's value: the whole token a decimal number ([sign] digits [. digits] [e [sign] digits]),
+  !> finite, in [lo, hi] (or (lo, hi] with open_low); else a usage error naming the flag and `what`.
+  real(dp) function real_in(name, flag, s, lo, hi, what, open_low) result(x)
+    character(len=*), intent(in) :: name, flag, s, what
+    real(dp), intent(in) :: lo, hi
+    logical, intent(in), optional :: open_low
+    logical :: ok, strict_low
     integer :: ios
-    read (s, *, iostat=ios) to_real
-    if (ios /= 0) call die('invalid number for '//flag//': '//s)
-  end function to_real
+    strict_low = .false.
+    if (present(open_low)) strict_low = open_low
+    x = 0.0_dp
+    ok = is_decimal(s)
+    if (ok) then
+      read (s, *, iostat=ios) x
+      ok = ios == 0 .and. ieee_is_finite(x)
+    end if
+    if (.not. ok) call usage_error(name//': '//flag//' needs a finite decimal number ('//what//'), not "'//s//'"')
+    if (x < lo .or. x > hi .or. (strict_low .and. x == lo)) &
+      call usage_error(name//': '//flag//' '//s//' is out of range: '//what)
+  end function real_in
+
+  !> An integer flag's value in [lo, hi]: a decimal number with an integral value (1000 or 1e3),
+  !> checked against the range before conversion, so that 1e20 is refused rather than overflowing.
+  integer function int_in(name, flag, s, lo, hi) result(k)
+    character(len=*), intent(in) :: name, flag, s
+    integer, intent(in) :: lo, hi
+    real(dp) :: x
+    character(len=64) :: what
+    write (what, '(a,i0,a,i0)') 'an integer in ', lo, '..', hi
+    x = real_in(name, flag, s, -huge(1.0_dp), huge(1.0_dp), trim(what))
+    if (x /= aint(x) .or. x < real(lo, dp) .or. x > real(hi, dp)) &
+      call usage_error(name//': '//flag//' '//s//' is out of range: '//trim(what))
+    k = int(x)
+  end function int_in
+
+  !> Whether s, as a whole, is [+-] digits [. digits] [(e|E) [+-] digits] with at least one mantissa
+  !> digit: no blanks, commas, slashes, d exponents, inf or nan (list-directed input takes those).
+  logical function is_decimal(s)
+    character(len=*), intent(in) :: s
+    integer :: i, n, mantissa_digits, fraction_digits, exponent_digits
+    is_decimal = .false.
+    n = len(s); i = 1
+    if (n == 0) return
+    if (s(1:1) == '+' .or. s(1:1) == '-') i = 2
+    call skip_digits(mantissa_digits)
+    if (i <= n) then
+      if (s(i:i) == '.') then
+        i = i + 1
+        call skip_digits(fraction_digits)
+        mantissa_digits = mantissa_digits + fraction_digits
+      end if
+    end if
+    if (mantissa_digits == 0) return
+    if (i <= n) then
+      if (s(i:i) /= 'e' .and. s(i:i) /= 'E') return
+      i = i + 1
+      if (i <= n) then
+        if (s(i:i) == '+' .or. s(i:i) == '-') i = i + 1
+      end if
+      call skip_digits(exponent_digits)
+      if (exponent_digits == 0) return
+    end if
+    is_decimal = i > n
+  contains
+    subroutine skip_digits(count)
+      integer, intent(out) :: count
+      count = 0
+      do while (i <= n)
+        if (s(i:i) < '0' .or. s(i:i) > '9') exit
+        count = count + 1; i = i + 1
+      end do
+    end subroutine skip_digits
+  end function is_decimal
+
+  !> A path flag's value: not empty, and not an existing directory or device (the output would
+  !> otherwise become FILE.h5 beside /dev/full, or fail inside the writer).
+  function path_arg(name, flag, s) result(path)
+    character(len=*), intent(in) :: name, flag, s
+    character(len=:), allocatable :: path
+    if (len_trim(s) == 0) call usage_error(name//': '//flag//' needs a file name, not an empty string')
+    if (c_path_kind(s//c_null_char) == 2) &
+      call usage_error(name//': '//flag//' '//s//' is not a regular file (a directory or a device)')
+    path = s
+  end function path_arg
+
+  !> A bad command line: the message on stderr, exit status 2.
+  subroutine usage_error(msg)
+    character(len=*), intent(in) :: msg
+    write (error_unit, '(a)') msg
+    stop 2, quiet=.true.
+  end subroutine usage_error
 
   subroutine die(msg)
     character(len=*), intent(in) :: msg
