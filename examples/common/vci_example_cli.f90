@@ -4,7 +4,6 @@
 !> always give CSV. `--from` reads either; `--append` continues the `--from` file itself.
 module vci_example_cli
   use, intrinsic :: iso_c_binding, only: c_int, c_char, c_null_char
-  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
   use vci
 #ifdef VCI_HAVE_HDF5
@@ -49,20 +48,22 @@ module vci_example_cli
       integer(c_int), value :: fd
       integer(c_int) :: r
     end function c_isatty
-    !> 0: nothing at path, 1: a regular file, 2: anything else (common/vci_example_path.c).
-    function c_path_kind(path) bind(C, name='vci_example_path_kind') result(r)
+    function c_path_kind(path) bind(C, name='vci_example_path_kind') result(r)   ! vci_example_path.c
       import :: c_int, c_char
       character(kind=c_char), intent(in) :: path(*)
       integer(c_int) :: r
     end function c_path_kind
   end interface
 
-  ! The accepted ranges of the numeric flags (printed by --help, checked by parse_options).
-  real(dp), parameter :: max_abs_time = 1.0e9_dp     !< |--t-final| (seconds)
-  real(dp), parameter :: max_rtol = 1.0e-2_dp        !< --rtol in (0, max_rtol]
-  real(dp), parameter :: max_steps = 1.0e15_dp       !< steps one run may take (|T - t0| / h)
+  public :: parse_options, run_example, read_last_state, create_integrator, scheme_id, is_decimal, steps_to
 
-  public :: parse_options, run_example, read_last_state, create_integrator, scheme_id
+  ! ranges of the numeric flags (--help states them)
+  real(dp), parameter :: h_max = 1.0e6_dp, t_max = 1.0e12_dp, rtol_min = 1.0e-16_dp, rtol_max = 1.0e-4_dp
+  integer, parameter :: max_impacts_max = 1000000
+  !> The program's name, for the messages of to_real/to_int (set by parse_options).
+  character(len=32) :: program_name = 'vci example'
+  !> Most steps a run may ask for: step indices stay exact in the float64 time grid t0 + k h.
+  real(dp), parameter :: steps_max = 2.0_dp**53
 
 #ifdef VCI_HAVE_HDF5
   character(len=*), parameter :: default_extension = '.h5'
@@ -73,15 +74,13 @@ module vci_example_cli
 contains
 
   !> Parse the command line. `usage` is the program-specific help text (printed by --help).
-  !> Every number is read strictly (the whole token, finite, in its range); a bad command line
-  !> ends the program with exit status 2 and a message on stderr naming the flag.
   subroutine parse_options(opts, name, usage)
     type(example_options_t), intent(inout) :: opts
     character(len=*), intent(in) :: name, usage
     integer :: i, nargs
     logical :: exists
     character(len=:), allocatable :: arg, val
-    character(len=24) :: txt
+    program_name = name
     nargs = command_argument_count()
     i = 1
     do while (i <= nargs)
@@ -89,55 +88,48 @@ contains
       select case (arg)
       case ('--help', '-h')
         write (output_unit, '(a)') usage
-        write (output_unit, '(a)') 'Common flags (a bad value or an unknown flag: exit status 2):'
-        write (output_unit, '(a)') '  --h H                 step length, finite, > 0'
-        write (output_unit, '(a)') '  --t-final T           integrate up to time T (backward: down to T), |T| <= 1e9,'
-        write (output_unit, '(a)') '                        at most 1e15 steps'
-        write (output_unit, '(a)') '  --output FILE         trajectory file: .h5 (default when built with HDF5) or .csv;'
-        write (output_unit, '(a)') '                        not a directory or a device'
+        write (output_unit, '(a)') 'Common flags:'
+        write (output_unit, '(a)') 'Numbers are read whole (1.5, 2e-3; not 1,5), finite and in the range shown.'
+        write (output_unit, '(a)') '  --h H                 step length, 0 < H <= 1e6'
+        write (output_unit, '(a)') '  --t-final T           integrate up to time T (backward: down to T), |T| <= 1e12,'
+        write (output_unit, '(a)') '                        at most 2^53 steps of H'
+        write (output_unit, '(a)') '  --output FILE         trajectory file: .h5 (default when built with HDF5) or .csv'
         write (output_unit, '(a)') '  --no-output           write no trajectory'
         write (output_unit, '(a)') '  --backward            integrate backward in time with the (-) scheme'
         write (output_unit, '(a)') '  --from FILE           start from the last state written by a previous run (.h5 or .csv)'
         write (output_unit, '(a)') '  --append              continue the --from file (.h5, same direction) instead of a new one'
-        write (output_unit, '(a)') '  --flush-every K       HDF5: write and flush every K steps (4096) and after every impact;'
-        write (output_unit, '(a)') '                        an integer >= 1'
+        write (output_unit, '(a)') '  --flush-every K       HDF5: write and flush every K >= 1 steps (4096) and after every impact'
         write (output_unit, '(a)') '  --impact-energy MODE  discrete (paper, default) or hamiltonian'
-        write (output_unit, '(a)') '  --rtol R              Newton tolerance relative to term sizes (1e-12), 0 < R <= 1e-2'
-        write (output_unit, '(a)') '  --max-impacts K       impacts allowed in one step (16), an integer >= 1'
+        write (output_unit, '(a)') '  --rtol R              Newton tolerance relative to term sizes, 1e-16 <= R <= 1e-4 (1e-12)'
+        write (output_unit, '(a)') '  --max-impacts K       impacts allowed in one step, 1 <= K <= 1000000 (16)'
         write (output_unit, '(a)') '  --differenced-hessian let the library difference the mixed Hessian'
         write (output_unit, '(a)') '  --scheme S            discretise the scene''s continuous L: left, midpoint or lobatto'
         write (output_unit, '(a)') '                        (default: the scene''s hand-derived L_d, as in the paper)'
-        write (output_unit, '(a,i0,a)') '  --stages s            lobatto: s stages, order 2s (2), an integer in 1..', &
-          VCI_LOBATTO_MAX_STAGES, ''
+        write (output_unit, '(a)') '  --stages s            lobatto: s stages, order 2s, 1 <= s <= 8 (2)'
         write (output_unit, '(a)') '  --quiet               print the summary only'
         stop
       case ('--h', '--t-final', '--output', '--from', '--impact-energy', '--rtol', '--max-impacts', '--flush-every', &
             '--scheme', '--stages')
-        if (i == nargs) call usage_error(name//': '//arg//' needs a value')
+        if (i == nargs) call die(name//': '//arg//' needs a value')
         i = i + 1
         val = get_arg(i)
         select case (arg)
-        case ('--h')
-          opts%h = real_in(name, arg, val, 0.0_dp, huge(1.0_dp), 'a finite step length > 0', open_low=.true.)
-          opts%h_given = .true.
-        case ('--flush-every'); opts%flush_every = int_in(name, arg, val, 1, huge(1))
-        case ('--t-final')
-          opts%t_final = real_in(name, arg, val, -max_abs_time, max_abs_time, 'a time with |T| <= 1e9')
-          opts%t_final_given = .true.
-        case ('--output'); opts%output = path_arg(name, arg, val)
-        case ('--from'); opts%from = path_arg(name, arg, val)
-        case ('--rtol'); opts%rtol = real_in(name, arg, val, 0.0_dp, max_rtol, 'in (0, 1e-2]', open_low=.true.)
-        case ('--max-impacts'); opts%max_impacts = int_in(name, arg, val, 1, huge(1))
-        case ('--stages'); opts%stages = int_in(name, arg, val, 1, VCI_LOBATTO_MAX_STAGES)
+        case ('--h'); opts%h = to_real(val, arg, 0.0_dp, h_max, low_open=.true.); opts%h_given = .true.
+        case ('--flush-every'); opts%flush_every = to_int(val, arg, 1, huge(1))
+        case ('--t-final'); opts%t_final = to_real(val, arg, -t_max, t_max); opts%t_final_given = .true.
+        case ('--output'); opts%output = val
+        case ('--from'); opts%from = val
+        case ('--rtol'); opts%rtol = to_real(val, arg, rtol_min, rtol_max)
+        case ('--max-impacts'); opts%max_impacts = to_int(val, arg, 1, max_impacts_max)
+        case ('--stages'); opts%stages = to_int(val, arg, 1, 8)
         case ('--scheme')
-          if (scheme_id(val) < 0) call usage_error(name//': --scheme must be left, midpoint or lobatto (not "'// &
-                                                   val//'")')
+          if (scheme_id(val) < 0) call die(name//': --scheme must be left, midpoint or lobatto')
           opts%scheme = val
         case ('--impact-energy')
           select case (val)
           case ('discrete'); opts%impact_energy = VCI_IMPACT_DISCRETE
           case ('hamiltonian'); opts%impact_energy = VCI_IMPACT_HAMILTONIAN
-          case default; call usage_error(name//': --impact-energy must be discrete or hamiltonian (not "'//val//'")')
+          case default; call die(name//': --impact-energy must be discrete or hamiltonian')
           end select
         end select
       case ('--backward'); opts%backward = .true.
@@ -146,18 +138,14 @@ contains
       case ('--no-output'); opts%no_output = .true.
       case ('--differenced-hessian'); opts%analytic_hessian = .false.
       case default
-        call usage_error(name//': unknown flag "'//arg//'" (see --help)')
+        call die(name//': unknown flag '//arg//' (see --help)')
       end select
       i = i + 1
     end do
-    if (.not. (opts%h > 0.0_dp .and. ieee_is_finite(opts%h))) call usage_error(name//': --h must be finite and > 0')
-    ! the step count |T - t0| / h must fit an integer(i8) comfortably (t0 = 0 unless --from)
-    if (abs(opts%t_final) / opts%h > max_steps) then
-      write (txt, '(es10.3)') abs(opts%t_final) / opts%h
-      call usage_error(name//': --t-final / --h = '//trim(adjustl(txt))//' steps, more than 1e15')
-    end if
-    if (opts%append .and. .not. allocated(opts%from)) call usage_error(name//': --append needs --from FILE')
-    if (opts%append .and. opts%no_output) call usage_error(name//': --append and --no-output exclude each other')
+    if (.not. (opts%h > 0.0_dp)) call die(name//': --h must be positive')
+    if (opts%append .and. .not. allocated(opts%from)) call die(name//': --append needs --from FILE')
+    if (opts%append .and. opts%no_output) call die(name//': --append and --no-output exclude each other')
+    if (opts%flush_every < 1) call die(name//': --flush-every must be >= 1')
     ! --output FILE without an extension writes FILE plus the default extension; read it back the same way
     if (allocated(opts%from)) then
       inquire (file=opts%from, exist=exists)
@@ -216,13 +204,17 @@ contains
     t_target = opts%t_final
     if (opts%backward .and. allocated(opts%from) .and. .not. opts%t_final_given) t_target = t_first
     if (opts%backward .and. .not. allocated(opts%from) .and. .not. opts%t_final_given) t_target = -opts%t_final
-    nsteps = max(0_i8, ceiling(real(dir, dp) * (t_target - integ%time()) / opts%h - 1.0e-9_dp, i8))
+    nsteps = steps_to(name, integ%time(), t_target, opts%h, dir)
 
     if (.not. opts%no_output) then
       if (opts%append .and. .not. allocated(opts%output)) opts%output = opts%from
       if (.not. allocated(opts%output)) opts%output = name//merge('_backward', '         ', opts%backward)
       opts%output = trim(opts%output)
-      if (index(opts%output, '.') == 0) opts%output = opts%output//default_extension
+      ! a name without an extension gets the default one, unless it names an existing file
+      if (index(opts%output, '.') == 0 .and. c_path_kind(opts%output//c_null_char) == 0) &
+        opts%output = opts%output//default_extension
+      if (c_path_kind(opts%output//c_null_char) == 2) &
+        call die(name//': --output '//opts%output//' is not a regular file (a device or a directory)')
       if (is_csv(opts%output)) then
         if (opts%append) call die(name//': --append writes HDF5 only (not '//opts%output//')')
         call csv%open(opts%output, stat)
@@ -449,97 +441,99 @@ contains
     call get_command_argument(i, s)
   end function get_arg
 
-  !> A real flag's value: the whole token a decimal number ([sign] digits [. digits] [e [sign] digits]),
-  !> finite, in [lo, hi] (or (lo, hi] with open_low); else a usage error naming the flag and `what`.
-  real(dp) function real_in(name, flag, s, lo, hi, what, open_low) result(x)
-    character(len=*), intent(in) :: name, flag, s, what
+  !> Steps of length h from t_from to t_to in direction dir (0 when t_to is behind); more than 2^53
+  !> is refused (step indices stay exact in the float64 time grid).
+  integer(i8) function steps_to(name, t_from, t_to, h, dir)
+    character(len=*), intent(in) :: name
+    real(dp), intent(in) :: t_from, t_to, h
+    integer, intent(in) :: dir
+    character(len=160) :: msg
+    if (real(dir, dp) * (t_to - t_from) / h > steps_max) then
+      write (msg, '(a,es10.3,a,es10.3,a)') ': reaching t = ', t_to, ' takes more than 2^53 steps of h = ', h, &
+        ' (lower --t-final or raise --h)'
+      call die(name//trim(msg))
+    end if
+    steps_to = max(0_i8, ceiling(real(dir, dp) * (t_to - t_from) / h - 1.0e-9_dp, i8))
+  end function steps_to
+
+  !> The value of a real flag: the whole token must be one decimal number (sign, digits with at most
+  !> one point, an optional exponent), finite and in [lo, hi] (lo excluded when low_open). List-directed
+  !> READ alone would take `1,5` as 1 and `inf` as infinity.
+  real(dp) function to_real(s, flag, lo, hi, low_open)
+    character(len=*), intent(in) :: s, flag
     real(dp), intent(in) :: lo, hi
-    logical, intent(in), optional :: open_low
-    logical :: ok, strict_low
+    logical, intent(in), optional :: low_open
     integer :: ios
-    strict_low = .false.
-    if (present(open_low)) strict_low = open_low
-    x = 0.0_dp
-    ok = is_decimal(s)
-    if (ok) then
-      read (s, *, iostat=ios) x
-      ok = ios == 0 .and. ieee_is_finite(x)
+    logical :: open_lo
+    character(len=32) :: bound
+    open_lo = .false.; if (present(low_open)) open_lo = low_open
+    if (.not. is_decimal(s, integer_only=.false.)) call die(trim(program_name)//': invalid number for '//flag//': "'//s//'"')
+    read (s, *, iostat=ios) to_real
+    if (ios /= 0) call die(trim(program_name)//': invalid number for '//flag//': "'//s//'"')
+    if (.not. (to_real <= huge(to_real) .and. to_real >= -huge(to_real))) &
+      call die(trim(program_name)//': '//flag//' must be finite (got "'//s//'")')
+    if (to_real < lo .or. to_real > hi .or. (open_lo .and. to_real == lo)) then
+      write (bound, '(a,es9.2,a,es9.2,a)') merge('(', '[', open_lo), lo, ', ', hi, ']'
+      call die(trim(program_name)//': '//flag//' must be in '//trim(bound)//' (got "'//s//'")')
     end if
-    if (.not. ok) call usage_error(name//': '//flag//' needs a finite decimal number ('//what//'), not "'//s//'"')
-    if (x < lo .or. x > hi .or. (strict_low .and. x == lo)) &
-      call usage_error(name//': '//flag//' '//s//' is out of range: '//what)
-  end function real_in
+  end function to_real
 
-  !> An integer flag's value in [lo, hi]: a decimal number with an integral value (1000 or 1e3),
-  !> checked against the range before conversion, so that 1e20 is refused rather than overflowing.
-  integer function int_in(name, flag, s, lo, hi) result(k)
-    character(len=*), intent(in) :: name, flag, s
+  !> The value of an integer flag: digits only (with an optional sign), in [lo, hi]; `1e20` or
+  !> `2.5` are refused rather than rounded or wrapped.
+  integer function to_int(s, flag, lo, hi)
+    character(len=*), intent(in) :: s, flag
     integer, intent(in) :: lo, hi
-    real(dp) :: x
-    character(len=64) :: what
-    write (what, '(a,i0,a,i0)') 'an integer in ', lo, '..', hi
-    x = real_in(name, flag, s, -huge(1.0_dp), huge(1.0_dp), trim(what))
-    if (x /= aint(x) .or. x < real(lo, dp) .or. x > real(hi, dp)) &
-      call usage_error(name//': '//flag//' '//s//' is out of range: '//trim(what))
-    k = int(x)
-  end function int_in
+    integer :: ios
+    integer(i8) :: v
+    character(len=48) :: bound
+    if (.not. is_decimal(s, integer_only=.true.) .or. len_trim(s) > 18) &
+      call die(trim(program_name)//': invalid integer for '//flag//': "'//s//'"')
+    read (s, *, iostat=ios) v
+    if (ios /= 0) call die(trim(program_name)//': invalid integer for '//flag//': "'//s//'"')
+    if (v < lo .or. v > hi) then
+      write (bound, '(a,i0,a,i0,a)') '[', lo, ', ', hi, ']'
+      call die(trim(program_name)//': '//flag//' must be an integer in '//trim(bound)//' (got "'//s//'")')
+    end if
+    to_int = int(v)
+  end function to_int
 
-  !> Whether s, as a whole, is [+-] digits [. digits] [(e|E) [+-] digits] with at least one mantissa
-  !> digit: no blanks, commas, slashes, d exponents, inf or nan (list-directed input takes those).
-  logical function is_decimal(s)
+  !> Is s one decimal number: [+-] digits [. digits] [(e|E|d|D) [+-] digits], with at least one
+  !> digit in the mantissa (integer_only: [+-] digits)?
+  pure logical function is_decimal(s, integer_only)
     character(len=*), intent(in) :: s
-    integer :: i, n, mantissa_digits, fraction_digits, exponent_digits
+    logical, intent(in) :: integer_only
+    integer :: i, n, mantissa_digits, exp_digits
+    logical :: seen_point, seen_exp
     is_decimal = .false.
-    n = len(s); i = 1
+    n = len_trim(s)
     if (n == 0) return
+    i = 1
     if (s(1:1) == '+' .or. s(1:1) == '-') i = 2
-    call skip_digits(mantissa_digits)
-    if (i <= n) then
-      if (s(i:i) == '.') then
-        i = i + 1
-        call skip_digits(fraction_digits)
-        mantissa_digits = mantissa_digits + fraction_digits
-      end if
-    end if
-    if (mantissa_digits == 0) return
-    if (i <= n) then
-      if (s(i:i) /= 'e' .and. s(i:i) /= 'E') return
+    mantissa_digits = 0; exp_digits = 0; seen_point = .false.; seen_exp = .false.
+    do while (i <= n)
+      select case (s(i:i))
+      case ('0':'9')
+        if (seen_exp) then
+          exp_digits = exp_digits + 1
+        else
+          mantissa_digits = mantissa_digits + 1
+        end if
+      case ('.')
+        if (integer_only .or. seen_point .or. seen_exp) return
+        seen_point = .true.
+      case ('e', 'E', 'd', 'D')
+        if (integer_only .or. seen_exp .or. mantissa_digits == 0) return
+        seen_exp = .true.
+        if (i < n) then
+          if (s(i+1:i+1) == '+' .or. s(i+1:i+1) == '-') i = i + 1
+        end if
+      case default
+        return
+      end select
       i = i + 1
-      if (i <= n) then
-        if (s(i:i) == '+' .or. s(i:i) == '-') i = i + 1
-      end if
-      call skip_digits(exponent_digits)
-      if (exponent_digits == 0) return
-    end if
-    is_decimal = i > n
-  contains
-    subroutine skip_digits(count)
-      integer, intent(out) :: count
-      count = 0
-      do while (i <= n)
-        if (s(i:i) < '0' .or. s(i:i) > '9') exit
-        count = count + 1; i = i + 1
-      end do
-    end subroutine skip_digits
+    end do
+    is_decimal = mantissa_digits > 0 .and. (.not. seen_exp .or. exp_digits > 0)
   end function is_decimal
-
-  !> A path flag's value: not empty, and not an existing directory or device (the output would
-  !> otherwise become FILE.h5 beside /dev/full, or fail inside the writer).
-  function path_arg(name, flag, s) result(path)
-    character(len=*), intent(in) :: name, flag, s
-    character(len=:), allocatable :: path
-    if (len_trim(s) == 0) call usage_error(name//': '//flag//' needs a file name, not an empty string')
-    if (c_path_kind(s//c_null_char) == 2) &
-      call usage_error(name//': '//flag//' '//s//' is not a regular file (a directory or a device)')
-    path = s
-  end function path_arg
-
-  !> A bad command line: the message on stderr, exit status 2.
-  subroutine usage_error(msg)
-    character(len=*), intent(in) :: msg
-    write (error_unit, '(a)') msg
-    stop 2, quiet=.true.
-  end subroutine usage_error
 
   subroutine die(msg)
     character(len=*), intent(in) :: msg

@@ -1,10 +1,12 @@
-/* What a command-line path names, for the examples' parser (vci_example_cli): Fortran's inquire
- * cannot tell a regular file from a device or a directory. */
+/* What kind of file a command-line path names, for the examples' --output check: writing a
+ * trajectory into a device or a directory (say /dev/full) must be refused, not turned into
+ * "/dev/full.h5" or a disk-full error halfway through a run. */
 #include <sys/stat.h>
 
-/* 0: nothing there, 1: a regular file, 2: something else (a directory, a device, a FIFO). */
-int vci_example_path_kind(const char *path) {
-  struct stat st;
-  if (stat(path, &st) != 0) return 0;
-  return S_ISREG(st.st_mode) ? 1 : 2;
+/* 0: nothing there; 1: a regular file; 2: something else (device, directory, fifo, socket). */
+int vci_example_path_kind(const char *path)
+{
+    struct stat st;
+    if (stat(path, &st) != 0) return 0;
+    return S_ISREG(st.st_mode) ? 1 : 2;
 }
