@@ -79,7 +79,9 @@ contains
     character(len=*), intent(in) :: name, usage
     integer :: i, nargs
     logical :: exists
-    character(len=:), allocatable :: arg, val
+    ! saved: a bad flag stops the program inside this loop, and LeakSanitizer (asan preset) must
+    ! still find these strings reachable then
+    character(len=:), allocatable, save :: arg, val
     program_name = name
     nargs = command_argument_count()
     i = 1
