@@ -4,114 +4,17 @@
 !> the timed steps, so every step is a regular one with its gap test), analytic Hessians, midpoint
 !> scheme. Prints the time per step against n, the time of one LU factorisation (dgetrf) of a dense
 !> n x n matrix in the same process, their ratio, and the exponents fitted over n >= 32.
+!> The chain is the scene's continuous model (examples/scenes/vci_scene_fpu_walls.f90) with w = 10.
 !> Not a test: tools/bench/run_bench.sh runs it (OPENBLAS_NUM_THREADS decides LAPACK's threads).
-module bench_fpu
-  use vci
-  implicit none
-  private
-  type, extends(vci_lagrangian_t), public :: fpu_t
-    real(dp) :: beta = 1.0_dp, wall = 10.0_dp
-  contains
-    procedure :: lagrangian, dl_dq, dl_dv, hessians, gaps, gap_gradients
-  end type fpu_t
-contains
-  pure real(dp) function bond(q, i)          ! x_{i+1} - x_i, i = 0..n
-    real(dp), intent(in) :: q(:)
-    integer, intent(in) :: i
-    real(dp) :: lo, hi
-    lo = 0.0_dp; hi = 0.0_dp
-    if (i >= 1) lo = q(i)
-    if (i + 1 <= size(q)) hi = q(i + 1)
-    bond = hi - lo
-  end function bond
-  subroutine lagrangian(self, q, v, l, stat)
-    class(fpu_t), intent(inout) :: self
-    real(dp), intent(in) :: q(:), v(:)
-    real(dp), intent(out) :: l
-    integer, intent(inout) :: stat
-    integer :: i
-    real(dp) :: r
-    l = 0.5_dp * sum(v**2)
-    do i = 0, size(q)
-      r = bond(q, i)
-      l = l - 0.5_dp * r**2 - 0.25_dp * self%beta * r**4
-    end do
-  end subroutine lagrangian
-  subroutine dl_dq(self, q, v, out, stat)
-    class(fpu_t), intent(inout) :: self
-    real(dp), intent(in) :: q(:), v(:)
-    real(dp), intent(out) :: out(:)
-    integer, intent(inout) :: stat
-    integer :: i, n
-    real(dp) :: r, f
-    n = size(q)
-    out = 0.0_dp
-    do i = 0, n
-      r = bond(q, i)
-      f = r + self%beta * r**3               ! tension of bond i
-      if (i >= 1) out(i) = out(i) + f
-      if (i + 1 <= n) out(i + 1) = out(i + 1) - f
-    end do
-  end subroutine dl_dq
-  subroutine dl_dv(self, q, v, out, stat)
-    class(fpu_t), intent(inout) :: self
-    real(dp), intent(in) :: q(:), v(:)
-    real(dp), intent(out) :: out(:)
-    integer, intent(inout) :: stat
-    out = v
-  end subroutine dl_dv
-  subroutine hessians(self, q, v, lqq, lqv, lvv, stat)
-    class(fpu_t), intent(inout) :: self
-    real(dp), intent(in) :: q(:), v(:)
-    real(dp), intent(out) :: lqq(:, :), lqv(:, :), lvv(:, :)
-    integer, intent(inout) :: stat
-    integer :: i, n
-    real(dp) :: k
-    n = size(q)
-    lqq = 0.0_dp; lqv = 0.0_dp; lvv = 0.0_dp
-    do i = 1, n
-      lvv(i, i) = 1.0_dp
-    end do
-    do i = 0, n
-      k = 1.0_dp + 3.0_dp * self%beta * bond(q, i)**2     ! stiffness of bond i
-      if (i >= 1) lqq(i, i) = lqq(i, i) - k
-      if (i + 1 <= n) lqq(i + 1, i + 1) = lqq(i + 1, i + 1) - k
-      if (i >= 1 .and. i + 1 <= n) then
-        lqq(i, i + 1) = lqq(i, i + 1) + k; lqq(i + 1, i) = lqq(i + 1, i) + k
-      end if
-    end do
-  end subroutine hessians
-  subroutine gaps(self, q, g, stat)
-    class(fpu_t), intent(inout) :: self
-    real(dp), intent(in) :: q(:)
-    real(dp), intent(out) :: g(:)
-    integer, intent(inout) :: stat
-    integer :: n
-    n = size(q)
-    g(1:n) = self%wall - q; g(n + 1:2 * n) = self%wall + q
-  end subroutine gaps
-  subroutine gap_gradients(self, q, dg, stat)
-    class(fpu_t), intent(inout) :: self
-    real(dp), intent(in) :: q(:)
-    real(dp), intent(out) :: dg(:, :)
-    integer, intent(inout) :: stat
-    integer :: i, n
-    n = size(q)
-    dg = 0.0_dp
-    do i = 1, n
-      dg(i, i) = -1.0_dp; dg(i, n + i) = 1.0_dp
-    end do
-  end subroutine gap_gradients
-end module bench_fpu
 
 program bench_chain_n
   use, intrinsic :: iso_fortran_env, only: output_unit
   use vci
   use vci_lapack, only: dgetrf
-  use bench_fpu
+  use vci_scene_fpu_walls, only: fpu_walls_lagrangian_t, fpu_walls_lagrangian_model
   implicit none
   integer, parameter :: ns(8) = [2, 4, 8, 16, 32, 64, 128, 256]
-  type(fpu_t), target :: model
+  type(fpu_walls_lagrangian_t), target :: model
   type(vci_integrator_t) :: integ
   integer, parameter :: nrep = 5
   integer :: in, n, stat, i, info, reps, rep
@@ -128,7 +31,7 @@ program bench_chain_n
   write (output_unit, '(a)') '|---:|---:|---:|---:|---:|---:|---:|'
   do in = 1, size(ns)
     n = ns(in)
-    model%n = n; model%n_gaps = 2 * n
+    model = fpu_walls_lagrangian_model(n, 1.0_dp, 10.0_dp)   ! beta = 1, walls far away
     allocate (q0(n), p0(n))
     do i = 1, n                                  ! the lowest mode, amplitude 0.5: the quartic term matters
       q0(i) = 0.5_dp * sin(pi * real(i, dp) / real(n + 1, dp))

@@ -16,6 +16,8 @@ module vci_scene_pendulum_walls
   end type pendulum_walls_t
 
   public :: pendulum_walls_model
+  ! the walls and H, shared with the hand-written midpoint L_d (vci_scene_pendulum_walls_ld)
+  public :: pendulum_walls_gaps, pendulum_walls_gap_gradients, pendulum_energy
 
 contains
 
@@ -66,8 +68,7 @@ contains
     real(dp), intent(in) :: q(:)
     real(dp), intent(out) :: g(:)
     integer, intent(inout) :: stat
-    g(1) = self%theta_wall - q(1)
-    g(2) = q(1) + self%theta_wall
+    call pendulum_walls_gaps(self%theta_wall, q, g)
   end subroutine gaps
 
   subroutine gap_gradients(self, q, dg, stat)
@@ -75,16 +76,36 @@ contains
     real(dp), intent(in) :: q(:)
     real(dp), intent(out) :: dg(:, :)
     integer, intent(inout) :: stat
-    dg(1, 1) = -1.0_dp
-    dg(1, 2) = 1.0_dp
+    call pendulum_walls_gap_gradients(dg)
   end subroutine gap_gradients
 
-  !> H(q, p) = p²/(2 m l²) − m g l cos θ.
+  !> H(q, p) (pendulum_energy).
   subroutine energy(self, q, p, e, stat)
     class(pendulum_walls_t), intent(inout) :: self
     real(dp), intent(in) :: q(:), p(:)
     real(dp), intent(out) :: e
     integer, intent(inout) :: stat
-    e = 0.5_dp * p(1)**2 / (self%mass * self%length**2) - self%mass * self%grav * self%length * cos(q(1))
+    e = pendulum_energy(self%mass, self%grav, self%length, q, p)
   end subroutine energy
+
+  !> The walls g_1 = θ_w − θ >= 0 and g_2 = θ + θ_w >= 0.
+  pure subroutine pendulum_walls_gaps(theta_wall, q, g)
+    real(dp), intent(in) :: theta_wall, q(:)
+    real(dp), intent(out) :: g(:)
+    g(1) = theta_wall - q(1)
+    g(2) = q(1) + theta_wall
+  end subroutine pendulum_walls_gaps
+
+  !> Their gradients (columns): −1 and +1.
+  pure subroutine pendulum_walls_gap_gradients(dg)
+    real(dp), intent(out) :: dg(:, :)
+    dg(1, 1) = -1.0_dp
+    dg(1, 2) = 1.0_dp
+  end subroutine pendulum_walls_gap_gradients
+
+  !> H(q, p) = p²/(2 m l²) − m g l cos θ.
+  pure real(dp) function pendulum_energy(mass, grav, length, q, p) result(e)
+    real(dp), intent(in) :: mass, grav, length, q(:), p(:)
+    e = 0.5_dp * p(1)**2 / (mass * length**2) - mass * grav * length * cos(q(1))
+  end function pendulum_energy
 end module vci_scene_pendulum_walls

@@ -7,6 +7,7 @@
 module vci_scene_pendulum_walls_ld
   use vci_kinds, only: dp
   use vci_model, only: vci_model_t
+  use vci_scene_pendulum_walls, only: pendulum_walls_gaps, pendulum_walls_gap_gradients, pendulum_energy
   implicit none
   private
 
@@ -69,8 +70,7 @@ contains
     real(dp), intent(in) :: q(:)
     real(dp), intent(out) :: g(:)
     integer, intent(inout) :: stat
-    g(1) = self%theta_wall - q(1)
-    g(2) = q(1) + self%theta_wall
+    call pendulum_walls_gaps(self%theta_wall, q, g)
   end subroutine gaps
 
   subroutine gap_gradients(self, q, dg, stat)
@@ -78,8 +78,7 @@ contains
     real(dp), intent(in) :: q(:)
     real(dp), intent(out) :: dg(:, :)
     integer, intent(inout) :: stat
-    dg(1, 1) = -1.0_dp
-    dg(1, 2) = 1.0_dp
+    call pendulum_walls_gap_gradients(dg)
   end subroutine gap_gradients
 
   !> H(q, p) = p^2 / (2 m l^2) - m g l cos q.
@@ -88,6 +87,6 @@ contains
     real(dp), intent(in) :: q(:), p(:)
     real(dp), intent(out) :: e
     integer, intent(inout) :: stat
-    e = 0.5_dp * p(1)**2 / (self%mass * self%length**2) - self%mass * self%grav * self%length * cos(q(1))
+    e = pendulum_energy(self%mass, self%grav, self%length, q, p)
   end subroutine energy
 end module vci_scene_pendulum_walls_ld
