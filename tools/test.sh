@@ -12,7 +12,7 @@ cmake --preset mpi
 cmake --build --preset mpi
 ctest --preset mpi
 # The C and core suites and the random-input harness (60 s) under AddressSanitizer and
-# UndefinedBehaviorSanitizer; the threads test under ThreadSanitizer (docs/TESTING.md).
+# UndefinedBehaviorSanitizer, leak detection on; the threads test under ThreadSanitizer (docs/TESTING.md).
 cmake --preset asan
 cmake --build --preset asan
 ctest --preset asan
