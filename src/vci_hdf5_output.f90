@@ -6,9 +6,11 @@
 !> Between flushes the file is not touched, so a killed run leaves a file that opens and holds every
 !> step up to the last flush. Memory does not grow with the number of steps.
 !>
-!> Restart: when the writer is attached to the integrator (`attach`), each flush also stores the
-!> integrator's checkpoint in `/checkpoint`; `vci_hdf5_read_checkpoint` + `restore` then continue the
-!> run bit for bit, and `open(..., append=.true.)` continues the same file.
+!> Restart: the writer keeps checkpoints (keeps_checkpoints) without knowing the driver: before a
+!> report that will flush it asks for one (wants_checkpoint), the driver hands it over
+!> (on_checkpoint), and the flush stores it in `/checkpoint` with the row it is the state of;
+!> `vci_hdf5_read_checkpoint` + `restore` then continue the run bit for bit, and
+!> `open(..., append=.true.)` continues the same file.
 !>
 !> Nothing here stops or prints (HDF5's own error printing is switched off); failures give
 !> VCI_ERR_IO and a message naming the file and the cause. Files are input like any other: every
@@ -22,7 +24,6 @@ module vci_hdf5_output
   use vci_status, only: VCI_OK, VCI_ERR_IO, VCI_MSG_LEN
   use vci_limits, only: vci_size_problem
   use vci_observer, only: vci_observer_t, vci_run_info_t, vci_impact_t
-  use vci_integrator, only: vci_integrator_t
   use vci_checkpoint, only: vci_checkpoint_t, vci_checkpoint_from_state, VCI_CHECKPOINT_VERSION
   implicit none
   private
@@ -40,8 +41,8 @@ module vci_hdf5_output
   ! rows per chunk: states and steps, impacts (few, so small chunks)
   integer, parameter :: chunk_rows = 1024, impact_chunk_rows = 64
 
-  !> The HDF5 observer. Use: `call w%open(path, stat)`, optionally `call w%attach(integ)`, then
-  !> `call integ%integrate(nsteps, dir, stat, w)`; the file is closed by the run's end (on_finish).
+  !> The HDF5 observer. Use: `call w%open(path, stat)`, then `call integ%integrate(nsteps, dir,
+  !> stat, w)`; the file is closed by the run's end (on_finish).
   type, extends(vci_observer_t), public :: vci_hdf5_writer_t
     character(len=VCI_MSG_LEN) :: message = ''   !< what went wrong, naming the file
     character(len=:), allocatable :: path
@@ -50,7 +51,9 @@ module vci_hdf5_output
     logical :: flush_on_impact = .true.           !< flush after the step of every impact
     logical :: append = .false.                   !< continuing an existing file
     logical :: is_open = .false.
-    type(vci_integrator_t), pointer, private :: integ => null()
+    type(vci_checkpoint_t), private :: cp          !< the driver's latest checkpoint (on_checkpoint)
+    logical, private :: have_cp = .false.
+    integer(i8), private :: last_step = 0          !< index of the last state reported (on_start, on_step)
     integer(hid_t), private :: file = -1, g_imp = -1, g_cp = -1
     integer(hid_t), private :: d_t = -1, d_q = -1, d_p = -1, d_e = -1, d_l = -1
     integer(hid_t), private :: d_it = -1, d_is = -1, d_ia = -1, d_ig = -1, d_iq = -1, d_ii = -1
@@ -68,12 +71,15 @@ module vci_hdf5_output
     real(dp), allocatable, private :: cp_rec(:)   !< the file's checkpoint, when it is valid (reading)
   contains
     procedure :: open => w_open
-    procedure :: attach => w_attach
     procedure :: close => w_close
     procedure :: on_start => w_start
     procedure :: on_step => w_step
     procedure :: on_impact => w_impact
     procedure :: on_finish => w_finish
+    procedure :: keeps_checkpoints => w_keeps_checkpoints
+    procedure :: wants_checkpoint => w_wants_checkpoint
+    procedure :: on_checkpoint => w_checkpoint
+    procedure :: failure_cause => w_failure_cause
   end type vci_hdf5_writer_t
 
   public :: vci_hdf5_read_checkpoint
@@ -114,6 +120,7 @@ contains
     end if
     self%started = .false.; self%flush_pending = .false.
     self%ns = 0; self%ne = 0; self%ni = 0
+    self%have_cp = .false.
 
     call h5open_f(err)
     if (err == 0) call h5eset_auto_f(0, err)   ! the library never prints
@@ -154,13 +161,34 @@ contains
     if (stat /= VCI_OK) call w_close(self)
   end subroutine w_open
 
-  !> Store `integ`'s checkpoint at every flush so that a restart from the file is bitwise. The
-  !> integrator must be the one running with this observer and must outlive the run.
-  subroutine w_attach(self, integ)
+  !> Yes: every flush stores the checkpoint of its last row, so a restart is bitwise.
+  pure logical function w_keeps_checkpoints(self)
+    class(vci_hdf5_writer_t), intent(in) :: self
+    w_keeps_checkpoints = .true.
+  end function w_keeps_checkpoints
+
+  !> Before on_start, and before an on_step that flushes (a full buffer, or an impact in the step).
+  pure logical function w_wants_checkpoint(self)
+    class(vci_hdf5_writer_t), intent(in) :: self
+    w_wants_checkpoint = self%is_open .and. (.not. self%started .or. self%ne + 1 >= self%flush_every &
+                                             .or. self%flush_pending)
+  end function w_wants_checkpoint
+
+  !> Keep the driver's checkpoint for the next flush (stored only if it is the state of its last row).
+  subroutine w_checkpoint(self, cp, stat)
     class(vci_hdf5_writer_t), intent(inout) :: self
-    type(vci_integrator_t), target, intent(in) :: integ
-    self%integ => integ
-  end subroutine w_attach
+    type(vci_checkpoint_t), intent(in) :: cp
+    integer, intent(inout) :: stat
+    self%cp = cp
+    self%have_cp = .true.
+  end subroutine w_checkpoint
+
+  !> The message of the last failure (naming the file and the cause).
+  subroutine w_failure_cause(self, cause)
+    class(vci_hdf5_writer_t), intent(in) :: self
+    character(len=*), intent(out) :: cause
+    cause = self%message
+  end subroutine w_failure_cause
 
   !> Close the file without a run end (e.g. when a run could not start). Safe to call twice.
   subroutine w_close(self)
@@ -367,6 +395,7 @@ contains
     if (s == VCI_OK) then
       call alloc_buffers(self)
       self%step0 = info%step0
+      self%last_step = info%step0
       self%started = .true.
       if (.not. self%append) call buffer_state(self, info%t0, q, p)
       call put_attr_int(self, self%file, 'status', VCI_HDF5_RUNNING, s)
@@ -413,10 +442,6 @@ contains
       call make_dset(self, self%g_imp, 'q', info%n, impact_chunk_rows, H5T_IEEE_F64LE, self%d_iq, stat)
       call make_dset(self, self%g_imp, 'impulse', 0, impact_chunk_rows, H5T_IEEE_F64LE, self%d_ii, stat)
     end if
-    if (stat == VCI_OK .and. associated(self%integ)) then
-      call h5gcreate_f(self%file, 'checkpoint', self%g_cp, err)
-      if (err /= 0) call fail(self, 'cannot create group /checkpoint', stat)
-    end if
   end subroutine start_new
 
   !> Appending: the run must continue the file's last state, same sizes, step and direction.
@@ -441,10 +466,6 @@ contains
       call fail(self, 'cannot append: the run does not start from the file''s last state', stat); return
     end if
     self%row_start = self%rows - 1
-    if (associated(self%integ) .and. self%g_cp < 0) then
-      call h5gcreate_f(self%file, 'checkpoint', self%g_cp, err)
-      if (err /= 0) call fail(self, 'cannot create group /checkpoint', stat)
-    end if
   end subroutine start_append
 
   subroutine alloc_buffers(self)
@@ -473,6 +494,7 @@ contains
       stat = VCI_ERR_IO; return
     end if
     call buffer_state(self, t, q, p)
+    self%last_step = step
     self%ne = self%ne + 1
     self%be(self%ne) = energy
     if (self%m > 0) self%bl(:, self%ne) = lambda
@@ -571,7 +593,10 @@ contains
     self%ns = 0; self%ne = 0; self%ni = 0
     self%flush_pending = .false.
     ! steps_completed last: it marks what a reader of a killed run's file can trust
-    if (associated(self%integ) .and. self%g_cp >= 0) call put_checkpoint(self, self%integ%checkpoint(), stat)
+    if (self%have_cp) then
+      if (self%cp%step == self%last_step) call put_checkpoint(self, self%cp, stat)
+      self%have_cp = .false.
+    end if
     call put_attr_i8(self, self%file, 'steps_completed', self%steps, stat)
     if (stat /= VCI_OK) return
     call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
@@ -584,11 +609,19 @@ contains
     type(vci_hdf5_writer_t), intent(inout) :: self
     type(vci_checkpoint_t), intent(in) :: cp
     integer, intent(inout) :: stat
+    integer :: err
+    if (stat /= VCI_OK) return
+    if (self%g_cp < 0) then
+      call h5gcreate_f(self%file, 'checkpoint', self%g_cp, err)
+      if (err /= 0) then
+        call fail(self, 'cannot create group /checkpoint', stat); return
+      end if
+    end if
     call put_vector(self, self%g_cp, 'record', [real(self%rows - 1, dp), cp%to_record()], stat)
   end subroutine put_checkpoint
 
   !> The state a restart from PATH starts with, as a checkpoint for `integ%restore`. With a
-  !> /checkpoint group (written when the writer was attached) the restart is bitwise; without one
+  !> /checkpoint group (written when the driver handed checkpoints over) the restart is bitwise; without one
   !> it is the last row (t, q, p, lambda) with index 0 at that time, like init_from_momentum.
   !> Optional: t_first (time of row 0), direction (+1/-1), message (why stat /= 0).
   subroutine vci_hdf5_read_checkpoint(path, cp, stat, message, t_first, direction)
