@@ -29,6 +29,7 @@ module vci_capi
   use vci_model, only: vci_model_t
   use vci_lagrangian, only: vci_lagrangian_t
   use vci_observer, only: vci_observer_t, vci_run_info_t, vci_impact_t
+  use vci_checkpoint, only: vci_checkpoint_t
   use vci_integrator, only: vci_integrator_t, vci_stats_t, VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN
   use vci_callback_adapter, only: vci_callback_record_t
   use vci, only: VCI_VERSION_NUMBER
@@ -190,6 +191,10 @@ module vci_capi
     procedure :: on_step => obs_step
     procedure :: on_impact => obs_impact
     procedure :: on_finish => obs_finish
+    procedure :: keeps_checkpoints => obs_keeps_checkpoints
+    procedure :: wants_checkpoint => obs_wants_checkpoint
+    procedure :: on_checkpoint => obs_checkpoint
+    procedure :: failure_cause => obs_failure_cause
   end type c_observer_t
 
   !> The C continuous model: extends vci_lagrangian_t as c_model_t extends vci_model_t; the return
@@ -755,6 +760,33 @@ contains
     end if
   end subroutine obs_impact
 
+  ! checkpoints go to the output (HDF5 stores them: restarts from its file continue bit for bit)
+  pure logical function obs_keeps_checkpoints(self)
+    class(c_observer_t), intent(in) :: self
+    obs_keeps_checkpoints = .false.
+    if (allocated(self%output)) obs_keeps_checkpoints = self%output%keeps_checkpoints()
+  end function obs_keeps_checkpoints
+
+  pure logical function obs_wants_checkpoint(self)
+    class(c_observer_t), intent(in) :: self
+    obs_wants_checkpoint = .false.
+    if (allocated(self%output)) obs_wants_checkpoint = self%output%wants_checkpoint()
+  end function obs_wants_checkpoint
+
+  subroutine obs_checkpoint(self, cp, stat)
+    class(c_observer_t), intent(inout) :: self
+    type(vci_checkpoint_t), intent(in) :: cp
+    integer, intent(inout) :: stat
+    if (allocated(self%output)) call self%output%on_checkpoint(cp, stat)
+  end subroutine obs_checkpoint
+
+  subroutine obs_failure_cause(self, cause)
+    class(c_observer_t), intent(in) :: self
+    character(len=*), intent(out) :: cause
+    cause = ''
+    if (allocated(self%output)) call self%output%failure_cause(cause)
+  end subroutine obs_failure_cause
+
   !> Runs end at vci_close_output or destroy, not at the end of each vci_integrate call.
   subroutine obs_finish(self, status, message, stat)
     class(c_observer_t), intent(inout) :: self
@@ -770,6 +802,9 @@ contains
     if (.not. allocated(ip%obs%output)) return
     ! also when no step was written: the writer then just closes its file
     call lock_io()
+    if (ip%obs%started .and. ip%obs%output%keeps_checkpoints()) &
+      call ip%obs%output%on_checkpoint(ip%integ%checkpoint(), stat)
+    stat = 0
     call ip%obs%output%on_finish(ip%integ%status(), trim(ip%integ%message_text()), stat)
     deallocate (ip%obs%output)
     call unlock_io()
@@ -1265,8 +1300,11 @@ contains
       ! a single step has no on_start of its own: the output's run starts with the first step
       ostat = 0
       if (allocated(ip%obs%output) .and. .not. ip%obs%started .and. ip%integ%is_initialized() .and. &
-          (direction == 1 .or. direction == -1)) call ip%obs%on_start(ip%integ%run_info(int(direction)), ip%integ%configuration(), &
-                                                    ip%integ%momentum(), ostat)
+          (direction == 1 .or. direction == -1)) then
+        if (ip%obs%wants_checkpoint()) call ip%obs%on_checkpoint(ip%integ%checkpoint(), ostat)
+        if (ostat == 0) call ip%obs%on_start(ip%integ%run_info(int(direction)), ip%integ%configuration(), &
+                                             ip%integ%momentum(), ostat)
+      end if
       if (ostat /= 0) then
         stat = fail(ip, VCI_ERR_IO, 'vci_step: the output could not start the run: '//trim(output_message(ip)))
       else
@@ -1483,7 +1521,6 @@ contains
           if (stat /= VCI_OK) then
             stat = fail(ip, VCI_ERR_IO, 'vci_open_output: '//trim(w%message))
           else
-            call w%attach(ip%integ)   ! checkpoints in the file: restarts continue bit for bit
             call move_alloc(w, ip%obs%output)
             ip%obs%started = .false.
             ip%obs%direction = 0

@@ -577,10 +577,12 @@ contains
       do i = 1, self%n_impacts
         call observer%on_impact(self%impacts(i), ostat)
       end do
+      if (ostat == 0 .and. observer%wants_checkpoint()) call observer%on_checkpoint(self%checkpoint(), ostat)
       if (ostat == 0) call observer%on_step(self%k, t, self%q, self%p, self%lambda, self%step_energy, ostat)
       if (ostat /= 0) then
         write (self%last_message, '(a,i0,a,es14.7,a)') 'observer failed after step to index ', self%k, &
           ' (t = ', t, ')'
+        call append_observer_cause(self, observer)
         call finish(self, VCI_ERR_IO, stat); return
       end if
     end if
@@ -611,9 +613,11 @@ contains
     end if
     if (present(observer)) then
       ostat = 0
-      call observer%on_start(self%run_info(direction), self%q, self%p, ostat)
+      if (observer%wants_checkpoint()) call observer%on_checkpoint(self%checkpoint(), ostat)
+      if (ostat == 0) call observer%on_start(self%run_info(direction), self%q, self%p, ostat)
       if (ostat /= 0) then
         self%last_message = 'integrate: observer failed at the start of the run'
+        call append_observer_cause(self, observer)
         call finish(self, VCI_ERR_IO, stat); return
       end if
     end if
@@ -624,15 +628,28 @@ contains
     end do
     if (present(observer)) then
       ostat = 0
+      ! the state is the last accepted step's: an output that flushes at the end stores it
+      if (observer%keeps_checkpoints()) call observer%on_checkpoint(self%checkpoint(), ostat)
+      ostat = 0
       call observer%on_finish(stat, trim(self%last_message), ostat)
       if (ostat /= 0 .and. stat == VCI_OK) then
         self%last_message = 'integrate: observer failed at the end of the run'
+        call append_observer_cause(self, observer)
         call finish(self, VCI_ERR_IO, stat); return
       end if
     end if
     self%last_status = stat
     if (stat == VCI_OK) self%last_message = ''   ! also after 0 steps: no message of an earlier call
   end subroutine integrate
+
+  !> An observer stopped the run: its own reason (the file, the OS's cause) after the message.
+  subroutine append_observer_cause(self, observer)
+    class(vci_integrator_t), intent(inout) :: self
+    class(vci_observer_t), intent(in) :: observer
+    character(len=len(self%last_message)) :: cause
+    call observer%failure_cause(cause)
+    if (len_trim(cause) > 0) self%last_message = trim(self%last_message)//': '//trim(cause)
+  end subroutine append_observer_cause
 
   !> The current state and solver memory, for restarts that continue bit for bit.
   function checkpoint(self) result(cp)

@@ -40,6 +40,10 @@ module vci_example_cli
     procedure :: on_step => s_step
     procedure :: on_impact => s_impact
     procedure :: on_finish => s_finish
+    procedure :: keeps_checkpoints => s_keeps_checkpoints
+    procedure :: wants_checkpoint => s_wants_checkpoint
+    procedure :: on_checkpoint => s_checkpoint
+    procedure :: failure_cause => s_failure_cause
   end type summary_observer_t
 
   interface
@@ -228,7 +232,6 @@ contains
         call h5%open(opts%output, stat, overwrite=.not. opts%append, append=opts%append, scene=name, &
                      flush_every=opts%flush_every)
         if (stat /= VCI_OK) call die(name//': '//trim(h5%message))
-        call h5%attach(integ)
         summary%next => h5
 #else
         call die(name//': built without HDF5; use an --output name ending in .csv')
@@ -433,6 +436,33 @@ contains
     integer, intent(inout) :: stat
     if (associated(self%next)) call self%next%on_finish(status, message, stat)
   end subroutine s_finish
+
+  ! checkpoints pass through to `next` (the HDF5 file stores them: --from continues bit for bit)
+  pure logical function s_keeps_checkpoints(self)
+    class(summary_observer_t), intent(in) :: self
+    s_keeps_checkpoints = .false.
+    if (associated(self%next)) s_keeps_checkpoints = self%next%keeps_checkpoints()
+  end function s_keeps_checkpoints
+
+  pure logical function s_wants_checkpoint(self)
+    class(summary_observer_t), intent(in) :: self
+    s_wants_checkpoint = .false.
+    if (associated(self%next)) s_wants_checkpoint = self%next%wants_checkpoint()
+  end function s_wants_checkpoint
+
+  subroutine s_checkpoint(self, cp, stat)
+    class(summary_observer_t), intent(inout) :: self
+    type(vci_checkpoint_t), intent(in) :: cp
+    integer, intent(inout) :: stat
+    if (associated(self%next)) call self%next%on_checkpoint(cp, stat)
+  end subroutine s_checkpoint
+
+  subroutine s_failure_cause(self, cause)
+    class(summary_observer_t), intent(in) :: self
+    character(len=*), intent(out) :: cause
+    cause = ''
+    if (associated(self%next)) call self%next%failure_cause(cause)
+  end subroutine s_failure_cause
 
   function get_arg(i) result(s)
     integer, intent(in) :: i
