@@ -17,7 +17,7 @@ module vci_h5_io
   implicit none
   private
 
-  public :: h5io_fail, h5io_os_cause
+  public :: h5io_fail, h5io_os_cause, h5io_flush_rows, h5io_discard_writes
   public :: h5io_put_attr, h5io_get_attr
   public :: h5io_make_rows, h5io_open_dset, h5io_rows, h5io_append_rows, h5io_read_row
   public :: h5io_put_vector, h5io_get_vector, h5io_close_dset, h5io_string_type
@@ -52,6 +52,31 @@ module vci_h5_io
       type(c_funptr), value :: func
       type(c_ptr), value :: client
     end function h5ewalk2
+    integer(c_int) function h5fget_vfd_handle(file, fapl, handle) bind(C, name='H5Fget_vfd_handle')
+      import :: c_int64_t, c_int, c_ptr
+      integer(c_int64_t), value :: file, fapl
+      type(c_ptr), intent(out) :: handle
+    end function h5fget_vfd_handle
+    type(c_ptr) function c_fopen(path, mode) bind(C, name='fopen')
+      import :: c_ptr, c_char
+      character(kind=c_char), intent(in) :: path(*), mode(*)
+    end function c_fopen
+    integer(c_int) function h5dflush(dset) bind(C, name='H5Dflush')
+      import :: c_int64_t, c_int
+      integer(c_int64_t), value :: dset
+    end function h5dflush
+    integer(c_int) function c_fileno(stream) bind(C, name='fileno')
+      import :: c_int, c_ptr
+      type(c_ptr), value :: stream
+    end function c_fileno
+    integer(c_int) function c_fclose(stream) bind(C, name='fclose')
+      import :: c_int, c_ptr
+      type(c_ptr), value :: stream
+    end function c_fclose
+    integer(c_int) function c_dup2(old, new) bind(C, name='dup2')
+      import :: c_int
+      integer(c_int), value :: old, new
+    end function c_dup2
     integer(c_size_t) function c_strlen(s) bind(C, name='strlen')
       import :: c_ptr, c_size_t
       type(c_ptr), value :: s
@@ -107,6 +132,51 @@ contains
     k = index(desc, "'")
     if (k > 1) found = desc(1:k - 1)
   end function take_os_cause
+
+  !> Write the raw data of datasets `dsets` (ids < 0 skipped) to the disk (H5Dflush), before the
+  !> file's metadata. A failure here (a full disk) is caught before H5Fflush: HDF5 1.10 cannot flush
+  !> or close a file whose metadata flush failed (its cache keeps its skip list enabled: "slist
+  !> already enabled?") and crashes at exit in its shutdown (H5F__close_cb). err /= 0: the cause
+  !> (the OS's reason) in `cause`; call h5io_discard_writes before anything else touches the file.
+  subroutine h5io_flush_rows(dsets, err, cause)
+    integer(hid_t), intent(in) :: dsets(:)
+    integer, intent(out) :: err
+    character(len=*), intent(out) :: cause
+    integer :: i
+    err = 0; cause = ''
+    do i = 1, size(dsets)
+      if (dsets(i) < 0) cycle
+      if (h5dflush(int(dsets(i), c_int64_t)) < 0) then
+        err = -1
+        cause = h5io_os_cause()
+        if (len_trim(cause) == 0) cause = 'HDF5 gives no reason'
+        return
+      end if
+    end do
+  end subroutine h5io_flush_rows
+
+  !> A file that cannot be written any more (a full disk): point its descriptor (sec2 driver) at
+  !> /dev/null, so that what HDF5 still holds goes nowhere and its closes complete and free
+  !> everything. The file keeps what reached the disk before (up to the last complete flush).
+  subroutine h5io_discard_writes(file)
+    integer(hid_t), intent(in) :: file
+    integer(hid_t) :: fapl, driver
+    integer :: e2
+    integer(c_int) :: r
+    type(c_ptr) :: handle, devnull
+    integer(c_int), pointer :: fd
+    call h5fget_access_plist_f(file, fapl, e2)
+    if (e2 == 0) call h5pget_driver_f(fapl, driver, e2)
+    if (e2 == 0) call h5pclose_f(fapl, e2)
+    if (e2 /= 0 .or. driver /= H5FD_SEC2_F) return
+    r = h5fget_vfd_handle(int(file, c_int64_t), 0_c_int64_t, handle)
+    devnull = c_fopen('/dev/null'//c_null_char, 'r+'//c_null_char)
+    if (r >= 0 .and. c_associated(handle) .and. c_associated(devnull)) then
+      call c_f_pointer(handle, fd)
+      r = c_dup2(c_fileno(devnull), fd)
+    end if
+    if (c_associated(devnull)) r = c_fclose(devnull)
+  end subroutine h5io_discard_writes
 
   ! --- attributes --------------------------------------------------------------------------------
 

@@ -54,6 +54,7 @@ module vci_hdf5_output
     logical :: is_open = .false.
     type(vci_checkpoint_t), private :: cp          !< the driver's latest checkpoint (on_checkpoint)
     logical, private :: have_cp = .false.
+    logical, private :: discarded = .false.       !< writes failed (a full disk): nothing more reaches the file
     integer(i8), private :: last_step = 0          !< index of the last state reported (on_start, on_step)
     integer(hid_t), private :: file = -1, g_imp = -1, g_cp = -1
     integer(hid_t), private :: d_t = -1, d_q = -1, d_p = -1, d_e = -1, d_l = -1
@@ -99,6 +100,7 @@ contains
     integer, intent(in), optional :: flush_every
     logical :: exists, replace
     integer :: err
+    character(len=256) :: cause
 
     stat = VCI_OK
     self%message = ''
@@ -121,7 +123,7 @@ contains
     end if
     self%started = .false.; self%flush_pending = .false.
     self%ns = 0; self%ne = 0; self%ni = 0
-    self%have_cp = .false.
+    self%have_cp = .false.; self%discarded = .false.
 
     call h5open_f(err)
     if (err == 0) call h5eset_auto_f(0, err)   ! the library never prints
@@ -149,7 +151,9 @@ contains
     end if
     call h5fcreate_f(path, H5F_ACC_TRUNC_F, self%file, err)
     if (err /= 0) then
-      call fail(self, 'cannot create the file: '//os_reason(path), stat); return
+      cause = h5io_os_cause()   ! HDF5's record of the OS's reason, else the Fortran runtime's
+      if (len_trim(cause) == 0) cause = os_reason(path)
+      call fail(self, 'cannot create the file: '//trim(cause), stat); return
     end if
     self%is_open = .true.
     call h5io_put_attr(self%file, 'vci_version', VCI_HDF5_LIBRARY_VERSION, stat, self%message, self%path)
@@ -158,7 +162,11 @@ contains
     call h5io_put_attr(self%file, 'status', VCI_HDF5_RUNNING, stat, self%message, self%path)
     call h5io_put_attr(self%file, 'status_message', 'opened, no run yet', stat, self%message, self%path)
     if (stat == VCI_OK) call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
-    if (stat == VCI_OK .and. err /= 0) call fail(self, 'flush after creation failed: '//trim(h5io_os_cause()), stat)
+    if (stat == VCI_OK .and. err /= 0) then
+      call fail(self, 'flush after creation failed: '//trim(h5io_os_cause()), stat)
+      call h5io_discard_writes(self%file)
+      self%discarded = .true.
+    end if
     if (stat /= VCI_OK) call w_close(self)
   end subroutine w_open
 
@@ -551,6 +559,10 @@ contains
     if (.not. self%started) then
       call w_close(self); return
     end if
+    if (self%discarded) then     ! the message says why; the file holds the steps of its last flush
+      call w_close(self)
+      stat = VCI_ERR_IO; return
+    end if
     s = VCI_OK
     call h5io_put_attr(self%file, 'status', status, s, self%message, self%path)
     if (status == VCI_OK .and. len_trim(message) == 0) then
@@ -568,6 +580,7 @@ contains
     type(vci_hdf5_writer_t), intent(inout) :: self
     integer, intent(inout) :: stat
     integer :: err
+    character(len=256) :: cause
     if (stat /= VCI_OK) return
     if (self%ns > 0) then
       call h5io_append_rows(self%d_t, 0, self%rows, self%bt(1:self%ns), self%ns, stat, self%message, self%path)
@@ -588,8 +601,16 @@ contains
           self%message, self%path)
       call h5io_append_rows(self%d_ii, 0, self%impacts, self%ii(1:self%ni), self%ni, stat, self%message, self%path)
     end if
-    if (stat /= VCI_OK) return
-    ! two phases: the rows reach the disk before the checkpoint and steps_completed that vouch for them
+    ! two phases: the rows reach the disk before the checkpoint and steps_completed that vouch for
+    ! them; the rows' raw data first, so that a full disk is caught before HDF5's metadata flush
+    if (stat == VCI_OK) call h5io_flush_rows([self%d_t, self%d_q, self%d_p, self%d_e, self%d_l, self%d_it, &
+                                              self%d_is, self%d_ia, self%d_ig, self%d_iq, self%d_ii], err, cause)
+    if (stat == VCI_OK .and. err /= 0) call fail(self, 'writing rows failed: '//trim(cause), stat)
+    if (stat /= VCI_OK) then
+      call h5io_discard_writes(self%file)   ! the disk keeps the last complete flush
+      self%discarded = .true.
+      return
+    end if
     call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
     if (err /= 0) then
       call fail(self, 'H5Fflush failed: '//trim(h5io_os_cause()), stat); return

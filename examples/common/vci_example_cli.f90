@@ -163,7 +163,7 @@ contains
     integer(i8) :: nsteps, c0, c1, rate
     real(dp) :: t_first, t_last, t_target, h0, h1, e_first
     real(dp), allocatable :: q(:), p(:)
-    logical :: has_h
+    logical :: has_h, exists
     type(vci_stats_t) :: stats
 
     dir = merge(-1, 1, opts%backward)
@@ -198,7 +198,9 @@ contains
       if (opts%append .and. .not. allocated(opts%output)) opts%output = opts%from
       if (.not. allocated(opts%output)) opts%output = name//merge('_backward', '         ', opts%backward)
       opts%output = trim(opts%output)
-      if (index(opts%output, '.') == 0) opts%output = opts%output//default_extension
+      ! a name that exists is taken as it is (a device such as /dev/full, a file being replaced)
+      inquire (file=opts%output, exist=exists)
+      if (.not. exists .and. index(opts%output, '.') == 0) opts%output = opts%output//default_extension
       if (is_csv(opts%output)) then
         if (opts%append) call die(name//': --append writes HDF5 only (not '//opts%output//')')
         call csv%open(opts%output, stat)
