@@ -17,7 +17,7 @@ module vci_h5_io
   implicit none
   private
 
-  public :: h5io_fail, h5io_os_cause, h5io_flush_rows, h5io_discard_writes
+  public :: h5io_fail, h5io_os_cause, h5io_discard_writes
   public :: h5io_put_attr, h5io_get_attr
   public :: h5io_make_rows, h5io_open_dset, h5io_rows, h5io_append_rows, h5io_read_row
   public :: h5io_put_vector, h5io_get_vector, h5io_close_dset, h5io_string_type
@@ -61,10 +61,6 @@ module vci_h5_io
       import :: c_ptr, c_char
       character(kind=c_char), intent(in) :: path(*), mode(*)
     end function c_fopen
-    integer(c_int) function h5dflush(dset) bind(C, name='H5Dflush')
-      import :: c_int64_t, c_int
-      integer(c_int64_t), value :: dset
-    end function h5dflush
     integer(c_int) function c_fileno(stream) bind(C, name='fileno')
       import :: c_int, c_ptr
       type(c_ptr), value :: stream
@@ -133,29 +129,8 @@ contains
     if (k > 1) found = desc(1:k - 1)
   end function take_os_cause
 
-  !> Write the raw data of datasets `dsets` (ids < 0 skipped) to the disk (H5Dflush), before the
-  !> file's metadata. A failure here (a full disk) is caught before H5Fflush: HDF5 1.10 cannot flush
-  !> or close a file whose metadata flush failed (its cache keeps its skip list enabled: "slist
-  !> already enabled?") and crashes at exit in its shutdown (H5F__close_cb). err /= 0: the cause
-  !> (the OS's reason) in `cause`; call h5io_discard_writes before anything else touches the file.
-  subroutine h5io_flush_rows(dsets, err, cause)
-    integer(hid_t), intent(in) :: dsets(:)
-    integer, intent(out) :: err
-    character(len=*), intent(out) :: cause
-    integer :: i
-    err = 0; cause = ''
-    do i = 1, size(dsets)
-      if (dsets(i) < 0) cycle
-      if (h5dflush(int(dsets(i), c_int64_t)) < 0) then
-        err = -1
-        cause = h5io_os_cause()
-        if (len_trim(cause) == 0) cause = 'HDF5 gives no reason'
-        return
-      end if
-    end do
-  end subroutine h5io_flush_rows
-
-  !> A file that cannot be written any more (a full disk): point its descriptor (sec2 driver) at
+  !> A file that cannot be written any more (a full disk; a row dataset's failed write, caught before
+  !> any H5Fflush: see h5io_make_rows): point its descriptor (sec2 driver) at
   !> /dev/null, so that what HDF5 still holds goes nowhere and its closes complete and free
   !> everything. The file keeps what reached the disk before (up to the last complete flush).
   subroutine h5io_discard_writes(file)
@@ -401,6 +376,17 @@ contains
     d = -1
   end subroutine h5io_close_dset
 
+  !> Dataset access without a chunk cache: appended rows go to the disk in H5Dwrite, so a full disk
+  !> is seen there, before H5Fflush. HDF5 1.10 can neither flush nor close a file whose metadata
+  !> flush failed (its cache stays in flushing mode, "slist already enabled?") and then crashes at
+  !> exit in its shutdown (H5F__close_cb); a failed raw write leaves it sound.
+  subroutine uncached_access(dapl, err)
+    integer(hid_t), intent(out) :: dapl
+    integer, intent(out) :: err
+    call h5pcreate_f(H5P_DATASET_ACCESS_F, dapl, err)
+    if (err == 0) call h5pset_chunk_cache_f(dapl, 0_size_t, 0_size_t, 1.0, err)
+  end subroutine uncached_access
+
   !> An extendible dataset of 0 rows, each row `width` values (width 0: a 1-D dataset).
   subroutine h5io_make_rows(loc, name, width, rows_per_chunk, ftype, dset, stat, message, who)
     integer(hid_t), intent(in) :: loc, ftype
@@ -409,11 +395,12 @@ contains
     integer(hid_t), intent(out) :: dset
     integer, intent(inout) :: stat
     character(len=*), intent(inout) :: message
-    integer(hid_t) :: space, plist
+    integer(hid_t) :: space, plist, dapl
     integer(hsize_t) :: dims(2), maxdims(2), chunk(2)
     integer :: rank, err, e2
     dset = -1
     if (stat /= VCI_OK) return
+    dapl = -1
     if (width > 0) then
       rank = 2; dims = [int(width, hsize_t), 0_hsize_t]; maxdims = [int(width, hsize_t), H5S_UNLIMITED_F]
       chunk = [int(width, hsize_t), int(rows_per_chunk, hsize_t)]
@@ -423,8 +410,10 @@ contains
     call h5screate_simple_f(rank, dims(1:rank), space, err, maxdims(1:rank))
     if (err == 0) call h5pcreate_f(H5P_DATASET_CREATE_F, plist, err)
     if (err == 0) call h5pset_chunk_f(plist, rank, chunk(1:rank), err)
-    if (err == 0) call h5dcreate_f(loc, name, ftype, space, dset, err, plist)
+    if (err == 0) call uncached_access(dapl, err)
+    if (err == 0) call h5dcreate_f(loc, name, ftype, space, dset, err, plist, dapl_id=dapl)
     call h5pclose_f(plist, e2); call h5sclose_f(space, e2)
+    if (dapl >= 0) call h5pclose_f(dapl, e2)
     if (err /= 0) call h5io_fail('cannot create dataset '//name, stat, message, who)
   end subroutine h5io_make_rows
 
@@ -434,10 +423,14 @@ contains
     integer(hid_t), intent(out) :: dset
     integer, intent(inout) :: stat
     character(len=*), intent(inout) :: message
-    integer :: err
+    integer(hid_t) :: dapl
+    integer :: err, e2
     dset = -1
     if (stat /= VCI_OK) return
-    call h5dopen_f(loc, name, dset, err)
+    dapl = -1
+    call uncached_access(dapl, err)
+    if (err == 0) call h5dopen_f(loc, name, dset, err, dapl)
+    if (dapl >= 0) call h5pclose_f(dapl, e2)
     if (err /= 0) call h5io_fail('dataset '//name//' missing', stat, message, who)
   end subroutine h5io_open_dset
 

@@ -610,7 +610,6 @@ contains
     type(vci_hdf5_writer_t), intent(inout) :: self
     integer, intent(inout) :: stat
     integer :: err
-    character(len=256) :: cause
     if (stat /= VCI_OK) return
     if (self%ns > 0) then
       call h5io_append_rows(self%d_t, 0, self%rows, self%bt(1:self%ns), self%ns, stat, self%message, self%path)
@@ -632,10 +631,8 @@ contains
       call h5io_append_rows(self%d_ii, 0, self%impacts, self%ii(1:self%ni), self%ni, stat, self%message, self%path)
     end if
     ! two phases: the rows reach the disk before the checkpoint and steps_completed that vouch for
-    ! them; the rows' raw data first, so that a full disk is caught before HDF5's metadata flush
-    if (stat == VCI_OK) call h5io_flush_rows([self%d_t, self%d_q, self%d_p, self%d_e, self%d_l, self%d_it, &
-                                              self%d_is, self%d_ia, self%d_ig, self%d_iq, self%d_ii], err, cause)
-    if (stat == VCI_OK .and. err /= 0) call fail(self, 'writing rows failed: '//trim(cause), stat)
+    ! them. Row datasets have no chunk cache (vci_h5_io): the rows' raw data went to the disk above,
+    ! so a full disk is caught there, before HDF5's metadata flush
     if (stat /= VCI_OK) then
       call h5io_discard_writes(self%file)   ! the disk keeps the last complete flush
       self%discarded = .true.
