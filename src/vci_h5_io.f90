@@ -19,7 +19,7 @@ module vci_h5_io
 
   public :: h5io_fail, h5io_os_cause, h5io_discard_writes
   public :: h5io_put_attr, h5io_get_attr
-  public :: h5io_make_rows, h5io_open_dset, h5io_rows, h5io_append_rows, h5io_read_row
+  public :: h5io_make_rows, h5io_open_dset, h5io_rows, h5io_append_rows, h5io_read_row, h5io_check_dims
   public :: h5io_put_vector, h5io_get_vector, h5io_close_dset, h5io_string_type
 
   !> A scalar attribute: real(dp), integer, integer(i8) or a string (fixed length, null-padded).
@@ -465,6 +465,33 @@ contains
     end if
     rows = int(dims(want), i8)
   end function h5io_rows
+
+  !> Check that a dataset has exactly the Fortran shape `dims` (rank and every extent) before it is
+  !> read whole into a buffer of that shape.
+  subroutine h5io_check_dims(dset, name, dims, stat, message, who)
+    integer(hid_t), intent(in) :: dset
+    character(len=*), intent(in) :: name, who
+    integer, intent(in) :: dims(:)
+    integer, intent(inout) :: stat
+    character(len=*), intent(inout) :: message
+    integer(hid_t) :: space
+    integer(hsize_t) :: got(7), maxdims(7)
+    integer :: rank, err, e2
+    if (stat /= VCI_OK) return
+    if (size(dims) > 7) then
+      call h5io_fail('dataset '//name//': more than 7 dimensions asked for', stat, message, who); return
+    end if
+    call h5dget_space_f(dset, space, err)
+    if (err == 0) call h5sget_simple_extent_ndims_f(space, rank, err)
+    if (err == 0 .and. rank /= size(dims)) err = -1
+    if (err == 0) call h5sget_simple_extent_dims_f(space, got(1:rank), maxdims(1:rank), err)
+    if (err >= 0) then
+      if (any(got(1:rank) /= int(dims, hsize_t))) err = -1
+    end if
+    call h5sclose_f(space, e2)
+    if (err < 0) call h5io_fail('dataset '//name//' does not have the shape the file''s attributes give', &
+                                stat, message, who)
+  end subroutine h5io_check_dims
 
   !> Spaces selecting rows first .. first + count - 1 (file) and count rows (memory); with `extend`
   !> the dataset is first extended to first + count rows.
