@@ -23,6 +23,7 @@ program ellipse_ensemble
   use vci_ensemble_mpi, only: vci_ensemble_run_file
 #endif
   use vci_scene_ellipse, only: ellipse_model
+  use vci_example_cli, only: is_decimal
   implicit none
 
   real(dp), parameter :: pi = acos(-1.0_dp)
@@ -274,16 +275,16 @@ contains
           write (output_unit, '(a)') '  --quiet             no per-member table'
         end if
         call finish(0)
-      case ('--members'); n_members = int(real_arg(k)); k = k + 1
+      case ('--members'); n_members = int_arg(k); k = k + 1
       case ('--t-final'); t_final = real_arg(k); k = k + 1
       case ('--h'); h = real_arg(k); k = k + 1
       case ('--min-size'); min_size = real_arg(k); k = k + 1
       case ('--max-size'); max_size = real_arg(k); k = k + 1
       case ('--tol'); tol = real_arg(k); k = k + 1
-      case ('--stride'); stride = int(real_arg(k)); k = k + 1
-      case ('--impact-cap'); impact_cap = int(real_arg(k)); k = k + 1
-      case ('--threads'); threads = int(real_arg(k)); k = k + 1
-      case ('--chunk'); chunk = int(real_arg(k)); k = k + 1
+      case ('--stride'); stride = int_arg(k); k = k + 1
+      case ('--impact-cap'); impact_cap = int_arg(k); k = k + 1
+      case ('--threads'); threads = int_arg(k); k = k + 1
+      case ('--chunk'); chunk = int_arg(k); k = k + 1
       case ('--output')
         call get_command_argument(k + 1, arg); output = trim(arg); k = k + 1
       case ('--no-output'); no_output = .true.
@@ -316,17 +317,54 @@ contains
     end do
   end function launched_by_mpirun
 
+  !> The value after argument k: one whole decimal number, finite (is_decimal: `1,5` or `inf` are refused).
   real(dp) function real_arg(k)
     integer, intent(in) :: k
     character(len=128) :: v
-    integer :: ios
-    call get_command_argument(k + 1, v)
-    read (v, *, iostat=ios) real_arg
+    integer :: ios, l
+    call get_command_argument(k + 1, v, length=l)
+    ios = 1
+    if (k + 1 <= command_argument_count() .and. l <= len(v)) then
+      if (is_decimal(trim(v), integer_only=.false.)) read (v, *, iostat=ios) real_arg
+    end if
+    if (ios == 0) then
+      if (.not. (abs(real_arg) <= huge(real_arg))) ios = 1
+    end if
     if (ios /= 0) then
-      if (rank == 0) write (error_unit, '(a)') 'ellipse_ensemble: not a number: '//trim(v)
+      if (rank == 0) write (error_unit, '(a)') 'ellipse_ensemble: not a finite number after '//trim(arg_name(k))// &
+        ': "'//trim(v)//'"'
       call finish(2)
     end if
   end function real_arg
+
+  !> The value after argument k: an integer written with digits only, within the default integer's range.
+  integer function int_arg(k)
+    integer, intent(in) :: k
+    character(len=128) :: v
+    integer :: ios, l
+    integer(i8) :: big
+    call get_command_argument(k + 1, v, length=l)
+    ios = 1
+    if (k + 1 <= command_argument_count() .and. l <= 18) then
+      if (is_decimal(trim(v), integer_only=.true.)) read (v, *, iostat=ios) big
+    end if
+    if (ios == 0) then
+      if (abs(big) > huge(int_arg)) ios = 1
+    end if
+    if (ios /= 0) then
+      if (rank == 0) write (error_unit, '(a)') 'ellipse_ensemble: not an integer after '//trim(arg_name(k))// &
+        ': "'//trim(v)//'"'
+      call finish(2)
+    end if
+    int_arg = int(big)
+  end function int_arg
+
+  function arg_name(k) result(s)
+    integer, intent(in) :: k
+    character(len=64) :: s
+    call get_command_argument(k, s)
+    s = trim(s)
+  end function arg_name
 
   subroutine finish(code)
     integer, intent(in) :: code

@@ -4,7 +4,7 @@
 !> prints the errors of the final state and of the impact times against an exact reference
 !> (quadrature of t(theta), vci_ref_pendulum_quad).
 program pendulum_walls
-  use, intrinsic :: iso_fortran_env, only: output_unit
+  use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
   use vci
   use vci_scene_pendulum_walls, only: pendulum_walls_t, pendulum_walls_model
   use vci_ref_pendulum_quad, only: pendulum_quad_t, pendulum_quad_state, pendulum_quad_impacts
@@ -25,6 +25,16 @@ program pendulum_walls
   opts%scheme = 'lobatto'; opts%stages = 4; opts%rtol = 1.0e-15_dp
   call parse_options(opts, 'pendulum_walls', 'pendulum_walls: a pendulum between walls at +-1 rad, against its '// &
     'exact solution (defaults h = 5e-2, t-final = 10, --scheme lobatto --stages 4, --rtol 1e-15)')
+  ! this example compares with its exact solution only: it has no trajectory file and runs forward
+  if (allocated(opts%output) .or. allocated(opts%from) .or. opts%backward) then
+    write (error_unit, '(a)') 'pendulum_walls: --output, --from and --backward are not supported here '// &
+      '(this example writes no trajectory and runs forward)'
+    stop 1, quiet=.true.
+  end if
+  if (opts%t_final < 0.0_dp) then
+    write (error_unit, '(a)') 'pendulum_walls: --t-final must be >= 0'
+    stop 1, quiet=.true.
+  end if
   model = pendulum_walls_model(.true.)
   call create_integrator('pendulum_walls', model, opts, integ)
   call integ%init_from_momentum(0.0_dp, [0.0_dp], [4.0_dp], stat)
@@ -33,7 +43,7 @@ program pendulum_walls
     write (output_unit, '(a)') 'pendulum_walls: '//integ%message()
     stop 2
   end if
-  nsteps = nint(opts%t_final / opts%h, i8)
+  nsteps = steps_to('pendulum_walls', 0.0_dp, opts%t_final, opts%h, 1)
   ref%k = 9.8_dp; ref%theta_wall = 1.0_dp; ref%theta0 = 0.0_dp; ref%omega0 = 4.0_dp
   call pendulum_quad_impacts(ref, real(nsteps, dp) * opts%h, times, nex)
   allocate (found(nex + 64))
@@ -47,7 +57,7 @@ program pendulum_walls
       if (nimp <= size(found)) found(nimp) = imp%t
     end do
   end do
-  write (output_unit, '(a,i0,a,es10.3,a,i0,a,a)') 'scheme: '//vci_scheme_name(integ%scheme())//'   stages: ', &
+  write (output_unit, '(a,i0,a,es10.3,a,i0,a,a)') 'scheme: '//trim(vci_scheme_name(integ%scheme()))//'   stages: ', &
     integ%stages(), '   h = ', opts%h, '   steps: ', nsteps, '   impact energy: ', &
     trim(merge('hamiltonian', 'discrete   ', opts%impact_energy == VCI_IMPACT_HAMILTONIAN))
   if (stat /= VCI_OK) then

@@ -42,7 +42,9 @@ module vci_integrator
     class(vci_model_base_t), pointer :: model => null()   !< the user's model (discrete or continuous)
     class(vci_model_t), pointer :: discrete => null()       !< the user's L_d, or
     class(vci_lagrangian_t), pointer :: lag => null()       !< the user's L
-    type(vci_retraction_model_t), pointer :: retraction => null()  !< owned: the left/midpoint L_d of lag
+    !> owned: the left/midpoint L_d of lag. Allocatable, not a pointer, so that it is freed with the
+    !> integrator (the scheme points into it: do not copy a created integrator by assignment).
+    type(vci_retraction_model_t), allocatable :: retraction
     logical :: lag_hessians = .false., lag_energy = .false.  !< optional procedures lag supplies
     integer :: scheme_id = VCI_SCHEME_DISCRETE  !< VCI_SCHEME_*; set_scheme chooses it for a continuous model
     integer :: n_stages = 0                     !< s of the lobatto scheme
@@ -200,7 +202,7 @@ contains
 
   !> Build the scheme object for the current model and scheme choice and hand it to the stepper.
   subroutine build_scheme(self, stat)
-    class(vci_integrator_t), intent(inout) :: self
+    class(vci_integrator_t), target, intent(inout) :: self
     integer, intent(out) :: stat
     class(vci_scheme_t), allocatable :: sch
     integer :: rule
@@ -218,7 +220,7 @@ contains
       if (stat /= 0) stat = VCI_ERR_MEMORY
     case (VCI_SCHEME_LEFT, VCI_SCHEME_MIDPOINT)
       rule = merge(RETRACTION_LEFT, RETRACTION_MIDPOINT, self%scheme_id == VCI_SCHEME_LEFT)
-      if (.not. associated(self%retraction)) allocate (self%retraction, stat=stat)
+      if (.not. allocated(self%retraction)) allocate (self%retraction, stat=stat)
       if (stat == 0) call self%retraction%bind(self%lag, rule, self%lag_hessians, self%lag_energy, stat)
       if (stat == 0) allocate (vci_scheme_discrete_t :: sch, stat=stat)
       if (stat == 0) then
@@ -299,10 +301,12 @@ contains
     call build_scheme(self, stat)
   end subroutine set_scheme
 
-  !> A short name of a scheme identifier ('left', 'midpoint', 'lobatto', 'discrete').
+  !> A short name of a scheme identifier ('left', 'midpoint', 'lobatto', 'discrete'), blank-padded
+  !> (trim it). Fixed length, not deferred: gfortran 12 keeps a deferred-length result's length in
+  !> a static per call site, which races across threads.
   pure function vci_scheme_name(scheme) result(name)
     integer, intent(in) :: scheme
-    character(len=:), allocatable :: name
+    character(len=8) :: name
     select case (scheme)
     case (VCI_SCHEME_DISCRETE); name = 'discrete'
     case (VCI_SCHEME_LEFT); name = 'left'

