@@ -20,7 +20,7 @@ module vci_ensemble_h5
 #endif
   use vci_kinds, only: dp, i8
   use vci_status, only: VCI_OK, VCI_ERR_IO, VCI_ERR_ARGUMENT, VCI_MSG_LEN
-  use vci_h5_io, only: h5io_put_attr, h5io_get_attr, h5io_string_type
+  use vci_h5_io, only: h5io_put_attr, h5io_get_attr, h5io_string_type, h5io_check_dims
   use vci_ensemble, only: vci_ensemble_config_t, vci_ensemble_table_t, vci_ensemble_results_t, &
                           vci_ensemble_samples, vci_ensemble_results_alloc, vci_ensemble_size, &
                           VCI_MEMBER_NOT_RUN, VCI_START_PAIR, VCI_START_MOMENTUM
@@ -354,6 +354,8 @@ contains
       if (j >= D_TRCOUNT .and. j <= D_TRP .and. f%samples == 0) cycle
       call h5dopen_f(f%file, trim(names(j)), f%d(j), err)
       if (err /= 0) call fail(f, 'dataset /'//trim(names(j))//' missing', stat)
+      ! read whole into buffers sized from the attributes: the shape must be theirs
+      if (err == 0) call h5io_check_dims(f%d(j), '/'//trim(names(j)), dims_of(f, j), stat, f%message, who(f))
     end do
     if (stat == VCI_OK) then
       call get_i32(f, D_STATUS, results%status, stat)
@@ -601,6 +603,27 @@ contains
   end subroutine get_messages
 
   ! --- root attributes: vci_h5_io's (collective under MPI: every rank writes the same value) ---
+
+  !> The Fortran shape of dataset `which` in a file of this ensemble's sizes (as f_create makes it).
+  pure function dims_of(self, which) result(dims)
+    type(vci_ensemble_file_t), intent(in) :: self
+    integer, intent(in) :: which
+    integer, allocatable :: dims(:)
+    select case (which)
+    case (D_Q0, D_V0, D_Q, D_P)
+      dims = [self%n, self%n_members]
+    case (D_PARAMS)
+      dims = [self%n_params, self%n_members]
+    case (D_IMPT, D_IMPGAP)
+      dims = [self%impact_cap, self%n_members]
+    case (D_TRT)
+      dims = [self%samples, self%n_members]
+    case (D_TRQ, D_TRP)
+      dims = [self%n, self%samples, self%n_members]
+    case default
+      dims = [self%n_members]
+    end select
+  end function dims_of
 
   !> How failures name this file (vci_h5_io's messages: who: cause).
   pure function who(self)

@@ -17,9 +17,9 @@ module vci_h5_io
   implicit none
   private
 
-  public :: h5io_fail, h5io_os_cause
+  public :: h5io_fail, h5io_os_cause, h5io_discard_writes
   public :: h5io_put_attr, h5io_get_attr
-  public :: h5io_make_rows, h5io_open_dset, h5io_rows, h5io_append_rows, h5io_read_row
+  public :: h5io_make_rows, h5io_open_dset, h5io_rows, h5io_append_rows, h5io_read_row, h5io_check_dims
   public :: h5io_put_vector, h5io_get_vector, h5io_close_dset, h5io_string_type
 
   !> A scalar attribute: real(dp), integer, integer(i8) or a string (fixed length, null-padded).
@@ -52,6 +52,27 @@ module vci_h5_io
       type(c_funptr), value :: func
       type(c_ptr), value :: client
     end function h5ewalk2
+    integer(c_int) function h5fget_vfd_handle(file, fapl, handle) bind(C, name='H5Fget_vfd_handle')
+      import :: c_int64_t, c_int, c_ptr
+      integer(c_int64_t), value :: file, fapl
+      type(c_ptr), intent(out) :: handle
+    end function h5fget_vfd_handle
+    type(c_ptr) function c_fopen(path, mode) bind(C, name='fopen')
+      import :: c_ptr, c_char
+      character(kind=c_char), intent(in) :: path(*), mode(*)
+    end function c_fopen
+    integer(c_int) function c_fileno(stream) bind(C, name='fileno')
+      import :: c_int, c_ptr
+      type(c_ptr), value :: stream
+    end function c_fileno
+    integer(c_int) function c_fclose(stream) bind(C, name='fclose')
+      import :: c_int, c_ptr
+      type(c_ptr), value :: stream
+    end function c_fclose
+    integer(c_int) function c_dup2(old, new) bind(C, name='dup2')
+      import :: c_int
+      integer(c_int), value :: old, new
+    end function c_dup2
     integer(c_size_t) function c_strlen(s) bind(C, name='strlen')
       import :: c_ptr, c_size_t
       type(c_ptr), value :: s
@@ -107,6 +128,30 @@ contains
     k = index(desc, "'")
     if (k > 1) found = desc(1:k - 1)
   end function take_os_cause
+
+  !> A file that cannot be written any more (a full disk; a row dataset's failed write, caught before
+  !> any H5Fflush: see h5io_make_rows): point its descriptor (sec2 driver) at
+  !> /dev/null, so that what HDF5 still holds goes nowhere and its closes complete and free
+  !> everything. The file keeps what reached the disk before (up to the last complete flush).
+  subroutine h5io_discard_writes(file)
+    integer(hid_t), intent(in) :: file
+    integer(hid_t) :: fapl, driver
+    integer :: e2
+    integer(c_int) :: r
+    type(c_ptr) :: handle, devnull
+    integer(c_int), pointer :: fd
+    call h5fget_access_plist_f(file, fapl, e2)
+    if (e2 == 0) call h5pget_driver_f(fapl, driver, e2)
+    if (e2 == 0) call h5pclose_f(fapl, e2)
+    if (e2 /= 0 .or. driver /= H5FD_SEC2_F) return
+    r = h5fget_vfd_handle(int(file, c_int64_t), 0_c_int64_t, handle)
+    devnull = c_fopen('/dev/null'//c_null_char, 'r+'//c_null_char)
+    if (r >= 0 .and. c_associated(handle) .and. c_associated(devnull)) then
+      call c_f_pointer(handle, fd)
+      r = c_dup2(c_fileno(devnull), fd)
+    end if
+    if (c_associated(devnull)) r = c_fclose(devnull)
+  end subroutine h5io_discard_writes
 
   ! --- attributes --------------------------------------------------------------------------------
 
@@ -331,6 +376,17 @@ contains
     d = -1
   end subroutine h5io_close_dset
 
+  !> Dataset access without a chunk cache: appended rows go to the disk in H5Dwrite, so a full disk
+  !> is seen there, before H5Fflush. HDF5 1.10 can neither flush nor close a file whose metadata
+  !> flush failed (its cache stays in flushing mode, "slist already enabled?") and then crashes at
+  !> exit in its shutdown (H5F__close_cb); a failed raw write leaves it sound.
+  subroutine uncached_access(dapl, err)
+    integer(hid_t), intent(out) :: dapl
+    integer, intent(out) :: err
+    call h5pcreate_f(H5P_DATASET_ACCESS_F, dapl, err)
+    if (err == 0) call h5pset_chunk_cache_f(dapl, 0_size_t, 0_size_t, 1.0, err)
+  end subroutine uncached_access
+
   !> An extendible dataset of 0 rows, each row `width` values (width 0: a 1-D dataset).
   subroutine h5io_make_rows(loc, name, width, rows_per_chunk, ftype, dset, stat, message, who)
     integer(hid_t), intent(in) :: loc, ftype
@@ -339,11 +395,12 @@ contains
     integer(hid_t), intent(out) :: dset
     integer, intent(inout) :: stat
     character(len=*), intent(inout) :: message
-    integer(hid_t) :: space, plist
+    integer(hid_t) :: space, plist, dapl
     integer(hsize_t) :: dims(2), maxdims(2), chunk(2)
     integer :: rank, err, e2
     dset = -1
     if (stat /= VCI_OK) return
+    dapl = -1
     if (width > 0) then
       rank = 2; dims = [int(width, hsize_t), 0_hsize_t]; maxdims = [int(width, hsize_t), H5S_UNLIMITED_F]
       chunk = [int(width, hsize_t), int(rows_per_chunk, hsize_t)]
@@ -353,8 +410,10 @@ contains
     call h5screate_simple_f(rank, dims(1:rank), space, err, maxdims(1:rank))
     if (err == 0) call h5pcreate_f(H5P_DATASET_CREATE_F, plist, err)
     if (err == 0) call h5pset_chunk_f(plist, rank, chunk(1:rank), err)
-    if (err == 0) call h5dcreate_f(loc, name, ftype, space, dset, err, plist)
+    if (err == 0) call uncached_access(dapl, err)
+    if (err == 0) call h5dcreate_f(loc, name, ftype, space, dset, err, plist, dapl_id=dapl)
     call h5pclose_f(plist, e2); call h5sclose_f(space, e2)
+    if (dapl >= 0) call h5pclose_f(dapl, e2)
     if (err /= 0) call h5io_fail('cannot create dataset '//name, stat, message, who)
   end subroutine h5io_make_rows
 
@@ -364,10 +423,14 @@ contains
     integer(hid_t), intent(out) :: dset
     integer, intent(inout) :: stat
     character(len=*), intent(inout) :: message
-    integer :: err
+    integer(hid_t) :: dapl
+    integer :: err, e2
     dset = -1
     if (stat /= VCI_OK) return
-    call h5dopen_f(loc, name, dset, err)
+    dapl = -1
+    call uncached_access(dapl, err)
+    if (err == 0) call h5dopen_f(loc, name, dset, err, dapl)
+    if (dapl >= 0) call h5pclose_f(dapl, e2)
     if (err /= 0) call h5io_fail('dataset '//name//' missing', stat, message, who)
   end subroutine h5io_open_dset
 
@@ -402,6 +465,33 @@ contains
     end if
     rows = int(dims(want), i8)
   end function h5io_rows
+
+  !> Check that a dataset has exactly the Fortran shape `dims` (rank and every extent) before it is
+  !> read whole into a buffer of that shape.
+  subroutine h5io_check_dims(dset, name, dims, stat, message, who)
+    integer(hid_t), intent(in) :: dset
+    character(len=*), intent(in) :: name, who
+    integer, intent(in) :: dims(:)
+    integer, intent(inout) :: stat
+    character(len=*), intent(inout) :: message
+    integer(hid_t) :: space
+    integer(hsize_t) :: got(7), maxdims(7)
+    integer :: rank, err, e2
+    if (stat /= VCI_OK) return
+    if (size(dims) > 7) then
+      call h5io_fail('dataset '//name//': more than 7 dimensions asked for', stat, message, who); return
+    end if
+    call h5dget_space_f(dset, space, err)
+    if (err == 0) call h5sget_simple_extent_ndims_f(space, rank, err)
+    if (err == 0 .and. rank /= size(dims)) err = -1
+    if (err == 0) call h5sget_simple_extent_dims_f(space, got(1:rank), maxdims(1:rank), err)
+    if (err >= 0) then
+      if (any(got(1:rank) /= int(dims, hsize_t))) err = -1
+    end if
+    call h5sclose_f(space, e2)
+    if (err < 0) call h5io_fail('dataset '//name//' does not have the shape the file''s attributes give', &
+                                stat, message, who)
+  end subroutine h5io_check_dims
 
   !> Spaces selecting rows first .. first + count - 1 (file) and count rows (memory); with `extend`
   !> the dataset is first extended to first + count rows.

@@ -54,7 +54,9 @@ module vci_hdf5_output
     logical :: is_open = .false.
     type(vci_checkpoint_t), private :: cp          !< the driver's latest checkpoint (on_checkpoint)
     logical, private :: have_cp = .false.
+    logical, private :: discarded = .false.       !< writes failed (a full disk): nothing more reaches the file
     integer(i8), private :: last_step = 0          !< index of the last state reported (on_start, on_step)
+    real(dp), private :: t_start = 0.0_dp          !< time of the run's start state (index step0)
     integer(hid_t), private :: file = -1, g_imp = -1, g_cp = -1
     integer(hid_t), private :: d_t = -1, d_q = -1, d_p = -1, d_e = -1, d_l = -1
     integer(hid_t), private :: d_it = -1, d_is = -1, d_ia = -1, d_ig = -1, d_iq = -1, d_ii = -1
@@ -99,6 +101,7 @@ contains
     integer, intent(in), optional :: flush_every
     logical :: exists, replace
     integer :: err
+    character(len=256) :: cause
 
     stat = VCI_OK
     self%message = ''
@@ -121,7 +124,7 @@ contains
     end if
     self%started = .false.; self%flush_pending = .false.
     self%ns = 0; self%ne = 0; self%ni = 0
-    self%have_cp = .false.
+    self%have_cp = .false.; self%discarded = .false.
 
     call h5open_f(err)
     if (err == 0) call h5eset_auto_f(0, err)   ! the library never prints
@@ -149,7 +152,9 @@ contains
     end if
     call h5fcreate_f(path, H5F_ACC_TRUNC_F, self%file, err)
     if (err /= 0) then
-      call fail(self, 'cannot create the file: '//os_reason(path), stat); return
+      cause = h5io_os_cause()   ! HDF5's record of the OS's reason, else the Fortran runtime's
+      if (len_trim(cause) == 0) cause = os_reason(path)
+      call fail(self, 'cannot create the file: '//trim(cause), stat); return
     end if
     self%is_open = .true.
     call h5io_put_attr(self%file, 'vci_version', VCI_HDF5_LIBRARY_VERSION, stat, self%message, self%path)
@@ -158,7 +163,11 @@ contains
     call h5io_put_attr(self%file, 'status', VCI_HDF5_RUNNING, stat, self%message, self%path)
     call h5io_put_attr(self%file, 'status_message', 'opened, no run yet', stat, self%message, self%path)
     if (stat == VCI_OK) call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
-    if (stat == VCI_OK .and. err /= 0) call fail(self, 'flush after creation failed: '//trim(h5io_os_cause()), stat)
+    if (stat == VCI_OK .and. err /= 0) then
+      call fail(self, 'flush after creation failed: '//trim(h5io_os_cause()), stat)
+      call h5io_discard_writes(self%file)
+      self%discarded = .true.
+    end if
     if (stat /= VCI_OK) call w_close(self)
   end subroutine w_open
 
@@ -392,6 +401,7 @@ contains
       call alloc_buffers(self)
       self%step0 = info%step0
       self%last_step = info%step0
+      self%t_start = info%t0
       self%started = .true.
       if (.not. self%append) call buffer_state(self, info%t0, q, p)
       call h5io_put_attr(self%file, 'status', VCI_HDF5_RUNNING, s, self%message, self%path)
@@ -496,6 +506,7 @@ contains
     if (.not. self%started) then
       stat = VCI_ERR_IO; return
     end if
+    if (.not. continues_run(self, step, t, stat)) return
     call buffer_state(self, t, q, p)
     self%last_step = step
     self%ne = self%ne + 1
@@ -507,12 +518,39 @@ contains
     end if
   end subroutine w_step
 
+  !> A step belongs in the file only if it continues its last state: the next index in the file's
+  !> direction, at the time that index has (t = t0 + index h, up to rounding). Stepping the other
+  !> way, or from a state the driver was re-initialised with, is refused (VCI_ERR_IO): /t would
+  !> turn back, /impacts/step would name wrong rows and the new start would be missing.
+  logical function continues_run(self, step, t, stat) result(ok)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer(i8), intent(in) :: step
+    real(dp), intent(in) :: t
+    integer, intent(inout) :: stat
+    real(dp) :: t_want
+    character(len=200) :: why
+    ! the driver's t = t0 + k h and t_start + (k - k0) h differ by rounding of the terms' sizes
+    t_want = self%t_start + real(step - self%step0, dp) * self%h
+    ok = step == self%last_step + self%direction .and. &
+         abs(t - t_want) <= 64 * epsilon(1.0_dp) * (abs(t) + abs(self%t_start) + abs(real(step - self%step0, dp) * self%h))
+    if (ok) return
+    write (why, '(a,i0,a,es12.5,a,i0,a)') 'refused: the step to index ', step, ' (t = ', t, &
+      ') does not continue the file''s last state (index ', self%last_step, ', '// &
+      trim(merge('forward ', 'backward', self%direction > 0))//')'
+    call fail(self, trim(why)//'; stepping the other way or re-initialising mid-file needs a new file', stat)
+  end function continues_run
+
   subroutine w_impact(self, impact, stat)
     class(vci_hdf5_writer_t), intent(inout) :: self
     type(vci_impact_t), intent(in) :: impact
     integer, intent(inout) :: stat
     if (.not. self%started) then
       stat = VCI_ERR_IO; return
+    end if
+    if (impact%step /= self%last_step) then   ! a step that does not start from the file's last state
+      call fail(self, 'refused: an impact in a step that does not start from the file''s last state; '// &
+                'stepping the other way or re-initialising mid-file needs a new file', stat)
+      return
     end if
     if (self%ni == size(self%it)) call grow_impacts(self)
     self%ni = self%ni + 1
@@ -551,6 +589,10 @@ contains
     if (.not. self%started) then
       call w_close(self); return
     end if
+    if (self%discarded) then     ! the message says why; the file holds the steps of its last flush
+      call w_close(self)
+      stat = VCI_ERR_IO; return
+    end if
     s = VCI_OK
     call h5io_put_attr(self%file, 'status', status, s, self%message, self%path)
     if (status == VCI_OK .and. len_trim(message) == 0) then
@@ -588,8 +630,14 @@ contains
           self%message, self%path)
       call h5io_append_rows(self%d_ii, 0, self%impacts, self%ii(1:self%ni), self%ni, stat, self%message, self%path)
     end if
-    if (stat /= VCI_OK) return
-    ! two phases: the rows reach the disk before the checkpoint and steps_completed that vouch for them
+    ! two phases: the rows reach the disk before the checkpoint and steps_completed that vouch for
+    ! them. Row datasets have no chunk cache (vci_h5_io): the rows' raw data went to the disk above,
+    ! so a full disk is caught there, before HDF5's metadata flush
+    if (stat /= VCI_OK) then
+      call h5io_discard_writes(self%file)   ! the disk keeps the last complete flush
+      self%discarded = .true.
+      return
+    end if
     call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
     if (err /= 0) then
       call fail(self, 'H5Fflush failed: '//trim(h5io_os_cause()), stat); return
