@@ -201,11 +201,7 @@ contains
         ! any decrease is taken on the way to round-off
         if (.not. (phit <= self%reuse_contraction * phi .or. (phi <= 1.0_dp .and. phit < phi))) exit
         res%iterations = res%iterations + 1
-        x = self%xt(1:n)
-        self%r(1:n) = self%rt(1:n)
-        self%sc(1:n) = self%sct(1:n)
-        phi = phit
-        res%scaled_residual = phi
+        call accept_trial(self, n, x, phit, phi, res)
       end do
     end if
 
@@ -258,11 +254,7 @@ contains
         res%status = VCI_ERR_NEWTON
         return
       end if
-      x = self%xt(1:n)
-      self%r(1:n) = self%rt(1:n)
-      self%sc(1:n) = self%sct(1:n)
-      phi = phit
-      res%scaled_residual = phi
+      call accept_trial(self, n, x, phit, phi, res)
     end do
 
     if (phi > 1.0_dp) then
@@ -272,6 +264,21 @@ contains
     end if
     if (self%polish .and. factored .and. phi > 0.0_dp) call polish_step(self, sys, x, n, phi, res)
   end subroutine solve
+
+  !> The trial point (xt, its residual rt and scales sct, merit phit) becomes the iterate.
+  subroutine accept_trial(self, n, x, phit, phi, res)
+    class(vci_newton_t), intent(inout) :: self
+    integer, intent(in) :: n
+    real(dp), intent(inout) :: x(:)
+    real(dp), intent(in) :: phit
+    real(dp), intent(out) :: phi
+    type(vci_newton_result_t), intent(inout) :: res
+    x = self%xt(1:n)
+    self%r(1:n) = self%rt(1:n)
+    self%sc(1:n) = self%sct(1:n)
+    phi = phit
+    res%scaled_residual = phi
+  end subroutine accept_trial
 
   !> Solve the small dense system a x = b in place (b becomes x), with the solver's workspace.
   !> info /= 0: singular even for least squares, or a or b not finite (LAPACK is then not called).

@@ -58,9 +58,18 @@ module vci_scheme_discrete
     procedure :: endpoint_direction
     procedure :: momentum_out, energy_out, hamiltonian
     procedure :: forget_jacobian
+    procedure :: use_derivatives
   end type vci_scheme_discrete_t
 
 contains
+
+  !> The model's mixed Hessian (else differenced) and gap gradients, where it supplies them.
+  subroutine use_derivatives(self, mixed_hessian, gap_gradients)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    logical, intent(in), optional :: mixed_hessian, gap_gradients
+    if (present(gap_gradients)) self%has_gap_gradients = gap_gradients
+    if (present(mixed_hessian)) self%has_hessian = mixed_hessian
+  end subroutine use_derivatives
 
   !> Bind to a model and size the workspace (once, before the step loop); stat /= 0: out of memory.
   subroutine setup(self, model, stat)
