@@ -31,6 +31,9 @@ module vci_newton
   integer, parameter, public :: NEWTON_EVALUATION = 4      !< the residual or Jacobian reported failure
   integer, parameter, public :: NEWTON_NONFINITE = 5       !< residual, scale or Jacobian not finite (overflow)
 
+  !> A starting merit at or below this is round-off: the start is accepted without a Newton step.
+  real(dp), parameter :: start_roundoff = 1.0e-3_dp
+
   !> Systems of at least this many unknowns are "large": they reuse the Newton matrix's factors across
   !> iterations and solves (simplified Newton, below) and schemes size their rows in O(n) per residual.
   integer, parameter, public :: vci_large_system = 16
@@ -206,16 +209,23 @@ contains
     end if
 
     do it = 1, self%max_iterations
-      if (phi <= 1.0_dp) exit
+      ! a start within the tolerance is kept only when it is at about round-off (a predictor exact
+      ! for the motion); otherwise one Newton step and the polish take it there, as from any start
+      if (phi <= 1.0_dp .and. (it > 1 .or. factored .or. phi <= start_roundoff)) exit
       res%iterations = res%iterations + 1
       call sys%jacobian(x, self%r(1:n), self%jac(1:n, 1:n), stat)
+      if (stat /= VCI_OK .and. phi <= 1.0_dp .and. .not. sys%unrecoverable) exit   ! (optional step: the start stands)
       if (stat /= VCI_OK) then
         call fail_eval(res, stat); return
       end if
       if (.not. all_finite(self%jac(1:n, 1:n))) then
+        if (phi <= 1.0_dp) exit
         call fail_nonfinite(res); return
       end if
       call newton_direction(self, n, factored, res)
+      if (res%reason /= NEWTON_CONVERGED .and. phi <= 1.0_dp) then
+        res%reason = NEWTON_CONVERGED; factored = .false.; exit
+      end if
       if (res%reason == NEWTON_NONFINITE) then
         res%status = VCI_ERR_NONFINITE; return
       end if
@@ -246,6 +256,7 @@ contains
         step = 0.5_dp * step
       end do
       if (ib > self%max_backtracks) then
+        if (phi <= 1.0_dp) exit
         ! a callback that failed (or gave NaN) at the trial points is the cause, not the descent
         if (trial_stat /= VCI_OK) then
           call fail_eval(res, trial_stat); return

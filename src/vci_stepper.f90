@@ -177,16 +177,21 @@ contains
   end subroutine use_model_derivatives
 
   !> Advance from (q, p) by one step of length h in direction dir (+1/-1).
-  !> vel: forward-time velocity estimate (initial guesses; updated). e_arrive: E_d of the sub-step
-  !> that arrived at q in this direction (needed only when q is on a wall and the motion goes into it).
+  !> vel: forward-time velocity of the last sub-step; vel_before, lambda_before, lambda_before2: the
+  !> velocity and multipliers of the steps before it; depth: how many consecutive regular steps in
+  !> direction sign(depth) they come from (the predictor's history, updated; see predict).
+  !> e_arrive: E_d of the sub-step that arrived at q in this direction (needed only when q is on a
+  !> wall and the motion goes into it).
   !> On success qn, pn, lambdan hold the new state, e_step the E_d of the step's last sub-step and
   !> impacts(1:n_impacts) the impacts of the step (the records grow on demand, up to
   !> settings%max_impacts_per_step of them, which may be huge).
-  subroutine advance(self, dir, h, t, q, p, lambda, vel, e_arrive, qn, pn, lambdan, e_step, impacts, n_impacts, stat)
+  subroutine advance(self, dir, h, t, q, p, lambda, vel, vel_before, lambda_before, lambda_before2, depth, &
+                     e_arrive, qn, pn, lambdan, e_step, impacts, n_impacts, stat)
     class(vci_stepper_t), intent(inout) :: self
     integer, intent(in) :: dir
     real(dp), intent(in) :: h, t, q(:), p(:), lambda(:)
-    real(dp), intent(inout) :: vel(:), e_arrive
+    real(dp), intent(inout) :: vel(:), vel_before(:), lambda_before(:), lambda_before2(:), e_arrive
+    integer, intent(inout) :: depth
     real(dp), intent(out) :: qn(:), pn(:), lambdan(:), e_step
     type(vci_impact_t), allocatable, intent(inout) :: impacts(:)
     integer, intent(out) :: n_impacts
@@ -201,9 +206,8 @@ contains
     self%cause = ''
     self%q_start = q; self%p_start = p; tau = h; consumed = 0.0_dp
     ! the regular step, from the extrapolated guess
-    self%q_guess = q + real(dir, dp) * h * vel
-    call self%sys%put_endpoint(self%x, q, self%q_guess)
-    call self%sys%put_multipliers(self%x, lambda)
+    if (depth * dir < 0) depth = 0           ! the history runs the other way
+    call predict(self, dir, h, q, lambda, vel, vel_before, lambda_before, lambda_before2, abs(depth))
     call substep(self, self%q_start, self%p_start, tau, stat)
     if (stat /= VCI_OK) return
 
@@ -290,6 +294,7 @@ contains
           call self%sys%get_multipliers(self%x_stage1, lambdan)
           qn = self%q_wall; pn = self%p_arrive; e_step = e_minus
           vel = real(dir, dp) * (self%q_wall - q) / h
+          depth = 0
           e_arrive = e_minus
           landed = .true.
           exit
@@ -325,9 +330,48 @@ contains
     if (stat /= VCI_OK) then
       call set_cause(self, 'momentum of the new state'); return
     end if
+    if (n_impacts == 0) then
+      ! a regular step: it extends the predictor's history
+      vel_before = vel
+      if (self%m > 0) then
+        lambda_before2 = lambda_before; lambda_before = lambda
+      end if
+      depth = dir * min(abs(depth) + 1, 3)
+    else
+      depth = 0                              ! an impact breaks the smooth history
+    end if
     vel = real(dir, dp) * (qn - self%q_start) / tau
     e_arrive = e_step
   end subroutine advance
+
+  !> Newton's start for the regular step from q: after `depth` consecutive regular steps the
+  !> configuration and multipliers are extrapolated from the last ones (q quadratic from depth 2:
+  !> 3 q_k - 3 q_{k-1} + q_{k-2}; lambda linear at depth 2, quadratic at 3); before, q + h v and the
+  !> last multipliers. Exact for the quadratic free flight of uniform gravity (no iteration then),
+  !> else O(h^3) from the solution. Schemes with interior stages (Lobatto) keep q + h v: their stage
+  !> values start on the chord to the guess, so a better endpoint alone is not a better start.
+  subroutine predict(self, dir, h, q, lambda, vel, vel_before, lambda_before, lambda_before2, depth)
+    type(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: dir, depth
+    real(dp), intent(in) :: h, q(:), lambda(:), vel(:), vel_before(:), lambda_before(:), lambda_before2(:)
+    if (depth >= 2 .and. .not. self%sys%needs_pair_solve()) then
+      self%q_guess = q + real(dir, dp) * h * (2.0_dp * vel - vel_before)
+    else
+      self%q_guess = q + real(dir, dp) * h * vel
+    end if
+    call self%sys%put_endpoint(self%x, q, self%q_guess)
+    if (self%m == 0) then
+      call self%sys%put_multipliers(self%x, lambda)
+    else if (depth >= 3) then
+      self%lambda_start = 3.0_dp * (lambda - lambda_before) + lambda_before2
+      call self%sys%put_multipliers(self%x, self%lambda_start)
+    else if (depth == 2) then
+      self%lambda_start = 2.0_dp * lambda - lambda_before
+      call self%sys%put_multipliers(self%x, self%lambda_start)
+    else
+      call self%sys%put_multipliers(self%x, lambda)
+    end if
+  end subroutine predict
 
   !> Is configuration a (the sub-step's start) on wall j, to solver tolerance?
   logical function on_wall(self, j)
