@@ -200,7 +200,7 @@ contains
     real(dp), intent(in) :: a(:), pa(:), tau
     integer, intent(out) :: stat
     self%kind = KIND_SUBSTEP
-    self%a = a; self%pa = pa; self%tau = tau
+    self%a(:) = a; self%pa(:) = pa; self%tau = tau   ! (:): no reallocation check on the hot path
     stat = VCI_OK
     if (self%m > 0) call self%eval_forms(a, self%omega, stat)
   end subroutine pose_substep
