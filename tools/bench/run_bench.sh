@@ -58,6 +58,48 @@ if [ "${CALLGRIND:-1}" != 0 ] && command -v valgrind >/dev/null 2>&1; then
   } >"$CG"
 fi
 
+# Where the instructions of a library step go (callgrind, analytic Hessian, self cost per function
+# group): the profile that explains a missed target. PROFILE=0 skips it.
+PR=""
+if [ "${CALLGRIND:-1}" != 0 ] && [ "${PROFILE:-1}" != 0 ] && command -v callgrind_annotate >/dev/null 2>&1; then
+  PR=$(mktemp); CGO=$(mktemp)
+  trap 'rm -f "$TMP" "$CG" "$PR" "$CGO"' EXIT
+  {
+    echo "### Where a library step's instructions go (callgrind, analytic H)"
+    echo
+    echo "Self instructions per step by function group, from \`valgrind --tool=callgrind --toggle-collect='*run_timed*'"
+    echo "vci_bench_throughput --profile SCENE 1 EPISODES\` and \`callgrind_annotate --inclusive=no\` (impact steps included;"
+    echo "groups by function name: see tools/bench/run_bench.sh)."
+    echo
+    echo "| group | ellipse | pendulum |"
+    echo "|---|---:|---:|"
+    for spec in ellipse:200:20 pendulum:4999:2; do
+      name=${spec%%:*}; rest=${spec#*:}; nst=${rest%%:*}; eps=${rest#*:}
+      valgrind --tool=callgrind --callgrind-out-file="$CGO" --toggle-collect='*run_timed*' \
+        "$EXE" --profile "$name" 1 "$eps" >/dev/null 2>&1
+      callgrind_annotate --inclusive=no --threshold=100 "$CGO" 2>/dev/null | awk -v steps=$((nst * eps)) -v scene="$name" '
+        /:/ && $1 ~ /^[0-9,]+$/ {
+          n = $1; gsub(",", "", n); f = $0
+          if (f ~ /newton_MOD_(small_lu|lu_|linear)|dgetr|dgelsd/) g = "4 LU factorisation and solves"
+          else if (f ~ /newton_MOD/) g = "5 Newton iteration (merit, finiteness, line search, copies)"
+          else if (f ~ /scene_|vci_scene/ || f ~ /libm|sincos|s_sin|s_cos/) g = "1 model callbacks (scene code, libm)"
+          else if (f ~ /scheme_discrete_MOD_(step_jacobian|fd_column)|dispatch_jacobian|check_matrix|impulse_jacobian/) g = "3 Jacobian assembly (incl. differenced rows)"
+          else if (f ~ /scheme_discrete_MOD_(step_residual|rows|d1s|check_fast)|dispatch_residual|scheme_MOD_check/) g = "2 residual and row scales"
+          else if (f ~ /energy_out|momentum_out|hamiltonian/) g = "6 new momentum and E_d"
+          else if (f ~ /gaps|gap_grad/) g = "7 gap tests"
+          else if (f ~ /stepper_MOD|integrator_MOD|scheme_MOD|scheme_discrete_MOD/) g = "8 stepper/driver bookkeeping (pose, put/get, copies)"
+          else g = "9 other (runtime, memcpy)"
+          tot[g] += n; all += n
+        }
+        END { for (g in tot) printf "%s|%s|%.0f\n", scene, g, tot[g] / steps; printf "%s|0 total|%.0f\n", scene, all / steps }'
+    done | sort -t'|' -k2,2 | awk -F'|' '
+      { v[$2, $1] = $3; if (!($2 in seen)) { seen[$2] = 1; order[++n] = $2 } }
+      END { for (i = 1; i <= n; i++) { g = order[i]
+              printf "| %s | %s | %s |\n", substr(g, 3), v[g, "ellipse"], v[g, "pendulum"] } }'
+    echo
+  } >"$PR"
+fi
+
 cpu=$(lscpu 2>/dev/null | sed -n 's/^Model name:[[:space:]]*//p' | head -n 1)
 lapack=$(ldd "$EXE" 2>/dev/null | awk '/liblapack|libopenblas|libblas/ {print $3}' | while read -r l; do readlink -f "$l"; done | sort -u | tr '\n' ' ')
 libvci=$(ldd "$EXE" 2>/dev/null | awk '/libvci/ {print "shared"}' | head -n 1)
@@ -81,6 +123,7 @@ mkdir -p "$(dirname "$OUT")"
   echo
   cat "$TMP"
   if [ -n "$CG" ]; then echo; cat "$CG"; fi
+  if [ -n "$PR" ]; then cat "$PR"; fi
   echo
   echo "### Cost per step against n (FPU-beta chain, midpoint, analytic Hessians)"
   echo
