@@ -57,7 +57,7 @@ program pendulum_walls
       if (nimp <= size(found)) found(nimp) = imp%t
     end do
   end do
-  write (output_unit, '(a,i0,a,es10.3,a,i0,a,a)') 'scheme: '//vci_scheme_name(integ%scheme())//'   stages: ', &
+  write (output_unit, '(a,i0,a,es10.3,a,i0,a,a)') 'scheme: '//trim(vci_scheme_name(integ%scheme()))//'   stages: ', &
     integ%stages(), '   h = ', opts%h, '   steps: ', nsteps, '   impact energy: ', &
     trim(merge('hamiltonian', 'discrete   ', opts%impact_energy == VCI_IMPACT_HAMILTONIAN))
   if (stat /= VCI_OK) then

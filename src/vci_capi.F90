@@ -25,9 +25,11 @@ module vci_capi
   use vci_kinds, only: dp, i8
   use vci_status
   use vci_limits, only: vci_size_problem
+  use vci_model_base, only: vci_model_base_t
   use vci_model, only: vci_model_t
   use vci_lagrangian, only: vci_lagrangian_t
   use vci_observer, only: vci_observer_t, vci_run_info_t, vci_impact_t
+  use vci_checkpoint, only: vci_checkpoint_t
   use vci_integrator, only: vci_integrator_t, vci_stats_t, VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN
   use vci_callback_adapter, only: vci_callback_record_t
   use vci, only: VCI_VERSION_NUMBER
@@ -189,6 +191,10 @@ module vci_capi
     procedure :: on_step => obs_step
     procedure :: on_impact => obs_impact
     procedure :: on_finish => obs_finish
+    procedure :: keeps_checkpoints => obs_keeps_checkpoints
+    procedure :: wants_checkpoint => obs_wants_checkpoint
+    procedure :: on_checkpoint => obs_checkpoint
+    procedure :: failure_cause => obs_failure_cause
   end type c_observer_t
 
   !> The C continuous model: extends vci_lagrangian_t as c_model_t extends vci_model_t; the return
@@ -429,24 +435,110 @@ contains
   end function c_array
 
   ! ---------------------------------------------------------------------------------------------
-  ! the C model: each procedure calls its C function and hands the return code to the adapter
+  ! the C models: each procedure calls its C function and hands the return code to the adapter
 
   logical function finite1(a)
     real(dp), intent(in) :: a(:)
     finite1 = all(ieee_is_finite(a))
   end function finite1
 
+  ! The discrete and the continuous C model share one caller per C function shape: out (nout values)
+  ! is zeroed (defined even where a failing callback leaves it unwritten), a NULL callback is "not
+  ! provided", else the return code and the finiteness of out go to the model's callback record.
+
+  !> Where a C model (either kind) notes its callbacks' returns, and its user pointer.
+  subroutine c_context(model, record, user)
+    class(vci_model_base_t), target, intent(inout) :: model
+    type(vci_callback_record_t), pointer, intent(out) :: record
+    type(c_ptr), intent(out) :: user
+    record => null(); user = c_null_ptr
+    select type (model)
+    type is (c_model_t)
+      record => model%record; user = model%user
+    type is (c_lagrangian_t)
+      record => model%record; user = model%user
+    end select
+  end subroutine c_context
+
+  !> f(n, q, v, h, out, user): c_ld_grad_fn's shape (D1, D2, D3 L_d, the mixed Hessian).
+  subroutine call_qvh(model, fp, name, q, v, h, out, nout, stat)
+    class(vci_model_base_t), target, intent(inout) :: model
+    type(c_funptr), intent(in) :: fp
+    character(len=*), intent(in) :: name
+    real(dp), intent(in) :: q(:), v(:), h
+    integer, intent(in) :: nout
+    real(dp), intent(out) :: out(nout)
+    integer, intent(inout) :: stat
+    procedure(c_ld_grad_fn), pointer :: f
+    type(vci_callback_record_t), pointer :: record
+    type(c_ptr) :: user
+    integer :: rc
+    out = 0.0_dp
+    if (.not. c_associated(fp)) then
+      call model%not_provided(stat); return
+    end if
+    call c_context(model, record, user)
+    call c_f_procpointer(fp, f)
+    rc = f(model%n, q, v, h, out, user)
+    call record%note(rc, 'the C callback '//name, finite1(out), stat)
+  end subroutine call_qvh
+
+  !> f(n, k, q, out, user): c_forms_fn's shape (constraint forms with k = m; gaps and their
+  !> gradients with k = ngaps).
+  subroutine call_qk(model, fp, name, k, q, out, nout, stat)
+    class(vci_model_base_t), target, intent(inout) :: model
+    type(c_funptr), intent(in) :: fp
+    character(len=*), intent(in) :: name
+    integer, intent(in) :: k, nout
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: out(nout)
+    integer, intent(inout) :: stat
+    procedure(c_forms_fn), pointer :: f
+    type(vci_callback_record_t), pointer :: record
+    type(c_ptr) :: user
+    integer :: rc
+    out = 0.0_dp
+    if (.not. c_associated(fp)) then
+      call model%not_provided(stat); return
+    end if
+    call c_context(model, record, user)
+    call c_f_procpointer(fp, f)
+    rc = f(model%n, k, q, out, user)
+    call record%note(rc, 'the C callback '//name, finite1(out), stat)
+  end subroutine call_qk
+
+  !> f(n, q, v, out, user): c_energy_fn's shape (L, dL/dq, dL/dqdot; H with v = p).
+  subroutine call_qv(model, fp, name, q, v, out, nout, stat)
+    class(vci_model_base_t), target, intent(inout) :: model
+    type(c_funptr), intent(in) :: fp
+    character(len=*), intent(in) :: name
+    real(dp), intent(in) :: q(:), v(:)
+    integer, intent(in) :: nout
+    real(dp), intent(out) :: out(nout)
+    integer, intent(inout) :: stat
+    procedure(c_energy_fn), pointer :: f
+    type(vci_callback_record_t), pointer :: record
+    type(c_ptr) :: user
+    integer :: rc
+    out = 0.0_dp
+    if (.not. c_associated(fp)) then
+      call model%not_provided(stat); return
+    end if
+    call c_context(model, record, user)
+    call c_f_procpointer(fp, f)
+    rc = f(model%n, q, v, out, user)
+    call record%note(rc, 'the C callback '//name, finite1(out), stat)
+  end subroutine call_qv
+
+  ! ---------------------------------------------------------------------------------------------
+  ! the C model (discrete L_d)
+
   subroutine cm_d1(self, q, v, h, out, stat)
     class(c_model_t), intent(inout) :: self
     real(dp), intent(in) :: q(:), v(:), h
     real(dp), intent(out) :: out(:)
     integer, intent(inout) :: stat
-    procedure(c_ld_grad_fn), pointer :: f
-    integer :: rc
-    call c_f_procpointer(self%cb%d1_ld, f)
-    out = 0.0_dp   ! defined even where a failing callback left it unwritten
-    rc = f(self%n, q, v, h, out, self%user)
-    call self%record%note(rc, 'the C callback d1_ld', finite1(out), stat)
+    call call_qvh(self, self%cb%d1_ld, 'd1_ld', q, v, h, out, size(out), stat)
   end subroutine cm_d1
 
   subroutine cm_d2(self, q, v, h, out, stat)
@@ -454,12 +546,7 @@ contains
     real(dp), intent(in) :: q(:), v(:), h
     real(dp), intent(out) :: out(:)
     integer, intent(inout) :: stat
-    procedure(c_ld_grad_fn), pointer :: f
-    integer :: rc
-    call c_f_procpointer(self%cb%d2_ld, f)
-    out = 0.0_dp   ! defined even where a failing callback left it unwritten
-    rc = f(self%n, q, v, h, out, self%user)
-    call self%record%note(rc, 'the C callback d2_ld', finite1(out), stat)
+    call call_qvh(self, self%cb%d2_ld, 'd2_ld', q, v, h, out, size(out), stat)
   end subroutine cm_d2
 
   subroutine cm_d3(self, q, v, h, out, stat)
@@ -467,13 +554,8 @@ contains
     real(dp), intent(in) :: q(:), v(:), h
     real(dp), intent(out) :: out
     integer, intent(inout) :: stat
-    procedure(c_ld_grad_fn), pointer :: f
-    real(c_double) :: tmp(1)
-    integer :: rc
-    call c_f_procpointer(self%cb%d3_ld, f)
-    tmp = 0.0_dp   ! defined even where a failing callback left it unwritten
-    rc = f(self%n, q, v, h, tmp, self%user)
-    call self%record%note(rc, 'the C callback d3_ld', finite1(tmp), stat)
+    real(dp) :: tmp(1)
+    call call_qvh(self, self%cb%d3_ld, 'd3_ld', q, v, h, tmp, 1, stat)
     out = tmp(1)
   end subroutine cm_d3
 
@@ -482,15 +564,7 @@ contains
     real(dp), intent(in) :: q(:), v(:), h
     real(dp), intent(out) :: hess(:, :)
     integer, intent(inout) :: stat
-    procedure(c_ld_grad_fn), pointer :: f
-    integer :: rc
-    if (.not. c_associated(self%cb%mixed_hessian)) then
-      hess = 0.0_dp; call self%not_provided(stat); return
-    end if
-    call c_f_procpointer(self%cb%mixed_hessian, f)
-    hess = 0.0_dp   ! defined even where a failing callback left it unwritten
-    rc = f(self%n, q, v, h, hess, self%user)
-    call self%record%note(rc, 'the C callback mixed_hessian', all(ieee_is_finite(hess)), stat)
+    call call_qvh(self, self%cb%mixed_hessian, 'mixed_hessian', q, v, h, hess, size(hess), stat)
   end subroutine cm_hessian
 
   subroutine cm_forms(self, q, omega, stat)
@@ -498,15 +572,7 @@ contains
     real(dp), intent(in) :: q(:)
     real(dp), intent(out) :: omega(:, :)
     integer, intent(inout) :: stat
-    procedure(c_forms_fn), pointer :: f
-    integer :: rc
-    if (.not. c_associated(self%cb%constraint_forms)) then
-      omega = 0.0_dp; call self%not_provided(stat); return
-    end if
-    call c_f_procpointer(self%cb%constraint_forms, f)
-    omega = 0.0_dp   ! defined even where a failing callback left it unwritten
-    rc = f(self%n, self%m, q, omega, self%user)
-    call self%record%note(rc, 'the C callback constraint_forms', all(ieee_is_finite(omega)), stat)
+    call call_qk(self, self%cb%constraint_forms, 'constraint_forms', self%m, q, omega, size(omega), stat)
   end subroutine cm_forms
 
   subroutine cm_dconstraint(self, base, other, h, out, stat)
@@ -530,15 +596,7 @@ contains
     real(dp), intent(in) :: q(:)
     real(dp), intent(out) :: g(:)
     integer, intent(inout) :: stat
-    procedure(c_forms_fn), pointer :: f
-    integer :: rc
-    if (.not. c_associated(self%cb%gaps)) then
-      g = 0.0_dp; call self%not_provided(stat); return
-    end if
-    call c_f_procpointer(self%cb%gaps, f)
-    g = 0.0_dp   ! defined even where a failing callback left it unwritten
-    rc = f(self%n, self%n_gaps, q, g, self%user)
-    call self%record%note(rc, 'the C callback gaps', finite1(g), stat)
+    call call_qk(self, self%cb%gaps, 'gaps', self%n_gaps, q, g, size(g), stat)
   end subroutine cm_gaps
 
   subroutine cm_gap_grads(self, q, dg, stat)
@@ -546,15 +604,7 @@ contains
     real(dp), intent(in) :: q(:)
     real(dp), intent(out) :: dg(:, :)
     integer, intent(inout) :: stat
-    procedure(c_forms_fn), pointer :: f
-    integer :: rc
-    if (.not. c_associated(self%cb%gap_gradients)) then
-      dg = 0.0_dp; call self%not_provided(stat); return
-    end if
-    call c_f_procpointer(self%cb%gap_gradients, f)
-    dg = 0.0_dp   ! defined even where a failing callback left it unwritten
-    rc = f(self%n, self%n_gaps, q, dg, self%user)
-    call self%record%note(rc, 'the C callback gap_gradients', all(ieee_is_finite(dg)), stat)
+    call call_qk(self, self%cb%gap_gradients, 'gap_gradients', self%n_gaps, q, dg, size(dg), stat)
   end subroutine cm_gap_grads
 
   subroutine cm_energy(self, q, p, e, stat)
@@ -562,37 +612,13 @@ contains
     real(dp), intent(in) :: q(:), p(:)
     real(dp), intent(out) :: e
     integer, intent(inout) :: stat
-    procedure(c_energy_fn), pointer :: f
-    real(c_double) :: tmp(1)
-    integer :: rc
-    if (.not. c_associated(self%cb%energy)) then
-      e = 0.0_dp; call self%not_provided(stat); return
-    end if
-    call c_f_procpointer(self%cb%energy, f)
-    tmp = 0.0_dp   ! defined even where a failing callback left it unwritten
-    rc = f(self%n, q, p, tmp, self%user)
-    call self%record%note(rc, 'the C callback energy', finite1(tmp), stat)
+    real(dp) :: tmp(1)
+    call call_qv(self, self%cb%energy, 'energy', q, p, tmp, 1, stat)
     e = tmp(1)
   end subroutine cm_energy
 
   ! ---------------------------------------------------------------------------------------------
-  ! the C continuous model: the same pattern, with vci_lagrangian_t's procedures
-
-  !> Call f(n, q, v, out, user) (L, dL/dq, dL/dqdot, H: c_energy_fn's shape) and note its return.
-  subroutine call_qv(self, fp, name, q, v, out, stat)
-    class(c_lagrangian_t), intent(inout) :: self
-    type(c_funptr), intent(in) :: fp
-    character(len=*), intent(in) :: name
-    real(dp), intent(in) :: q(:), v(:)
-    real(dp), intent(out) :: out(:)
-    integer, intent(inout) :: stat
-    procedure(c_energy_fn), pointer :: f
-    integer :: rc
-    call c_f_procpointer(fp, f)
-    out = 0.0_dp   ! defined even where a failing callback left it unwritten
-    rc = f(self%n, q, v, out, self%user)
-    call self%record%note(rc, 'the C callback '//name, finite1(out), stat)
-  end subroutine call_qv
+  ! the C continuous model: the same callers, with vci_lagrangian_t's procedures
 
   subroutine cl_value(self, q, v, l, stat)
     class(c_lagrangian_t), intent(inout) :: self
@@ -600,11 +626,7 @@ contains
     real(dp), intent(out) :: l
     integer, intent(inout) :: stat
     real(dp) :: tmp(1)
-    l = 0.0_dp
-    if (.not. c_associated(self%cb%lagrangian)) then
-      call self%not_provided(stat); return
-    end if
-    call call_qv(self, self%cb%lagrangian, 'lagrangian', q, v, tmp, stat)
+    call call_qv(self, self%cb%lagrangian, 'lagrangian', q, v, tmp, 1, stat)
     l = tmp(1)
   end subroutine cl_value
 
@@ -613,10 +635,7 @@ contains
     real(dp), intent(in) :: q(:), v(:)
     real(dp), intent(out) :: out(:)
     integer, intent(inout) :: stat
-    if (.not. c_associated(self%cb%dl_dq)) then
-      out = 0.0_dp; call self%not_provided(stat); return
-    end if
-    call call_qv(self, self%cb%dl_dq, 'dl_dq', q, v, out, stat)
+    call call_qv(self, self%cb%dl_dq, 'dl_dq', q, v, out, size(out), stat)
   end subroutine cl_dl_dq
 
   subroutine cl_dl_dv(self, q, v, out, stat)
@@ -624,10 +643,7 @@ contains
     real(dp), intent(in) :: q(:), v(:)
     real(dp), intent(out) :: out(:)
     integer, intent(inout) :: stat
-    if (.not. c_associated(self%cb%dl_dv)) then
-      out = 0.0_dp; call self%not_provided(stat); return
-    end if
-    call call_qv(self, self%cb%dl_dv, 'dl_dv', q, v, out, stat)
+    call call_qv(self, self%cb%dl_dv, 'dl_dv', q, v, out, size(out), stat)
   end subroutine cl_dl_dv
 
   subroutine cl_hessians(self, q, v, lqq, lqv, lvv, stat)
@@ -652,15 +668,7 @@ contains
     real(dp), intent(in) :: q(:)
     real(dp), intent(out) :: omega(:, :)
     integer, intent(inout) :: stat
-    procedure(c_forms_fn), pointer :: f
-    integer :: rc
-    omega = 0.0_dp
-    if (.not. c_associated(self%cb%constraint_forms)) then
-      call self%not_provided(stat); return
-    end if
-    call c_f_procpointer(self%cb%constraint_forms, f)
-    rc = f(self%n, self%m, q, omega, self%user)
-    call self%record%note(rc, 'the C callback constraint_forms', all(ieee_is_finite(omega)), stat)
+    call call_qk(self, self%cb%constraint_forms, 'constraint_forms', self%m, q, omega, size(omega), stat)
   end subroutine cl_forms
 
   subroutine cl_gaps(self, q, g, stat)
@@ -668,15 +676,7 @@ contains
     real(dp), intent(in) :: q(:)
     real(dp), intent(out) :: g(:)
     integer, intent(inout) :: stat
-    procedure(c_forms_fn), pointer :: f
-    integer :: rc
-    g = 0.0_dp
-    if (.not. c_associated(self%cb%gaps)) then
-      call self%not_provided(stat); return
-    end if
-    call c_f_procpointer(self%cb%gaps, f)
-    rc = f(self%n, self%n_gaps, q, g, self%user)
-    call self%record%note(rc, 'the C callback gaps', finite1(g), stat)
+    call call_qk(self, self%cb%gaps, 'gaps', self%n_gaps, q, g, size(g), stat)
   end subroutine cl_gaps
 
   subroutine cl_gap_grads(self, q, dg, stat)
@@ -684,15 +684,7 @@ contains
     real(dp), intent(in) :: q(:)
     real(dp), intent(out) :: dg(:, :)
     integer, intent(inout) :: stat
-    procedure(c_forms_fn), pointer :: f
-    integer :: rc
-    dg = 0.0_dp
-    if (.not. c_associated(self%cb%gap_gradients)) then
-      call self%not_provided(stat); return
-    end if
-    call c_f_procpointer(self%cb%gap_gradients, f)
-    rc = f(self%n, self%n_gaps, q, dg, self%user)
-    call self%record%note(rc, 'the C callback gap_gradients', all(ieee_is_finite(dg)), stat)
+    call call_qk(self, self%cb%gap_gradients, 'gap_gradients', self%n_gaps, q, dg, size(dg), stat)
   end subroutine cl_gap_grads
 
   subroutine cl_energy(self, q, p, e, stat)
@@ -701,11 +693,7 @@ contains
     real(dp), intent(out) :: e
     integer, intent(inout) :: stat
     real(dp) :: tmp(1)
-    e = 0.0_dp
-    if (.not. c_associated(self%cb%energy)) then
-      call self%not_provided(stat); return
-    end if
-    call call_qv(self, self%cb%energy, 'energy', q, p, tmp, stat)
+    call call_qv(self, self%cb%energy, 'energy', q, p, tmp, 1, stat)
     e = tmp(1)
   end subroutine cl_energy
 
@@ -772,6 +760,33 @@ contains
     end if
   end subroutine obs_impact
 
+  ! checkpoints go to the output (HDF5 stores them: restarts from its file continue bit for bit)
+  pure logical function obs_keeps_checkpoints(self)
+    class(c_observer_t), intent(in) :: self
+    obs_keeps_checkpoints = .false.
+    if (allocated(self%output)) obs_keeps_checkpoints = self%output%keeps_checkpoints()
+  end function obs_keeps_checkpoints
+
+  pure logical function obs_wants_checkpoint(self)
+    class(c_observer_t), intent(in) :: self
+    obs_wants_checkpoint = .false.
+    if (allocated(self%output)) obs_wants_checkpoint = self%output%wants_checkpoint()
+  end function obs_wants_checkpoint
+
+  subroutine obs_checkpoint(self, cp, stat)
+    class(c_observer_t), intent(inout) :: self
+    type(vci_checkpoint_t), intent(in) :: cp
+    integer, intent(inout) :: stat
+    if (allocated(self%output)) call self%output%on_checkpoint(cp, stat)
+  end subroutine obs_checkpoint
+
+  subroutine obs_failure_cause(self, cause)
+    class(c_observer_t), intent(in) :: self
+    character(len=*), intent(out) :: cause
+    cause = ''
+    if (allocated(self%output)) call self%output%failure_cause(cause)
+  end subroutine obs_failure_cause
+
   !> Runs end at vci_close_output or destroy, not at the end of each vci_integrate call.
   subroutine obs_finish(self, status, message, stat)
     class(c_observer_t), intent(inout) :: self
@@ -787,6 +802,9 @@ contains
     if (.not. allocated(ip%obs%output)) return
     ! also when no step was written: the writer then just closes its file
     call lock_io()
+    if (ip%obs%started .and. ip%obs%output%keeps_checkpoints()) &
+      call ip%obs%output%on_checkpoint(ip%integ%checkpoint(), stat)
+    stat = 0
     call ip%obs%output%on_finish(ip%integ%status(), trim(ip%integ%message_text()), stat)
     deallocate (ip%obs%output)
     call unlock_io()
@@ -852,7 +870,7 @@ contains
     k = int(min(nbytes, ours))
     dst(1:k) = src(1:k)
     local%size = ours
-    vci_model_create_v2 = create_model(model, n, m, ngaps, local, user)
+    vci_model_create_v2 = create_model('vci_model_create', model, n, m, ngaps, local, user)
   end function vci_model_create_v2
 
   !> int vci_model_create(...) as vci.h 0.1.0 declared it: the callbacks are nine pointers with no
@@ -873,7 +891,7 @@ contains
     call c_f_pointer(cb, old)
     local = vci_callbacks_c(c_sizeof(local), old%d1_ld, old%d2_ld, old%d3_ld, old%mixed_hessian, &
                             old%constraint_forms, old%discrete_constraint, old%gaps, old%gap_gradients, old%energy)
-    vci_model_create_v0_1 = create_model(model, n, m, ngaps, local, user)
+    vci_model_create_v0_1 = create_model('vci_model_create', model, n, m, ngaps, local, user)
   end function vci_model_create_v0_1
 
   !> int vci_model_create_lagrangian(vci_model *model, int n, int m, int ngaps,
@@ -947,7 +965,7 @@ contains
       return
     end if
     ! sizes, allocation and registry as for a discrete model
-    vci_model_create_lagrangian = create_model(model, n, m, ngaps, vci_callbacks_c(), user, local)
+    vci_model_create_lagrangian = create_model('vci_model_create_lagrangian', model, n, m, ngaps, vci_callbacks_c(), user, local)
   end function vci_model_create_lagrangian
 
   !> *out = NULL for the handle pointer `out` (not NULL).
@@ -958,9 +976,10 @@ contains
     h = c_null_ptr
   end subroutine null_out
 
-  !> The model_create entry points: validate, allocate, register. With lcb: a continuous model
-  !> (its callbacks already checked; fcb unused).
-  integer function create_model(model, n, m, ngaps, fcb, user, lcb) result(status)
+  !> The model_create entry points (`caller`: the one called): validate, allocate, register.
+  !> With lcb: a continuous model (its callbacks already checked; fcb unused).
+  integer function create_model(caller, model, n, m, ngaps, fcb, user, lcb) result(status)
+    character(len=*), intent(in) :: caller   !< the C entry point called, named in messages
     type(c_ptr), intent(in) :: model, user
     integer(c_int), intent(in) :: n, m, ngaps
     type(vci_callbacks_c), intent(in) :: fcb
@@ -976,7 +995,7 @@ contains
     if (why /= '') then
       block
         character(len=VCI_MSG_LEN) :: msg
-        write (msg, '(a,3(i0,a))') 'vci_model_create: sizes n = ', n, ', m = ', m, ', ngaps = ', ngaps, &
+        write (msg, '(a,3(i0,a))') caller//': sizes n = ', n, ', m = ', m, ', ngaps = ', ngaps, &
           ' invalid ('//trim(why)//')'
         call set_thread_message(msg)
       end block
@@ -992,11 +1011,11 @@ contains
       if (ngaps > 0 .and. .not. c_associated(fcb%gaps)) what = 'gaps (needed as ngaps > 0)'
     end if
     if (what /= '') then
-      call set_thread_message('vci_model_create: callback '//trim(what)//' is NULL'); return
+      call set_thread_message(caller//': callback '//trim(what)//' is NULL'); return
     end if
     allocate (mp, stat=st)
     if (st /= 0) then
-      call set_thread_message('vci_model_create: out of memory')
+      call set_thread_message(caller//': out of memory')
       status = VCI_ERR_MEMORY; return
     end if
     mp%n = n; mp%m = m; mp%n_gaps = ngaps
@@ -1013,7 +1032,7 @@ contains
     call unlock_registry()
     if (.not. c_associated(out)) then
       deallocate (mp)
-      call set_thread_message('vci_model_create: too many live handles, or out of memory')
+      call set_thread_message(caller//': too many live handles, or out of memory')
       status = VCI_ERR_MEMORY; return
     end if
     status = VCI_OK
@@ -1076,7 +1095,7 @@ contains
         call set_thread_message('vci_integrator_create: the model handle is NULL')
       else
         call set_thread_message('vci_integrator_create: not a live model handle (destroyed, or not made by '// &
-                                'vci_model_create)')
+                                'vci_model_create or vci_model_create_lagrangian)')
       end if
       return
     end if
@@ -1219,45 +1238,40 @@ contains
   integer(c_int) function vci_init_from_pair(integ, t0, q0, q1) bind(C, name='vci_init_from_pair')
     type(c_ptr), value :: integ, q0, q1
     real(c_double), value :: t0
-    type(c_integrator_t), pointer :: ip
-    real(c_double), pointer :: a(:), b(:)
-    integer :: stat
-    call enter(integ, 'vci_init_from_pair', ip, stat)
-    if (stat /= VCI_OK) then
-      vci_init_from_pair = stat; return
-    end if
-    if (.not. (c_array(q0, ip%model%n, a) .and. c_array(q1, ip%model%n, b))) then
-      call ip%integ%forget_state()
-      stat = fail(ip, VCI_ERR_ARGUMENT, 'vci_init_from_pair: q0 or q1 is NULL')
-    else if (.not. output_blocks_init(ip, 'vci_init_from_pair', stat)) then
-      call ip%integ%init_from_pair(real(t0, dp), a, b, stat)
-      stat = after_call(ip, stat)
-    end if
-    call leave(ip)
-    vci_init_from_pair = stat
+    vci_init_from_pair = init_entry(integ, 'vci_init_from_pair', .true., t0, q0, q1)
   end function vci_init_from_pair
 
   !> int vci_init_from_momentum(vci_integrator integ, double t0, const double *q0, const double *p0)
   integer(c_int) function vci_init_from_momentum(integ, t0, q0, p0) bind(C, name='vci_init_from_momentum')
     type(c_ptr), value :: integ, q0, p0
     real(c_double), value :: t0
+    vci_init_from_momentum = init_entry(integ, 'vci_init_from_momentum', .false., t0, q0, p0)
+  end function vci_init_from_momentum
+
+  !> The two init entry points (`who`): from the pair (q0 at t0, x1 = q1 at t0 + h) when from_pair,
+  !> else from (q0, x1 = p0) at t0.
+  integer function init_entry(integ, who, from_pair, t0, q0, x1) result(stat)
+    type(c_ptr), intent(in) :: integ, q0, x1
+    character(len=*), intent(in) :: who
+    logical, intent(in) :: from_pair
+    real(c_double), intent(in) :: t0
     type(c_integrator_t), pointer :: ip
     real(c_double), pointer :: a(:), b(:)
-    integer :: stat
-    call enter(integ, 'vci_init_from_momentum', ip, stat)
-    if (stat /= VCI_OK) then
-      vci_init_from_momentum = stat; return
-    end if
-    if (.not. (c_array(q0, ip%model%n, a) .and. c_array(p0, ip%model%n, b))) then
+    call enter(integ, who, ip, stat)
+    if (stat /= VCI_OK) return
+    if (.not. (c_array(q0, ip%model%n, a) .and. c_array(x1, ip%model%n, b))) then
       call ip%integ%forget_state()
-      stat = fail(ip, VCI_ERR_ARGUMENT, 'vci_init_from_momentum: q0 or p0 is NULL')
-    else if (.not. output_blocks_init(ip, 'vci_init_from_momentum', stat)) then
-      call ip%integ%init_from_momentum(real(t0, dp), a, b, stat)
+      stat = fail(ip, VCI_ERR_ARGUMENT, who//': q0 or '//merge('q1', 'p0', from_pair)//' is NULL')
+    else if (.not. output_blocks_init(ip, who, stat)) then
+      if (from_pair) then
+        call ip%integ%init_from_pair(real(t0, dp), a, b, stat)
+      else
+        call ip%integ%init_from_momentum(real(t0, dp), a, b, stat)
+      end if
       stat = after_call(ip, stat)
     end if
     call leave(ip)
-    vci_init_from_momentum = stat
-  end function vci_init_from_momentum
+  end function init_entry
 
   !> The output's run goes one way: refuse the other direction while it is open.
   logical function output_blocks_direction(ip, who, direction, stat)
@@ -1286,8 +1300,11 @@ contains
       ! a single step has no on_start of its own: the output's run starts with the first step
       ostat = 0
       if (allocated(ip%obs%output) .and. .not. ip%obs%started .and. ip%integ%is_initialized() .and. &
-          (direction == 1 .or. direction == -1)) call ip%obs%on_start(ip%integ%run_info(int(direction)), ip%integ%configuration(), &
-                                                    ip%integ%momentum(), ostat)
+          (direction == 1 .or. direction == -1)) then
+        if (ip%obs%wants_checkpoint()) call ip%obs%on_checkpoint(ip%integ%checkpoint(), ostat)
+        if (ostat == 0) call ip%obs%on_start(ip%integ%run_info(int(direction)), ip%integ%configuration(), &
+                                             ip%integ%momentum(), ostat)
+      end if
       if (ostat /= 0) then
         stat = fail(ip, VCI_ERR_IO, 'vci_step: the output could not start the run: '//trim(output_message(ip)))
       else
@@ -1504,7 +1521,6 @@ contains
           if (stat /= VCI_OK) then
             stat = fail(ip, VCI_ERR_IO, 'vci_open_output: '//trim(w%message))
           else
-            call w%attach(ip%integ)   ! checkpoints in the file: restarts continue bit for bit
             call move_alloc(w, ip%obs%output)
             ip%obs%started = .false.
             ip%obs%direction = 0

@@ -20,6 +20,7 @@ module vci_ensemble_h5
 #endif
   use vci_kinds, only: dp, i8
   use vci_status, only: VCI_OK, VCI_ERR_IO, VCI_ERR_ARGUMENT, VCI_MSG_LEN
+  use vci_h5_io, only: h5io_put_attr, h5io_get_attr, h5io_string_type
   use vci_ensemble, only: vci_ensemble_config_t, vci_ensemble_table_t, vci_ensemble_results_t, &
                           vci_ensemble_samples, vci_ensemble_results_alloc, vci_ensemble_size, &
                           VCI_MEMBER_NOT_RUN, VCI_START_PAIR, VCI_START_MOMENTUM
@@ -178,28 +179,28 @@ contains
 
     start_kind = 'pair'
     if (config%start_kind /= VCI_START_PAIR) start_kind = 'momentum'
-    call put_attr_str(self, 'format', 'vci-ensemble', stat)
-    call put_attr_int(self, 'format_version', VCI_ENSEMBLE_FORMAT_VERSION, stat)
-    call put_attr_str(self, 'vci_version', VCI_VERSION_STRING, stat)
-    call put_attr_str(self, 'name', trim(config%name), stat)
-    call put_attr_int(self, 'n_members', nm, stat)
-    call put_attr_int(self, 'n', self%n, stat)
-    call put_attr_int(self, 'n_params', self%n_params, stat)
-    call put_attr_real(self, 'h', config%h, stat)
-    call put_attr_i8(self, 'nsteps', config%nsteps, stat)
-    call put_attr_int(self, 'direction', config%direction, stat)
-    call put_attr_str(self, 'start_kind', trim(start_kind), stat)
-    call put_attr_int(self, 'impact_energy', config%impact_energy, stat)
-    call put_attr_int(self, 'impact_cap', config%impact_cap, stat)
-    call put_attr_i8(self, 'stride', config%stride, stat)
-    call put_attr_int(self, 'samples', self%samples, stat)
-    call put_attr_int(self, 'message_length', VCI_ENSEMBLE_MESSAGE_LEN, stat)
-    call put_attr_int(self, 'ranks', ranks, stat)
-    call put_attr_int(self, 'threads', threads, stat)
-    call put_attr_int(self, 'chunk', chunk, stat)
-    call put_attr_int(self, 'complete', 0, stat)
-    call put_attr_int(self, 'members_run', 0, stat)
-    call put_attr_int(self, 'members_failed', 0, stat)
+    call h5io_put_attr(self%file, 'format', 'vci-ensemble', stat, self%message, who(self))
+    call h5io_put_attr(self%file, 'format_version', VCI_ENSEMBLE_FORMAT_VERSION, stat, self%message, who(self))
+    call h5io_put_attr(self%file, 'vci_version', VCI_VERSION_STRING, stat, self%message, who(self))
+    call h5io_put_attr(self%file, 'name', trim(config%name), stat, self%message, who(self))
+    call h5io_put_attr(self%file, 'n_members', nm, stat, self%message, who(self))
+    call h5io_put_attr(self%file, 'n', self%n, stat, self%message, who(self))
+    call h5io_put_attr(self%file, 'n_params', self%n_params, stat, self%message, who(self))
+    call h5io_put_attr(self%file, 'h', config%h, stat, self%message, who(self))
+    call h5io_put_attr(self%file, 'nsteps', config%nsteps, stat, self%message, who(self))
+    call h5io_put_attr(self%file, 'direction', config%direction, stat, self%message, who(self))
+    call h5io_put_attr(self%file, 'start_kind', trim(start_kind), stat, self%message, who(self))
+    call h5io_put_attr(self%file, 'impact_energy', config%impact_energy, stat, self%message, who(self))
+    call h5io_put_attr(self%file, 'impact_cap', config%impact_cap, stat, self%message, who(self))
+    call h5io_put_attr(self%file, 'stride', config%stride, stat, self%message, who(self))
+    call h5io_put_attr(self%file, 'samples', self%samples, stat, self%message, who(self))
+    call h5io_put_attr(self%file, 'message_length', VCI_ENSEMBLE_MESSAGE_LEN, stat, self%message, who(self))
+    call h5io_put_attr(self%file, 'ranks', ranks, stat, self%message, who(self))
+    call h5io_put_attr(self%file, 'threads', threads, stat, self%message, who(self))
+    call h5io_put_attr(self%file, 'chunk', chunk, stat, self%message, who(self))
+    call h5io_put_attr(self%file, 'complete', 0, stat, self%message, who(self))
+    call h5io_put_attr(self%file, 'members_run', 0, stat, self%message, who(self))
+    call h5io_put_attr(self%file, 'members_failed', 0, stat, self%message, who(self))
     if (stat /= VCI_OK) return
     ! metadata on disk now: from here on only raw data are written until close
     call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
@@ -278,9 +279,9 @@ contains
     integer :: i, err
     stat = VCI_OK
     if (.not. self%is_open) return
-    call put_attr_int(self, 'members_run', members_run, stat)
-    call put_attr_int(self, 'members_failed', members_failed, stat)
-    call put_attr_int(self, 'complete', merge(1, 0, members_run == self%n_members), stat)
+    call h5io_put_attr(self%file, 'members_run', members_run, stat, self%message, who(self))
+    call h5io_put_attr(self%file, 'members_failed', members_failed, stat, self%message, who(self))
+    call h5io_put_attr(self%file, 'complete', merge(1, 0, members_run == self%n_members), stat, self%message, who(self))
     do i = 1, N_DSETS
       if (self%d(i) >= 0) call h5dclose_f(self%d(i), err)
       self%d(i) = -1
@@ -322,20 +323,20 @@ contains
       return
     end if
     f%is_open = .true.
-    call get_attr_int(f, 'n_members', nm, stat)
-    call get_attr_int(f, 'n', f%n, stat)
-    call get_attr_int(f, 'n_params', f%n_params, stat)
-    call get_attr_int(f, 'impact_cap', cfg%impact_cap, stat)
-    call get_attr_i8(f, 'stride', stride, stat)
-    call get_attr_i8(f, 'nsteps', nsteps, stat)
-    call get_attr_real(f, 'h', cfg%h, stat)
-    call get_attr_int(f, 'direction', cfg%direction, stat)
-    call get_attr_int(f, 'impact_energy', cfg%impact_energy, stat)
-    call get_attr_int(f, 'threads', cfg%threads, stat)
-    call get_attr_int(f, 'chunk', cfg%chunk, stat)
-    call get_attr_str(f, 'start_kind', text, stat)
+    call h5io_get_attr(f%file, 'n_members', nm, stat, f%message, who(f))
+    call h5io_get_attr(f%file, 'n', f%n, stat, f%message, who(f))
+    call h5io_get_attr(f%file, 'n_params', f%n_params, stat, f%message, who(f))
+    call h5io_get_attr(f%file, 'impact_cap', cfg%impact_cap, stat, f%message, who(f))
+    call h5io_get_attr(f%file, 'stride', stride, stat, f%message, who(f))
+    call h5io_get_attr(f%file, 'nsteps', nsteps, stat, f%message, who(f))
+    call h5io_get_attr(f%file, 'h', cfg%h, stat, f%message, who(f))
+    call h5io_get_attr(f%file, 'direction', cfg%direction, stat, f%message, who(f))
+    call h5io_get_attr(f%file, 'impact_energy', cfg%impact_energy, stat, f%message, who(f))
+    call h5io_get_attr(f%file, 'threads', cfg%threads, stat, f%message, who(f))
+    call h5io_get_attr(f%file, 'chunk', cfg%chunk, stat, f%message, who(f))
+    call h5io_get_attr(f%file, 'start_kind', text, stat, f%message, who(f))
     if (text /= 'pair') cfg%start_kind = VCI_START_MOMENTUM
-    call get_attr_str(f, 'name', text, stat)
+    call h5io_get_attr(f%file, 'name', text, stat, f%message, who(f))
     cfg%name = text
     f%n_members = nm
     cfg%stride = stride; cfg%nsteps = nsteps
@@ -451,7 +452,7 @@ contains
     integer(hid_t) :: stype
     integer :: err, e2
     if (stat /= VCI_OK) return
-    call string_type(stype, err)
+    call h5io_string_type(VCI_ENSEMBLE_MESSAGE_LEN, stype, err)
     if (err /= 0) then
       call fail(self, 'cannot make a string type', stat); return
     end if
@@ -459,14 +460,6 @@ contains
     call new_dset(self, which, stype, [nm], stat)
     call h5tclose_f(stype, e2)
   end subroutine new_string_dset
-
-  subroutine string_type(stype, err)
-    integer(hid_t), intent(out) :: stype
-    integer, intent(out) :: err
-    call h5tcopy_f(H5T_FORTRAN_S1, stype, err)
-    if (err == 0) call h5tset_size_f(stype, int(VCI_ENSEMBLE_MESSAGE_LEN, size_t), err)
-    if (err == 0) call h5tset_strpad_f(stype, H5T_STR_NULLPAD_F, err)
-  end subroutine string_type
 
   !> Select members first .. first + count - 1 of dataset `which` (leading dimensions `lead`, whole;
   !> none for a dataset of one value per member).
@@ -542,7 +535,7 @@ contains
     ! null-padded like the dataset's type: readers see the message without trailing blanks
     buf = repeat(achar(0), VCI_ENSEMBLE_MESSAGE_LEN)
     buf(1:min(len_trim(text), VCI_ENSEMBLE_MESSAGE_LEN)) = text
-    call string_type(stype, err)
+    call h5io_string_type(VCI_ENSEMBLE_MESSAGE_LEN, stype, err)
     if (err == 0) call put_raw(self, D_MESSAGE, stype, c_loc(buf), per_member, member, 1, stat)
     call h5tclose_f(stype, e2)
   end subroutine put_message
@@ -594,7 +587,7 @@ contains
     integer :: err, e2, j, k
     if (stat /= VCI_OK) return
     allocate (buf(size(msgs)), stat=err)
-    if (err == 0) call string_type(stype, err)
+    if (err == 0) call h5io_string_type(VCI_ENSEMBLE_MESSAGE_LEN, stype, err)
     if (err /= 0) then
       call fail(self, 'cannot read /'//trim(names(D_MESSAGE)), stat); return
     end if
@@ -607,167 +600,12 @@ contains
     end do
   end subroutine get_messages
 
-  ! --- root attributes (collective under MPI: every rank writes the same value) ---
+  ! --- root attributes: vci_h5_io's (collective under MPI: every rank writes the same value) ---
 
-  subroutine new_attr(self, name, ftype, attr, stat)
-    type(vci_ensemble_file_t), intent(inout) :: self
-    character(len=*), intent(in) :: name
-    integer(hid_t), intent(in) :: ftype
-    integer(hid_t), intent(out) :: attr
-    integer, intent(inout) :: stat
-    integer(hid_t) :: space
-    integer :: err, e2
-    logical :: ex
-    attr = -1
-    if (stat /= VCI_OK) return
-    call h5aexists_f(self%file, name, ex, err)
-    if (err == 0 .and. ex) then
-      call h5aopen_f(self%file, name, attr, err)
-    else if (err == 0) then
-      call h5screate_f(H5S_SCALAR_F, space, err)
-      if (err == 0) call h5acreate_f(self%file, name, ftype, space, attr, err)
-      call h5sclose_f(space, e2)
-    end if
-    if (err /= 0) call fail(self, 'cannot write attribute '//name, stat)
-  end subroutine new_attr
-
-  subroutine put_attr_int(self, name, v, stat)
-    type(vci_ensemble_file_t), intent(inout) :: self
-    character(len=*), intent(in) :: name
-    integer, intent(in) :: v
-    integer, intent(inout) :: stat
-    integer(hid_t) :: attr
-    integer :: err, e2
-    call new_attr(self, name, H5T_STD_I32LE, attr, stat)
-    if (stat /= VCI_OK) return
-    call h5awrite_f(attr, H5T_NATIVE_INTEGER, v, [1_hsize_t], err)
-    call h5aclose_f(attr, e2)
-    if (err /= 0) call fail(self, 'cannot write attribute '//name, stat)
-  end subroutine put_attr_int
-
-  subroutine put_attr_i8(self, name, v, stat)
-    type(vci_ensemble_file_t), intent(inout) :: self
-    character(len=*), intent(in) :: name
-    integer(i8), intent(in) :: v
-    integer, intent(inout) :: stat
-    integer(hid_t) :: attr
-    integer :: err, e2
-    call new_attr(self, name, H5T_STD_I64LE, attr, stat)
-    if (stat /= VCI_OK) return
-    call h5awrite_f(attr, h5kind_to_type(i8, H5_INTEGER_KIND), v, [1_hsize_t], err)
-    call h5aclose_f(attr, e2)
-    if (err /= 0) call fail(self, 'cannot write attribute '//name, stat)
-  end subroutine put_attr_i8
-
-  subroutine put_attr_real(self, name, v, stat)
-    type(vci_ensemble_file_t), intent(inout) :: self
-    character(len=*), intent(in) :: name
-    real(dp), intent(in) :: v
-    integer, intent(inout) :: stat
-    integer(hid_t) :: attr
-    integer :: err, e2
-    call new_attr(self, name, H5T_IEEE_F64LE, attr, stat)
-    if (stat /= VCI_OK) return
-    call h5awrite_f(attr, H5T_NATIVE_DOUBLE, v, [1_hsize_t], err)
-    call h5aclose_f(attr, e2)
-    if (err /= 0) call fail(self, 'cannot write attribute '//name, stat)
-  end subroutine put_attr_real
-
-  !> A fixed-length, null-padded string (h5py: numpy.bytes_); written once, at creation.
-  subroutine put_attr_str(self, name, v, stat)
-    type(vci_ensemble_file_t), intent(inout) :: self
-    character(len=*), intent(in) :: name, v
-    integer, intent(inout) :: stat
-    integer(hid_t) :: attr, stype
-    integer :: err, e2
-    character(len=max(1, len(v))) :: buf
-    if (stat /= VCI_OK) return
-    buf = v
-    if (len(v) == 0) buf = achar(0)
-    call h5tcopy_f(H5T_FORTRAN_S1, stype, err)
-    if (err == 0) call h5tset_size_f(stype, int(len(buf), size_t), err)
-    if (err == 0) call h5tset_strpad_f(stype, H5T_STR_NULLPAD_F, err)
-    if (err /= 0) then
-      call fail(self, 'cannot make a string type', stat); return
-    end if
-    call new_attr(self, name, stype, attr, stat)
-    if (stat == VCI_OK) then
-      call h5awrite_f(attr, stype, buf, [1_hsize_t], err)
-      call h5aclose_f(attr, e2)
-      if (err /= 0) call fail(self, 'cannot write attribute '//name, stat)
-    end if
-    call h5tclose_f(stype, e2)
-  end subroutine put_attr_str
-
-  subroutine get_attr_int(self, name, v, stat)
-    type(vci_ensemble_file_t), intent(inout) :: self
-    character(len=*), intent(in) :: name
-    integer, intent(out) :: v
-    integer, intent(inout) :: stat
-    integer(hid_t) :: attr
-    integer :: err, e2
-    v = 0
-    if (stat /= VCI_OK) return
-    call h5aopen_f(self%file, name, attr, err)
-    if (err == 0) call h5aread_f(attr, H5T_NATIVE_INTEGER, v, [1_hsize_t], err)
-    call h5aclose_f(attr, e2)
-    if (err /= 0) call fail(self, 'attribute '//name//' missing or unreadable', stat)
-  end subroutine get_attr_int
-
-  subroutine get_attr_real(self, name, v, stat)
-    type(vci_ensemble_file_t), intent(inout) :: self
-    character(len=*), intent(in) :: name
-    real(dp), intent(out) :: v
-    integer, intent(inout) :: stat
-    integer(hid_t) :: attr
-    integer :: err, e2
-    v = 0.0_dp
-    if (stat /= VCI_OK) return
-    call h5aopen_f(self%file, name, attr, err)
-    if (err == 0) call h5aread_f(attr, H5T_NATIVE_DOUBLE, v, [1_hsize_t], err)
-    call h5aclose_f(attr, e2)
-    if (err /= 0) call fail(self, 'attribute '//name//' missing or unreadable', stat)
-  end subroutine get_attr_real
-
-  subroutine get_attr_str(self, name, v, stat)
-    type(vci_ensemble_file_t), intent(inout) :: self
-    character(len=*), intent(in) :: name
-    character(len=:), allocatable, intent(out) :: v
-    integer, intent(inout) :: stat
-    integer(hid_t) :: attr, ftype
-    integer(size_t) :: sz
-    integer :: err, e2, k
-    v = ''
-    if (stat /= VCI_OK) return
-    call h5aopen_f(self%file, name, attr, err)
-    if (err == 0) call h5aget_type_f(attr, ftype, err)
-    if (err == 0) call h5tget_size_f(ftype, sz, err)
-    if (err == 0) then
-      deallocate (v)
-      allocate (character(len=sz) :: v)
-      call h5aread_f(attr, ftype, v, [1_hsize_t], err)
-      call h5tclose_f(ftype, e2)
-    end if
-    call h5aclose_f(attr, e2)
-    if (err /= 0) then
-      call fail(self, 'attribute '//name//' missing or unreadable', stat); return
-    end if
-    k = index(v, achar(0))
-    if (k > 0) v = v(1:k - 1)
-  end subroutine get_attr_str
-
-  subroutine get_attr_i8(self, name, v, stat)
-    type(vci_ensemble_file_t), intent(inout) :: self
-    character(len=*), intent(in) :: name
-    integer(i8), intent(out) :: v
-    integer, intent(inout) :: stat
-    integer(hid_t) :: attr
-    integer :: err, e2
-    v = 0
-    if (stat /= VCI_OK) return
-    call h5aopen_f(self%file, name, attr, err)
-    if (err == 0) call h5aread_f(attr, h5kind_to_type(i8, H5_INTEGER_KIND), v, [1_hsize_t], err)
-    call h5aclose_f(attr, e2)
-    if (err /= 0) call fail(self, 'attribute '//name//' missing or unreadable', stat)
-  end subroutine get_attr_i8
+  !> How failures name this file (vci_h5_io's messages: who: cause).
+  pure function who(self)
+    type(vci_ensemble_file_t), intent(in) :: self
+    character(len=len(self%path) + 14) :: who
+    who = 'ensemble file '//self%path
+  end function who
 end module vci_ensemble_h5

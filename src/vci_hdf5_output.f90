@@ -6,9 +6,11 @@
 !> Between flushes the file is not touched, so a killed run leaves a file that opens and holds every
 !> step up to the last flush. Memory does not grow with the number of steps.
 !>
-!> Restart: when the writer is attached to the integrator (`attach`), each flush also stores the
-!> integrator's checkpoint in `/checkpoint`; `vci_hdf5_read_checkpoint` + `restore` then continue the
-!> run bit for bit, and `open(..., append=.true.)` continues the same file.
+!> Restart: the writer keeps checkpoints (keeps_checkpoints) without knowing the driver: before a
+!> report that will flush it asks for one (wants_checkpoint), the driver hands it over
+!> (on_checkpoint), and the flush stores it in `/checkpoint` with the row it is the state of;
+!> `vci_hdf5_read_checkpoint` + `restore` then continue the run bit for bit, and
+!> `open(..., append=.true.)` continues the same file.
 !>
 !> Nothing here stops or prints (HDF5's own error printing is switched off); failures give
 !> VCI_ERR_IO and a message naming the file and the cause. Files are input like any other: every
@@ -22,7 +24,7 @@ module vci_hdf5_output
   use vci_status, only: VCI_OK, VCI_ERR_IO, VCI_MSG_LEN
   use vci_limits, only: vci_size_problem
   use vci_observer, only: vci_observer_t, vci_run_info_t, vci_impact_t
-  use vci_integrator, only: vci_integrator_t
+  use vci_h5_io
   use vci_checkpoint, only: vci_checkpoint_t, vci_checkpoint_from_state, VCI_CHECKPOINT_VERSION
   use vci_checkpoint, only: vci_checkpoint_record_size
   implicit none
@@ -41,8 +43,8 @@ module vci_hdf5_output
   ! rows per chunk: states and steps, impacts (few, so small chunks)
   integer, parameter :: chunk_rows = 1024, impact_chunk_rows = 64
 
-  !> The HDF5 observer. Use: `call w%open(path, stat)`, optionally `call w%attach(integ)`, then
-  !> `call integ%integrate(nsteps, dir, stat, w)`; the file is closed by the run's end (on_finish).
+  !> The HDF5 observer. Use: `call w%open(path, stat)`, then `call integ%integrate(nsteps, dir,
+  !> stat, w)`; the file is closed by the run's end (on_finish).
   type, extends(vci_observer_t), public :: vci_hdf5_writer_t
     character(len=VCI_MSG_LEN) :: message = ''   !< what went wrong, naming the file
     character(len=:), allocatable :: path
@@ -51,7 +53,9 @@ module vci_hdf5_output
     logical :: flush_on_impact = .true.           !< flush after the step of every impact
     logical :: append = .false.                   !< continuing an existing file
     logical :: is_open = .false.
-    type(vci_integrator_t), pointer, private :: integ => null()
+    type(vci_checkpoint_t), private :: cp          !< the driver's latest checkpoint (on_checkpoint)
+    logical, private :: have_cp = .false.
+    integer(i8), private :: last_step = 0          !< index of the last state reported (on_start, on_step)
     integer(hid_t), private :: file = -1, g_imp = -1, g_cp = -1
     integer(hid_t), private :: d_t = -1, d_q = -1, d_p = -1, d_e = -1, d_l = -1
     integer(hid_t), private :: d_it = -1, d_is = -1, d_ia = -1, d_ig = -1, d_iq = -1, d_ii = -1
@@ -69,12 +73,15 @@ module vci_hdf5_output
     real(dp), allocatable, private :: cp_rec(:)   !< the file's checkpoint, when it is valid (reading)
   contains
     procedure :: open => w_open
-    procedure :: attach => w_attach
     procedure :: close => w_close
     procedure :: on_start => w_start
     procedure :: on_step => w_step
     procedure :: on_impact => w_impact
     procedure :: on_finish => w_finish
+    procedure :: keeps_checkpoints => w_keeps_checkpoints
+    procedure :: wants_checkpoint => w_wants_checkpoint
+    procedure :: on_checkpoint => w_checkpoint
+    procedure :: failure_cause => w_failure_cause
   end type vci_hdf5_writer_t
 
   public :: vci_hdf5_read_checkpoint
@@ -115,6 +122,7 @@ contains
     end if
     self%started = .false.; self%flush_pending = .false.
     self%ns = 0; self%ne = 0; self%ni = 0
+    self%have_cp = .false.
 
     call h5open_f(err)
     if (err == 0) call h5eset_auto_f(0, err)   ! the library never prints
@@ -145,32 +153,53 @@ contains
       call fail(self, 'cannot create the file: '//os_reason(path), stat); return
     end if
     self%is_open = .true.
-    call put_attr_str(self, self%file, 'vci_version', VCI_HDF5_LIBRARY_VERSION, stat)
-    call put_attr_str(self, self%file, 'scene', self%scene, stat)
-    call put_attr_str(self, self%file, 'created', iso_now(), stat)
-    call put_attr_int(self, self%file, 'status', VCI_HDF5_RUNNING, stat)
-    call put_attr_str(self, self%file, 'status_message', 'opened, no run yet', stat)
+    call h5io_put_attr(self%file, 'vci_version', VCI_HDF5_LIBRARY_VERSION, stat, self%message, self%path)
+    call h5io_put_attr(self%file, 'scene', self%scene, stat, self%message, self%path)
+    call h5io_put_attr(self%file, 'created', iso_now(), stat, self%message, self%path)
+    call h5io_put_attr(self%file, 'status', VCI_HDF5_RUNNING, stat, self%message, self%path)
+    call h5io_put_attr(self%file, 'status_message', 'opened, no run yet', stat, self%message, self%path)
     if (stat == VCI_OK) call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
-    if (stat == VCI_OK .and. err /= 0) call fail(self, 'flush after creation failed', stat)
+    if (stat == VCI_OK .and. err /= 0) call fail(self, 'flush after creation failed: '//trim(h5io_os_cause()), stat)
     if (stat /= VCI_OK) call w_close(self)
   end subroutine w_open
 
-  !> Store `integ`'s checkpoint at every flush so that a restart from the file is bitwise. The
-  !> integrator must be the one running with this observer and must outlive the run.
-  subroutine w_attach(self, integ)
+  !> Yes: every flush stores the checkpoint of its last row, so a restart is bitwise.
+  pure logical function w_keeps_checkpoints(self)
+    class(vci_hdf5_writer_t), intent(in) :: self
+    w_keeps_checkpoints = .true.
+  end function w_keeps_checkpoints
+
+  !> Before on_start, and before an on_step that flushes (a full buffer, or an impact in the step).
+  pure logical function w_wants_checkpoint(self)
+    class(vci_hdf5_writer_t), intent(in) :: self
+    w_wants_checkpoint = self%is_open .and. (.not. self%started .or. self%ne + 1 >= self%flush_every &
+                                             .or. self%flush_pending)
+  end function w_wants_checkpoint
+
+  !> Keep the driver's checkpoint for the next flush (stored only if it is the state of its last row).
+  subroutine w_checkpoint(self, cp, stat)
     class(vci_hdf5_writer_t), intent(inout) :: self
-    type(vci_integrator_t), target, intent(in) :: integ
-    self%integ => integ
-  end subroutine w_attach
+    type(vci_checkpoint_t), intent(in) :: cp
+    integer, intent(inout) :: stat
+    self%cp = cp
+    self%have_cp = .true.
+  end subroutine w_checkpoint
+
+  !> The message of the last failure (naming the file and the cause).
+  subroutine w_failure_cause(self, cause)
+    class(vci_hdf5_writer_t), intent(in) :: self
+    character(len=*), intent(out) :: cause
+    cause = self%message
+  end subroutine w_failure_cause
 
   !> Close the file without a run end (e.g. when a run could not start). Safe to call twice.
   subroutine w_close(self)
     class(vci_hdf5_writer_t), intent(inout) :: self
     integer :: err
-    call close_dset(self%d_t); call close_dset(self%d_q); call close_dset(self%d_p)
-    call close_dset(self%d_e); call close_dset(self%d_l)
-    call close_dset(self%d_it); call close_dset(self%d_is); call close_dset(self%d_ia)
-    call close_dset(self%d_ig); call close_dset(self%d_iq); call close_dset(self%d_ii)
+    call h5io_close_dset(self%d_t); call h5io_close_dset(self%d_q); call h5io_close_dset(self%d_p)
+    call h5io_close_dset(self%d_e); call h5io_close_dset(self%d_l)
+    call h5io_close_dset(self%d_it); call h5io_close_dset(self%d_is); call h5io_close_dset(self%d_ia)
+    call h5io_close_dset(self%d_ig); call h5io_close_dset(self%d_iq); call h5io_close_dset(self%d_ii)
     if (self%g_imp >= 0) call h5gclose_f(self%g_imp, err)
     if (self%g_cp >= 0) call h5gclose_f(self%g_cp, err)
     self%g_imp = -1; self%g_cp = -1
@@ -178,13 +207,6 @@ contains
     self%file = -1
     self%is_open = .false.; self%started = .false.
   end subroutine w_close
-
-  subroutine close_dset(d)
-    integer(hid_t), intent(inout) :: d
-    integer :: err
-    if (d >= 0) call h5dclose_f(d, err)
-    d = -1
-  end subroutine close_dset
 
   !> Reopen the datasets of an existing file and read what on_start will check.
   subroutine open_existing(self, stat)
@@ -194,11 +216,11 @@ contains
     integer :: err
     logical :: ex
     integer(i8) :: rows_t, rows_q, rows_p, rows_e, rows_l, row_cp
-    call get_attr_int(self, self%file, 'n', self%n, stat)
-    call get_attr_int(self, self%file, 'm', self%m, stat)
-    call get_attr_int(self, self%file, 'n_gaps', self%n_gaps, stat)
-    call get_attr_real(self, self%file, 'h', self%h, stat)
-    call get_attr_str(self, self%file, 'direction', dirname, stat)
+    call h5io_get_attr(self%file, 'n', self%n, stat, self%message, self%path)
+    call h5io_get_attr(self%file, 'm', self%m, stat, self%message, self%path)
+    call h5io_get_attr(self%file, 'n_gaps', self%n_gaps, stat, self%message, self%path)
+    call h5io_get_attr(self%file, 'h', self%h, stat, self%message, self%path)
+    call h5io_get_attr(self%file, 'direction', dirname, stat, self%message, self%path)
     if (stat /= VCI_OK) return
     if (dirname /= 'forward' .and. dirname /= 'backward') then
       call fail(self, 'attribute direction is neither forward nor backward', stat); return
@@ -211,22 +233,22 @@ contains
     if (.not. (ieee_is_finite(self%h) .and. self%h > 0.0_dp)) then
       call fail(self, 'attribute h is not a positive finite step length', stat); return
     end if
-    call open_dset(self, self%file, 't', self%d_t, stat)
-    call open_dset(self, self%file, 'q', self%d_q, stat)
-    call open_dset(self, self%file, 'p', self%d_p, stat)
-    call open_dset(self, self%file, 'energy', self%d_e, stat)
-    if (self%m > 0) call open_dset(self, self%file, 'lambda', self%d_l, stat)
+    call h5io_open_dset(self%file, 't', self%d_t, stat, self%message, self%path)
+    call h5io_open_dset(self%file, 'q', self%d_q, stat, self%message, self%path)
+    call h5io_open_dset(self%file, 'p', self%d_p, stat, self%message, self%path)
+    call h5io_open_dset(self%file, 'energy', self%d_e, stat, self%message, self%path)
+    if (self%m > 0) call h5io_open_dset(self%file, 'lambda', self%d_l, stat, self%message, self%path)
     ! shapes: rows of n values (Fortran order: the row index is the last dimension)
-    rows_t = dset_rows(self, self%d_t, 't', 0, stat)
-    rows_q = dset_rows(self, self%d_q, 'q', self%n, stat)
-    rows_p = dset_rows(self, self%d_p, 'p', self%n, stat)
-    rows_e = dset_rows(self, self%d_e, 'energy', 0, stat)
+    rows_t = h5io_rows(self%d_t, 't', 0, stat, self%message, self%path)
+    rows_q = h5io_rows(self%d_q, 'q', self%n, stat, self%message, self%path)
+    rows_p = h5io_rows(self%d_p, 'p', self%n, stat, self%message, self%path)
+    rows_e = h5io_rows(self%d_e, 'energy', 0, stat, self%message, self%path)
     rows_l = huge(1_i8)
-    if (self%m > 0) rows_l = dset_rows(self, self%d_l, 'lambda', self%m, stat)
+    if (self%m > 0) rows_l = h5io_rows(self%d_l, 'lambda', self%m, stat, self%message, self%path)
     if (stat /= VCI_OK) return
     ! Trust the steps that steps_completed (written last at every flush) vouches for: a file whose
     ! run was killed during a flush may hold a few more rows, which are dropped here.
-    call get_attr_i8(self, self%file, 'steps_completed', self%steps, stat)
+    call h5io_get_attr(self%file, 'steps_completed', self%steps, stat, self%message, self%path)
     if (stat /= VCI_OK) return
     self%steps = min(self%steps, rows_e, rows_t - 1, rows_q - 1, rows_p - 1, rows_l)
     if (self%steps < 0) then
@@ -249,12 +271,12 @@ contains
       if (err /= 0) then
         call fail(self, 'cannot append: group /impacts missing', stat); return
       end if
-      call open_dset(self, self%g_imp, 'time', self%d_it, stat)
-      call open_dset(self, self%g_imp, 'step', self%d_is, stat)
-      call open_dset(self, self%g_imp, 'alpha', self%d_ia, stat)
-      call open_dset(self, self%g_imp, 'gap_index', self%d_ig, stat)
-      call open_dset(self, self%g_imp, 'q', self%d_iq, stat)
-      call open_dset(self, self%g_imp, 'impulse', self%d_ii, stat)
+      call h5io_open_dset(self%g_imp, 'time', self%d_it, stat, self%message, self%path)
+      call h5io_open_dset(self%g_imp, 'step', self%d_is, stat, self%message, self%path)
+      call h5io_open_dset(self%g_imp, 'alpha', self%d_ia, stat, self%message, self%path)
+      call h5io_open_dset(self%g_imp, 'gap_index', self%d_ig, stat, self%message, self%path)
+      call h5io_open_dset(self%g_imp, 'q', self%d_iq, stat, self%message, self%path)
+      call h5io_open_dset(self%g_imp, 'impulse', self%d_ii, stat, self%message, self%path)
       if (stat /= VCI_OK) return
       self%impacts = trusted_impacts(self, stat)
       if (stat /= VCI_OK) return
@@ -274,7 +296,7 @@ contains
     allocate (rec(1 + vci_checkpoint_record_size(n, self%m)), qr(n, 1), pr(n, 1), stat=st)
     if (st /= 0) return
     s = VCI_OK
-    call get_vector(self, self%g_cp, 'record', rec, s)
+    call h5io_get_vector(self%g_cp, 'record', rec, s, self%message, self%path)
     if (s /= VCI_OK) then
       self%message = ''; return      ! no usable checkpoint: not an error, the last row serves
     end if
@@ -285,8 +307,8 @@ contains
     if (rec(1) < 0.0_dp .or. rec(1) > real(min(max_row, max_steps), dp)) return
     if (rec(7) /= -1.0_dp .and. rec(7) /= 0.0_dp .and. rec(7) /= 1.0_dp) return
     if (rec(4) /= self%h) return
-    call read_rows(self, self%d_q, n, int(rec(1), i8), qr, s)
-    call read_rows(self, self%d_p, n, int(rec(1), i8), pr, s)
+    call h5io_read_row(self%d_q, n, int(rec(1), i8), qr, s, self%message, self%path)
+    call h5io_read_row(self%d_p, n, int(rec(1), i8), pr, s, self%message, self%path)
     if (s /= VCI_OK) then
       self%message = ''; return
     end if
@@ -303,10 +325,12 @@ contains
     integer(i8) :: n_step
     integer :: err
     k = 0
-    n_step = dset_rows(self, self%d_is, 'impacts/step', 0, stat)
-    k = min(n_step, dset_rows(self, self%d_it, 'impacts/time', 0, stat), &
-            dset_rows(self, self%d_ia, 'impacts/alpha', 0, stat), dset_rows(self, self%d_ig, 'impacts/gap_index', 0, stat), &
-            dset_rows(self, self%d_iq, 'impacts/q', self%n, stat), dset_rows(self, self%d_ii, 'impacts/impulse', 0, stat))
+    n_step = h5io_rows(self%d_is, 'impacts/step', 0, stat, self%message, self%path)
+    k = min(n_step, h5io_rows(self%d_it, 'impacts/time', 0, stat, self%message, self%path), &
+            h5io_rows(self%d_ia, 'impacts/alpha', 0, stat, self%message, self%path), h5io_rows(self%d_ig, &
+                'impacts/gap_index', 0, stat, self%message, self%path), &
+            h5io_rows(self%d_iq, 'impacts/q', self%n, stat, self%message, self%path), h5io_rows(self%d_ii, &
+                'impacts/impulse', 0, stat, self%message, self%path))
     if (stat /= VCI_OK) then
       k = 0; return
     end if
@@ -368,10 +392,11 @@ contains
     if (s == VCI_OK) then
       call alloc_buffers(self)
       self%step0 = info%step0
+      self%last_step = info%step0
       self%started = .true.
       if (.not. self%append) call buffer_state(self, info%t0, q, p)
-      call put_attr_int(self, self%file, 'status', VCI_HDF5_RUNNING, s)
-      call put_attr_str(self, self%file, 'status_message', 'running (not closed yet)', s)
+      call h5io_put_attr(self%file, 'status', VCI_HDF5_RUNNING, s, self%message, self%path)
+      call h5io_put_attr(self%file, 'status_message', 'running (not closed yet)', s, self%message, self%path)
       if (s == VCI_OK) call flush_file(self, s)
     end if
     if (s /= VCI_OK) then
@@ -389,34 +414,38 @@ contains
     self%n = info%n; self%m = info%m; self%n_gaps = info%n_gaps
     self%direction = info%direction; self%h = info%h
     self%rows = 0; self%steps = 0; self%impacts = 0; self%row_start = 0
-    call put_attr_str(self, self%file, 'direction', trim(merge('forward ', 'backward', info%direction > 0)), stat)
-    call put_attr_real(self, self%file, 'h', info%h, stat)
-    call put_attr_real(self, self%file, 't0', info%t0, stat)
-    call put_attr_int(self, self%file, 'n', info%n, stat)
-    call put_attr_int(self, self%file, 'm', info%m, stat)
-    call put_attr_int(self, self%file, 'n_gaps', info%n_gaps, stat)
-    call put_attr_i8(self, self%file, 'steps_completed', 0_i8, stat)
-    call make_dset(self, self%file, 't', 0, chunk_rows, H5T_IEEE_F64LE, self%d_t, stat)
-    call make_dset(self, self%file, 'q', info%n, chunk_rows, H5T_IEEE_F64LE, self%d_q, stat)
-    call make_dset(self, self%file, 'p', info%n, chunk_rows, H5T_IEEE_F64LE, self%d_p, stat)
-    call make_dset(self, self%file, 'energy', 0, chunk_rows, H5T_IEEE_F64LE, self%d_e, stat)
-    if (info%m > 0) call make_dset(self, self%file, 'lambda', info%m, chunk_rows, H5T_IEEE_F64LE, self%d_l, stat)
+    call h5io_put_attr(self%file, 'direction', trim(merge('forward ', 'backward', info%direction > 0)), stat, &
+        self%message, self%path)
+    call h5io_put_attr(self%file, 'h', info%h, stat, self%message, self%path)
+    call h5io_put_attr(self%file, 't0', info%t0, stat, self%message, self%path)
+    call h5io_put_attr(self%file, 'n', info%n, stat, self%message, self%path)
+    call h5io_put_attr(self%file, 'm', info%m, stat, self%message, self%path)
+    call h5io_put_attr(self%file, 'n_gaps', info%n_gaps, stat, self%message, self%path)
+    call h5io_put_attr(self%file, 'steps_completed', 0_i8, stat, self%message, self%path)
+    call h5io_make_rows(self%file, 't', 0, chunk_rows, H5T_IEEE_F64LE, self%d_t, stat, self%message, self%path)
+    call h5io_make_rows(self%file, 'q', info%n, chunk_rows, H5T_IEEE_F64LE, self%d_q, stat, self%message, self%path)
+    call h5io_make_rows(self%file, 'p', info%n, chunk_rows, H5T_IEEE_F64LE, self%d_p, stat, self%message, self%path)
+    call h5io_make_rows(self%file, 'energy', 0, chunk_rows, H5T_IEEE_F64LE, self%d_e, stat, self%message, self%path)
+    if (info%m > 0) call h5io_make_rows(self%file, 'lambda', info%m, chunk_rows, H5T_IEEE_F64LE, self%d_l, &
+        stat, self%message, self%path)
     if (stat /= VCI_OK) return
     if (info%n_gaps > 0) then
       call h5gcreate_f(self%file, 'impacts', self%g_imp, err)
       if (err /= 0) then
         call fail(self, 'cannot create group /impacts', stat); return
       end if
-      call make_dset(self, self%g_imp, 'time', 0, impact_chunk_rows, H5T_IEEE_F64LE, self%d_it, stat)
-      call make_dset(self, self%g_imp, 'step', 0, impact_chunk_rows, H5T_STD_I64LE, self%d_is, stat)
-      call make_dset(self, self%g_imp, 'alpha', 0, impact_chunk_rows, H5T_IEEE_F64LE, self%d_ia, stat)
-      call make_dset(self, self%g_imp, 'gap_index', 0, impact_chunk_rows, H5T_STD_I32LE, self%d_ig, stat)
-      call make_dset(self, self%g_imp, 'q', info%n, impact_chunk_rows, H5T_IEEE_F64LE, self%d_iq, stat)
-      call make_dset(self, self%g_imp, 'impulse', 0, impact_chunk_rows, H5T_IEEE_F64LE, self%d_ii, stat)
-    end if
-    if (stat == VCI_OK .and. associated(self%integ)) then
-      call h5gcreate_f(self%file, 'checkpoint', self%g_cp, err)
-      if (err /= 0) call fail(self, 'cannot create group /checkpoint', stat)
+      call h5io_make_rows(self%g_imp, 'time', 0, impact_chunk_rows, H5T_IEEE_F64LE, self%d_it, stat, &
+          self%message, self%path)
+      call h5io_make_rows(self%g_imp, 'step', 0, impact_chunk_rows, H5T_STD_I64LE, self%d_is, stat, &
+          self%message, self%path)
+      call h5io_make_rows(self%g_imp, 'alpha', 0, impact_chunk_rows, H5T_IEEE_F64LE, self%d_ia, stat, &
+          self%message, self%path)
+      call h5io_make_rows(self%g_imp, 'gap_index', 0, impact_chunk_rows, H5T_STD_I32LE, self%d_ig, stat, &
+          self%message, self%path)
+      call h5io_make_rows(self%g_imp, 'q', info%n, impact_chunk_rows, H5T_IEEE_F64LE, self%d_iq, stat, &
+          self%message, self%path)
+      call h5io_make_rows(self%g_imp, 'impulse', 0, impact_chunk_rows, H5T_IEEE_F64LE, self%d_ii, stat, &
+          self%message, self%path)
     end if
   end subroutine start_new
 
@@ -427,7 +456,6 @@ contains
     real(dp), intent(in) :: q(:), p(:)
     integer, intent(inout) :: stat
     real(dp) :: t_last(1), q_last(info%n, 1)
-    integer :: err
     if (info%n /= self%n .or. info%m /= self%m .or. info%n_gaps /= self%n_gaps .or. info%h /= self%h) then
       call fail(self, 'cannot append: the run''s n, m, n_gaps or h differ from the file''s', stat); return
     end if
@@ -435,17 +463,13 @@ contains
       call fail(self, 'cannot append: the run goes the other way in time (write the reversal to a new file)', stat)
       return
     end if
-    call read_rows(self, self%d_t, 0, self%rows - 1, t_last, stat)
-    call read_rows(self, self%d_q, info%n, self%rows - 1, q_last, stat)
+    call h5io_read_row(self%d_t, 0, self%rows - 1, t_last, stat, self%message, self%path)
+    call h5io_read_row(self%d_q, info%n, self%rows - 1, q_last, stat, self%message, self%path)
     if (stat /= VCI_OK) return
     if (t_last(1) /= info%t0 .or. any(q_last(:, 1) /= q)) then
       call fail(self, 'cannot append: the run does not start from the file''s last state', stat); return
     end if
     self%row_start = self%rows - 1
-    if (associated(self%integ) .and. self%g_cp < 0) then
-      call h5gcreate_f(self%file, 'checkpoint', self%g_cp, err)
-      if (err /= 0) call fail(self, 'cannot create group /checkpoint', stat)
-    end if
   end subroutine start_append
 
   subroutine alloc_buffers(self)
@@ -474,6 +498,7 @@ contains
       stat = VCI_ERR_IO; return
     end if
     call buffer_state(self, t, q, p)
+    self%last_step = step
     self%ne = self%ne + 1
     self%be(self%ne) = energy
     if (self%m > 0) self%bl(:, self%ne) = lambda
@@ -528,11 +553,11 @@ contains
       call w_close(self); return
     end if
     s = VCI_OK
-    call put_attr_int(self, self%file, 'status', status, s)
+    call h5io_put_attr(self%file, 'status', status, s, self%message, self%path)
     if (status == VCI_OK .and. len_trim(message) == 0) then
-      call put_attr_str(self, self%file, 'status_message', 'ok', s)
+      call h5io_put_attr(self%file, 'status_message', 'ok', s, self%message, self%path)
     else
-      call put_attr_str(self, self%file, 'status_message', trim(message), s)
+      call h5io_put_attr(self%file, 'status_message', trim(message), s, self%message, self%path)
     end if
     call flush_file(self, s)
     call w_close(self)
@@ -546,37 +571,42 @@ contains
     integer :: err
     if (stat /= VCI_OK) return
     if (self%ns > 0) then
-      call append_real(self, self%d_t, 0, self%rows, self%bt(1:self%ns), self%ns, stat)
-      call append_real(self, self%d_q, self%n, self%rows, self%bq(:, 1:self%ns), self%ns, stat)
-      call append_real(self, self%d_p, self%n, self%rows, self%bp(:, 1:self%ns), self%ns, stat)
+      call h5io_append_rows(self%d_t, 0, self%rows, self%bt(1:self%ns), self%ns, stat, self%message, self%path)
+      call h5io_append_rows(self%d_q, self%n, self%rows, self%bq(:, 1:self%ns), self%ns, stat, self%message, self%path)
+      call h5io_append_rows(self%d_p, self%n, self%rows, self%bp(:, 1:self%ns), self%ns, stat, self%message, self%path)
     end if
     if (self%ne > 0) then
-      call append_real(self, self%d_e, 0, self%steps, self%be(1:self%ne), self%ne, stat)
-      if (self%m > 0) call append_real(self, self%d_l, self%m, self%steps, self%bl(:, 1:self%ne), self%ne, stat)
+      call h5io_append_rows(self%d_e, 0, self%steps, self%be(1:self%ne), self%ne, stat, self%message, self%path)
+      if (self%m > 0) call h5io_append_rows(self%d_l, self%m, self%steps, self%bl(:, 1:self%ne), self%ne, &
+          stat, self%message, self%path)
     end if
     if (self%ni > 0) then
-      call append_real(self, self%d_it, 0, self%impacts, self%it(1:self%ni), self%ni, stat)
-      call append_i8(self, self%d_is, self%impacts, self%is(1:self%ni), self%ni, stat)
-      call append_real(self, self%d_ia, 0, self%impacts, self%ia(1:self%ni), self%ni, stat)
-      call append_int(self, self%d_ig, self%impacts, self%ig(1:self%ni), self%ni, stat)
-      call append_real(self, self%d_iq, self%n, self%impacts, self%iq(:, 1:self%ni), self%ni, stat)
-      call append_real(self, self%d_ii, 0, self%impacts, self%ii(1:self%ni), self%ni, stat)
+      call h5io_append_rows(self%d_it, 0, self%impacts, self%it(1:self%ni), self%ni, stat, self%message, self%path)
+      call h5io_append_rows(self%d_is, 0, self%impacts, self%is(1:self%ni), self%ni, stat, self%message, self%path)
+      call h5io_append_rows(self%d_ia, 0, self%impacts, self%ia(1:self%ni), self%ni, stat, self%message, self%path)
+      call h5io_append_rows(self%d_ig, 0, self%impacts, self%ig(1:self%ni), self%ni, stat, self%message, self%path)
+      call h5io_append_rows(self%d_iq, self%n, self%impacts, self%iq(:, 1:self%ni), self%ni, stat, &
+          self%message, self%path)
+      call h5io_append_rows(self%d_ii, 0, self%impacts, self%ii(1:self%ni), self%ni, stat, self%message, self%path)
     end if
     if (stat /= VCI_OK) return
     ! two phases: the rows reach the disk before the checkpoint and steps_completed that vouch for them
     call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
     if (err /= 0) then
-      call fail(self, 'H5Fflush failed (disk full?)', stat); return
+      call fail(self, 'H5Fflush failed: '//trim(h5io_os_cause()), stat); return
     end if
     self%rows = self%rows + self%ns; self%steps = self%steps + self%ne; self%impacts = self%impacts + self%ni
     self%ns = 0; self%ne = 0; self%ni = 0
     self%flush_pending = .false.
     ! steps_completed last: it marks what a reader of a killed run's file can trust
-    if (associated(self%integ) .and. self%g_cp >= 0) call put_checkpoint(self, self%integ%checkpoint(), stat)
-    call put_attr_i8(self, self%file, 'steps_completed', self%steps, stat)
+    if (self%have_cp) then
+      if (self%cp%step == self%last_step) call put_checkpoint(self, self%cp, stat)
+      self%have_cp = .false.
+    end if
+    call h5io_put_attr(self%file, 'steps_completed', self%steps, stat, self%message, self%path)
     if (stat /= VCI_OK) return
     call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
-    if (err /= 0) call fail(self, 'H5Fflush failed (disk full?)', stat)
+    if (err /= 0) call fail(self, 'H5Fflush failed: '//trim(h5io_os_cause()), stat)
   end subroutine flush_file
 
   !> /checkpoint/record: the file's last row followed by the checkpoint's record (vci_checkpoint:
@@ -585,11 +615,19 @@ contains
     type(vci_hdf5_writer_t), intent(inout) :: self
     type(vci_checkpoint_t), intent(in) :: cp
     integer, intent(inout) :: stat
-    call put_vector(self, self%g_cp, 'record', [real(self%rows - 1, dp), cp%to_record()], stat)
+    integer :: err
+    if (stat /= VCI_OK) return
+    if (self%g_cp < 0) then
+      call h5gcreate_f(self%file, 'checkpoint', self%g_cp, err)
+      if (err /= 0) then
+        call fail(self, 'cannot create group /checkpoint', stat); return
+      end if
+    end if
+    call h5io_put_vector(self%g_cp, 'record', [real(self%rows - 1, dp), cp%to_record()], stat, self%message, self%path)
   end subroutine put_checkpoint
 
   !> The state a restart from PATH starts with, as a checkpoint for `integ%restore`. With a
-  !> /checkpoint group (written when the writer was attached) the restart is bitwise; without one
+  !> /checkpoint group (written when the driver handed checkpoints over) the restart is bitwise; without one
   !> it is the last row (t, q, p, lambda) with index 0 at that time, like init_from_momentum.
   !> Optional: t_first (time of row 0), direction (+1/-1), message (why stat /= 0).
   subroutine vci_hdf5_read_checkpoint(path, cp, stat, message, t_first, direction)
@@ -621,7 +659,7 @@ contains
       r%is_open = .true.
       call open_existing(r, stat)
     end if
-    if (stat == VCI_OK .and. present(t_first)) call read_rows(r, r%d_t, 0, 0_i8, buf, stat)
+    if (stat == VCI_OK .and. present(t_first)) call h5io_read_row(r%d_t, 0, 0_i8, buf, stat, r%message, r%path)
     if (stat == VCI_OK .and. present(t_first)) t_first = buf(1)
     if (present(direction)) direction = r%direction
     ! the checkpoint counts only if it is the state of a row on disk (open_existing checked it)
@@ -637,24 +675,22 @@ contains
       if (st /= 0) call fail(r, 'out of memory', stat)
     end if
     if (.not. use_cp .and. stat == VCI_OK) then
-      call read_rows(r, r%d_t, 0, r%rows - 1, buf, stat)
-      call read_rows(r, r%d_q, r%n, r%rows - 1, row(1:r%n, 1:1), stat)
-      call read_rows(r, r%d_p, r%n, r%rows - 1, row(1:r%n, 2:2), stat)
+      call h5io_read_row(r%d_t, 0, r%rows - 1, buf, stat, r%message, r%path)
+      call h5io_read_row(r%d_q, r%n, r%rows - 1, row(1:r%n, 1:1), stat, r%message, r%path)
+      call h5io_read_row(r%d_p, r%n, r%rows - 1, row(1:r%n, 2:2), stat, r%message, r%path)
       row(1:r%m, 3) = 0.0_dp
-      if (r%steps > 0 .and. r%m > 0) call read_rows(r, r%d_l, r%m, r%steps - 1, row(1:r%m, 3:3), stat)
+      if (r%steps > 0 .and. r%m > 0) call h5io_read_row(r%d_l, r%m, r%steps - 1, row(1:r%m, 3:3), stat, &
+          r%message, r%path)
       cp = vci_checkpoint_from_state(buf(1), r%h, row(1:r%n, 1), row(1:r%n, 2), row(1:r%m, 3))
       if (r%steps > 0) then
-        call read_rows(r, r%d_e, 0, r%steps - 1, buf, stat); cp%step_energy = buf(1)
+        call h5io_read_row(r%d_e, 0, r%steps - 1, buf, stat, r%message, r%path); cp%step_energy = buf(1)
       end if
     end if
     call w_close(r)
     if (present(message)) message = r%message
   end subroutine vci_hdf5_read_checkpoint
 
-  ! ---------------------------------------------------------------------------------------------
-  ! HDF5 helpers. Each takes stat (inout): it does nothing if stat is already nonzero, and on
-  ! failure sets stat = VCI_ERR_IO and the message. Dims are given in Fortran order (row last).
-  ! ---------------------------------------------------------------------------------------------
+  ! The HDF5 helpers (attributes, row datasets, vectors) are vci_h5_io's, shared with the ensemble file.
 
   subroutine fail(self, cause, stat)
     type(vci_hdf5_writer_t), intent(inout) :: self
@@ -692,437 +728,4 @@ contains
     s = d(1:4)//'-'//d(5:6)//'-'//d(7:8)//'T'//t(1:2)//':'//t(3:4)//':'//t(5:6)//z(1:3)//':'//z(4:5)
   end function iso_now
 
-  !> An extendible dataset of 0 rows, each row `width` values (width 0: a 1-D dataset).
-  subroutine make_dset(self, loc, name, width, rows_per_chunk, ftype, dset, stat)
-    type(vci_hdf5_writer_t), intent(inout) :: self
-    integer(hid_t), intent(in) :: loc, ftype
-    character(len=*), intent(in) :: name
-    integer, intent(in) :: width, rows_per_chunk
-    integer(hid_t), intent(out) :: dset
-    integer, intent(inout) :: stat
-    integer(hid_t) :: space, plist
-    integer(hsize_t) :: dims(2), maxdims(2), chunk(2)
-    integer :: rank, err, e2
-    dset = -1
-    if (stat /= VCI_OK) return
-    if (width > 0) then
-      rank = 2; dims = [int(width, hsize_t), 0_hsize_t]; maxdims = [int(width, hsize_t), H5S_UNLIMITED_F]
-      chunk = [int(width, hsize_t), int(rows_per_chunk, hsize_t)]
-    else
-      rank = 1; dims = 0; maxdims = [H5S_UNLIMITED_F, 0_hsize_t]; chunk = [int(rows_per_chunk, hsize_t), 0_hsize_t]
-    end if
-    call h5screate_simple_f(rank, dims(1:rank), space, err, maxdims(1:rank))
-    if (err == 0) call h5pcreate_f(H5P_DATASET_CREATE_F, plist, err)
-    if (err == 0) call h5pset_chunk_f(plist, rank, chunk(1:rank), err)
-    if (err == 0) call h5dcreate_f(loc, name, ftype, space, dset, err, plist)
-    call h5pclose_f(plist, e2); call h5sclose_f(space, e2)
-    if (err /= 0) call fail(self, 'cannot create dataset '//name, stat)
-  end subroutine make_dset
-
-  subroutine open_dset(self, loc, name, dset, stat)
-    type(vci_hdf5_writer_t), intent(inout) :: self
-    integer(hid_t), intent(in) :: loc
-    character(len=*), intent(in) :: name
-    integer(hid_t), intent(out) :: dset
-    integer, intent(inout) :: stat
-    integer :: err
-    dset = -1
-    if (stat /= VCI_OK) return
-    call h5dopen_f(loc, name, dset, err)
-    if (err /= 0) call fail(self, 'dataset '//name//' missing', stat)
-  end subroutine open_dset
-
-  !> Number of rows of a dataset of rows of `width` values (width 0: a 1-D dataset), after checking
-  !> its shape: rank 1 (width 0) or rank 2 with `width` values in the first (Fortran) dimension.
-  !> 0 and a failure (stat) when the shape is another one; nothing done if stat is set already.
-  integer(i8) function dset_rows(self, dset, name, width, stat) result(rows)
-    type(vci_hdf5_writer_t), intent(inout) :: self
-    integer(hid_t), intent(in) :: dset
-    character(len=*), intent(in) :: name
-    integer, intent(in) :: width
-    integer, intent(inout) :: stat
-    integer(hid_t) :: space
-    integer(hsize_t) :: dims(2), maxdims(2)
-    integer :: rank, want, err, e2
-    rows = 0
-    if (stat /= VCI_OK) return
-    want = merge(2, 1, width > 0)
-    call h5dget_space_f(dset, space, err)
-    if (err == 0) call h5sget_simple_extent_ndims_f(space, rank, err)
-    if (err == 0 .and. rank /= want) err = -1
-    if (err == 0) call h5sget_simple_extent_dims_f(space, dims(1:want), maxdims(1:want), err)
-    call h5sclose_f(space, e2)
-    if (err >= 0 .and. width > 0) then
-      if (dims(1) /= int(width, hsize_t)) err = -1
-    end if
-    if (err < 0) then
-      call fail(self, 'dataset '//name//' is not a list of rows of the expected width', stat); return
-    end if
-    if (dims(want) > int(huge(1_i8), hsize_t)) then
-      call fail(self, 'dataset '//name//' has too many rows', stat); return
-    end if
-    rows = int(dims(want), i8)
-  end function dset_rows
-
-  !> Extend a dataset to first + count rows and select rows first.. in the file; a matching memory space.
-  subroutine select_rows(self, dset, width, first, count, fspace, mspace, stat)
-    type(vci_hdf5_writer_t), intent(inout) :: self
-    integer(hid_t), intent(in) :: dset
-    integer, intent(in) :: width, count
-    integer(i8), intent(in) :: first
-    integer(hid_t), intent(out) :: fspace, mspace
-    integer, intent(inout) :: stat
-    integer(hsize_t) :: newdims(2), offset(2), cnt(2)
-    integer :: rank, err
-    if (width > 0) then
-      rank = 2; newdims = [int(width, hsize_t), int(first + count, hsize_t)]
-      offset = [0_hsize_t, int(first, hsize_t)]; cnt = [int(width, hsize_t), int(count, hsize_t)]
-    else
-      rank = 1; newdims = [int(first + count, hsize_t), 0_hsize_t]
-      offset = [int(first, hsize_t), 0_hsize_t]; cnt = [int(count, hsize_t), 0_hsize_t]
-    end if
-    call h5dset_extent_f(dset, newdims(1:rank), err)
-    if (err == 0) call h5dget_space_f(dset, fspace, err)
-    if (err == 0) call h5sselect_hyperslab_f(fspace, H5S_SELECT_SET_F, offset(1:rank), cnt(1:rank), err)
-    if (err == 0) call h5screate_simple_f(rank, cnt(1:rank), mspace, err)
-    if (err /= 0) call fail(self, 'cannot extend a dataset', stat)
-  end subroutine select_rows
-
-  subroutine append_real(self, dset, width, first, buf, count, stat)
-    type(vci_hdf5_writer_t), intent(inout) :: self
-    integer(hid_t), intent(in) :: dset
-    integer, intent(in) :: width, count
-    integer(i8), intent(in) :: first
-    real(dp), intent(in) :: buf(*)
-    integer, intent(inout) :: stat
-    integer(hid_t) :: fspace, mspace
-    integer(hsize_t) :: dims(2)
-    integer :: err, e2
-    if (stat /= VCI_OK) return
-    call select_rows(self, dset, width, first, count, fspace, mspace, stat)
-    if (stat /= VCI_OK) return
-    dims = [int(max(width, 1), hsize_t), int(count, hsize_t)]
-    call h5dwrite_f(dset, H5T_NATIVE_DOUBLE, buf(1:max(width, 1) * count), dims(1:1) * dims(2), err, mspace, fspace)
-    call h5sclose_f(mspace, e2); call h5sclose_f(fspace, e2)
-    if (err /= 0) call fail(self, 'writing rows failed (disk full?)', stat)
-  end subroutine append_real
-
-  subroutine append_i8(self, dset, first, buf, count, stat)
-    type(vci_hdf5_writer_t), intent(inout) :: self
-    integer(hid_t), intent(in) :: dset
-    integer, intent(in) :: count
-    integer(i8), intent(in) :: first, buf(:)
-    integer, intent(inout) :: stat
-    integer(hid_t) :: fspace, mspace
-    integer :: err, e2
-    if (stat /= VCI_OK) return
-    call select_rows(self, dset, 0, first, count, fspace, mspace, stat)
-    if (stat /= VCI_OK) return
-    call h5dwrite_f(dset, h5kind_to_type(i8, H5_INTEGER_KIND), buf, [int(count, hsize_t)], err, mspace, fspace)
-    call h5sclose_f(mspace, e2); call h5sclose_f(fspace, e2)
-    if (err /= 0) call fail(self, 'writing rows failed (disk full?)', stat)
-  end subroutine append_i8
-
-  subroutine append_int(self, dset, first, buf, count, stat)
-    type(vci_hdf5_writer_t), intent(inout) :: self
-    integer(hid_t), intent(in) :: dset
-    integer, intent(in) :: count
-    integer(i8), intent(in) :: first
-    integer, intent(in) :: buf(:)
-    integer, intent(inout) :: stat
-    integer(hid_t) :: fspace, mspace
-    integer :: err, e2
-    if (stat /= VCI_OK) return
-    call select_rows(self, dset, 0, first, count, fspace, mspace, stat)
-    if (stat /= VCI_OK) return
-    call h5dwrite_f(dset, H5T_NATIVE_INTEGER, buf, [int(count, hsize_t)], err, mspace, fspace)
-    call h5sclose_f(mspace, e2); call h5sclose_f(fspace, e2)
-    if (err /= 0) call fail(self, 'writing rows failed (disk full?)', stat)
-  end subroutine append_int
-
-  !> Read row `row` (0-based) of a dataset of rows of `width` values into buf(:, 1) (or buf(1)).
-  subroutine read_rows(self, dset, width, row, buf, stat)
-    type(vci_hdf5_writer_t), intent(inout) :: self
-    integer(hid_t), intent(in) :: dset
-    integer, intent(in) :: width
-    integer(i8), intent(in) :: row
-    real(dp), intent(out) :: buf(*)
-    integer, intent(inout) :: stat
-    integer(hid_t) :: fspace, mspace
-    integer(hsize_t) :: offset(2), cnt(2)
-    integer :: rank, err, e2
-    if (stat /= VCI_OK) return
-    if (width > 0) then
-      rank = 2; offset = [0_hsize_t, int(row, hsize_t)]; cnt = [int(width, hsize_t), 1_hsize_t]
-    else
-      rank = 1; offset = [int(row, hsize_t), 0_hsize_t]; cnt = [1_hsize_t, 0_hsize_t]
-    end if
-    call h5dget_space_f(dset, fspace, err)
-    if (err == 0) call h5sselect_hyperslab_f(fspace, H5S_SELECT_SET_F, offset(1:rank), cnt(1:rank), err)
-    if (err == 0) call h5screate_simple_f(rank, cnt(1:rank), mspace, err)
-    if (err == 0) call h5dread_f(dset, H5T_NATIVE_DOUBLE, buf(1:max(width, 1)), [cnt(1) * max(cnt(2), 1_hsize_t)], &
-                                 err, mspace, fspace)
-    call h5sclose_f(mspace, e2); call h5sclose_f(fspace, e2)
-    if (err /= 0) call fail(self, 'cannot read the last row', stat)
-  end subroutine read_rows
-
-  !> A small fixed dataset (n values), created on first use, overwritten afterwards.
-  subroutine put_vector(self, loc, name, v, stat)
-    type(vci_hdf5_writer_t), intent(inout) :: self
-    integer(hid_t), intent(in) :: loc
-    character(len=*), intent(in) :: name
-    real(dp), intent(in) :: v(:)
-    integer, intent(inout) :: stat
-    integer(hid_t) :: space, dset
-    integer :: err, e2, s
-    logical :: ex
-    if (stat /= VCI_OK) return
-    call h5lexists_f(loc, name, ex, err)
-    if (err == 0 .and. ex) then
-      call h5dopen_f(loc, name, dset, err)
-      ! a dataset of another shape (a damaged or foreign file being appended to) is replaced
-      s = VCI_OK
-      if (err == 0) then
-        if (dset_rows(self, dset, name, 0, s) /= size(v) .or. s /= VCI_OK) then
-          call h5dclose_f(dset, e2)
-          call h5ldelete_f(loc, name, err)
-          ex = .false.
-          self%message = ''
-        end if
-      end if
-    end if
-    if (err == 0 .and. .not. ex) then
-      call h5screate_simple_f(1, [int(size(v), hsize_t)], space, err)
-      if (err == 0) call h5dcreate_f(loc, name, H5T_IEEE_F64LE, space, dset, err)
-      call h5sclose_f(space, e2)
-    end if
-    if (err == 0) call h5dwrite_f(dset, H5T_NATIVE_DOUBLE, v, [int(size(v), hsize_t)], err)
-    call h5dclose_f(dset, e2)
-    if (err /= 0) call fail(self, 'cannot write checkpoint '//name, stat)
-  end subroutine put_vector
-
-  subroutine get_vector(self, loc, name, v, stat)
-    type(vci_hdf5_writer_t), intent(inout) :: self
-    integer(hid_t), intent(in) :: loc
-    character(len=*), intent(in) :: name
-    real(dp), intent(out) :: v(:)
-    integer, intent(inout) :: stat
-    integer(hid_t) :: dset
-    integer :: err, e2
-    integer :: s
-    if (stat /= VCI_OK) return
-    call h5dopen_f(loc, name, dset, err)
-    if (err == 0) then
-      s = VCI_OK
-      if (dset_rows(self, dset, 'checkpoint/'//name, 0, s) /= size(v) .or. s /= VCI_OK) err = -1
-    end if
-    if (err == 0) call h5dread_f(dset, H5T_NATIVE_DOUBLE, v, [int(size(v), hsize_t)], err)
-    call h5dclose_f(dset, e2)
-    if (err /= 0) call fail(self, 'cannot read checkpoint '//name//' (missing, or not a vector of the expected '// &
-                            'length)', stat)
-  end subroutine get_vector
-
-  !> A scalar attribute of type ftype, returned open: an existing one is reused (numbers are
-  !> rewritten in place) or, with `replace` (strings, whose size changes), deleted and made anew.
-  subroutine new_attr(self, loc, name, ftype, attr, stat, replace)
-    type(vci_hdf5_writer_t), intent(inout) :: self
-    integer(hid_t), intent(in) :: loc, ftype
-    character(len=*), intent(in) :: name
-    integer(hid_t), intent(out) :: attr
-    integer, intent(inout) :: stat
-    logical, intent(in), optional :: replace
-    integer(hid_t) :: space
-    integer :: err, e2
-    logical :: ex
-    attr = -1
-    if (stat /= VCI_OK) return
-    call h5aexists_f(loc, name, ex, err)
-    if (err == 0 .and. ex .and. .not. present(replace)) then
-      call h5aopen_f(loc, name, attr, err)
-      if (err /= 0) call fail(self, 'cannot open attribute '//name, stat)
-      return
-    end if
-    if (err == 0 .and. ex) call h5adelete_f(loc, name, err)
-    if (err == 0) call h5screate_f(H5S_SCALAR_F, space, err)
-    if (err == 0) call h5acreate_f(loc, name, ftype, space, attr, err)
-    call h5sclose_f(space, e2)
-    if (err /= 0) call fail(self, 'cannot write attribute '//name, stat)
-  end subroutine new_attr
-
-  subroutine put_attr_real(self, loc, name, v, stat)
-    type(vci_hdf5_writer_t), intent(inout) :: self
-    integer(hid_t), intent(in) :: loc
-    character(len=*), intent(in) :: name
-    real(dp), intent(in) :: v
-    integer, intent(inout) :: stat
-    integer(hid_t) :: attr
-    integer :: err, e2
-    call new_attr(self, loc, name, H5T_IEEE_F64LE, attr, stat)
-    if (stat /= VCI_OK) return
-    call h5awrite_f(attr, H5T_NATIVE_DOUBLE, v, [1_hsize_t], err)
-    call h5aclose_f(attr, e2)
-    if (err /= 0) call fail(self, 'cannot write attribute '//name, stat)
-  end subroutine put_attr_real
-
-  subroutine put_attr_int(self, loc, name, v, stat)
-    type(vci_hdf5_writer_t), intent(inout) :: self
-    integer(hid_t), intent(in) :: loc
-    character(len=*), intent(in) :: name
-    integer, intent(in) :: v
-    integer, intent(inout) :: stat
-    integer(hid_t) :: attr
-    integer :: err, e2
-    call new_attr(self, loc, name, H5T_STD_I32LE, attr, stat)
-    if (stat /= VCI_OK) return
-    call h5awrite_f(attr, H5T_NATIVE_INTEGER, v, [1_hsize_t], err)
-    call h5aclose_f(attr, e2)
-    if (err /= 0) call fail(self, 'cannot write attribute '//name, stat)
-  end subroutine put_attr_int
-
-  subroutine put_attr_i8(self, loc, name, v, stat)
-    type(vci_hdf5_writer_t), intent(inout) :: self
-    integer(hid_t), intent(in) :: loc
-    character(len=*), intent(in) :: name
-    integer(i8), intent(in) :: v
-    integer, intent(inout) :: stat
-    integer(hid_t) :: attr
-    integer :: err, e2
-    call new_attr(self, loc, name, H5T_STD_I64LE, attr, stat)
-    if (stat /= VCI_OK) return
-    call h5awrite_f(attr, h5kind_to_type(i8, H5_INTEGER_KIND), v, [1_hsize_t], err)
-    call h5aclose_f(attr, e2)
-    if (err /= 0) call fail(self, 'cannot write attribute '//name, stat)
-  end subroutine put_attr_i8
-
-  !> A fixed-length, null-padded string of exactly len(v) characters (h5py: numpy.bytes_).
-  subroutine put_attr_str(self, loc, name, v, stat)
-    type(vci_hdf5_writer_t), intent(inout) :: self
-    integer(hid_t), intent(in) :: loc
-    character(len=*), intent(in) :: name, v
-    integer, intent(inout) :: stat
-    integer(hid_t) :: attr, stype
-    integer :: err, e2
-    character(len=max(1, len(v))) :: buf
-    if (stat /= VCI_OK) return
-    buf = v
-    if (len(v) == 0) buf = achar(0)
-    call h5tcopy_f(H5T_FORTRAN_S1, stype, err)
-    if (err == 0) call h5tset_size_f(stype, int(len(buf), size_t), err)
-    if (err == 0) call h5tset_strpad_f(stype, H5T_STR_NULLPAD_F, err)
-    if (err /= 0) then
-      call fail(self, 'cannot make a string type', stat); return
-    end if
-    call new_attr(self, loc, name, stype, attr, stat, replace=.true.)
-    if (stat == VCI_OK) then
-      call h5awrite_f(attr, stype, buf, [1_hsize_t], err)
-      call h5aclose_f(attr, e2)
-      if (err /= 0) call fail(self, 'cannot write attribute '//name, stat)
-    end if
-    call h5tclose_f(stype, e2)
-  end subroutine put_attr_str
-
-  !> err = 0 when the attribute holds exactly one value of type class `class`, else -1.
-  subroutine check_attr(attr, class, err)
-    integer(hid_t), intent(in) :: attr
-    integer, intent(in) :: class
-    integer, intent(out) :: err
-    integer(hid_t) :: space, ftype
-    integer(hsize_t) :: npoints
-    integer :: c, e2
-    call h5aget_space_f(attr, space, err)
-    if (err == 0) call h5sget_simple_extent_npoints_f(space, npoints, err)
-    if (err == 0 .and. npoints /= 1) err = -1
-    call h5sclose_f(space, e2)
-    if (err == 0) call h5aget_type_f(attr, ftype, err)
-    if (err == 0) then
-      call h5tget_class_f(ftype, c, err)
-      if (err == 0 .and. c /= class) err = -1
-      call h5tclose_f(ftype, e2)
-    end if
-    if (err /= 0) err = -1
-  end subroutine check_attr
-
-  subroutine get_attr_real(self, loc, name, v, stat)
-    type(vci_hdf5_writer_t), intent(inout) :: self
-    integer(hid_t), intent(in) :: loc
-    character(len=*), intent(in) :: name
-    real(dp), intent(out) :: v
-    integer, intent(inout) :: stat
-    integer(hid_t) :: attr
-    integer :: err, e2
-    v = 0.0_dp
-    if (stat /= VCI_OK) return
-    call h5aopen_f(loc, name, attr, err)
-    if (err == 0) call check_attr(attr, H5T_FLOAT_F, err)
-    if (err == 0) call h5aread_f(attr, H5T_NATIVE_DOUBLE, v, [1_hsize_t], err)
-    call h5aclose_f(attr, e2)
-    if (err /= 0) call fail(self, 'attribute '//name//' missing, unreadable, or not one real number', stat)
-  end subroutine get_attr_real
-
-  subroutine get_attr_int(self, loc, name, v, stat)
-    type(vci_hdf5_writer_t), intent(inout) :: self
-    integer(hid_t), intent(in) :: loc
-    character(len=*), intent(in) :: name
-    integer, intent(out) :: v
-    integer, intent(inout) :: stat
-    integer(hid_t) :: attr
-    integer :: err, e2
-    v = 0
-    if (stat /= VCI_OK) return
-    call h5aopen_f(loc, name, attr, err)
-    if (err == 0) call check_attr(attr, H5T_INTEGER_F, err)
-    if (err == 0) call h5aread_f(attr, H5T_NATIVE_INTEGER, v, [1_hsize_t], err)
-    call h5aclose_f(attr, e2)
-    if (err /= 0) call fail(self, 'attribute '//name//' missing, unreadable, or not one integer', stat)
-  end subroutine get_attr_int
-
-  subroutine get_attr_i8(self, loc, name, v, stat)
-    type(vci_hdf5_writer_t), intent(inout) :: self
-    integer(hid_t), intent(in) :: loc
-    character(len=*), intent(in) :: name
-    integer(i8), intent(out) :: v
-    integer, intent(inout) :: stat
-    integer(hid_t) :: attr
-    integer :: err, e2
-    v = 0
-    if (stat /= VCI_OK) return
-    call h5aopen_f(loc, name, attr, err)
-    if (err == 0) call check_attr(attr, H5T_INTEGER_F, err)
-    if (err == 0) call h5aread_f(attr, h5kind_to_type(i8, H5_INTEGER_KIND), v, [1_hsize_t], err)
-    call h5aclose_f(attr, e2)
-    if (err /= 0) call fail(self, 'attribute '//name//' missing, unreadable, or not one integer', stat)
-  end subroutine get_attr_i8
-
-  subroutine get_attr_str(self, loc, name, v, stat)
-    type(vci_hdf5_writer_t), intent(inout) :: self
-    integer(hid_t), intent(in) :: loc
-    character(len=*), intent(in) :: name
-    character(len=:), allocatable, intent(out) :: v
-    integer, intent(inout) :: stat
-    integer(hid_t) :: attr, ftype
-    integer(size_t) :: sz
-    integer :: err, e2, k
-    v = ''
-    if (stat /= VCI_OK) return
-    call h5aopen_f(loc, name, attr, err)
-    if (err == 0) call check_attr(attr, H5T_STRING_F, err)
-    if (err == 0) call h5aget_type_f(attr, ftype, err)
-    if (err == 0) call h5tget_size_f(ftype, sz, err)
-    if (err == 0 .and. (sz < 1 .or. sz > 4096)) then   ! no allocation the file dictates
-      call h5tclose_f(ftype, e2)
-      err = -1
-    end if
-    if (err == 0) then
-      deallocate (v)
-      allocate (character(len=sz) :: v)
-      call h5aread_f(attr, ftype, v, [1_hsize_t], err)
-      call h5tclose_f(ftype, e2)
-    end if
-    call h5aclose_f(attr, e2)
-    if (err /= 0) then
-      call fail(self, 'attribute '//name//' missing or unreadable', stat); return
-    end if
-    k = index(v, achar(0))
-    if (k > 0) v = v(1:k - 1)
-  end subroutine get_attr_str
 end module vci_hdf5_output

@@ -42,7 +42,9 @@ module vci_integrator
     class(vci_model_base_t), pointer :: model => null()   !< the user's model (discrete or continuous)
     class(vci_model_t), pointer :: discrete => null()       !< the user's L_d, or
     class(vci_lagrangian_t), pointer :: lag => null()       !< the user's L
-    type(vci_retraction_model_t), pointer :: retraction => null()  !< owned: the left/midpoint L_d of lag
+    !> owned: the left/midpoint L_d of lag. Allocatable, not a pointer, so that it is freed with the
+    !> integrator (the scheme points into it: do not copy a created integrator by assignment).
+    type(vci_retraction_model_t), allocatable :: retraction
     logical :: lag_hessians = .false., lag_energy = .false.  !< optional procedures lag supplies
     integer :: scheme_id = VCI_SCHEME_DISCRETE  !< VCI_SCHEME_*; set_scheme chooses it for a continuous model
     integer :: n_stages = 0                     !< s of the lobatto scheme
@@ -206,7 +208,7 @@ contains
 
   !> Build the scheme object for the current model and scheme choice and hand it to the stepper.
   subroutine build_scheme(self, stat)
-    class(vci_integrator_t), intent(inout) :: self
+    class(vci_integrator_t), target, intent(inout) :: self
     integer, intent(out) :: stat
     class(vci_scheme_t), allocatable :: sch
     integer :: rule
@@ -224,7 +226,7 @@ contains
       if (stat /= 0) stat = VCI_ERR_MEMORY
     case (VCI_SCHEME_LEFT, VCI_SCHEME_MIDPOINT)
       rule = merge(RETRACTION_LEFT, RETRACTION_MIDPOINT, self%scheme_id == VCI_SCHEME_LEFT)
-      if (.not. associated(self%retraction)) allocate (self%retraction, stat=stat)
+      if (.not. allocated(self%retraction)) allocate (self%retraction, stat=stat)
       if (stat == 0) call self%retraction%bind(self%lag, rule, self%lag_hessians, self%lag_energy, stat)
       if (stat == 0) allocate (vci_scheme_discrete_t :: sch, stat=stat)
       if (stat == 0) then
@@ -305,10 +307,12 @@ contains
     call build_scheme(self, stat)
   end subroutine set_scheme
 
-  !> A short name of a scheme identifier ('left', 'midpoint', 'lobatto', 'discrete').
+  !> A short name of a scheme identifier ('left', 'midpoint', 'lobatto', 'discrete'), blank-padded
+  !> (trim it). Fixed length, not deferred: gfortran 12 keeps a deferred-length result's length in
+  !> a static per call site, which races across threads.
   pure function vci_scheme_name(scheme) result(name)
     integer, intent(in) :: scheme
-    character(len=:), allocatable :: name
+    character(len=8) :: name
     select case (scheme)
     case (VCI_SCHEME_DISCRETE); name = 'discrete'
     case (VCI_SCHEME_LEFT); name = 'left'
@@ -582,10 +586,12 @@ contains
       do i = 1, self%n_impacts
         call observer%on_impact(self%impacts(i), ostat)
       end do
+      if (ostat == 0 .and. observer%wants_checkpoint()) call observer%on_checkpoint(self%checkpoint(), ostat)
       if (ostat == 0) call observer%on_step(self%k, t, self%q, self%p, self%lambda, self%step_energy, ostat)
       if (ostat /= 0) then
         write (self%last_message, '(a,i0,a,es14.7,a)') 'observer failed after step to index ', self%k, &
           ' (t = ', t, ')'
+        call append_observer_cause(self, observer)
         call finish(self, VCI_ERR_IO, stat); return
       end if
     end if
@@ -616,9 +622,11 @@ contains
     end if
     if (present(observer)) then
       ostat = 0
-      call observer%on_start(self%run_info(direction), self%q, self%p, ostat)
+      if (observer%wants_checkpoint()) call observer%on_checkpoint(self%checkpoint(), ostat)
+      if (ostat == 0) call observer%on_start(self%run_info(direction), self%q, self%p, ostat)
       if (ostat /= 0) then
         self%last_message = 'integrate: observer failed at the start of the run'
+        call append_observer_cause(self, observer)
         call finish(self, VCI_ERR_IO, stat); return
       end if
     end if
@@ -629,15 +637,28 @@ contains
     end do
     if (present(observer)) then
       ostat = 0
+      ! the state is the last accepted step's: an output that flushes at the end stores it
+      if (observer%keeps_checkpoints()) call observer%on_checkpoint(self%checkpoint(), ostat)
+      ostat = 0
       call observer%on_finish(stat, trim(self%last_message), ostat)
       if (ostat /= 0 .and. stat == VCI_OK) then
         self%last_message = 'integrate: observer failed at the end of the run'
+        call append_observer_cause(self, observer)
         call finish(self, VCI_ERR_IO, stat); return
       end if
     end if
     self%last_status = stat
     if (stat == VCI_OK) self%last_message = ''   ! also after 0 steps: no message of an earlier call
   end subroutine integrate
+
+  !> An observer stopped the run: its own reason (the file, the OS's cause) after the message.
+  subroutine append_observer_cause(self, observer)
+    class(vci_integrator_t), intent(inout) :: self
+    class(vci_observer_t), intent(in) :: observer
+    character(len=len(self%last_message)) :: cause
+    call observer%failure_cause(cause)
+    if (len_trim(cause) > 0) self%last_message = trim(self%last_message)//': '//trim(cause)
+  end subroutine append_observer_cause
 
   !> The current state and solver memory, for restarts that continue bit for bit.
   function checkpoint(self) result(cp)

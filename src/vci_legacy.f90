@@ -76,7 +76,7 @@ module vci_legacy
   private
 
   public :: vci_legacy_model_fn, legacy_new, legacy_get, legacy_after, legacy_delete, legacy_advance, legacy_message
-  public :: legacy_set_scheme
+  public :: legacy_set_scheme, legacy_init
 
   !> TASK codes of the model routine: a discrete L_d (1-4, 6), a continuous L (10-13), both (5, 7-9).
   integer, parameter, public :: TASK_D1 = 1, TASK_D2 = 2, TASK_D3 = 3, TASK_HESSIAN = 4, TASK_FORMS = 5, &
@@ -573,6 +573,27 @@ contains
     call slots(i)%integ%report_failure(stat, msg)
   end subroutine legacy_after
 
+  !> VCIINP and VCIINM: start the integrator named ih from (q0 at t0, x1 = q1 at t0 + h) with
+  !> from_pair, else from (q0, x1 = p0) at t0; the arrays are the caller's assumed-size ones.
+  subroutine legacy_init(ih, who, from_pair, t0, q0, x1, stat)
+    integer, intent(in) :: ih
+    character(len=*), intent(in) :: who
+    logical, intent(in) :: from_pair
+    real(dp), intent(in) :: t0, q0(*), x1(*)
+    integer, intent(out) :: stat
+    type(vci_integrator_t), pointer :: integ
+    integer :: n
+    call legacy_get(ih, who, integ, stat)
+    if (stat /= VCI_OK) return
+    n = integ%n_coordinates()
+    if (from_pair) then
+      call integ%init_from_pair(t0, q0(1:n), x1(1:n), stat)
+    else
+      call integ%init_from_momentum(t0, q0(1:n), x1(1:n), stat)
+    end if
+    call legacy_after(ih, stat)
+  end subroutine legacy_init
+
   !> Choose the scheme of the continuous model named ih (live: legacy_get succeeded).
   subroutine legacy_set_scheme(ih, scheme, stages, stat)
     integer, intent(in) :: ih, scheme, stages
@@ -703,35 +724,23 @@ end subroutine vcisch
 !> Start from Q0 at T0 and Q1 at T0 + H: the state becomes (T0 + H, Q1, D2 L_d(Q0, Q1, H)).
 subroutine vciinp(ih, t0, q0, q1, istat)
   use vci_kinds, only: dp
-  use vci_status, only: VCI_OK
-  use vci_integrator, only: vci_integrator_t
-  use vci_legacy, only: legacy_get, legacy_after
+  use vci_legacy, only: legacy_init
   implicit none
   integer, intent(in) :: ih
   real(dp), intent(in) :: t0, q0(*), q1(*)
   integer, intent(out) :: istat
-  type(vci_integrator_t), pointer :: integ
-  call legacy_get(ih, 'VCIINP', integ, istat)
-  if (istat /= VCI_OK) return
-  call integ%init_from_pair(t0, q0(1:integ%n_coordinates()), q1(1:integ%n_coordinates()), istat)
-  call legacy_after(ih, istat)
+  call legacy_init(ih, 'VCIINP', .true., t0, q0, q1, istat)
 end subroutine vciinp
 
 !> Start from (Q0, P0) at T0.
 subroutine vciinm(ih, t0, q0, p0, istat)
   use vci_kinds, only: dp
-  use vci_status, only: VCI_OK
-  use vci_integrator, only: vci_integrator_t
-  use vci_legacy, only: legacy_get, legacy_after
+  use vci_legacy, only: legacy_init
   implicit none
   integer, intent(in) :: ih
   real(dp), intent(in) :: t0, q0(*), p0(*)
   integer, intent(out) :: istat
-  type(vci_integrator_t), pointer :: integ
-  call legacy_get(ih, 'VCIINM', integ, istat)
-  if (istat /= VCI_OK) return
-  call integ%init_from_momentum(t0, q0(1:integ%n_coordinates()), p0(1:integ%n_coordinates()), istat)
-  call legacy_after(ih, istat)
+  call legacy_init(ih, 'VCIINM', .false., t0, q0, p0, istat)
 end subroutine vciinm
 
 !> NSTEPS steps in direction IDIR (+1 forward, -1 backward). Out: the state (T, Q(N), P(N)) (the

@@ -1,9 +1,14 @@
 !> The observer interface: the integrator reports every accepted step and every impact to it,
 !> so output formats (CSV, HDF5, in-memory recorders) are not the stepper's business.
 !> All procedures have empty defaults; extend the type and override what you need. Set `stat`
-!> nonzero to stop the run (reported as VCI_ERR_IO by the integrator).
+!> nonzero to stop the run (reported as VCI_ERR_IO by the integrator, with `failure_cause`).
+!>
+!> Checkpoints: an observer that stores them (keeps_checkpoints) does not know the driver; the driver
+!> hands it one (on_checkpoint) when the observer asks (wants_checkpoint is true before the report
+!> that will store it), before on_start, and always before on_finish (docs/DESIGN.md, layers).
 module vci_observer
   use vci_kinds, only: dp, i8
+  use vci_checkpoint, only: vci_checkpoint_t
   implicit none
   private
 
@@ -41,6 +46,9 @@ module vci_observer
     procedure :: on_impact => default_on_impact
     procedure :: on_finish => default_on_finish
     procedure :: keeps_checkpoints => default_keeps_checkpoints
+    procedure :: wants_checkpoint => default_wants_checkpoint
+    procedure :: on_checkpoint => default_on_checkpoint
+    procedure :: failure_cause => default_failure_cause
   end type vci_observer_t
 
 contains
@@ -75,6 +83,27 @@ contains
     class(vci_observer_t), intent(in) :: self
     default_keeps_checkpoints = .false.
   end function default_keeps_checkpoints
+
+  !> Does the next report (on_start, or the on_step after the impacts already reported) store a
+  !> checkpoint? Then the driver calls on_checkpoint with the state that report is about, first.
+  pure logical function default_wants_checkpoint(self)
+    class(vci_observer_t), intent(in) :: self
+    default_wants_checkpoint = .false.
+  end function default_wants_checkpoint
+
+  !> The driver's checkpoint of the state the next report (on_start, on_step, on_finish) is about.
+  subroutine default_on_checkpoint(self, cp, stat)
+    class(vci_observer_t), intent(inout) :: self
+    type(vci_checkpoint_t), intent(in) :: cp
+    integer, intent(inout) :: stat
+  end subroutine default_on_checkpoint
+
+  !> Why the last report set `stat` nonzero (e.g. the file and the OS's reason), or blank.
+  subroutine default_failure_cause(self, cause)
+    class(vci_observer_t), intent(in) :: self
+    character(len=*), intent(out) :: cause
+    cause = ''
+  end subroutine default_failure_cause
 
   !> The run ended with `status` (VCI_OK or an error) and its message.
   subroutine default_on_finish(self, status, message, stat)

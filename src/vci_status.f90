@@ -29,11 +29,14 @@ module vci_status
 contains
 
   !> A short, fixed description of a status code ('unknown status' for other values).
+  !> The result's length is a specification expression, not deferred: gfortran 12 keeps a
+  !> deferred-length result's length in a static per call site, which races across threads.
   pure function vci_status_name(status) result(name)
     integer, intent(in) :: status
-    character(len=:), allocatable :: name
+    character(len=merge(len_trim(VCI_STATUS_NAMES(min(max(status, 0), ubound(VCI_STATUS_NAMES, 1)))), &
+                        len('unknown status'), status >= 0 .and. status <= ubound(VCI_STATUS_NAMES, 1))) :: name
     if (status >= lbound(VCI_STATUS_NAMES, 1) .and. status <= ubound(VCI_STATUS_NAMES, 1)) then
-      name = trim(VCI_STATUS_NAMES(status))
+      name = VCI_STATUS_NAMES(status)
     else
       name = 'unknown status'
     end if

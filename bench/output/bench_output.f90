@@ -54,7 +54,6 @@ contains
     if (flush_every > 0) then
       call w%open(trim(dir)//'/bench_output.h5', stat, overwrite=.true., scene='pendulum', flush_every=flush_every)
       if (stat /= VCI_OK) error stop 'bench_output: cannot open the output file'
-      call w%attach(integ)
       call integ%integrate(nsteps, 1, stat, w)
     else
       call integ%integrate(nsteps, 1, stat)

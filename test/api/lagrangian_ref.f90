@@ -42,4 +42,5 @@ program lagrangian_ref
   write (unit, '(es25.17)') integ%time(), q(1), p(1), theta, omega
   write (unit, '(i0)') impacts, n_exact
   close (unit)
+  deallocate (times)   ! main-program allocatables are not freed at its end (LeakSanitizer)
 end program lagrangian_ref

@@ -154,6 +154,12 @@ static void suite_bad(void) {
   CHECK(vci_model_create_lagrangian(&model, 1, 0, 2, &cb, NULL) == VCI_ERR_ARGUMENT);
   CHECK(vci_model_create_lagrangian(NULL, 1, 0, 2, &cb, NULL) == VCI_ERR_ARGUMENT);
   CHECK(vci_model_create_lagrangian(&model, 1, 0, 2, NULL, NULL) == VCI_ERR_ARGUMENT);
+  /* every message names the entry point that was called, not vci_model_create */
+  cb = pendulum_callbacks(1);
+  CHECK(vci_model_create_lagrangian(&model, 0, 0, 2, &cb, NULL) == VCI_ERR_ARGUMENT);
+  vci_last_error(NULL, msg, sizeof msg);
+  printf("  %s\n", msg);
+  CHECK(strncmp(msg, "vci_model_create_lagrangian: sizes n = 0", 40) == 0);
 
   cb = pendulum_callbacks(1);
   CHECK(vci_model_create_lagrangian(&model, 1, 0, 2, &cb, NULL) == VCI_OK);

@@ -71,7 +71,6 @@ program sigkill_check
   if (stat /= VCI_OK) call die('restore: '//trim(integ2%message()))
   call w%open(trim(path), stat, append=.true.)
   if (stat /= VCI_OK) call die('append: '//trim(w%message))
-  call w%attach(integ2)
   call integ2%integrate(int(s + 500, i8) - (cp%step - 1), 1, stat, w)
   if (stat /= VCI_OK) call die('restarted run: '//trim(integ2%message()))
   f = h5r_open(trim(path))

@@ -1,0 +1,580 @@
+!> HDF5 helpers shared by the run file (vci_hdf5_output) and the ensemble file (vci_ensemble_h5):
+!> scalar attributes (real, integer, 64-bit integer, string), extendible row datasets (create, open,
+!> check the shape, append rows, read one row), small fixed vectors, and the reason of a failure.
+!>
+!> One body serves every numeric type: the typed entry points are thin wrappers of a generic
+!> interface that pass the HDF5 file and memory types and a C pointer to the data (the HDF5
+!> Fortran 2003 interface). Every helper takes `stat` (inout): it does nothing if stat is already
+!> nonzero, and on failure sets stat = VCI_ERR_IO and message = who//': '//cause. Reading checks
+!> before use: an attribute holds one value of the right class, a string at most 4096 bytes, a
+!> dataset has the rank and row width asked for. Dims are in Fortran order (the row index last).
+module vci_h5_io
+  use, intrinsic :: iso_c_binding, only: c_ptr, c_loc, c_char, c_int, c_size_t, c_f_pointer, c_null_char, &
+                                          c_associated, c_funptr, c_funloc, c_int64_t
+  use hdf5
+  use vci_kinds, only: dp, i8
+  use vci_status, only: VCI_OK, VCI_ERR_IO
+  implicit none
+  private
+
+  public :: h5io_fail, h5io_os_cause
+  public :: h5io_put_attr, h5io_get_attr
+  public :: h5io_make_rows, h5io_open_dset, h5io_rows, h5io_append_rows, h5io_read_row
+  public :: h5io_put_vector, h5io_get_vector, h5io_close_dset, h5io_string_type
+
+  !> A scalar attribute: real(dp), integer, integer(i8) or a string (fixed length, null-padded).
+  interface h5io_put_attr
+    module procedure put_attr_real, put_attr_int, put_attr_i8, put_attr_str
+  end interface h5io_put_attr
+
+  !> Read a scalar attribute after checking it holds one value of the right class.
+  interface h5io_get_attr
+    module procedure get_attr_real, get_attr_int, get_attr_i8, get_attr_str
+  end interface h5io_get_attr
+
+  !> Append `count` rows at row `first` (0-based) of a dataset of rows of `width` values.
+  interface h5io_append_rows
+    module procedure append_real, append_i8, append_int
+  end interface h5io_append_rows
+
+  ! HDF5's error record (H5E_error2_t), read by the walk over the error stack
+  type, bind(C) :: h5e_error_t
+    integer(c_int64_t) :: cls_id, maj_num, min_num   ! hid_t: int64_t since HDF5 1.10
+    integer(c_int) :: line
+    type(c_ptr) :: func_name, file_name, desc
+  end type h5e_error_t
+
+  interface
+    integer(c_int) function h5ewalk2(stack, direction, func, client) bind(C, name='H5Ewalk2')
+      import :: c_int64_t, c_int, c_funptr, c_ptr
+      integer(c_int64_t), value :: stack
+      integer(c_int), value :: direction
+      type(c_funptr), value :: func
+      type(c_ptr), value :: client
+    end function h5ewalk2
+    integer(c_size_t) function c_strlen(s) bind(C, name='strlen')
+      import :: c_ptr, c_size_t
+      type(c_ptr), value :: s
+    end function c_strlen
+  end interface
+
+contains
+
+  !> stat = VCI_ERR_IO and message = who: cause, unless stat is set already (the first cause stays).
+  subroutine h5io_fail(cause, stat, message, who)
+    character(len=*), intent(in) :: cause, who
+    integer, intent(inout) :: stat
+    character(len=*), intent(inout) :: message
+    if (stat /= VCI_OK) return
+    stat = VCI_ERR_IO
+    message = who//': '//cause
+  end subroutine h5io_fail
+
+  !> The operating system's reason for HDF5's last failure, as its file driver recorded it (e.g. "No
+  !> space left on device"), or blank. Call it right after the failing HDF5 call: the next call
+  !> clears HDF5's error stack.
+  function h5io_os_cause() result(cause)
+    character(len=256) :: cause
+    character(len=256), target :: found
+    integer(c_int) :: r
+    found = ''
+    r = h5ewalk2(0_c_int64_t, 0_c_int, c_funloc(take_os_cause), c_loc(found))
+    cause = found
+  end function h5io_os_cause
+
+  !> One record of the walk: keep the driver's "error message = '...'" (errno's text) if it has one.
+  integer(c_int) function take_os_cause(n, err, client) bind(C, name='vci_h5io_take_os_cause') result(r)
+    integer(c_int), value :: n
+    type(h5e_error_t), intent(in) :: err
+    type(c_ptr), value :: client
+    character(len=256), pointer :: found
+    character(kind=c_char), pointer :: chars(:)
+    character(len=1024) :: desc
+    integer :: i, k, l
+    r = 0
+    if (.not. c_associated(err%desc) .or. .not. c_associated(client)) return
+    call c_f_pointer(client, found)
+    if (len_trim(found) > 0) return
+    l = int(min(c_strlen(err%desc), int(len(desc), c_size_t)))
+    call c_f_pointer(err%desc, chars, [l])
+    desc = ''
+    do i = 1, l
+      desc(i:i) = chars(i)
+    end do
+    k = index(desc, "error message = '")
+    if (k == 0) return
+    desc = desc(k + 17:)
+    k = index(desc, "'")
+    if (k > 1) found = desc(1:k - 1)
+  end function take_os_cause
+
+  ! --- attributes --------------------------------------------------------------------------------
+
+  !> A scalar attribute of type ftype, returned open: an existing one is reused (numbers are
+  !> rewritten in place) or, with `replace` (strings, whose size changes), deleted and made anew.
+  subroutine new_attr(loc, name, ftype, attr, stat, message, who, replace)
+    integer(hid_t), intent(in) :: loc, ftype
+    character(len=*), intent(in) :: name, who
+    integer(hid_t), intent(out) :: attr
+    integer, intent(inout) :: stat
+    character(len=*), intent(inout) :: message
+    logical, intent(in) :: replace
+    integer(hid_t) :: space
+    integer :: err, e2
+    logical :: ex
+    attr = -1
+    if (stat /= VCI_OK) return
+    call h5aexists_f(loc, name, ex, err)
+    if (err == 0 .and. ex .and. .not. replace) then
+      call h5aopen_f(loc, name, attr, err)
+      if (err /= 0) call h5io_fail('cannot open attribute '//name, stat, message, who)
+      return
+    end if
+    if (err == 0 .and. ex) call h5adelete_f(loc, name, err)
+    space = -1
+    if (err == 0) call h5screate_f(H5S_SCALAR_F, space, err)
+    if (err == 0) call h5acreate_f(loc, name, ftype, space, attr, err)
+    if (space >= 0) call h5sclose_f(space, e2)
+    if (err /= 0) call h5io_fail('cannot write attribute '//name, stat, message, who)
+  end subroutine new_attr
+
+  !> The one body of every attribute write: value at `buf` of memory type mtype, file type ftype.
+  subroutine write_attr(loc, name, ftype, mtype, buf, stat, message, who, replace)
+    integer(hid_t), intent(in) :: loc, ftype, mtype
+    character(len=*), intent(in) :: name, who
+    type(c_ptr), intent(in) :: buf
+    integer, intent(inout) :: stat
+    character(len=*), intent(inout) :: message
+    logical, intent(in) :: replace
+    integer(hid_t) :: attr
+    integer :: err, e2
+    call new_attr(loc, name, ftype, attr, stat, message, who, replace)
+    if (stat /= VCI_OK) return
+    call h5awrite_f(attr, mtype, buf, err)
+    call h5aclose_f(attr, e2)
+    if (err /= 0) call h5io_fail('cannot write attribute '//name, stat, message, who)
+  end subroutine write_attr
+
+  subroutine put_attr_real(loc, name, v, stat, message, who)
+    integer(hid_t), intent(in) :: loc
+    character(len=*), intent(in) :: name, who
+    real(dp), intent(in), target :: v
+    integer, intent(inout) :: stat
+    character(len=*), intent(inout) :: message
+    call write_attr(loc, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, c_loc(v), stat, message, who, .false.)
+  end subroutine put_attr_real
+
+  subroutine put_attr_int(loc, name, v, stat, message, who)
+    integer(hid_t), intent(in) :: loc
+    character(len=*), intent(in) :: name, who
+    integer, intent(in), target :: v
+    integer, intent(inout) :: stat
+    character(len=*), intent(inout) :: message
+    call write_attr(loc, name, H5T_STD_I32LE, H5T_NATIVE_INTEGER, c_loc(v), stat, message, who, .false.)
+  end subroutine put_attr_int
+
+  subroutine put_attr_i8(loc, name, v, stat, message, who)
+    integer(hid_t), intent(in) :: loc
+    character(len=*), intent(in) :: name, who
+    integer(i8), intent(in), target :: v
+    integer, intent(inout) :: stat
+    character(len=*), intent(inout) :: message
+    call write_attr(loc, name, H5T_STD_I64LE, h5kind_to_type(i8, H5_INTEGER_KIND), c_loc(v), stat, message, who, &
+                    .false.)
+  end subroutine put_attr_i8
+
+  !> A fixed-length, null-padded string of exactly len(v) characters (h5py: numpy.bytes_).
+  subroutine put_attr_str(loc, name, v, stat, message, who)
+    integer(hid_t), intent(in) :: loc
+    character(len=*), intent(in) :: name, v, who
+    integer, intent(inout) :: stat
+    character(len=*), intent(inout) :: message
+    integer(hid_t) :: stype
+    integer :: err, e2
+    character(len=max(1, len(v))), target :: buf
+    if (stat /= VCI_OK) return
+    buf = v
+    if (len(v) == 0) buf = achar(0)
+    call h5io_string_type(len(buf), stype, err)
+    if (err /= 0) then
+      call h5io_fail('cannot make a string type', stat, message, who); return
+    end if
+    call write_attr(loc, name, stype, stype, c_loc(buf), stat, message, who, .true.)
+    call h5tclose_f(stype, e2)
+  end subroutine put_attr_str
+
+  !> A fixed-length, null-padded string type of `length` bytes (close it with h5tclose_f).
+  subroutine h5io_string_type(length, stype, err)
+    integer, intent(in) :: length
+    integer(hid_t), intent(out) :: stype
+    integer, intent(out) :: err
+    call h5tcopy_f(H5T_FORTRAN_S1, stype, err)
+    if (err == 0) call h5tset_size_f(stype, int(length, size_t), err)
+    if (err == 0) call h5tset_strpad_f(stype, H5T_STR_NULLPAD_F, err)
+  end subroutine h5io_string_type
+
+  !> Open attribute `name` and check it holds exactly one value of type class `class`; attr = -1
+  !> and err /= 0 otherwise.
+  subroutine open_attr(loc, name, class, attr, err)
+    integer(hid_t), intent(in) :: loc
+    character(len=*), intent(in) :: name
+    integer, intent(in) :: class
+    integer(hid_t), intent(out) :: attr
+    integer, intent(out) :: err
+    integer(hid_t) :: space, ftype
+    integer(hsize_t) :: npoints
+    integer :: c, e2
+    call h5aopen_f(loc, name, attr, err)
+    if (err /= 0) then
+      attr = -1; return
+    end if
+    call h5aget_space_f(attr, space, err)
+    if (err == 0) call h5sget_simple_extent_npoints_f(space, npoints, err)
+    if (err == 0 .and. npoints /= 1) err = -1
+    call h5sclose_f(space, e2)
+    if (err == 0) call h5aget_type_f(attr, ftype, err)
+    if (err == 0) then
+      call h5tget_class_f(ftype, c, err)
+      if (err == 0 .and. c /= class) err = -1
+      call h5tclose_f(ftype, e2)
+    end if
+    if (err /= 0) err = -1
+  end subroutine open_attr
+
+  !> The one body of every numeric attribute read.
+  subroutine read_attr(loc, name, class, mtype, buf, what, stat, message, who)
+    integer(hid_t), intent(in) :: loc, mtype
+    character(len=*), intent(in) :: name, what, who
+    integer, intent(in) :: class
+    type(c_ptr), intent(in) :: buf
+    integer, intent(inout) :: stat
+    character(len=*), intent(inout) :: message
+    integer(hid_t) :: attr
+    integer :: err, e2
+    type(c_ptr) :: p
+    if (stat /= VCI_OK) return
+    p = buf      ! HDF5's pointer interface takes the pointer intent(inout)
+    call open_attr(loc, name, class, attr, err)
+    if (err == 0) call h5aread_f(attr, mtype, p, err)
+    if (attr >= 0) call h5aclose_f(attr, e2)
+    if (err /= 0) call h5io_fail('attribute '//name//' missing, unreadable, or not '//what, stat, message, who)
+  end subroutine read_attr
+
+  subroutine get_attr_real(loc, name, v, stat, message, who)
+    integer(hid_t), intent(in) :: loc
+    character(len=*), intent(in) :: name, who
+    real(dp), intent(out), target :: v
+    integer, intent(inout) :: stat
+    character(len=*), intent(inout) :: message
+    v = 0.0_dp
+    call read_attr(loc, name, H5T_FLOAT_F, H5T_NATIVE_DOUBLE, c_loc(v), 'one real number', stat, message, who)
+  end subroutine get_attr_real
+
+  subroutine get_attr_int(loc, name, v, stat, message, who)
+    integer(hid_t), intent(in) :: loc
+    character(len=*), intent(in) :: name, who
+    integer, intent(out), target :: v
+    integer, intent(inout) :: stat
+    character(len=*), intent(inout) :: message
+    v = 0
+    call read_attr(loc, name, H5T_INTEGER_F, H5T_NATIVE_INTEGER, c_loc(v), 'one integer', stat, message, who)
+  end subroutine get_attr_int
+
+  subroutine get_attr_i8(loc, name, v, stat, message, who)
+    integer(hid_t), intent(in) :: loc
+    character(len=*), intent(in) :: name, who
+    integer(i8), intent(out), target :: v
+    integer, intent(inout) :: stat
+    character(len=*), intent(inout) :: message
+    v = 0
+    call read_attr(loc, name, H5T_INTEGER_F, h5kind_to_type(i8, H5_INTEGER_KIND), c_loc(v), 'one integer', &
+                   stat, message, who)
+  end subroutine get_attr_i8
+
+  !> A string attribute of 1 to 4096 bytes (no allocation the file dictates), without its padding.
+  subroutine get_attr_str(loc, name, v, stat, message, who)
+    integer(hid_t), intent(in) :: loc
+    character(len=*), intent(in) :: name, who
+    character(len=:), allocatable, intent(out) :: v
+    integer, intent(inout) :: stat
+    character(len=*), intent(inout) :: message
+    integer(hid_t) :: attr, ftype
+    integer(size_t) :: sz
+    integer :: err, e2, k
+    v = ''
+    if (stat /= VCI_OK) return
+    ftype = -1
+    call open_attr(loc, name, H5T_STRING_F, attr, err)
+    if (err == 0) call h5aget_type_f(attr, ftype, err)
+    if (err == 0) call h5tget_size_f(ftype, sz, err)
+    if (err == 0 .and. (sz < 1 .or. sz > 4096)) err = -1
+    if (err == 0) then
+      deallocate (v)
+      allocate (character(len=sz) :: v)
+      call h5aread_f(attr, ftype, v, [1_hsize_t], err)
+    end if
+    if (ftype >= 0) call h5tclose_f(ftype, e2)
+    if (attr >= 0) call h5aclose_f(attr, e2)
+    if (err /= 0) then
+      call h5io_fail('attribute '//name//' missing or unreadable', stat, message, who); return
+    end if
+    k = index(v, achar(0))
+    if (k > 0) v = v(1:k - 1)
+  end subroutine get_attr_str
+
+  ! --- datasets of rows ------------------------------------------------------------------------
+
+  subroutine h5io_close_dset(d)
+    integer(hid_t), intent(inout) :: d
+    integer :: err
+    if (d >= 0) call h5dclose_f(d, err)
+    d = -1
+  end subroutine h5io_close_dset
+
+  !> An extendible dataset of 0 rows, each row `width` values (width 0: a 1-D dataset).
+  subroutine h5io_make_rows(loc, name, width, rows_per_chunk, ftype, dset, stat, message, who)
+    integer(hid_t), intent(in) :: loc, ftype
+    character(len=*), intent(in) :: name, who
+    integer, intent(in) :: width, rows_per_chunk
+    integer(hid_t), intent(out) :: dset
+    integer, intent(inout) :: stat
+    character(len=*), intent(inout) :: message
+    integer(hid_t) :: space, plist
+    integer(hsize_t) :: dims(2), maxdims(2), chunk(2)
+    integer :: rank, err, e2
+    dset = -1
+    if (stat /= VCI_OK) return
+    if (width > 0) then
+      rank = 2; dims = [int(width, hsize_t), 0_hsize_t]; maxdims = [int(width, hsize_t), H5S_UNLIMITED_F]
+      chunk = [int(width, hsize_t), int(rows_per_chunk, hsize_t)]
+    else
+      rank = 1; dims = 0; maxdims = [H5S_UNLIMITED_F, 0_hsize_t]; chunk = [int(rows_per_chunk, hsize_t), 0_hsize_t]
+    end if
+    call h5screate_simple_f(rank, dims(1:rank), space, err, maxdims(1:rank))
+    if (err == 0) call h5pcreate_f(H5P_DATASET_CREATE_F, plist, err)
+    if (err == 0) call h5pset_chunk_f(plist, rank, chunk(1:rank), err)
+    if (err == 0) call h5dcreate_f(loc, name, ftype, space, dset, err, plist)
+    call h5pclose_f(plist, e2); call h5sclose_f(space, e2)
+    if (err /= 0) call h5io_fail('cannot create dataset '//name, stat, message, who)
+  end subroutine h5io_make_rows
+
+  subroutine h5io_open_dset(loc, name, dset, stat, message, who)
+    integer(hid_t), intent(in) :: loc
+    character(len=*), intent(in) :: name, who
+    integer(hid_t), intent(out) :: dset
+    integer, intent(inout) :: stat
+    character(len=*), intent(inout) :: message
+    integer :: err
+    dset = -1
+    if (stat /= VCI_OK) return
+    call h5dopen_f(loc, name, dset, err)
+    if (err /= 0) call h5io_fail('dataset '//name//' missing', stat, message, who)
+  end subroutine h5io_open_dset
+
+  !> Number of rows of a dataset of rows of `width` values (width 0: a 1-D dataset), after checking
+  !> its shape: rank 1 (width 0) or rank 2 with `width` values in the first (Fortran) dimension.
+  !> 0 and a failure (stat) when the shape is another one.
+  integer(i8) function h5io_rows(dset, name, width, stat, message, who) result(rows)
+    integer(hid_t), intent(in) :: dset
+    character(len=*), intent(in) :: name, who
+    integer, intent(in) :: width
+    integer, intent(inout) :: stat
+    character(len=*), intent(inout) :: message
+    integer(hid_t) :: space
+    integer(hsize_t) :: dims(2), maxdims(2)
+    integer :: rank, want, err, e2
+    rows = 0
+    if (stat /= VCI_OK) return
+    want = merge(2, 1, width > 0)
+    call h5dget_space_f(dset, space, err)
+    if (err == 0) call h5sget_simple_extent_ndims_f(space, rank, err)
+    if (err == 0 .and. rank /= want) err = -1
+    if (err == 0) call h5sget_simple_extent_dims_f(space, dims(1:want), maxdims(1:want), err)
+    call h5sclose_f(space, e2)
+    if (err >= 0 .and. width > 0) then
+      if (dims(1) /= int(width, hsize_t)) err = -1
+    end if
+    if (err < 0) then
+      call h5io_fail('dataset '//name//' is not a list of rows of the expected width', stat, message, who); return
+    end if
+    if (dims(want) > int(huge(1_i8), hsize_t)) then
+      call h5io_fail('dataset '//name//' has too many rows', stat, message, who); return
+    end if
+    rows = int(dims(want), i8)
+  end function h5io_rows
+
+  !> Spaces selecting rows first .. first + count - 1 (file) and count rows (memory); with `extend`
+  !> the dataset is first extended to first + count rows.
+  subroutine select_rows(dset, width, first, count, extend, fspace, mspace, err)
+    integer(hid_t), intent(in) :: dset
+    integer, intent(in) :: width, count
+    integer(i8), intent(in) :: first
+    logical, intent(in) :: extend
+    integer(hid_t), intent(out) :: fspace, mspace
+    integer, intent(out) :: err
+    integer(hsize_t) :: newdims(2), offset(2), cnt(2)
+    integer :: rank
+    fspace = -1; mspace = -1
+    if (width > 0) then
+      rank = 2; newdims = [int(width, hsize_t), int(first + count, hsize_t)]
+      offset = [0_hsize_t, int(first, hsize_t)]; cnt = [int(width, hsize_t), int(count, hsize_t)]
+    else
+      rank = 1; newdims = [int(first + count, hsize_t), 0_hsize_t]
+      offset = [int(first, hsize_t), 0_hsize_t]; cnt = [int(count, hsize_t), 0_hsize_t]
+    end if
+    err = 0
+    if (extend) call h5dset_extent_f(dset, newdims(1:rank), err)
+    if (err == 0) call h5dget_space_f(dset, fspace, err)
+    if (err == 0) call h5sselect_hyperslab_f(fspace, H5S_SELECT_SET_F, offset(1:rank), cnt(1:rank), err)
+    if (err == 0) call h5screate_simple_f(rank, cnt(1:rank), mspace, err)
+  end subroutine select_rows
+
+  !> The one body of every append: rows at `buf` of memory type mtype.
+  subroutine append_raw(dset, mtype, width, first, count, buf, stat, message, who)
+    integer(hid_t), intent(in) :: dset, mtype
+    integer, intent(in) :: width, count
+    integer(i8), intent(in) :: first
+    type(c_ptr), intent(in) :: buf
+    integer, intent(inout) :: stat
+    character(len=*), intent(in) :: who
+    character(len=*), intent(inout) :: message
+    integer(hid_t) :: fspace, mspace
+    integer :: err, e2
+    character(len=256) :: os
+    if (stat /= VCI_OK .or. count < 1) return
+    call select_rows(dset, width, first, count, .true., fspace, mspace, err)
+    if (err /= 0) then
+      os = h5io_os_cause()
+    else
+      call h5dwrite_f(dset, mtype, buf, err, mspace, fspace)
+      if (err /= 0) os = h5io_os_cause()
+    end if
+    if (mspace >= 0) call h5sclose_f(mspace, e2)
+    if (fspace >= 0) call h5sclose_f(fspace, e2)
+    if (err /= 0) then
+      if (len_trim(os) == 0) os = 'HDF5 gives no reason'
+      call h5io_fail('writing rows failed: '//trim(os), stat, message, who)
+    end if
+  end subroutine append_raw
+
+  subroutine append_real(dset, width, first, buf, count, stat, message, who)
+    integer(hid_t), intent(in) :: dset
+    integer, intent(in) :: width, count
+    integer(i8), intent(in) :: first
+    real(dp), intent(in), target, contiguous :: buf(..)
+    integer, intent(inout) :: stat
+    character(len=*), intent(in) :: who
+    character(len=*), intent(inout) :: message
+    call append_raw(dset, H5T_NATIVE_DOUBLE, width, first, count, c_loc(buf), stat, message, who)
+  end subroutine append_real
+
+  subroutine append_i8(dset, width, first, buf, count, stat, message, who)
+    integer(hid_t), intent(in) :: dset
+    integer, intent(in) :: width, count
+    integer(i8), intent(in) :: first
+    integer(i8), intent(in), target, contiguous :: buf(..)
+    integer, intent(inout) :: stat
+    character(len=*), intent(in) :: who
+    character(len=*), intent(inout) :: message
+    call append_raw(dset, h5kind_to_type(i8, H5_INTEGER_KIND), width, first, count, c_loc(buf), stat, message, who)
+  end subroutine append_i8
+
+  subroutine append_int(dset, width, first, buf, count, stat, message, who)
+    integer(hid_t), intent(in) :: dset
+    integer, intent(in) :: width, count
+    integer(i8), intent(in) :: first
+    integer, intent(in), target, contiguous :: buf(..)
+    integer, intent(inout) :: stat
+    character(len=*), intent(in) :: who
+    character(len=*), intent(inout) :: message
+    call append_raw(dset, H5T_NATIVE_INTEGER, width, first, count, c_loc(buf), stat, message, who)
+  end subroutine append_int
+
+  !> Read row `row` (0-based) of a dataset of rows of `width` real values into buf(1:max(width, 1)).
+  subroutine h5io_read_row(dset, width, row, buf, stat, message, who)
+    integer(hid_t), intent(in) :: dset
+    integer, intent(in) :: width
+    integer(i8), intent(in) :: row
+    real(dp), intent(inout), target, contiguous :: buf(..)
+    integer, intent(inout) :: stat
+    character(len=*), intent(in) :: who
+    character(len=*), intent(inout) :: message
+    integer(hid_t) :: fspace, mspace
+    integer :: err, e2
+    type(c_ptr) :: p
+    if (stat /= VCI_OK) return
+    err = 0; fspace = -1; mspace = -1
+    p = c_loc(buf)
+    if (size(buf) < max(width, 1)) err = -1
+    if (err == 0) call select_rows(dset, width, row, 1, .false., fspace, mspace, err)
+    if (err == 0) call h5dread_f(dset, H5T_NATIVE_DOUBLE, p, err, mspace, fspace)
+    if (mspace >= 0) call h5sclose_f(mspace, e2)
+    if (fspace >= 0) call h5sclose_f(fspace, e2)
+    if (err /= 0) call h5io_fail('cannot read the last row', stat, message, who)
+  end subroutine h5io_read_row
+
+  ! --- small fixed vectors -----------------------------------------------------------------------
+
+  !> A fixed dataset of size(v) reals, created on first use, overwritten afterwards; one of another
+  !> shape (a damaged or foreign file being appended to) is replaced.
+  subroutine h5io_put_vector(loc, name, v, stat, message, who)
+    integer(hid_t), intent(in) :: loc
+    character(len=*), intent(in) :: name, who
+    real(dp), intent(in), target, contiguous :: v(:)
+    integer, intent(inout) :: stat
+    character(len=*), intent(inout) :: message
+    integer(hid_t) :: space, dset
+    integer :: err, e2, s
+    logical :: ex
+    character(len=256) :: os, scratch
+    if (stat /= VCI_OK) return
+    dset = -1; os = ''
+    call h5lexists_f(loc, name, ex, err)
+    if (err == 0 .and. ex) then
+      call h5dopen_f(loc, name, dset, err)
+      s = VCI_OK
+      if (err == 0) then
+        if (h5io_rows(dset, name, 0, s, scratch, who) /= size(v) .or. s /= VCI_OK) then
+          call h5dclose_f(dset, e2)
+          dset = -1
+          call h5ldelete_f(loc, name, err)
+          ex = .false.
+        end if
+      end if
+    end if
+    if (err == 0 .and. .not. ex) then
+      call h5screate_simple_f(1, [int(size(v), hsize_t)], space, err)
+      if (err == 0) call h5dcreate_f(loc, name, H5T_IEEE_F64LE, space, dset, err)
+      call h5sclose_f(space, e2)
+    end if
+    if (err == 0) call h5dwrite_f(dset, H5T_NATIVE_DOUBLE, c_loc(v), err)
+    if (err /= 0) os = h5io_os_cause()
+    if (dset >= 0) call h5dclose_f(dset, e2)
+    if (err /= 0 .and. len_trim(os) == 0) os = 'HDF5 gives no reason'
+    if (err /= 0) call h5io_fail('cannot write '//name//': '//trim(os), stat, message, who)
+  end subroutine h5io_put_vector
+
+  !> Read a fixed dataset that must hold exactly size(v) reals.
+  subroutine h5io_get_vector(loc, name, v, stat, message, who)
+    integer(hid_t), intent(in) :: loc
+    character(len=*), intent(in) :: name, who
+    real(dp), intent(out), target, contiguous :: v(:)
+    integer, intent(inout) :: stat
+    character(len=*), intent(inout) :: message
+    integer(hid_t) :: dset
+    integer :: err, e2, s
+    character(len=256) :: scratch
+    type(c_ptr) :: p
+    if (stat /= VCI_OK) return
+    p = c_loc(v)
+    call h5dopen_f(loc, name, dset, err)
+    if (err == 0) then
+      s = VCI_OK
+      if (h5io_rows(dset, name, 0, s, scratch, who) /= size(v) .or. s /= VCI_OK) err = -1
+      if (err == 0) call h5dread_f(dset, H5T_NATIVE_DOUBLE, p, err)
+      call h5dclose_f(dset, e2)
+    end if
+    if (err /= 0) call h5io_fail('cannot read '//name//' (missing, or not a vector of the expected length)', &
+                                 stat, message, who)
+  end subroutine h5io_get_vector
+end module vci_h5_io
