@@ -2,7 +2,10 @@
 !> with. Each regular step does what the library's regular step does, written by hand for one scene
 !> with no model type, no callbacks and no LAPACK:
 !>
-!> - the initial guess q_k + h v_k (v_k the last step's velocity) and the last multiplier;
+!> - the library's predictor (src/vci_stepper.f90, predict): after two regular steps the quadratic
+!>   extrapolation q_k + h (2 v_k - v_{k-1}) (v the steps' velocities), before that q_k + h v_k; the
+!>   multiplier extrapolated linearly after two and quadratically after three regular steps; the
+!>   history reset at impacts. A start within the tolerance is kept only at round-off (merit <= 1e-3);
 !> - the residual of DESIGN.md §1 with the library's per-row scales (the row's terms, the kinetic
 !>   term |J||x - a| once a Jacobian is known, a few ulps of sum_j |J_ij||x_j|) and its convergence
 !>   test max_i |r_i| / (rtol scale_i) <= 1;
@@ -106,8 +109,8 @@ contains
     type(hand_result_t), intent(out) :: res
     integer(int64) :: k
     real(dp) :: mm(3), hg, mg, a2, b2, x(3), a(3), vel(3), r(3), sc(3), jac(3, 3), lu(3, 3), w(3), dx(3)
-    real(dp) :: xt(3), rt(3), sct(3), jscale(3), jabs(3), phi, phit, step, qt(3), t2
-    integer :: piv(3), it, ib, i
+    real(dp) :: xt(3), rt(3), sct(3), jscale(3), jabs(3), phi, phit, step, qt(3), t2, vel_before(3)
+    integer :: piv(3), it, ib, i, depth
     logical :: known, factored
     mm = [par%mass * (par%a**2 + par%b**2) / 4.0_dp, par%mass, par%mass]
     mg = par%mass * par%grav; hg = 0.5_dp * h * mg
@@ -115,15 +118,20 @@ contains
     q = q1
     p = mm * (q1 - q0) / h; p(3) = p(3) - hg
     vel = (q1 - q0) / h
+    vel_before = 0.0_dp; depth = 0
     jscale = 0.0_dp
     do k = 1, nsteps
       a = q
-      x = a + h * vel
+      if (depth >= 2) then
+        x = a + h * (2.0_dp * vel - vel_before)
+      else
+        x = a + h * vel
+      end if
       known = .false.; factored = .false.
       call resid(x, r, sc)
       phi = merit(r, sc)
       do it = 1, 30
-        if (phi <= 1.0_dp) exit
+        if (phi <= 1.0_dp .and. (it > 1 .or. phi <= 1.0e-3_dp)) exit
         res%newton_iterations = res%newton_iterations + 1
         jac = 0.0_dp
         do i = 1, 3
@@ -169,12 +177,15 @@ contains
       if (x(3) - sqrt(a2 * sin(x(1))**2 + b2 * cos(x(1))**2) >= 0.0_dp) then
         p = mm * (x - a) / h; p(3) = p(3) - hg                                    ! D2 L_d(a, x, h)
         e = 0.5_dp * sum(mm * (x - a)**2) / h**2 + 0.5_dp * mg * (a(3) + x(3))    ! -D3 L_d
+        vel_before = vel
         vel = (x - a) / h
+        depth = min(depth + 1, 3)
         q = x
         cycle
       end if
       call ellipse_impacts(par, h, t0 + real(k, dp) * h, q, p, res, qt, t2)
       if (.not. res%ok) return
+      depth = 0
       vel = (q - qt) / t2
       e = 0.5_dp * sum(mm * (q - qt)**2) / t2**2 + 0.5_dp * mg * (qt(3) + q(3))
     end do
@@ -205,8 +216,9 @@ contains
     type(hand_result_t), intent(out) :: res
     integer(int64) :: k
     real(dp) :: ml2, mgl, s, c, f, x(3), a(2), vel(2), lam, r(3), sc(3), jac(3, 3), lu(3, 3), w(3), dx(3)
-    real(dp) :: xt(3), rt(3), sct(3), jscale(3), jabs(2, 2), phi, phit, step, qn(2), d(2)
-    integer :: piv(3), it, ib, i
+    real(dp) :: xt(3), rt(3), sct(3), jscale(3), jabs(2, 2), phi, phit, step, qn(2), d(2), vel_before(2)
+    real(dp) :: lam_before, lam_before2, lam_guess
+    integer :: piv(3), it, ib, i, depth
     logical :: known, factored
     ml2 = par%mass * par%length**2; mgl = par%mass * par%grav * par%length
     q = q1
@@ -214,16 +226,27 @@ contains
     p = [ml2 * (q1(1) - q0(1)) / h, ml2 * (q1(2) - q0(2)) * s**2 / h]   ! D2 L_d(q0, q1, h)
     vel = (q1 - q0) / h
     lam = 0.0_dp
+    vel_before = 0.0_dp; lam_before = 0.0_dp; lam_before2 = 0.0_dp; depth = 0
     jscale = 0.0_dp
     do k = 1, nsteps
       a = q
       s = sin(a(1)); c = cos(a(1)); f = pi + c**2
-      x = [a(1) + h * vel(1), a(2) + h * vel(2), lam]
+      lam_guess = lam
+      if (depth >= 3) then
+        lam_guess = 3.0_dp * (lam - lam_before) + lam_before2
+      else if (depth == 2) then
+        lam_guess = 2.0_dp * lam - lam_before
+      end if
+      if (depth >= 2) then
+        x = [a(1) + h * (2.0_dp * vel(1) - vel_before(1)), a(2) + h * (2.0_dp * vel(2) - vel_before(2)), lam_guess]
+      else
+        x = [a(1) + h * vel(1), a(2) + h * vel(2), lam_guess]
+      end if
       known = .false.; factored = .false.
       call resid(x, r, sc)
       phi = merit(r, sc)
       do it = 1, 30
-        if (phi <= 1.0_dp) exit
+        if (phi <= 1.0_dp .and. (it > 1 .or. phi <= 1.0e-3_dp)) exit
         res%newton_iterations = res%newton_iterations + 1
         jac(1, :) = [-ml2 / h, 2.0_dp * ml2 * (x(2) - a(2)) * s * c / h, -f]
         jac(2, :) = [0.0_dp, -ml2 * s**2 / h, 1.0_dp]
@@ -270,7 +293,10 @@ contains
         d = qn - a
         p = [ml2 * d(1) / h, ml2 * d(2) * s**2 / h]                       ! D2 L_d(a, qn, h)
         e = 0.5_dp * ml2 * (d(1)**2 + d(2)**2 * s**2) / h**2 + mgl * c    ! -D3 L_d
+        vel_before = vel
         vel = d / h
+        lam_before2 = lam_before; lam_before = lam
+        depth = min(depth + 1, 3)
         lam = x(3)
         q = qn
         cycle
@@ -278,6 +304,7 @@ contains
       ! (E_d of an impact step is not computed here: impacts are timed apart)
       call pendulum_impacts(par, h, t0 + real(k, dp) * h, q, p, qn, lam, vel, res)
       if (.not. res%ok) return
+      depth = 0
     end do
 
   contains

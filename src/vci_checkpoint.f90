@@ -11,7 +11,7 @@ module vci_checkpoint
   private
 
   !> Layout version of the checkpoint (bumped whenever a field is added, removed or reordered).
-  integer, parameter, public :: VCI_CHECKPOINT_VERSION = 1
+  integer, parameter, public :: VCI_CHECKPOINT_VERSION = 2
 
   !> Scalars at the head of the record: step, t0, h, step_energy, arriving_energy, arriving_direction.
   integer, parameter :: head = 6
@@ -27,6 +27,10 @@ module vci_checkpoint
     real(dp) :: step_energy = 0.0_dp        !< E_d of the last step (NaN before the first)
     real(dp) :: arriving_energy = 0.0_dp    !< E_d of the sub-step that arrived at q (a start on a wall needs it)
     integer :: arriving_direction = 0       !< direction in which arriving_energy is known (0: unknown)
+    !> The predictor's history (version 2): velocity and multipliers of the steps before the last,
+    !> from |predictor_depth| consecutive regular steps in direction sign(predictor_depth)
+    real(dp), allocatable :: velocity_before(:), lambda_before(:), lambda_before2(:)
+    integer :: predictor_depth = 0
   contains
     procedure :: to_record
     procedure :: from_record
@@ -40,7 +44,7 @@ contains
   !> Length of the flat record of a model with n coordinates and m constraints.
   pure integer function vci_checkpoint_record_size(n, m)
     integer, intent(in) :: n, m
-    vci_checkpoint_record_size = head + 3 * n + m
+    vci_checkpoint_record_size = head + 4 * n + 3 * m + 1
   end function vci_checkpoint_record_size
 
   !> The time of the checkpoint's state.
@@ -50,13 +54,15 @@ contains
   end function time
 
   !> The checkpoint as one float64 vector [step, t0, h, step_energy, arriving_energy,
-  !> arriving_direction, q(n), p(n), velocity(n), lambda(m)] (integers are exact in float64), so that
-  !> an output writes it in one piece. The version is stored beside it by the output.
+  !> arriving_direction, q(n), p(n), velocity(n), lambda(m), then (version 2) velocity_before(n),
+  !> lambda_before(m), lambda_before2(m), predictor_depth] (integers are exact in float64), so that an
+  !> output writes it in one piece. The version is stored beside it by the output.
   pure function to_record(self) result(rec)
     class(vci_checkpoint_t), intent(in) :: self
     real(dp), allocatable :: rec(:)
     rec = [real(self%step, dp), self%t0, self%h, self%step_energy, self%arriving_energy, &
-           real(self%arriving_direction, dp), self%q, self%p, self%velocity, self%lambda]
+           real(self%arriving_direction, dp), self%q, self%p, self%velocity, self%lambda, &
+           self%velocity_before, self%lambda_before, self%lambda_before2, real(self%predictor_depth, dp)]
   end function to_record
 
   !> Rebuild from a record of `version` written by to_record for sizes n, m.
@@ -74,6 +80,10 @@ contains
     self%p = rec(head + n + 1:head + 2 * n)
     self%velocity = rec(head + 2 * n + 1:head + 3 * n)
     self%lambda = rec(head + 3 * n + 1:head + 3 * n + m)
+    self%velocity_before = rec(head + 3 * n + m + 1:head + 4 * n + m)
+    self%lambda_before = rec(head + 4 * n + m + 1:head + 4 * n + 2 * m)
+    self%lambda_before2 = rec(head + 4 * n + 2 * m + 1:head + 4 * n + 3 * m)
+    self%predictor_depth = nint(rec(head + 4 * n + 3 * m + 1))
     stat = VCI_OK
   end subroutine from_record
 
@@ -84,8 +94,10 @@ contains
     type(vci_checkpoint_t) :: cp
     cp%t0 = t; cp%h = h; cp%step = 0_i8
     cp%q = q; cp%p = p; cp%lambda = lambda
-    allocate (cp%velocity(size(q)))
-    cp%velocity = 0.0_dp
+    allocate (cp%velocity(size(q)), cp%velocity_before(size(q)), cp%lambda_before(size(lambda)), &
+              cp%lambda_before2(size(lambda)))
+    cp%velocity = 0.0_dp; cp%velocity_before = 0.0_dp; cp%lambda_before = 0.0_dp; cp%lambda_before2 = 0.0_dp
+    cp%predictor_depth = 0
     cp%arriving_direction = 0
     cp%arriving_energy = ieee_value(1.0_dp, ieee_quiet_nan)
     cp%step_energy = ieee_value(1.0_dp, ieee_quiet_nan)

@@ -26,6 +26,7 @@ module vci_hdf5_output
   use vci_observer, only: vci_observer_t, vci_run_info_t, vci_impact_t
   use vci_h5_io
   use vci_checkpoint, only: vci_checkpoint_t, vci_checkpoint_from_state, VCI_CHECKPOINT_VERSION
+  use vci_checkpoint, only: vci_checkpoint_record_size
   implicit none
   private
 
@@ -301,7 +302,7 @@ contains
     integer :: n, s, st
     row = -1
     n = self%n
-    allocate (rec(7 + 3 * n + self%m), qr(n, 1), pr(n, 1), stat=st)
+    allocate (rec(1 + vci_checkpoint_record_size(n, self%m)), qr(n, 1), pr(n, 1), stat=st)
     if (st /= 0) return
     s = VCI_OK
     call h5io_get_vector(self%g_cp, 'record', rec, s, self%message, self%path)

@@ -58,6 +58,10 @@ module vci_integrator
     real(dp) :: step_energy = 0.0_dp            !< E_d of the last step (of its last sub-step)
     ! solver memory carried from step to step (part of a checkpoint)
     real(dp), allocatable :: velocity(:)        !< forward-time velocity of the last sub-step: Newton's first guess
+    !> the predictor's history (vci_stepper's predict): the velocity and multipliers of the steps
+    !> before the last, from predictor_depth consecutive regular steps in its sign's direction
+    real(dp), allocatable :: velocity_before(:), lambda_before(:), lambda_before2(:)
+    integer :: predictor_depth = 0
     real(dp) :: arriving_energy = 0.0_dp        !< E_d of the sub-step that arrived at q
     integer :: arriving_direction = 0           !< direction in which arriving_energy is known (0: unknown)
     ! the step being taken, and what it found
@@ -190,13 +194,15 @@ contains
     self%model => model
     self%h = h
     if (allocated(self%q)) deallocate (self%q, self%p, self%lambda, self%velocity, self%q_next, self%p_next, &
-                                       self%lambda_next)
+                                       self%lambda_next, self%velocity_before, self%lambda_before, self%lambda_before2)
     allocate (self%q(model%n), self%p(model%n), self%lambda(model%m), self%velocity(model%n), &
-              self%q_next(model%n), self%p_next(model%n), self%lambda_next(model%m), stat=stat)
+              self%q_next(model%n), self%p_next(model%n), self%lambda_next(model%m), self%velocity_before(model%n), &
+              self%lambda_before(model%m), self%lambda_before2(model%m), stat=stat)
     if (stat /= 0) then
       call out_of_memory(self, model, stat); return
     end if
     self%lambda = 0.0_dp; self%q = 0.0_dp; self%p = 0.0_dp; self%velocity = 0.0_dp
+    call forget_history(self)
     stat = VCI_OK
   end subroutine bind_sizes
 
@@ -411,6 +417,7 @@ contains
     self%q = q1
     self%lambda = 0.0_dp
     self%velocity = (q1 - q0) / self%h
+    call forget_history(self)
     self%arriving_energy = self%step_energy; self%arriving_direction = 1
     self%initialized = .true.
     call finish(self, VCI_OK, stat)
@@ -427,6 +434,7 @@ contains
     self%q = q0; self%p = p0
     self%lambda = 0.0_dp
     self%velocity = 0.0_dp
+    call forget_history(self)
     self%step_energy = ieee_value(1.0_dp, ieee_quiet_nan)
     self%arriving_direction = 0
     self%initialized = .true.
@@ -551,6 +559,7 @@ contains
     end if
     if (self%arriving_direction /= direction) self%arriving_energy = ieee_value(1.0_dp, ieee_quiet_nan)
     call self%stepper%advance(direction, self%h, t, self%q, self%p, self%lambda, self%velocity, &
+                              self%velocity_before, self%lambda_before, self%lambda_before2, self%predictor_depth, &
                               self%arriving_energy, self%q_next, self%p_next, self%lambda_next, self%step_energy, &
                               self%impacts, self%n_impacts, stat)
     if (stat /= VCI_OK) then
@@ -660,9 +669,20 @@ contains
     allocate (cp%p, source=self%p)
     allocate (cp%lambda, source=self%lambda)
     allocate (cp%velocity, source=self%velocity)
+    allocate (cp%velocity_before, source=self%velocity_before)
+    allocate (cp%lambda_before, source=self%lambda_before)
+    allocate (cp%lambda_before2, source=self%lambda_before2)
+    cp%predictor_depth = self%predictor_depth
     cp%step_energy = self%step_energy
     cp%arriving_energy = self%arriving_energy; cp%arriving_direction = self%arriving_direction
   end function checkpoint
+
+  !> No predictor history: the next step starts from q + h velocity and the last multipliers.
+  subroutine forget_history(self)
+    type(vci_integrator_t), intent(inout) :: self
+    self%velocity_before = 0.0_dp; self%lambda_before = 0.0_dp; self%lambda_before2 = 0.0_dp
+    self%predictor_depth = 0
+  end subroutine forget_history
 
   !> Continue from a checkpoint taken with the same model and step length.
   subroutine restore(self, cp, stat)
@@ -685,6 +705,15 @@ contains
     if (stat /= VCI_OK) return
     self%t0 = cp%t0; self%k = cp%step
     self%q = cp%q; self%p = cp%p; self%lambda = cp%lambda; self%velocity = cp%velocity
+    call forget_history(self)
+    if (allocated(cp%velocity_before) .and. allocated(cp%lambda_before) .and. allocated(cp%lambda_before2)) then
+      if (size(cp%velocity_before) == self%model%n .and. size(cp%lambda_before) == self%model%m .and. &
+          size(cp%lambda_before2) == self%model%m) then
+        self%velocity_before = cp%velocity_before
+        self%lambda_before = cp%lambda_before; self%lambda_before2 = cp%lambda_before2
+        self%predictor_depth = cp%predictor_depth
+      end if
+    end if
     self%step_energy = cp%step_energy
     self%arriving_energy = cp%arriving_energy; self%arriving_direction = cp%arriving_direction
     self%initialized = .true.

@@ -31,6 +31,9 @@ module vci_newton
   integer, parameter, public :: NEWTON_EVALUATION = 4      !< the residual or Jacobian reported failure
   integer, parameter, public :: NEWTON_NONFINITE = 5       !< residual, scale or Jacobian not finite (overflow)
 
+  !> A starting merit at or below this is round-off: the start is accepted without a Newton step.
+  real(dp), parameter :: start_roundoff = 1.0e-3_dp
+
   !> Systems of at least this many unknowns are "large": they reuse the Newton matrix's factors across
   !> iterations and solves (simplified Newton, below) and schemes size their rows in O(n) per residual.
   integer, parameter, public :: vci_large_system = 16
@@ -201,25 +204,25 @@ contains
         ! any decrease is taken on the way to round-off
         if (.not. (phit <= self%reuse_contraction * phi .or. (phi <= 1.0_dp .and. phit < phi))) exit
         res%iterations = res%iterations + 1
-        x = self%xt(1:n)
-        self%r(1:n) = self%rt(1:n)
-        self%sc(1:n) = self%sct(1:n)
-        phi = phit
-        res%scaled_residual = phi
+        call accept_trial(self, n, x, phit, phi, res)
       end do
     end if
 
     do it = 1, self%max_iterations
-      if (phi <= 1.0_dp) exit
+      ! a start within the tolerance is kept only when it is at about round-off (a predictor exact
+      ! for the motion); otherwise one Newton step and the polish take it there, as from any start
+      if (phi <= 1.0_dp .and. (it > 1 .or. factored .or. phi <= start_roundoff)) exit
       res%iterations = res%iterations + 1
       call sys%jacobian(x, self%r(1:n), self%jac(1:n, 1:n), stat)
+      if (stat /= VCI_OK .and. phi <= 1.0_dp .and. .not. sys%unrecoverable) exit   ! (optional step: the start stands)
       if (stat /= VCI_OK) then
         call fail_eval(res, stat); return
       end if
-      if (.not. all_finite(self%jac(1:n, 1:n))) then
-        call fail_nonfinite(res); return
-      end if
+      ! (a NaN/Inf in the Jacobian reaches the equilibrated matrix, which newton_direction checks)
       call newton_direction(self, n, factored, res)
+      if (res%reason /= NEWTON_CONVERGED .and. phi <= 1.0_dp) then
+        res%reason = NEWTON_CONVERGED; factored = .false.; exit
+      end if
       if (res%reason == NEWTON_NONFINITE) then
         res%status = VCI_ERR_NONFINITE; return
       end if
@@ -250,6 +253,7 @@ contains
         step = 0.5_dp * step
       end do
       if (ib > self%max_backtracks) then
+        if (phi <= 1.0_dp) exit
         ! a callback that failed (or gave NaN) at the trial points is the cause, not the descent
         if (trial_stat /= VCI_OK) then
           call fail_eval(res, trial_stat); return
@@ -258,11 +262,7 @@ contains
         res%status = VCI_ERR_NEWTON
         return
       end if
-      x = self%xt(1:n)
-      self%r(1:n) = self%rt(1:n)
-      self%sc(1:n) = self%sct(1:n)
-      phi = phit
-      res%scaled_residual = phi
+      call accept_trial(self, n, x, phit, phi, res)
     end do
 
     if (phi > 1.0_dp) then
@@ -272,6 +272,21 @@ contains
     end if
     if (self%polish .and. factored .and. phi > 0.0_dp) call polish_step(self, sys, x, n, phi, res)
   end subroutine solve
+
+  !> The trial point (xt, its residual rt and scales sct, merit phit) becomes the iterate.
+  subroutine accept_trial(self, n, x, phit, phi, res)
+    class(vci_newton_t), intent(inout) :: self
+    integer, intent(in) :: n
+    real(dp), intent(inout) :: x(:)
+    real(dp), intent(in) :: phit
+    real(dp), intent(out) :: phi
+    type(vci_newton_result_t), intent(inout) :: res
+    x = self%xt(1:n)
+    self%r(1:n) = self%rt(1:n)
+    self%sc(1:n) = self%sct(1:n)
+    phi = phit
+    res%scaled_residual = phi
+  end subroutine accept_trial
 
   !> Solve the small dense system a x = b in place (b becomes x), with the solver's workspace.
   !> info /= 0: singular even for least squares, or a or b not finite (LAPACK is then not called).

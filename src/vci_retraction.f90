@@ -130,12 +130,21 @@ contains
     real(dp), intent(in) :: q(:), v(:), h
     real(dp), intent(out) :: hess(:, :)
     integer, intent(inout) :: stat
-    integer :: s
     if (.not. self%work%has_hessians) then
       hess = 0.0_dp
       call self%not_provided(stat); return
     end if
     call point_velocity(self, q, v, h)
+    call mixed_block(self, h, hess, stat)
+  end subroutine mixed_hessian
+
+  !> D2 D1 L_d of the rule from L's Hessian blocks at the point and velocity already set (pt, w).
+  subroutine mixed_block(self, h, hess, stat)
+    class(vci_retraction_model_t), intent(inout) :: self
+    real(dp), intent(in) :: h
+    real(dp), intent(out) :: hess(:, :)
+    integer, intent(inout) :: stat
+    integer :: s
     call lagrangian_hessians(self%lag, self%work, self%pt, self%w, self%lqq, self%lqv, self%lvv, s)
     if (s /= VCI_OK) then
       stat = failure_code(self, s); return
@@ -145,7 +154,7 @@ contains
     else
       hess = 0.25_dp * h * self%lqq + 0.5_dp * (self%lqv - transpose(self%lqv)) - self%lvv / h
     end if
-  end subroutine mixed_hessian
+  end subroutine mixed_block
 
   subroutine constraint_forms(self, q, omega, stat)
     class(vci_retraction_model_t), intent(inout) :: self
@@ -257,14 +266,10 @@ contains
       call self%not_provided(stat); return
     end if
     call segment_inc(self, a, d, h, dir)
-    call lagrangian_hessians(self%lag, self%work, self%pt, self%w, self%lqq, self%lqv, self%lvv, s)
+    s = VCI_OK
+    call mixed_block(self, h, jac, s)
     if (s /= VCI_OK) then
-      stat = failure_code(self, s); return
-    end if
-    if (self%rule == RETRACTION_LEFT) then
-      jac = self%lqv - self%lvv / h
-    else
-      jac = 0.25_dp * h * self%lqq + 0.5_dp * (self%lqv - transpose(self%lqv)) - self%lvv / h
+      stat = s; return
     end if
     if (dir < 0) jac = -transpose(jac)
   end subroutine jacobian_inc

@@ -61,6 +61,16 @@ module vci_scheme
     procedure(out_vec_iface), deferred :: momentum_out
     procedure(out_scalar_iface), deferred :: energy_out
     procedure(hamiltonian_iface), deferred :: hamiltonian
+    procedure :: pose_substep
+    procedure :: pose_stage1
+    procedure :: pose_stage2
+    procedure :: pose_impulse
+    procedure :: pose_pair
+    procedure :: set_direction
+    procedure :: set_wall_normal
+    procedure :: configure_impacts
+    procedure :: use_derivatives
+    procedure :: clear_failure
     procedure :: needs_pair_solve
     procedure :: endpoint_direction
     procedure :: forget_jacobian
@@ -183,6 +193,95 @@ contains
     self%omega = 0.0_dp
     self%a = 0.0_dp; self%pa = 0.0_dp; self%grad = 0.0_dp; self%gscale = 0.0_dp
   end subroutine setup_common
+
+  !> The regular sub-step from (a, pa) of length tau (forms Omega(a) evaluated when m > 0).
+  subroutine pose_substep(self, a, pa, tau, stat)
+    class(vci_scheme_t), intent(inout) :: self
+    real(dp), intent(in) :: a(:), pa(:), tau
+    integer, intent(out) :: stat
+    self%kind = KIND_SUBSTEP
+    self%a(:) = a; self%pa(:) = pa; self%tau = tau   ! (:): no reallocation check on the hot path
+    stat = VCI_OK
+    if (self%m > 0) call self%eval_forms(a, self%omega, stat)
+  end subroutine pose_substep
+
+  !> Stage 1 towards wall `gap` (gradient grad_g at a) from (a, pa) over at most tau.
+  subroutine pose_stage1(self, a, pa, tau, gap, grad_g, stat)
+    class(vci_scheme_t), intent(inout) :: self
+    real(dp), intent(in) :: a(:), pa(:), tau, grad_g(:)
+    integer, intent(in) :: gap
+    integer, intent(out) :: stat
+    self%kind = KIND_STAGE1
+    self%a = a; self%pa = pa; self%tau = tau; self%gap = gap
+    self%gscale = abs(grad_g)
+    stat = VCI_OK
+    if (self%m > 0) call self%eval_forms(a, self%omega, stat)
+  end subroutine pose_stage1
+
+  !> Stage 2 at wall `gap` from (q_wall, p_minus) over tau with the arriving energy e_minus (the wall
+  !> normal set by set_wall_normal, the forms by the last pose_substep at q_wall).
+  subroutine pose_stage2(self, q_wall, p_minus, tau, gap, e_minus)
+    class(vci_scheme_t), intent(inout) :: self
+    real(dp), intent(in) :: q_wall(:), p_minus(:), tau, e_minus
+    integer, intent(in) :: gap
+    self%kind = KIND_STAGE2
+    self%a = q_wall; self%pa = p_minus; self%tau = tau; self%gap = gap
+    self%e_minus = e_minus
+  end subroutine pose_stage2
+
+  !> The Hamiltonian impact's [nu, mu] system at (q_wall, p_minus) with H(q_wall, p_minus) = e_minus.
+  subroutine pose_impulse(self, q_wall, p_minus, e_minus)
+    class(vci_scheme_t), intent(inout) :: self
+    real(dp), intent(in) :: q_wall(:), p_minus(:), e_minus
+    self%kind = KIND_IMPULSE
+    self%a = q_wall; self%pa = p_minus; self%e_minus = e_minus
+  end subroutine pose_impulse
+
+  !> The interior stages of the segment from a to the given b of length tau (the initial pair).
+  subroutine pose_pair(self, a, b, tau)
+    class(vci_scheme_t), intent(inout) :: self
+    real(dp), intent(in) :: a(:), b(:), tau
+    self%kind = KIND_PAIR
+    self%a = a; self%b_target = b; self%tau = tau
+  end subroutine pose_pair
+
+  !> Time direction of the sub-steps posed next: +1 forward, -1 backward.
+  subroutine set_direction(self, dir)
+    class(vci_scheme_t), intent(inout) :: self
+    integer, intent(in) :: dir
+    self%dir = dir
+  end subroutine set_direction
+
+  !> The gradient of the wall being reflected from (stage 2, the impulse system).
+  subroutine set_wall_normal(self, grad_g)
+    class(vci_scheme_t), intent(inout) :: self
+    real(dp), intent(in) :: grad_g(:)
+    self%grad = grad_g
+  end subroutine set_wall_normal
+
+  !> The impact energy condition and Newton's relative tolerance (once per change of settings).
+  subroutine configure_impacts(self, impact_energy, rtol)
+    class(vci_scheme_t), intent(inout) :: self
+    integer, intent(in) :: impact_energy
+    real(dp), intent(in) :: rtol
+    self%impact_energy = impact_energy
+    self%rtol = rtol
+  end subroutine configure_impacts
+
+  !> Which optional model derivatives to use: the gap gradients (else differenced); the mixed
+  !> Hessian of a closed-form L_d matters only to schemes that have one (they override).
+  subroutine use_derivatives(self, mixed_hessian, gap_gradients)
+    class(vci_scheme_t), intent(inout) :: self
+    logical, intent(in), optional :: mixed_hessian, gap_gradients
+    if (present(gap_gradients)) self%has_gap_gradients = gap_gradients
+  end subroutine use_derivatives
+
+  !> Forget which callback failed last (a new solve starts).
+  subroutine clear_failure(self)
+    class(vci_scheme_t), intent(inout) :: self
+    self%failed_callback = ''
+    self%failed_stat = 0
+  end subroutine clear_failure
 
   !> Does starting from a pair (q0, q1) need a solve for interior stages? (no, for closed-form L_d)
   pure logical function needs_pair_solve(self)

@@ -12,9 +12,8 @@ module vci_stepper
   use vci_status
   use vci_newton, only: vci_newton_t, vci_newton_result_t, NEWTON_MAX_ITERATIONS, NEWTON_NO_DESCENT, &
                         NEWTON_SINGULAR, NEWTON_EVALUATION, NEWTON_NONFINITE
-  use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_STAGE1, KIND_STAGE2, KIND_IMPULSE, KIND_PAIR, &
+  use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_STAGE1, KIND_STAGE2, KIND_IMPULSE, &
                         VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN
-  use vci_scheme_discrete, only: vci_scheme_discrete_t
   use vci_observer, only: vci_impact_t
   implicit none
   private
@@ -131,8 +130,7 @@ contains
     self%newton%rtol = settings%rtol
     self%newton%max_iterations = settings%max_iterations
     if (.not. allocated(self%sys)) return
-    self%sys%impact_energy = settings%impact_energy
-    self%sys%rtol = settings%rtol
+    call self%sys%configure_impacts(settings%impact_energy, settings%rtol)
   end subroutine configure
 
   pure function current_settings(self) result(settings)
@@ -175,26 +173,25 @@ contains
   subroutine use_model_derivatives(self, mixed_hessian, gap_gradients)
     class(vci_stepper_t), intent(inout) :: self
     logical, intent(in), optional :: mixed_hessian, gap_gradients
-    if (present(gap_gradients)) self%sys%has_gap_gradients = gap_gradients
-    if (present(mixed_hessian)) then
-      select type (sch => self%sys)
-      type is (vci_scheme_discrete_t)
-        sch%has_hessian = mixed_hessian
-      end select
-    end if
+    call self%sys%use_derivatives(mixed_hessian, gap_gradients)
   end subroutine use_model_derivatives
 
   !> Advance from (q, p) by one step of length h in direction dir (+1/-1).
-  !> vel: forward-time velocity estimate (initial guesses; updated). e_arrive: E_d of the sub-step
-  !> that arrived at q in this direction (needed only when q is on a wall and the motion goes into it).
+  !> vel: forward-time velocity of the last sub-step; vel_before, lambda_before, lambda_before2: the
+  !> velocity and multipliers of the steps before it; depth: how many consecutive regular steps in
+  !> direction sign(depth) they come from (the predictor's history, updated; see predict).
+  !> e_arrive: E_d of the sub-step that arrived at q in this direction (needed only when q is on a
+  !> wall and the motion goes into it).
   !> On success qn, pn, lambdan hold the new state, e_step the E_d of the step's last sub-step and
   !> impacts(1:n_impacts) the impacts of the step (the records grow on demand, up to
   !> settings%max_impacts_per_step of them, which may be huge).
-  subroutine advance(self, dir, h, t, q, p, lambda, vel, e_arrive, qn, pn, lambdan, e_step, impacts, n_impacts, stat)
+  subroutine advance(self, dir, h, t, q, p, lambda, vel, vel_before, lambda_before, lambda_before2, depth, &
+                     e_arrive, qn, pn, lambdan, e_step, impacts, n_impacts, stat)
     class(vci_stepper_t), intent(inout) :: self
     integer, intent(in) :: dir
     real(dp), intent(in) :: h, t, q(:), p(:), lambda(:)
-    real(dp), intent(inout) :: vel(:), e_arrive
+    real(dp), intent(inout) :: vel(:), vel_before(:), lambda_before(:), lambda_before2(:), e_arrive
+    integer, intent(inout) :: depth
     real(dp), intent(out) :: qn(:), pn(:), lambdan(:), e_step
     type(vci_impact_t), allocatable, intent(inout) :: impacts(:)
     integer, intent(out) :: n_impacts
@@ -204,14 +201,13 @@ contains
     logical :: landed
 
     n = self%n; m = self%m
-    self%sys%dir = dir
+    call self%sys%set_direction(dir)
     n_impacts = 0
     self%cause = ''
     self%q_start = q; self%p_start = p; tau = h; consumed = 0.0_dp
     ! the regular step, from the extrapolated guess
-    self%q_guess = q + real(dir, dp) * h * vel
-    call self%sys%put_endpoint(self%x, q, self%q_guess)
-    call self%sys%put_multipliers(self%x, lambda)
+    if (depth * dir < 0) depth = 0           ! the history runs the other way
+    call predict(self, dir, h, q, lambda, vel, vel_before, lambda_before, lambda_before2, abs(depth))
     call substep(self, self%q_start, self%p_start, tau, stat)
     if (stat /= VCI_OK) return
 
@@ -298,6 +294,7 @@ contains
           call self%sys%get_multipliers(self%x_stage1, lambdan)
           qn = self%q_wall; pn = self%p_arrive; e_step = e_minus
           vel = real(dir, dp) * (self%q_wall - q) / h
+          depth = 0
           e_arrive = e_minus
           landed = .true.
           exit
@@ -333,9 +330,48 @@ contains
     if (stat /= VCI_OK) then
       call set_cause(self, 'momentum of the new state'); return
     end if
+    if (n_impacts == 0) then
+      ! a regular step: it extends the predictor's history
+      vel_before = vel
+      if (self%m > 0) then
+        lambda_before2 = lambda_before; lambda_before = lambda
+      end if
+      depth = dir * min(abs(depth) + 1, 3)
+    else
+      depth = 0                              ! an impact breaks the smooth history
+    end if
     vel = real(dir, dp) * (qn - self%q_start) / tau
     e_arrive = e_step
   end subroutine advance
+
+  !> Newton's start for the regular step from q: after `depth` consecutive regular steps the
+  !> configuration and multipliers are extrapolated from the last ones (q quadratic from depth 2:
+  !> 3 q_k - 3 q_{k-1} + q_{k-2}; lambda linear at depth 2, quadratic at 3); before, q + h v and the
+  !> last multipliers. Exact for the quadratic free flight of uniform gravity (no iteration then),
+  !> else O(h^3) from the solution. Schemes with interior stages (Lobatto) keep q + h v: their stage
+  !> values start on the chord to the guess, so a better endpoint alone is not a better start.
+  subroutine predict(self, dir, h, q, lambda, vel, vel_before, lambda_before, lambda_before2, depth)
+    type(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: dir, depth
+    real(dp), intent(in) :: h, q(:), lambda(:), vel(:), vel_before(:), lambda_before(:), lambda_before2(:)
+    if (depth >= 2 .and. .not. self%sys%needs_pair_solve()) then
+      self%q_guess = q + real(dir, dp) * h * (2.0_dp * vel - vel_before)
+    else
+      self%q_guess = q + real(dir, dp) * h * vel
+    end if
+    call self%sys%put_endpoint(self%x, q, self%q_guess)
+    if (self%m == 0) then
+      call self%sys%put_multipliers(self%x, lambda)
+    else if (depth >= 3) then
+      self%lambda_start = 3.0_dp * (lambda - lambda_before) + lambda_before2
+      call self%sys%put_multipliers(self%x, self%lambda_start)
+    else if (depth == 2) then
+      self%lambda_start = 2.0_dp * lambda - lambda_before
+      call self%sys%put_multipliers(self%x, self%lambda_start)
+    else
+      call self%sys%put_multipliers(self%x, lambda)
+    end if
+  end subroutine predict
 
   !> Is configuration a (the sub-step's start) on wall j, to solver tolerance?
   logical function on_wall(self, j)
@@ -354,13 +390,9 @@ contains
     integer, intent(out) :: stat
     integer :: nx
     nx = self%nsub
-    self%sys%kind = KIND_SUBSTEP
-    self%sys%a = a; self%sys%pa = pa; self%sys%tau = tau
-    if (self%m > 0) then
-      call self%sys%eval_forms(a, self%sys%omega, stat)
-      if (stat /= VCI_OK) then
-        call set_cause(self, 'constraint forms'); return
-      end if
+    call self%sys%pose_substep(a, pa, tau, stat)
+    if (stat /= VCI_OK) then
+      call set_cause(self, 'constraint forms'); return
     end if
     call run_newton(self, nx, 'regular step', stat)
   end subroutine substep
@@ -510,17 +542,10 @@ contains
     real(dp), intent(in) :: tau, alpha
     character(len=*), intent(in) :: what
     integer, intent(out) :: stat
-    integer :: m
-    m = self%m
     call self%sys%put_extra(self%x, KIND_STAGE1, alpha)
-    self%sys%kind = KIND_STAGE1
-    self%sys%a = self%q_start; self%sys%pa = self%p_start; self%sys%tau = tau; self%sys%gap = j
-    self%sys%gscale = abs(self%gap_grads(:, j))
-    if (m > 0) then
-      call self%sys%eval_forms(self%q_start, self%sys%omega, stat)
-      if (stat /= VCI_OK) then
-        call set_cause(self, 'constraint forms'); return
-      end if
+    call self%sys%pose_stage1(self%q_start, self%p_start, tau, j, self%gap_grads(:, j), stat)
+    if (stat /= VCI_OK) then
+      call set_cause(self, 'constraint forms'); return
     end if
     call run_newton(self, self%sys%unknowns(KIND_STAGE1), what, stat)
   end subroutine solve_wall
@@ -541,7 +566,7 @@ contains
     if (stat /= VCI_OK) then
       call set_cause(self, 'gap gradients at the wall'); return
     end if
-    self%sys%grad = self%gap_grads(:, j)
+    call self%sys%set_wall_normal(self%gap_grads(:, j))
     ! the motion with no impulse, and its sensitivity d = d(q_next, lambda)/d mu
     self%q_guess = self%q_wall + tau2 * self%chord_velocity
     call self%sys%put_endpoint(self%x, self%q_wall, self%q_guess)
@@ -580,8 +605,7 @@ contains
       self%x_saved(1:nx0) = self%x(1:nx0)
       self%x(1:m) = 0.0_dp                       ! the impulse system's unknowns: [nu(m), mu]
       call self%sys%put_extra(self%x, KIND_IMPULSE, mu0)
-      self%sys%kind = KIND_IMPULSE
-      self%sys%a = self%q_wall; self%sys%pa = self%p_arrive; self%sys%e_minus = e_minus
+      call self%sys%pose_impulse(self%q_wall, self%p_arrive, e_minus)
       if (m > 0) then
         ! start nu where the outgoing velocity satisfies the constraints for the estimated mu
         ! (one linear solve: exact when H is quadratic in p)
@@ -609,9 +633,7 @@ contains
         return
       end if
     else if (mu0 /= 0.0_dp) then
-      self%sys%kind = KIND_STAGE2
-      self%sys%a = self%q_wall; self%sys%pa = self%p_arrive; self%sys%tau = tau2; self%sys%gap = j
-      self%sys%e_minus = e_minus
+      call self%sys%pose_stage2(self%q_wall, self%p_arrive, tau2, j, e_minus)
       call run_newton(self, self%sys%unknowns(KIND_STAGE2), trim(what), stat)
       if (stat /= VCI_OK) return
       if (.not. reflected(self, self%sys%get_extra(self%x, KIND_STAGE2), tau2, stat)) then
@@ -696,12 +718,12 @@ contains
     integer :: nx
     nx = self%sys%unknowns(KIND_STAGE2)
     self%x_saved(1:nx) = self%x(1:nx)
-    self%sys%dir = -dir
+    call self%sys%set_direction(-dir)
     call self%sys%put_endpoint(self%x, self%q_start, self%q_start)
     call self%sys%put_multipliers(self%x, self%zero_lambda)
     call substep(self, self%q_start, self%p_start, h, stat)
     if (stat == VCI_OK) call self%sys%energy_out(self%x, self%q_start, h, e, stat)
-    self%sys%dir = dir
+    call self%sys%set_direction(dir)
     self%x(1:nx) = self%x_saved(1:nx)
   end subroutine arriving_energy
 
@@ -712,13 +734,12 @@ contains
     real(dp), intent(in) :: q0(:), q1(:), h
     real(dp), intent(out) :: p1(:), e
     integer, intent(out) :: stat
-    self%sys%dir = 1
+    call self%sys%set_direction(1)
     self%cause = ''
     call self%sys%put_endpoint(self%x, q0, q1)
     call self%sys%put_multipliers(self%x, self%zero_lambda)
     if (self%sys%needs_pair_solve()) then
-      self%sys%kind = KIND_PAIR
-      self%sys%a = q0; self%sys%b_target = q1; self%sys%tau = h
+      call self%sys%pose_pair(q0, q1, h)
       call run_newton(self, self%nsub, 'interior stages of the initial pair', stat)
       if (stat /= VCI_OK) return
     end if
@@ -738,8 +759,7 @@ contains
     character(len=*), intent(in) :: what
     integer, intent(out) :: stat
     type(vci_newton_result_t) :: res
-    self%sys%failed_callback = ''
-    self%sys%failed_stat = 0
+    call self%sys%clear_failure()
     call self%sys%forget_jacobian()
     call self%newton%solve(self%sys, self%x(1:nx), res)
     self%stats%newton_solves = self%stats%newton_solves + 1

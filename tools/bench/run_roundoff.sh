@@ -45,5 +45,19 @@ mkdir -p "$(dirname "$OUT")"
     echo
     "$EXE" --long 10000000 1e-3 discrete 2>/dev/null | grep -v '^Note'
   fi
+  echo
+  echo "## Targets of issue 14 (item 4)"
+  echo
+  echo "Target: the 3-s error within 1e-11 for h = 1e-2 ... 1e-4, and max|H - H0| of the 1e7-step run growing"
+  echo "no faster than t^0.5. Read off the tables above: the continuous L with the midpoint scheme meets the"
+  echo "first at h = 1e-2 and 1e-3 and misses it narrowly at h = 1e-4 (the error after three impacts, each of"
+  echo "which amplifies it about tenfold); the hand-derived L_d misses it from h = 1e-2 on, by a factor that"
+  echo "grows about as 1/h^2: a user's L_d(q, v, h) receives positions and differences them itself, so each"
+  echo "step's momentum carries eps |q| / h and the errors add up systematically (slope 2 in the position error"
+  echo "against the number of steps); solving for increments and compensating positions, as the continuous"
+  echo "schemes do, needs an L_d that takes the increment, which the discrete model interface does not offer."
+  echo "The energy slopes above are both above 0.5: not met. For the continuous scheme the remaining drift is"
+  echo "not explained by this benchmark (a candidate: the momentum after each impact is a position"
+  echo "difference over the short remaining sub-step (1 - alpha) h, rounded at every one of the ~10^4 impacts)."
 } >"$OUT"
 cat "$OUT"
