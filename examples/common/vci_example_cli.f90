@@ -155,7 +155,7 @@ contains
     ! --output FILE without an extension writes FILE plus the default extension; read it back the same way
     if (allocated(opts%from)) then
       inquire (file=opts%from, exist=exists)
-      if (.not. exists .and. index(opts%from, '.') == 0) opts%from = opts%from//default_extension
+      if (.not. exists .and. .not. has_extension(opts%from)) opts%from = opts%from//default_extension
     end if
   end subroutine parse_options
 
@@ -217,7 +217,7 @@ contains
       if (.not. allocated(opts%output)) opts%output = name//merge('_backward', '         ', opts%backward)
       opts%output = trim(opts%output)
       ! a name without an extension gets the default one, unless it names an existing file
-      if (index(opts%output, '.') == 0 .and. c_path_kind(opts%output//c_null_char) == 0) &
+      if (.not. has_extension(opts%output) .and. c_path_kind(opts%output//c_null_char) == 0) &
         opts%output = opts%output//default_extension
       if (c_path_kind(opts%output//c_null_char) == 2) &
         call die(name//': --output '//opts%output//' is not a regular file (a device or a directory)')
@@ -472,6 +472,12 @@ contains
     allocate (character(len=l) :: s)
     call get_command_argument(i, s)
   end function get_arg
+
+  !> Does the last component of path have an extension (a dot after its last '/')? `./run` has not.
+  pure logical function has_extension(path)
+    character(len=*), intent(in) :: path
+    has_extension = index(path, '.', back=.true.) > index(path, '/', back=.true.) + 1
+  end function has_extension
 
   !> Steps of length h from t_from to t_to in direction dir (0 when t_to is behind); more than 2^53
   !> is refused (step indices stay exact in the float64 time grid).

@@ -63,5 +63,11 @@ for flags in "--h 1e-2 --t-final 0.05" "--h 0.01 --t-final +5E-2" "--h 1.0d-2 --
   "$bin/ellipse" $flags --no-output --quiet > out.txt 2> err.txt
   grep -q '^status: ok' out.txt || { echo "FAIL: good line refused: ellipse $flags: $(cat err.txt)"; fail=1; }
 done
+# a name without an extension gets the default one, also when a folder on its path has a dot
+rm -f ./run.h5 ./run.csv ./run
+"$bin/ellipse" --h 1e-2 --t-final 0.05 --quiet --output ./run > out.txt 2> err.txt
+if ! grep -q '^status: ok' out.txt || ! { [ -f ./run.h5 ] || [ -f ./run.csv ]; } || [ -e ./run ]; then
+  echo "FAIL: --output ./run did not write ./run.h5 (or ./run.csv): $(ls) $(cat err.txt)"; fail=1
+fi
 [ $fail -eq 0 ] && echo "all bad command lines refused with a message; good ones run"
 exit $fail
