@@ -233,7 +233,7 @@ contains
         select type (sch)
         type is (vci_scheme_discrete_t)
           call sch%setup(self%retraction, stat)
-          sch%has_hessian = self%lag_hessians
+          call sch%use_derivatives(mixed_hessian=self%lag_hessians)
         end select
       end if
       if (stat /= 0) stat = VCI_ERR_MEMORY
