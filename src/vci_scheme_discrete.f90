@@ -102,6 +102,7 @@ contains
     self%jac_known = .false.
     self%have_end = .false.
     self%start_key = huge(1.0_dp); self%start_lo = 0.0_dp
+    self%end_key = huge(1.0_dp); self%end_lo = 0.0_dp   ! read (before have_end is known) by get_endpoint
   end subroutine setup
 
   pure integer function unknowns(self, kind)
