@@ -11,7 +11,7 @@ module vci_checkpoint
   private
 
   !> Layout version of the checkpoint (bumped whenever a field is added, removed or reordered).
-  integer, parameter, public :: VCI_CHECKPOINT_VERSION = 2
+  integer, parameter, public :: VCI_CHECKPOINT_VERSION = 3
 
   !> Scalars at the head of the record: step, t0, h, step_energy, arriving_energy, arriving_direction.
   integer, parameter :: head = 6
@@ -31,6 +31,9 @@ module vci_checkpoint
     !> from |predictor_depth| consecutive regular steps in direction sign(predictor_depth)
     real(dp), allocatable :: velocity_before(:), lambda_before(:), lambda_before2(:)
     integer :: predictor_depth = 0
+    !> (version 3) what compensated summation carries beyond q's rounding (continuous models'
+    !> left/midpoint; zero otherwise)
+    real(dp), allocatable :: position_lo(:)
   contains
     procedure :: to_record
     procedure :: from_record
@@ -44,7 +47,7 @@ contains
   !> Length of the flat record of a model with n coordinates and m constraints.
   pure integer function vci_checkpoint_record_size(n, m)
     integer, intent(in) :: n, m
-    vci_checkpoint_record_size = head + 4 * n + 3 * m + 1
+    vci_checkpoint_record_size = head + 5 * n + 3 * m + 1
   end function vci_checkpoint_record_size
 
   !> The time of the checkpoint's state.
@@ -55,14 +58,14 @@ contains
 
   !> The checkpoint as one float64 vector [step, t0, h, step_energy, arriving_energy,
   !> arriving_direction, q(n), p(n), velocity(n), lambda(m), then (version 2) velocity_before(n),
-  !> lambda_before(m), lambda_before2(m), predictor_depth] (integers are exact in float64), so that an
-  !> output writes it in one piece. The version is stored beside it by the output.
+  !> lambda_before(m), lambda_before2(m), predictor_depth, then (version 3) position_lo(n)] (integers
+  !> are exact in float64), so that an output writes it in one piece. The version is stored beside it by the output.
   pure function to_record(self) result(rec)
     class(vci_checkpoint_t), intent(in) :: self
     real(dp), allocatable :: rec(:)
     rec = [real(self%step, dp), self%t0, self%h, self%step_energy, self%arriving_energy, &
            real(self%arriving_direction, dp), self%q, self%p, self%velocity, self%lambda, &
-           self%velocity_before, self%lambda_before, self%lambda_before2, real(self%predictor_depth, dp)]
+           self%velocity_before, self%lambda_before, self%lambda_before2, real(self%predictor_depth, dp), self%position_lo]
   end function to_record
 
   !> Rebuild from a record of `version` written by to_record for sizes n, m.
@@ -84,6 +87,7 @@ contains
     self%lambda_before = rec(head + 4 * n + m + 1:head + 4 * n + 2 * m)
     self%lambda_before2 = rec(head + 4 * n + 2 * m + 1:head + 4 * n + 3 * m)
     self%predictor_depth = nint(rec(head + 4 * n + 3 * m + 1))
+    self%position_lo = rec(head + 4 * n + 3 * m + 2:head + 5 * n + 3 * m + 1)
     stat = VCI_OK
   end subroutine from_record
 
@@ -98,6 +102,8 @@ contains
               cp%lambda_before2(size(lambda)))
     cp%velocity = 0.0_dp; cp%velocity_before = 0.0_dp; cp%lambda_before = 0.0_dp; cp%lambda_before2 = 0.0_dp
     cp%predictor_depth = 0
+    allocate (cp%position_lo(size(q)))
+    cp%position_lo = 0.0_dp
     cp%arriving_direction = 0
     cp%arriving_energy = ieee_value(1.0_dp, ieee_quiet_nan)
     cp%step_energy = ieee_value(1.0_dp, ieee_quiet_nan)

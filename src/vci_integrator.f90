@@ -673,6 +673,8 @@ contains
     allocate (cp%lambda_before, source=self%lambda_before)
     allocate (cp%lambda_before2, source=self%lambda_before2)
     cp%predictor_depth = self%predictor_depth
+    allocate (cp%position_lo(size(self%q)))
+    call self%stepper%position_carry(self%q, cp%position_lo)
     cp%step_energy = self%step_energy
     cp%arriving_energy = self%arriving_energy; cp%arriving_direction = self%arriving_direction
   end function checkpoint
@@ -713,6 +715,9 @@ contains
         self%lambda_before = cp%lambda_before; self%lambda_before2 = cp%lambda_before2
         self%predictor_depth = cp%predictor_depth
       end if
+    end if
+    if (allocated(cp%position_lo)) then
+      if (size(cp%position_lo) == self%model%n) call self%stepper%restore_position_carry(self%q, cp%position_lo)
     end if
     self%step_energy = cp%step_energy
     self%arriving_energy = cp%arriving_energy; self%arriving_direction = cp%arriving_direction

@@ -71,6 +71,8 @@ module vci_scheme
     procedure :: configure_impacts
     procedure :: use_derivatives
     procedure :: clear_failure
+    procedure :: position_carry
+    procedure :: restore_position_carry
     procedure :: needs_pair_solve
     procedure :: endpoint_direction
     procedure :: forget_jacobian
@@ -275,6 +277,21 @@ contains
     logical, intent(in), optional :: mixed_hessian, gap_gradients
     if (present(gap_gradients)) self%has_gap_gradients = gap_gradients
   end subroutine use_derivatives
+
+  !> The part of position q that compensated summation carries beyond q's rounding (zero for schemes
+  !> that sum positions plainly). Part of a checkpoint: a restart continues bit for bit.
+  subroutine position_carry(self, q, lo)
+    class(vci_scheme_t), intent(in) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: lo(:)
+    lo = 0.0_dp
+  end subroutine position_carry
+
+  !> Continue from position q whose carried part is lo (from position_carry).
+  subroutine restore_position_carry(self, q, lo)
+    class(vci_scheme_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), lo(:)
+  end subroutine restore_position_carry
 
   !> Forget which callback failed last (a new solve starts).
   subroutine clear_failure(self)

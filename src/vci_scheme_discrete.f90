@@ -59,6 +59,8 @@ module vci_scheme_discrete
     procedure :: momentum_out, energy_out, hamiltonian
     procedure :: forget_jacobian
     procedure :: use_derivatives
+    procedure :: position_carry => discrete_position_carry
+    procedure :: restore_position_carry => discrete_restore_carry
   end type vci_scheme_discrete_t
 
 contains
@@ -70,6 +72,25 @@ contains
     if (present(gap_gradients)) self%has_gap_gradients = gap_gradients
     if (present(mixed_hessian)) self%has_hessian = mixed_hessian
   end subroutine use_derivatives
+
+  !> The low part of q kept by get_endpoint when q is the last endpoint it returned, else zero.
+  subroutine discrete_position_carry(self, q, lo)
+    class(vci_scheme_discrete_t), intent(in) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: lo(:)
+    lo = 0.0_dp
+    if (.not. self%increments .or. .not. self%have_end) return
+    if (all(q == self%end_key)) lo = self%end_lo
+  end subroutine discrete_position_carry
+
+  !> Make q the last endpoint, with low part lo, so that the next sub-step from q adds lo back.
+  subroutine discrete_restore_carry(self, q, lo)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), lo(:)
+    if (.not. self%increments) return
+    self%end_key = q; self%end_lo = lo; self%have_end = .true.
+    self%start_key = huge(1.0_dp)   ! the next sub-step's start is looked up again
+  end subroutine discrete_restore_carry
 
   !> Bind to a model and size the workspace (once, before the step loop); stat /= 0: out of memory.
   subroutine setup(self, model, stat)

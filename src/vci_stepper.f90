@@ -78,6 +78,8 @@ module vci_stepper
     procedure :: factorisations
     procedure :: failure_cause
     procedure :: use_model_derivatives
+    procedure :: position_carry
+    procedure :: restore_position_carry
     procedure :: advance
     procedure :: pair_momentum
   end type vci_stepper_t
@@ -170,6 +172,21 @@ contains
 
   !> Which optional derivatives the model supplies (probed by the driver): the mixed Hessian of a
   !> user's L_d (else differenced) and the gap gradients (else differenced).
+  !> The compensated-summation carry of position q (for a checkpoint), and its restore.
+  subroutine position_carry(self, q, lo)
+    class(vci_stepper_t), intent(in) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: lo(:)
+    lo = 0.0_dp
+    if (allocated(self%sys)) call self%sys%position_carry(q, lo)
+  end subroutine position_carry
+
+  subroutine restore_position_carry(self, q, lo)
+    class(vci_stepper_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), lo(:)
+    if (allocated(self%sys)) call self%sys%restore_position_carry(q, lo)
+  end subroutine restore_position_carry
+
   subroutine use_model_derivatives(self, mixed_hessian, gap_gradients)
     class(vci_stepper_t), intent(inout) :: self
     logical, intent(in), optional :: mixed_hessian, gap_gradients
