@@ -134,10 +134,7 @@ contains
     real(dp), intent(in) :: q(:)
     real(dp), intent(out) :: g(:)
     integer, intent(inout) :: stat
-    integer :: n
-    n = size(q)
-    g(1:n) = self%w - q
-    g(n + 1:2 * n) = self%w + q
+    call wall_gaps(self%w, q, g)
   end subroutine gaps
 
   subroutine gap_gradients(self, q, dg, stat)
@@ -145,13 +142,7 @@ contains
     real(dp), intent(in) :: q(:)
     real(dp), intent(out) :: dg(:, :)
     integer, intent(inout) :: stat
-    integer :: i, n
-    n = size(q)
-    dg = 0.0_dp
-    do i = 1, n
-      dg(i, i) = -1.0_dp
-      dg(i, n + i) = 1.0_dp
-    end do
+    call wall_gap_gradients(q, dg)
   end subroutine gap_gradients
 
   !> H(q, p) = |p|^2/2 + sum_j (r_j^2/2 + beta r_j^4/4).
@@ -215,10 +206,7 @@ contains
     real(dp), intent(in) :: q(:)
     real(dp), intent(out) :: g(:)
     integer, intent(inout) :: stat
-    integer :: n
-    n = size(q)
-    g(1:n) = self%w - q
-    g(n + 1:2 * n) = self%w + q
+    call wall_gaps(self%w, q, g)
   end subroutine fl_gaps
 
   subroutine fl_gap_grads(self, q, dg, stat)
@@ -226,13 +214,7 @@ contains
     real(dp), intent(in) :: q(:)
     real(dp), intent(out) :: dg(:, :)
     integer, intent(inout) :: stat
-    integer :: i, n
-    n = size(q)
-    dg = 0.0_dp
-    do i = 1, n
-      dg(i, i) = -1.0_dp
-      dg(i, n + i) = 1.0_dp
-    end do
+    call wall_gap_gradients(q, dg)
   end subroutine fl_gap_grads
 
   !> H(q, p) = |p|^2/2 + V_total(q).
@@ -243,4 +225,25 @@ contains
     integer, intent(inout) :: stat
     e = 0.5_dp * sum(p**2) + potential(self%beta, q)
   end subroutine fl_energy
+  !> Both models' walls: g_i = w - q_i and g_{n+i} = w + q_i (each particle between -w and w).
+  pure subroutine wall_gaps(w, q, g)
+    real(dp), intent(in) :: w, q(:)
+    real(dp), intent(out) :: g(:)
+    integer :: n
+    n = size(q)
+    g(1:n) = w - q
+    g(n + 1:2 * n) = w + q
+  end subroutine wall_gaps
+
+  pure subroutine wall_gap_gradients(q, dg)
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: dg(:, :)
+    integer :: i, n
+    n = size(q)
+    dg = 0.0_dp
+    do i = 1, n
+      dg(i, i) = -1.0_dp
+      dg(i, n + i) = 1.0_dp
+    end do
+  end subroutine wall_gap_gradients
 end module vci_scene_fpu_walls
