@@ -119,13 +119,15 @@ typedef struct vci_callbacks {
   vci_gaps_fn gaps;                                         /* required iff ngaps > 0 */
   vci_gap_grads_fn gap_gradients;                           /* optional (NULL: differenced) */
   vci_energy_fn energy;                                     /* optional; needed by VCI_IMPACT_HAMILTONIAN */
+  /* optional (NULL: differenced): jac[mu + m*i] = d omega_d^mu / d other_i at (base, other, h) */
+  vci_dconstraint_fn discrete_constraint_jacobian;
   /* new members here */
 } vci_callbacks;
 
 /** Initialiser: `vci_callbacks cb = VCI_CALLBACKS_INIT;` (size set, every callback NULL). The C form
  *  is designated (no -Wmissing-field-initializers warning); the C++ one lists every member. */
 #ifdef __cplusplus
-#define VCI_CALLBACKS_INIT {sizeof(vci_callbacks), 0, 0, 0, 0, 0, 0, 0, 0, 0}
+#define VCI_CALLBACKS_INIT {sizeof(vci_callbacks), 0, 0, 0, 0, 0, 0, 0, 0, 0, 0}
 #else
 #define VCI_CALLBACKS_INIT {.size = sizeof(vci_callbacks)}
 #endif

@@ -57,6 +57,7 @@ module vci_capi
     type(c_funptr) :: mixed_hessian = c_null_funptr, constraint_forms = c_null_funptr
     type(c_funptr) :: discrete_constraint = c_null_funptr, gaps = c_null_funptr
     type(c_funptr) :: gap_gradients = c_null_funptr, energy = c_null_funptr
+    type(c_funptr) :: discrete_constraint_jacobian = c_null_funptr   !< added after 0.2.0 (at the end)
   end type vci_callbacks_c
 
   !> The callbacks as vci.h 0.1.0 laid them out (nine pointers, no size): what binaries built
@@ -168,6 +169,7 @@ module vci_capi
     procedure :: mixed_hessian => cm_hessian
     procedure :: constraint_forms => cm_forms
     procedure :: discrete_constraint => cm_dconstraint
+    procedure :: discrete_constraint_jacobian => cm_dconstraint_jacobian
     procedure :: gaps => cm_gaps
     procedure :: gap_gradients => cm_gap_grads
     procedure :: energy => cm_energy
@@ -580,16 +582,38 @@ contains
     real(dp), intent(in) :: base(:), other(:), h
     real(dp), intent(out) :: out(:)
     integer, intent(inout) :: stat
+    call call_pair(self, self%cb%discrete_constraint, 'discrete_constraint', base, other, h, out, size(out), stat)
+  end subroutine cm_dconstraint
+
+  subroutine cm_dconstraint_jacobian(self, base, other, h, jac, stat)
+    class(c_model_t), intent(inout) :: self
+    real(dp), intent(in) :: base(:), other(:), h
+    real(dp), intent(out) :: jac(:, :)
+    integer, intent(inout) :: stat
+    call call_pair(self, self%cb%discrete_constraint_jacobian, 'discrete_constraint_jacobian', base, other, h, &
+                   jac, size(jac), stat)
+  end subroutine cm_dconstraint_jacobian
+
+  !> A C function of the discrete constraint's shape, f(n, m, base, other, h, out, user), with nout
+  !> outputs (m: the constraint; m * n: its Jacobian, column-major); "not provided" when NULL.
+  subroutine call_pair(model, fp, name, base, other, h, out, nout, stat)
+    class(c_model_t), intent(inout) :: model
+    type(c_funptr), intent(in) :: fp
+    character(len=*), intent(in) :: name
+    real(dp), intent(in) :: base(:), other(:), h
+    integer, intent(in) :: nout
+    real(dp), intent(out) :: out(nout)
+    integer, intent(inout) :: stat
     procedure(c_dconstraint_fn), pointer :: f
     integer :: rc
-    if (.not. c_associated(self%cb%discrete_constraint)) then
-      out = 0.0_dp; call self%not_provided(stat); return
+    if (.not. c_associated(fp)) then
+      out = 0.0_dp; call model%not_provided(stat); return
     end if
-    call c_f_procpointer(self%cb%discrete_constraint, f)
+    call c_f_procpointer(fp, f)
     out = 0.0_dp   ! defined even where a failing callback left it unwritten
-    rc = f(self%n, self%m, base, other, h, out, self%user)
-    call self%record%note(rc, 'the C callback discrete_constraint', finite1(out), stat)
-  end subroutine cm_dconstraint
+    rc = f(model%n, model%m, base, other, h, out, model%user)
+    call model%record%note(rc, 'the C callback '//name, finite1(out), stat)
+  end subroutine call_pair
 
   subroutine cm_gaps(self, q, g, stat)
     class(c_model_t), intent(inout) :: self

@@ -449,7 +449,7 @@ contains
     integer, intent(out) :: stat
     real(dp), intent(in), optional :: q1(:)   !< second configuration of a pair: must be admissible too
     integer :: n, s, j
-    real(dp), allocatable :: g(:), omega(:, :), hess(:, :), w(:), dg(:, :), w2(:)
+    real(dp), allocatable :: g(:), omega(:, :), hess(:, :), w(:), dg(:, :), w2(:), cjo(:, :)
     self%initialized = .false.
     if (.not. self%created) then
       self%last_message = who//': create the integrator first'
@@ -467,6 +467,7 @@ contains
     end if
     ! optional procedures: each is probed once (vci_model_base: not_provided)
     allocate (hess(n, n), omega(n, max(1, self%model%m)), g(self%model%n_gaps), w(self%model%m), &
+              cjo(self%model%m, n), &
               dg(n, self%model%n_gaps), w2(self%model%n_gaps), stat=s)
     if (s /= 0) then
       self%last_message = who//': cannot allocate the probes of the model (out of memory)'
@@ -496,6 +497,11 @@ contains
         write (self%last_message, '(a,i0,a)') who//': the model has m = ', self%model%m, &
           ' constraints but does not supply discrete_constraint'
         call finish(self, VCI_ERR_ARGUMENT, stat); return
+      end if
+      if (associated(self%discrete)) then
+        call self%model%clear_not_provided(); s = 0
+        call self%discrete%discrete_constraint_jacobian(q0, v0, self%h, cjo, s)
+        call self%stepper%use_model_derivatives(constraint_jacobian=.not. self%model%answered_not_provided())
       end if
     end if
     if (self%model%n_gaps > 0) then

@@ -4,7 +4,8 @@
 !>
 !> Required: d1, d2, d3 (partials of L_d). Everything else has a default that tells the library
 !> "not provided" (`call self%not_provided(stat)`, vci_model_base); the library then either does without it (m = 0:
-!> no multipliers; n_gaps = 0: no impact detection) or differences it (mixed Hessian, gap gradients).
+!> no multipliers; n_gaps = 0: no impact detection) or differences it (mixed Hessian, discrete
+!> constraint Jacobian, gap gradients).
 !> Sizes, constraint forms, gaps and energy come from `vci_model_base_t`.
 !>
 !> Every procedure receives `stat` preset to 0. The callback contract (as SUNDIALS'): leave it 0 on
@@ -26,6 +27,7 @@ module vci_model
     procedure(ld_dh), deferred :: d3        !< D3 L_d(q, v, h) = dL_d/dh; E_d = -D3 L_d
     procedure :: mixed_hessian => not_provided_hessian
     procedure :: discrete_constraint => not_provided_dconstraint
+    procedure :: discrete_constraint_jacobian => not_provided_dconstraint_jacobian
   end type vci_model_t
 
   abstract interface
@@ -67,4 +69,16 @@ contains
     out = 0.0_dp
     call self%not_provided(stat)
   end subroutine not_provided_dconstraint
+
+  !> The discrete constraint's Jacobian along its second argument: jac(mu, i) = d omega_d^mu / d other_i
+  !> at (base, other, h), m x n (both directions impose omega_d(known, unknown)). Optional: without it
+  !> the library differences omega_d (2n extra evaluations per Newton matrix).
+  subroutine not_provided_dconstraint_jacobian(self, base, other, h, jac, stat)
+    class(vci_model_t), intent(inout) :: self
+    real(dp), intent(in) :: base(:), other(:), h
+    real(dp), intent(out) :: jac(:, :)
+    integer, intent(inout) :: stat
+    jac = 0.0_dp
+    call self%not_provided(stat)
+  end subroutine not_provided_dconstraint_jacobian
 end module vci_model

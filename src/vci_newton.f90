@@ -16,6 +16,7 @@ module vci_newton
   use vci_kinds, only: dp, i8
   use vci_status, only: VCI_OK, VCI_ERR_NEWTON, VCI_ERR_NONFINITE, VCI_ERR_MEMORY
   use vci_lapack, only: dgetrf, dgetrs, dgelsd
+  use vci_kernels, only: equilibrate, scaled_merit
   implicit none
   private
 
@@ -328,25 +329,14 @@ contains
     logical, intent(out) :: factored
     type(vci_newton_result_t), intent(inout) :: res
     integer :: i, info, rank
-    real(dp) :: w, dmin, dmax
-    ! rows equilibrated by their largest entry, so rows in different units pivot fairly
-    do i = 1, n
-      w = maxval(abs(self%jac(i, 1:n)))
-      if (w > 0.0_dp) then
-        w = 1.0_dp / w
-      else
-        w = 1.0_dp
-      end if
-      self%lu(i, 1:n) = self%jac(i, 1:n) * w
-      self%dx(i) = self%r(i) * w
-      self%rw(i) = w
-    end do
+    real(dp) :: dmin, dmax
+    ! rows equilibrated by their largest entry; jac keeps the equilibrated matrix for the fallback
+    call equilibrate(n, self%capacity, self%jac, self%lu, self%r, self%dx, self%rw)
     factored = .false.
     ! r w overflows when r is huge and the row's entries tiny: nothing non-finite goes to LAPACK
     if (.not. (all_finite(self%lu(1:n, 1:n)) .and. all_finite(self%dx(1:n)))) then
       res%reason = NEWTON_NONFINITE; return
     end if
-    self%jac(1:n, 1:n) = self%lu(1:n, 1:n)   ! keep the equilibrated matrix for the fallback
     call lu_factor(self, n, info)
     self%factorisations = self%factorisations + 1
     factored = .false.
@@ -494,12 +484,7 @@ contains
   pure real(dp) function merit(self, r, sc)
     type(vci_newton_t), intent(in) :: self
     real(dp), intent(in) :: r(:), sc(:)
-    integer :: i
-    merit = 0.0_dp
-    do i = 1, size(r)
-      merit = max(merit, abs(r(i)) / max(self%atol + self%rtol * sc(i), tiny(1.0_dp)))
-    end do
-    if (.not. ieee_is_finite(merit)) merit = huge(1.0_dp)
+    merit = scaled_merit(size(r), r, sc, self%atol, self%rtol)
   end function merit
 
   !> No NaN or Inf in a (any rank: assumed-rank is F2018, so vectors and matrices separately).

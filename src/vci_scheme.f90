@@ -271,10 +271,11 @@ contains
   end subroutine configure_impacts
 
   !> Which optional model derivatives to use: the gap gradients (else differenced); the mixed
-  !> Hessian of a closed-form L_d matters only to schemes that have one (they override).
-  subroutine use_derivatives(self, mixed_hessian, gap_gradients)
+  !> Hessian and the discrete constraint's Jacobian of a closed-form L_d matter only to schemes that
+  !> have them (they override).
+  subroutine use_derivatives(self, mixed_hessian, gap_gradients, constraint_jacobian)
     class(vci_scheme_t), intent(inout) :: self
-    logical, intent(in), optional :: mixed_hessian, gap_gradients
+    logical, intent(in), optional :: mixed_hessian, gap_gradients, constraint_jacobian
     if (present(gap_gradients)) self%has_gap_gradients = gap_gradients
   end subroutine use_derivatives
 

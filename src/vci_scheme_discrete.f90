@@ -19,6 +19,7 @@ module vci_scheme_discrete
   use vci_model, only: vci_model_t
   use vci_retraction, only: vci_retraction_model_t, RETRACTION_LEFT
   use vci_newton, only: vci_large_system
+  use vci_kernels, only: momentum_terms, kinetic_and_floor, jacobian_sizes
   use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_STAGE1, KIND_STAGE2, KIND_IMPULSE, KIND_PAIR, &
                         VCI_IMPACT_HAMILTONIAN, vci_fd_rel
   implicit none
@@ -33,10 +34,13 @@ module vci_scheme_discrete
     real(dp), allocatable, private :: start_key(:), start_lo(:), end_key(:), end_lo(:)
     logical, private :: have_end = .false.
     logical :: has_hessian = .false.
+    logical :: has_constraint_jacobian = .false.   !< the model's d omega_d (user L_d only)
+    real(dp), allocatable, private :: cjo(:, :)   !< the model's d omega_d(a, b) / db
     real(dp), allocatable, private :: d1(:), hess(:, :), g(:), rp(:), rm(:), sp(:), sm(:), xp(:), bb(:)
     !> sum_j |dR_i/dx_j| |x_j| from the last Jacobian: the round-off floor of row i (positions are
     !> often large next to their change over a step), added to each row's scale
     real(dp), allocatable, private :: jscale(:)
+    real(dp), allocatable, private :: sizes(:)   !< |b_j| and |x_j| that jscale weighs the Jacobian's entries by
     !> |dR/dx| from the last Jacobian of the current solve (zero until the first one): with it,
     !> sum_j |dR_i/db_j| |b_j - a_j| sizes the kinetic term M (b - a)/tau of a momentum row, which
     !> the row's value alone does not show when it cancels the force term (a body released from
@@ -65,12 +69,14 @@ module vci_scheme_discrete
 
 contains
 
-  !> The model's mixed Hessian (else differenced) and gap gradients, where it supplies them.
-  subroutine use_derivatives(self, mixed_hessian, gap_gradients)
+  !> The model's mixed Hessian, discrete constraint Jacobian and gap gradients (each differenced
+  !> when the model does not supply it).
+  subroutine use_derivatives(self, mixed_hessian, gap_gradients, constraint_jacobian)
     class(vci_scheme_discrete_t), intent(inout) :: self
-    logical, intent(in), optional :: mixed_hessian, gap_gradients
+    logical, intent(in), optional :: mixed_hessian, gap_gradients, constraint_jacobian
     if (present(gap_gradients)) self%has_gap_gradients = gap_gradients
     if (present(mixed_hessian)) self%has_hessian = mixed_hessian
+    if (present(constraint_jacobian)) self%has_constraint_jacobian = constraint_jacobian
   end subroutine use_derivatives
 
   !> The low part of q kept by get_endpoint when q is the last endpoint it returned, else zero.
@@ -112,8 +118,9 @@ contains
     nx = n + m + 1
     if (allocated(self%d1)) deallocate (self%d1, self%hess, self%g, self%rp, self%rm, self%sp, self%sm, &
                                         self%xp, self%jscale, self%jabs, self%bb, self%start_key, &
-                                        self%start_lo, self%end_key, self%end_lo, self%kin)
-    allocate (self%d1(n), self%hess(n, n), self%g(max(1, model%n_gaps)), self%bb(n), self%start_key(n), self%start_lo(n), &
+                                        self%start_lo, self%end_key, self%end_lo, self%kin, self%cjo, self%sizes)
+    allocate (self%cjo(m, n), self%sizes(nx), &
+              self%d1(n), self%hess(n, n), self%g(max(1, model%n_gaps)), self%bb(n), self%start_key(n), self%start_lo(n), &
               self%end_key(n), self%end_lo(n), self%kin(n), &
               self%rp(nx), self%rm(nx), self%sp(nx), self%sm(nx), self%xp(nx), self%jscale(nx), &
               self%jabs(nx, nx), stat=stat)
@@ -340,22 +347,7 @@ contains
     if (momentum_rows) then
       call d1s(self, self%a, x(1:n), tau, self%d1, stat)
       if (stat /= VCI_OK) return
-      do i = 1, n   ! (one scalar loop: the array form cost ~5x its arithmetic at n = 3)
-        r(i) = self%d1(i) + self%pa(i)
-        sc(i) = abs(self%d1(i)) + abs(self%pa(i))
-      end do
-      if (m > 0) then
-        ! - Omega lambda and its size, as explicit loops: matmul here allocated temporaries per call
-        do i = 1, n
-          ol = 0.0_dp; ols = 0.0_dp
-          do mu = 1, m
-            ol = ol + self%omega(i, mu) * x(n + mu)
-            ols = ols + abs(self%omega(i, mu)) * abs(x(n + mu))
-          end do
-          r(i) = r(i) - ol
-          sc(i) = sc(i) + ols
-        end do
-      end if
+      call momentum_terms(n, m, self%d1, self%pa, self%omega, x(n + 1:n + m), r, sc)   ! - Omega lambda included
       if (self%kind == KIND_STAGE2) then
         r(1:n) = r(1:n) + x(last) * self%grad
         sc(1:n) = sc(1:n) + abs(x(last) * self%grad)
@@ -421,24 +413,19 @@ contains
     n = self%n
     call rows(self, x, r, scale, .true., stat)
     if (stat /= VCI_OK) return
-    ! size of the kinetic terms of the momentum rows, from the current solve's Jacobian
+    ! size of the kinetic terms of the momentum rows, from the current solve's Jacobian (large
+    ! systems: taken at that Jacobian's point), and the round-off floor of each row: a few ulps of
+    ! sum_j |dR_i/dx_j| |x_j|, in units of rtol
+    fl = 8.0_dp * epsilon(1.0_dp) / max(self%rtol, epsilon(1.0_dp))
     if (self%jac_known .and. size(x) >= vci_large_system) then
       scale(1:n) = scale(1:n) + self%kin
     else if (self%jac_known) then
       do j = 1, n
         self%kin(j) = motion(self, x, j)
       end do
-      do j = 1, n
-        do i = 1, n
-          scale(i) = scale(i) + self%jabs(i, j) * self%kin(j)
-        end do
-      end do
     end if
-    ! round-off floor of each row: a few ulps of sum_j |dR_i/dx_j| |x_j|, in units of rtol
-    fl = 8.0_dp * epsilon(1.0_dp) / max(self%rtol, epsilon(1.0_dp))
-    do j = 1, size(x)
-      scale(j) = scale(j) + fl * self%jscale(j)
-    end do
+    call kinetic_and_floor(n, size(x), size(self%jabs, 1), self%jabs, self%kin, &
+                           self%jac_known .and. size(x) < vci_large_system, fl, self%jscale, scale)
     ! one finiteness check for all the callbacks' values; when it fails, evaluate again scanning
     ! each callback's values so that the failure names the culprit
     if (.not. ieee_is_finite(sum(r) + sum(scale))) then
@@ -448,47 +435,26 @@ contains
     end if
   end subroutine step_residual
 
-  !> Jacobian: the momentum block from the model's mixed Hessian when it has one, multiplier and
-  !> impulse columns analytically, everything else by central differences.
+  !> Jacobian: the momentum block from the model's mixed Hessian when it has one, the constraint
+  !> rows from the model's constraint Jacobian when it has one (the left retraction's are linear),
+  !> multiplier and impulse columns analytically, everything else by central differences.
   subroutine step_jacobian(self, x, r, jac, stat)
     class(vci_scheme_discrete_t), intent(inout) :: self
     real(dp), intent(in) :: x(:), r(:)
     real(dp), intent(inout) :: jac(:, :)
     integer, intent(out) :: stat
-    integer :: n, m, nx, j, last
+    integer :: n, m, nx, i, j, last
     real(dp) :: tau, d, hp, hm
-    n = self%n; m = self%m; nx = self%unknowns(self%kind); last = n + m + 1
+    n = self%n; m = self%m; nx = size(x); last = n + m + 1
     stat = VCI_OK
     tau = step_length(self, x)
     ! columns of b
     if (self%has_hessian) then
-      if (self%increments) then
-        call self%ret%jacobian_inc(self%a, x(1:n), tau, self%dir, self%hess, stat)
-        call self%check_matrix(stat, self%hess, 'mixed Hessian')
+      call momentum_block(self, x, tau, jac, stat)
+      if (stat /= VCI_OK) return
+      if (nx > n .and. self%kind == KIND_SUBSTEP) then
+        call constraint_block(self, x, tau, jac, stat)   ! only the m constraint rows depend on b besides
         if (stat /= VCI_OK) return
-        jac(1:n, 1:n) = self%hess
-      else if (self%dir > 0) then
-        call self%model%mixed_hessian(self%a, x(1:n), tau, self%hess, stat)
-        call self%check_matrix(stat, self%hess, 'mixed Hessian')
-        if (stat /= VCI_OK) return
-        jac(1:n, 1:n) = self%hess
-      else
-        call self%model%mixed_hessian(x(1:n), self%a, tau, self%hess, stat)
-        call self%check_matrix(stat, self%hess, 'mixed Hessian')
-        if (stat /= VCI_OK) return
-        jac(1:n, 1:n) = -transpose(self%hess)
-      end if
-      if (nx > n .and. self%kind == KIND_SUBSTEP .and. self%increments .and. self%ret%rule == RETRACTION_LEFT) then
-        ! left retraction: omega_d = Omega(a)^T d / tau is linear in d, its Jacobian Omega(a)^T / tau
-        do j = 1, n
-          jac(n + 1:n + m, j) = self%omega(j, 1:m) / tau
-        end do
-      else if (nx > n .and. self%kind == KIND_SUBSTEP) then
-        ! only the m constraint rows depend on b besides the momentum block
-        do j = 1, n
-          call fd_constraint_column(self, x, j, tau, fd_step(position(self, x, j), motion(self, x, j)), jac(n + 1:n + m, j), stat)
-          if (stat /= VCI_OK) return
-        end do
       else if (nx > n) then
         do j = 1, n
           call fd_column(self, x, j, fd_step(position(self, x, j), motion(self, x, j)), .false., jac(:, j), stat)
@@ -502,7 +468,11 @@ contains
       end do
     end if
     ! multiplier columns: d/d lambda of -Omega(a) lambda
-    if (m > 0) jac(1:n, n + 1:n + m) = -self%omega
+    do j = 1, m
+      do i = 1, n
+        jac(i, n + j) = -self%omega(i, j)
+      end do
+    end do
     select case (self%kind)
     case (KIND_STAGE1)       ! alpha enters through the sub-step length
       d = vci_fd_rel * x(last)
@@ -520,13 +490,18 @@ contains
         jac(last, last) = (hp - hm) / (2.0_dp * d)
       end if
     end select
-    ! the round-off floor is sized on positions in both layouts (a user's L_d rounds b - a to ulps of
-    ! |b|; a retraction rounds a + d/2 where forces are evaluated)
-    call endpoint_of(self, x)
+    ! |J| for the kinetic term of the momentum rows, and the round-off floor sum_j |J_ij| |x_j|, sized on
+    ! positions in both layouts (a user's L_d rounds b - a to ulps of |b|; a retraction rounds
+    ! a + d/2 where forces are evaluated); explicit loops: array syntax on these sections costs more
+    ! than the arithmetic at small n
     do j = 1, nx
-      self%jscale(j) = sum(abs(jac(j, 1:n)) * abs(self%bb)) + sum(abs(jac(j, n + 1:nx)) * abs(x(n + 1:nx)))
+      if (j <= n) then
+        self%sizes(j) = abs(position(self, x, j))
+      else
+        self%sizes(j) = abs(x(j))
+      end if
     end do
-    self%jabs(1:nx, 1:nx) = abs(jac(1:nx, 1:nx))
+    call jacobian_sizes(nx, size(jac, 1), jac, self%sizes, size(self%jabs, 1), self%jabs, self%jscale)
     self%jac_known = .true.
     if (nx >= vci_large_system) then
       self%kin = 0.0_dp
@@ -535,6 +510,75 @@ contains
       end do
     end if
   end subroutine step_jacobian
+
+  !> jac(1:n, 1:n) = d(s D1 L^s)/db from the model's mixed Hessian (its transpose, negated, backward).
+  subroutine momentum_block(self, x, tau, jac, stat)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:), tau
+    real(dp), intent(inout) :: jac(:, :)
+    integer, intent(out) :: stat
+    integer :: i, j, n
+    n = self%n
+    stat = 0
+    if (self%increments) then
+      call self%ret%jacobian_inc(self%a, x(1:n), tau, self%dir, self%hess, stat)
+    else if (self%dir > 0) then
+      call self%model%mixed_hessian(self%a, x(1:n), tau, self%hess, stat)
+    else
+      call self%model%mixed_hessian(x(1:n), self%a, tau, self%hess, stat)
+    end if
+    call self%check_matrix(stat, self%hess, 'mixed Hessian')
+    if (stat /= VCI_OK) return
+    if (self%increments .or. self%dir > 0) then
+      do j = 1, n
+        do i = 1, n
+          jac(i, j) = self%hess(i, j)
+        end do
+      end do
+    else
+      do j = 1, n
+        do i = 1, n
+          jac(i, j) = -self%hess(j, i)
+        end do
+      end do
+    end if
+  end subroutine momentum_block
+
+  !> The sub-step's constraint rows jac(n+1:n+m, 1:n) = d omega_d(a, b) / db: from the model's
+  !> Jacobian along `other`, the left retraction's Omega(a)^T / tau, or central differences.
+  subroutine constraint_block(self, x, tau, jac, stat)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:), tau
+    real(dp), intent(inout) :: jac(:, :)
+    integer, intent(out) :: stat
+    integer :: i, j, n, m
+    n = self%n; m = self%m
+    stat = VCI_OK
+    if (self%increments) then
+      if (self%ret%rule == RETRACTION_LEFT) then
+        ! left retraction: omega_d = Omega(a)^T d / tau is linear in d
+        do j = 1, n
+          do i = 1, m
+            jac(n + i, j) = self%omega(j, i) / tau
+          end do
+        end do
+        return
+      end if
+    else if (self%has_constraint_jacobian) then
+      ! both directions impose omega_d(a, b): the known point is the base (DESIGN.md §1)
+      stat = 0
+      call self%model%discrete_constraint_jacobian(self%a, x(1:n), tau, self%cjo, stat)
+      call self%check_matrix(stat, self%cjo, 'discrete constraint Jacobian')
+      if (stat /= VCI_OK) return
+      jac(n + 1:n + m, 1:n) = self%cjo
+      return
+    end if
+    do j = 1, n
+      call fd_constraint_column(self, x, j, tau, fd_step(position(self, x, j), motion(self, x, j)), &
+                                jac(n + 1:n + m, j), stat)
+      if (stat /= VCI_OK) return
+    end do
+  end subroutine constraint_block
 
   !> A new solve starts: its Jacobian is not known yet (see jabs).
   subroutine forget_jacobian(self)

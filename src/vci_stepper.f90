@@ -187,10 +187,10 @@ contains
     if (allocated(self%sys)) call self%sys%restore_position_carry(q, lo)
   end subroutine restore_position_carry
 
-  subroutine use_model_derivatives(self, mixed_hessian, gap_gradients)
+  subroutine use_model_derivatives(self, mixed_hessian, gap_gradients, constraint_jacobian)
     class(vci_stepper_t), intent(inout) :: self
-    logical, intent(in), optional :: mixed_hessian, gap_gradients
-    call self%sys%use_derivatives(mixed_hessian, gap_gradients)
+    logical, intent(in), optional :: mixed_hessian, gap_gradients, constraint_jacobian
+    call self%sys%use_derivatives(mixed_hessian, gap_gradients, constraint_jacobian)
   end subroutine use_model_derivatives
 
   !> Advance from (q, p) by one step of length h in direction dir (+1/-1).

@@ -159,6 +159,15 @@ static int pendulum_dconstraint(int n, int m, const double *base, const double *
   return 0;
 }
 
+/* jac[mu + m*i] = d omega_d^mu / d other_i (optional: without it the library differences omega_d) */
+static int pendulum_dconstraint_jacobian(int n, int m, const double *base, const double *other, double h,
+                                         double *jac, void *user) {
+  (void)n; (void)m; (void)other; (void)user;
+  jac[0] = pendulum_f(base[0]) / h;
+  jac[1] = -1.0 / h;
+  return 0;
+}
+
 static int pendulum_gaps(int n, int ngaps, const double *q, double *g, void *user) {
   const pendulum_params *P = (const pendulum_params *)user;
   double s = sin(q[0]);
@@ -180,6 +189,7 @@ static vci_callbacks pendulum_callbacks(void) {
   cb.d1_ld = pendulum_d1; cb.d2_ld = pendulum_d2; cb.d3_ld = pendulum_d3;
   cb.mixed_hessian = pendulum_hessian;
   cb.constraint_forms = pendulum_forms; cb.discrete_constraint = pendulum_dconstraint;
+  cb.discrete_constraint_jacobian = pendulum_dconstraint_jacobian;
   cb.gaps = pendulum_gaps; cb.gap_gradients = pendulum_gap_grads;
   return cb;
 }

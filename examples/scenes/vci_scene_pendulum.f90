@@ -16,9 +16,10 @@ module vci_scene_pendulum
 
   type, extends(vci_model_t), public :: pendulum_t
     real(dp) :: mass = 1.0_dp, grav = 9.8_dp, length = 2.0_dp, radius = 1.5_dp
-    logical :: analytic_hessian = .true.
+    logical :: analytic_hessian = .true.   !< supply the mixed Hessian and the constraint Jacobian (else differenced)
   contains
     procedure :: d1, d2, d3, mixed_hessian, constraint_forms, discrete_constraint, gaps, gap_gradients, energy
+    procedure :: discrete_constraint_jacobian
   end type pendulum_t
 
   !> The continuous model (a few lines: L, its partials and Hessians, Omega, the wall, H).
@@ -110,6 +111,19 @@ contains
     integer, intent(inout) :: stat
     out(1) = (pendulum_f(base(1)) * (other(1) - base(1)) - (other(2) - base(2))) / h
   end subroutine discrete_constraint
+
+  !> d omega_d(base, other, h) / d other (1 x 2).
+  subroutine discrete_constraint_jacobian(self, base, other, h, jac, stat)
+    class(pendulum_t), intent(inout) :: self
+    real(dp), intent(in) :: base(:), other(:), h
+    real(dp), intent(out) :: jac(:, :)
+    integer, intent(inout) :: stat
+    if (.not. self%analytic_hessian) then
+      call self%not_provided(stat); return
+    end if
+    jac(1, 1) = pendulum_f(base(1)) / h
+    jac(1, 2) = -1.0_dp / h
+  end subroutine discrete_constraint_jacobian
 
   subroutine gaps(self, q, g, stat)
     class(pendulum_t), intent(inout) :: self
