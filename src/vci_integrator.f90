@@ -926,7 +926,9 @@ contains
     integer, intent(in) :: status
     integer, intent(out) :: stat
     self%last_status = status
-    if (status == VCI_OK) self%last_message = ''
+    ! (messages start with a word: a blank first character means blank, and blanking the whole
+    ! buffer on every step would cost more than the step's bookkeeping)
+    if (status == VCI_OK .and. self%last_message(1:1) /= ' ') self%last_message = ''
     stat = status
   end subroutine finish
 end module vci_integrator

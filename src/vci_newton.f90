@@ -492,6 +492,7 @@ contains
     real(dp), intent(in) :: a(:)
     integer :: i
     ok = .true.
+    if (abs(sum(a)) <= huge(1.0_dp)) return   ! all finite: one test on the sum (else look at each)
     do i = 1, size(a)
       if (.not. (abs(a(i)) <= huge(1.0_dp))) then
         ok = .false.; return

@@ -551,6 +551,11 @@ contains
     real(dp), intent(in) :: values(:, :)
     character(len=*), intent(in) :: what
     integer :: j
+    if (stat == 0) then
+      if (abs(sum(values)) <= huge(1.0_dp)) then   ! all finite (one test on the sum)
+        stat = VCI_OK; return
+      end if
+    end if
     call self%check(stat, values(:, 1), what)
     do j = 2, size(values, 2)
       if (stat /= VCI_OK) return

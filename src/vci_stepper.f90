@@ -220,7 +220,7 @@ contains
     n = self%n; m = self%m
     call self%sys%set_direction(dir)
     n_impacts = 0
-    self%cause = ''
+    if (self%cause(1:1) /= ' ') self%cause = ''   ! (causes start with a word; blanking all of it costs per step)
     self%q_start = q; self%p_start = p; tau = h; consumed = 0.0_dp
     ! the regular step, from the extrapolated guess
     if (depth * dir < 0) depth = 0           ! the history runs the other way
