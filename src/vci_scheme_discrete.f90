@@ -455,6 +455,10 @@ contains
       if (nx > n .and. self%kind == KIND_SUBSTEP) then
         call constraint_block(self, x, tau, jac, stat)   ! only the m constraint rows depend on b besides
         if (stat /= VCI_OK) return
+      else if (nx > n .and. analytic_last_row(self)) then
+        ! the last row does not depend on b: no differenced columns of b
+        if (m > 0) call constraint_block(self, x, tau, jac, stat)
+        if (stat /= VCI_OK) return
       else if (nx > n) then
         do j = 1, n
           call fd_column(self, x, j, fd_step(position(self, x, j), motion(self, x, j)), .false., jac(:, j), stat)
@@ -510,6 +514,16 @@ contains
       end do
     end if
   end subroutine step_jacobian
+
+  !> Is the last row of stage 1 or 2 known in closed form along b? Stage 2 with the Hamiltonian
+  !> condition H(qt, p- + mu grad g) = H(qt, p-): free of b. (Stage 1's row g_j(b) has the gradient
+  !> grad g_j(b), equal to its difference quotients to 1e-7, but the changed round-off path moves
+  !> the ellipse's rare large Hamiltonian-impact energy jumps (docs/RESULTS.md) past the long
+  !> test's bound: kept differenced until those are understood.)
+  pure logical function analytic_last_row(self)
+    class(vci_scheme_discrete_t), intent(in) :: self
+    analytic_last_row = self%kind == KIND_STAGE2 .and. self%impact_energy == VCI_IMPACT_HAMILTONIAN
+  end function analytic_last_row
 
   !> jac(1:n, 1:n) = d(s D1 L^s)/db from the model's mixed Hessian (its transpose, negated, backward).
   subroutine momentum_block(self, x, tau, jac, stat)
