@@ -121,13 +121,16 @@ contains
     logical, intent(in) :: discrete
     type(vci_integrator_t) :: integ
     type(ellipse_t), target :: md
-    real(dp) :: e0, e, emax, mm(3), lt(64), le(64), slope
-    integer(i8) :: k, next
+    real(dp) :: e0, e, emax, mm(3), lt(64), le(64), slope, eprev, de
+    ! H's change over each step, apart for steps with and without impacts: count, sum, sum of squares
+    real(dp) :: dsum(0:1), dsq(0:1)
+    integer(i8) :: k, next, dn(0:1)
     type(vci_stats_t) :: st
-    integer :: s, nfit
+    integer :: s, nfit, kind
     call long_setup(integ, h, e0, mm, md, discrete)
     nfit = 0
     emax = 0.0_dp; next = 1
+    eprev = e0; dsum = 0.0_dp; dsq = 0.0_dp; dn = 0
     write (output_unit, '(a)') '| t | steps | max abs(H - H0) so far | impacts |'
     write (output_unit, '(a)') '|---:|---:|---:|---:|'
     do k = 1, nsteps
@@ -137,6 +140,9 @@ contains
       end if
       call md%energy(integ%configuration(), integ%momentum(), e, s)
       emax = max(emax, abs(e - e0))
+      kind = min(1, integ%impact_count())
+      de = e - eprev; eprev = e
+      dn(kind) = dn(kind) + 1; dsum(kind) = dsum(kind) + de; dsq(kind) = dsq(kind) + de**2
       if (k == next .or. k == nsteps) then
         st = integ%statistics()
         write (output_unit, '("| ",es10.4," | ",i0," | ",es9.3," | ",i0," |")') real(k, dp) * h, k, emax, &
@@ -154,6 +160,17 @@ contains
       write (output_unit, '(a,f5.2,a)') 'Least-squares slope of log max|H - H0| against log t for t >= 10 s: ', &
         slope, ' (Brouwer''s law: 0.5).'
     end if
+    ! Unbiased changes add up like sqrt(count) * rms; a mean that is not zero adds count * mean.
+    write (output_unit, '(a)') ''
+    write (output_unit, '(a)') '| steps | count | mean of the change of H | rms of the change of H | count x mean '// &
+      '| sqrt(count) x rms |'
+    write (output_unit, '(a)') '|---|---:|---:|---:|---:|---:|'
+    do kind = 0, 1
+      if (dn(kind) == 0) cycle
+      write (output_unit, '("| ",a," | ",i0," | ",es10.3," | ",es10.3," | ",es10.3," | ",es10.3," |")') &
+        trim(merge('with an impact', 'regular       ', kind == 1)), dn(kind), dsum(kind) / real(dn(kind), dp), &
+        sqrt(dsq(kind) / real(dn(kind), dp)), dsum(kind), sqrt(real(dn(kind), dp) * dsq(kind) / real(dn(kind), dp))
+    end do
   end subroutine long_run
 
   subroutine long_setup(integ, h, e0, mm, md, discrete)

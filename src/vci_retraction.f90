@@ -33,6 +33,7 @@ module vci_retraction
   contains
     procedure :: bind
     procedure :: d1, d2, d3, mixed_hessian, constraint_forms, discrete_constraint, gaps, gap_gradients, energy
+    procedure :: impulse_inc
     procedure :: d1s_inc, pout_inc, energy_inc, jacobian_inc, constraint_inc
   end type vci_retraction_model_t
 
@@ -236,6 +237,20 @@ contains
       out = self%lv - h * self%lq                            ! -D1 L_d(b, a), left
     end if
   end subroutine pout_inc
+
+  !> The force impulse of the sub-step, dir h dL/dq at the segment's point and velocity: the momentum
+  !> at the unknown end is p_a - Omega(a) lambda + this (forward (D1 + D2) L_d(a, b); backward minus
+  !> that of L_d(b, a)), a sum with no cancellation between kinetic terms.
+  subroutine impulse_inc(self, a, d, h, dir, out, stat)
+    class(vci_retraction_model_t), intent(inout) :: self
+    real(dp), intent(in) :: a(:), d(:), h
+    integer, intent(in) :: dir
+    real(dp), intent(out) :: out(:)
+    integer, intent(inout) :: stat
+    call segment_inc(self, a, d, h, dir)
+    call self%lag%dl_dq(self%pt, self%w, self%lq, stat)
+    out = (real(dir, dp) * h) * self%lq
+  end subroutine impulse_inc
 
   !> E_d = -D3 L_d = Lv . w - L at the segment (both directions).
   subroutine energy_inc(self, a, d, h, dir, e, stat)
