@@ -147,12 +147,15 @@ module vci_scheme
       real(dp), intent(out) :: rhs(:)
     end subroutine momentum_rhs_iface
     !> The momentum at the far end of the segment from a of length tau whose unknowns are x.
-    subroutine out_vec_iface(self, x, a, tau, p, stat)
+    !> pa (optional): the momentum at a that x's momentum rows balance, when x solved the sub-step
+    !> posed from a (schemes may then use it instead of differencing the segment's kinetic terms).
+    subroutine out_vec_iface(self, x, a, tau, p, stat, pa)
       import :: vci_scheme_t, dp
       class(vci_scheme_t), intent(inout) :: self
       real(dp), intent(in) :: x(:), a(:), tau
       real(dp), intent(out) :: p(:)
       integer, intent(out) :: stat
+      real(dp), intent(in), optional :: pa(:)
     end subroutine out_vec_iface
     !> The discrete energy E_d = -D3 L_d of that segment.
     subroutine out_scalar_iface(self, x, a, tau, e, stat)

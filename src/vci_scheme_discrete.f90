@@ -281,22 +281,23 @@ contains
   end subroutine check_fast
 
   !> p_b = s D2 L^s(a, b, tau)  (forward: D2 L_d(a, b); backward: -D1 L_d(b, a)), b = endpoint of x;
-  !> for a retraction, from the impulse when x solves the sub-step posed from a (the same value in
-  !> exact arithmetic).
-  subroutine momentum_out(self, x, a, tau, p, stat)
+  !> for a retraction, from the impulse when the caller gives the momentum pa that x balances (the
+  !> same value in exact arithmetic).
+  subroutine momentum_out(self, x, a, tau, p, stat, pa)
     class(vci_scheme_discrete_t), intent(inout) :: self
     real(dp), intent(in) :: x(:), a(:), tau
     real(dp), intent(out) :: p(:)
     integer, intent(out) :: stat
+    real(dp), intent(in), optional :: pa(:)
     integer :: i, mu
     stat = 0
-    if (self%increments .and. all(a == self%a) .and. (self%kind == KIND_SUBSTEP .or. self%kind == KIND_STAGE1)) then
-      ! x solves the posed momentum rows from (a, pa): p_b = pa - Omega(a) lambda + the force impulse.
-      ! D2 L_d alone is a difference of kinetic terms M d / tau, whose rounding had a mean: over 1e7
-      ! steps it grew the ellipse's energy error like t^0.8 (docs/bench/roundoff.md)
+    if (self%increments .and. present(pa) .and. all(a == self%a)) then   ! (Omega(a) is the posed one)
+      ! x balances pa: p_b = pa - Omega(a) lambda + the force impulse. D2 L_d alone is a difference
+      ! of kinetic terms M d / tau, whose rounding had a mean: over 1e7 steps it grew the ellipse's
+      ! energy error like t^0.8 (docs/bench/roundoff.md)
       call self%ret%impulse_inc(a, x(1:self%n), tau, self%dir, p, stat)
       do i = 1, self%n
-        p(i) = self%pa(i) + p(i)
+        p(i) = pa(i) + p(i)
         do mu = 1, self%m
           p(i) = p(i) - self%omega(i, mu) * x(self%n + mu)
         end do

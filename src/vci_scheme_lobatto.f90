@@ -336,11 +336,12 @@ contains
   end subroutine scheme_jacobian
 
   !> The new momentum p_b = dir F_s.
-  subroutine momentum_out(self, x, a, tau, p, stat)
+  subroutine momentum_out(self, x, a, tau, p, stat, pa)
     class(vci_scheme_lobatto_t), intent(inout) :: self
     real(dp), intent(in) :: x(:), a(:), tau
     real(dp), intent(out) :: p(:)
     integer, intent(out) :: stat
+    real(dp), intent(in), optional :: pa(:)   !< not used: the end momentum comes from the stages
     call evaluate(self, x, a, tau, .false., stat)
     if (stat /= VCI_OK) return
     p = real(self%dir, dp) * self%f(:, self%s)

@@ -293,7 +293,7 @@ contains
           end if
         end do
         call self%sys%get_endpoint(self%x_stage1, self%q_wall)
-        call self%sys%momentum_out(self%x_stage1, self%q_start, alpha * tau, self%p_arrive, stat)
+        call self%sys%momentum_out(self%x_stage1, self%q_start, alpha * tau, self%p_arrive, stat, self%p_start)
         if (stat == VCI_OK) then
           if (self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN) then
             call self%sys%hamiltonian(self%q_wall, self%p_arrive, e_minus, stat)
@@ -342,7 +342,14 @@ contains
 
     call self%sys%get_endpoint(self%x, qn)
     call self%sys%get_multipliers(self%x, lambdan)
-    call self%sys%momentum_out(self%x, self%q_start, tau, pn, stat)
+    ! x balances p_start, or after an impact p- + mu grad g (with the Hamiltonian condition the
+    ! constraint impulse is in x's multipliers, not in that momentum)
+    if (n_impacts > 0) self%p_leave = self%p_arrive + self%sys%get_extra(self%x, KIND_STAGE2) * self%sys%grad
+    if (n_impacts == 0) then
+      call self%sys%momentum_out(self%x, self%q_start, tau, pn, stat, self%p_start)
+    else
+      call self%sys%momentum_out(self%x, self%q_start, tau, pn, stat, self%p_leave)
+    end if
     if (stat == VCI_OK) call self%sys%energy_out(self%x, self%q_start, tau, e_step, stat)
     if (stat /= VCI_OK) then
       call set_cause(self, 'momentum of the new state'); return
