@@ -35,6 +35,7 @@ module vci_integrator
   type, public :: vci_stats_t
     integer(i8) :: steps = 0, impacts = 0, newton_solves = 0, newton_iterations = 0, fallbacks = 0
     integer(i8) :: factorisations = 0   !< LU factorisations of Newton matrices
+    integer(i8) :: fused_solves = 0     !< regular sub-steps solved by the scheme's fused routine
   end type vci_stats_t
 
   type, public :: vci_integrator_t
@@ -855,15 +856,19 @@ contains
     stats%newton_solves = solver%newton_solves; stats%newton_iterations = solver%newton_iterations
     stats%factorisations = self%stepper%factorisations()
     stats%fallbacks = solver%fallbacks
+    stats%fused_solves = solver%fused_solves
   end function statistics
 
   !> Linear-algebra paths of Newton (docs/DESIGN.md §6): the in-line LU for systems of at most
   !> small_lu_max unknowns (0: LAPACK always), factor reuse for systems of at least reuse_min
-  !> unknowns (huge: full Newton always). For tests and benchmarks that compare the paths.
-  subroutine set_solver_paths(self, small_lu_max, reuse_min)
+  !> unknowns (huge: full Newton always), and `fused` (default on): the regular sub-step of a small
+  !> system with analytic derivatives solved by the scheme's fused routine (vci_scheme_discrete_fused).
+  !> For tests and benchmarks that compare the paths.
+  subroutine set_solver_paths(self, small_lu_max, reuse_min, fused)
     class(vci_integrator_t), intent(inout) :: self
     integer, intent(in) :: small_lu_max, reuse_min
-    call self%stepper%set_solver_paths(small_lu_max, reuse_min)
+    logical, intent(in), optional :: fused
+    call self%stepper%set_solver_paths(small_lu_max, reuse_min, fused)
   end subroutine set_solver_paths
 
   !> Status of the last call (VCI_OK or a VCI_ERR_*).

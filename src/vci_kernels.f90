@@ -12,7 +12,8 @@ module vci_kernels
   implicit none
   private
 
-  public :: momentum_terms, kinetic_and_floor, jacobian_sizes, equilibrate, scaled_merit
+  public :: momentum_terms, kinetic_and_floor, jacobian_sizes, equilibrate, scaled_merit, small_lu, small_lu_solve
+  public :: substep_rows, substep_direction
 
 contains
 
@@ -114,4 +115,149 @@ contains
     end do
     if (.not. (phi <= huge(1.0_dp))) phi = huge(1.0_dp)
   end function scaled_merit
+
+  !> Right-looking LU with partial pivoting (the pivot is the first largest |entry| of the column, as
+  !> LAPACK's idamax picks it); ipiv as LAPACK's. Stops at an exact zero pivot (info = its column).
+  pure subroutine small_lu(n, a, ipiv, info)
+    integer, intent(in) :: n
+    real(dp), intent(inout) :: a(:, :)
+    integer, intent(inout) :: ipiv(:)
+    integer, intent(out) :: info
+    integer :: i, j, k, p
+    real(dp) :: t, piv_inv
+    info = 0
+    do j = 1, n
+      p = j
+      do i = j + 1, n
+        if (abs(a(i, j)) > abs(a(p, j))) p = i
+      end do
+      ipiv(j) = p
+      if (a(p, j) == 0.0_dp) then
+        if (info == 0) info = j
+        cycle
+      end if
+      if (p /= j) then
+        do k = 1, n
+          t = a(j, k); a(j, k) = a(p, k); a(p, k) = t
+        end do
+      end if
+      piv_inv = 1.0_dp / a(j, j)
+      do i = j + 1, n
+        a(i, j) = a(i, j) * piv_inv
+      end do
+      do k = j + 1, n
+        t = a(j, k)
+        do i = j + 1, n
+          a(i, k) = a(i, k) - a(i, j) * t
+        end do
+      end do
+    end do
+  end subroutine small_lu
+
+  pure subroutine small_lu_solve(n, a, ipiv, b)
+    integer, intent(in) :: n
+    real(dp), intent(in) :: a(:, :)
+    integer, intent(in) :: ipiv(:)
+    real(dp), intent(inout) :: b(:)
+    integer :: i, k
+    real(dp) :: t
+    do i = 1, n
+      if (ipiv(i) /= i) then
+        t = b(i); b(i) = b(ipiv(i)); b(ipiv(i)) = t
+      end if
+    end do
+    do k = 1, n                 ! L y = b (unit diagonal), column by column
+      t = b(k)
+      do i = k + 1, n
+        b(i) = b(i) - a(i, k) * t
+      end do
+    end do
+    do k = n, 1, -1             ! U x = y
+      b(k) = b(k) / a(k, k)
+      t = b(k)
+      do i = 1, k - 1
+        b(i) = b(i) - a(i, k) * t
+      end do
+    end do
+  end subroutine small_lu_solve
+
+  !> The regular sub-step's rows from the callbacks' values, their sizes and merit in one call (the
+  !> fused solve, vci_scheme_discrete_fused): on entry d1 = s D1 L^s(a, b) and r(n+1:n+m) = omega_d;
+  !> x = [b or the increment, lambda]. kin(j) = |b_j - a_j|; ok false if any r_i or sc_i is NaN/Inf.
+  pure subroutine substep_rows(n, m, x, a, increments, d1, pa, omega, tau, jac_known, ld, jabs, fl, &
+                               jscale, atol, rtol, r, sc, kin, phi, ok)
+    integer, intent(in) :: n, m, ld
+    real(dp), intent(in) :: x(n + m), a(n), d1(n), pa(n), omega(n, m), tau, jabs(ld, *), fl, &
+                            jscale(n + m), atol, rtol
+    logical, intent(in) :: increments, jac_known
+    real(dp), intent(inout) :: r(n + m)
+    real(dp), intent(out) :: sc(n + m), kin(n), phi
+    logical, intent(out) :: ok
+    integer :: i, mu
+    real(dp) :: ol, s
+    if (increments) then
+      do i = 1, n
+        kin(i) = abs(x(i))
+      end do
+    else
+      do i = 1, n
+        kin(i) = abs(x(i) - a(i))
+      end do
+    end if
+    call momentum_terms(n, m, d1, pa, omega, x(n + 1:n + m), r, sc)
+    do mu = 1, m
+      ol = 0.0_dp
+      do i = 1, n
+        ol = ol + abs(omega(i, mu)) * kin(i)
+      end do
+      sc(n + mu) = abs(r(n + mu)) + ol / tau
+    end do
+    call kinetic_and_floor(n, n + m, ld, jabs, kin, jac_known, fl, jscale, sc)
+    phi = 0.0_dp; s = 0.0_dp
+    do i = 1, n + m
+      phi = max(phi, abs(r(i)) / max(atol + rtol * sc(i), tiny(1.0_dp)))
+      s = s + r(i) + sc(i)
+    end do
+    ok = abs(s) <= huge(1.0_dp)
+  end subroutine substep_rows
+
+  !> The Newton direction of the fused solve: from the Jacobian jac (n x n; scaled in place) and the
+  !> unknowns' sizes, the round-off sizes jabs and jscale (as jacobian_sizes), the equilibrated LU
+  !> factors lu, ipiv and row weights rw, and dx = J^{-1} r. ok false when a value is not finite or
+  !> the matrix is numerically singular (pivot ratio below 1e-14, as vci_newton's test).
+  pure subroutine substep_direction(n, jac, sizes, lda, jabs, jscale, r, lu, ipiv, rw, dx, ok)
+    integer, intent(in) :: n, lda
+    real(dp), intent(inout) :: jac(n, n)
+    real(dp), intent(in) :: sizes(n), r(n)
+    real(dp), intent(inout) :: jabs(lda, *)
+    real(dp), intent(out) :: jscale(n), lu(n, n), rw(n), dx(n)
+    integer, intent(inout) :: ipiv(n)
+    logical, intent(out) :: ok
+    integer :: i, j, info
+    real(dp) :: s, dmin, dmax
+    call jacobian_sizes(n, n, jac, sizes, lda, jabs, jscale)
+    call equilibrate(n, n, jac, lu, r, dx, rw)
+    s = 0.0_dp
+    do j = 1, n
+      do i = 1, n
+        s = s + lu(i, j)
+      end do
+      s = s + dx(j)
+    end do
+    ok = .false.
+    if (.not. abs(s) <= huge(1.0_dp)) return
+    call small_lu(n, lu, ipiv, info)
+    if (info /= 0) return
+    dmin = huge(1.0_dp); dmax = 0.0_dp
+    do i = 1, n
+      dmin = min(dmin, abs(lu(i, i))); dmax = max(dmax, abs(lu(i, i)))
+    end do
+    if (.not. dmin > 1.0e-14_dp * dmax) return
+    call small_lu_solve(n, lu, ipiv, dx)
+    s = 0.0_dp
+    do i = 1, n
+      s = s + dx(i)
+    end do
+    ok = abs(s) <= huge(1.0_dp)
+  end subroutine substep_direction
 end module vci_kernels

@@ -16,7 +16,7 @@ module vci_newton
   use vci_kinds, only: dp, i8
   use vci_status, only: VCI_OK, VCI_ERR_NEWTON, VCI_ERR_NONFINITE, VCI_ERR_MEMORY
   use vci_lapack, only: dgetrf, dgetrs, dgelsd
-  use vci_kernels, only: equilibrate, scaled_merit
+  use vci_kernels, only: equilibrate, scaled_merit, small_lu, small_lu_solve
   implicit none
   private
 
@@ -33,7 +33,7 @@ module vci_newton
   integer, parameter, public :: NEWTON_NONFINITE = 5       !< residual, scale or Jacobian not finite (overflow)
 
   !> A starting merit at or below this is round-off: the start is accepted without a Newton step.
-  real(dp), parameter :: start_roundoff = 1.0e-3_dp
+  real(dp), parameter, public :: start_roundoff = 1.0e-3_dp
 
   !> Systems of at least this many unknowns are "large": they reuse the Newton matrix's factors across
   !> iterations and solves (simplified Newton, below) and schemes size their rows in O(n) per residual.
@@ -415,70 +415,6 @@ contains
     end if
   end subroutine lu_solve
 
-  !> Right-looking LU with partial pivoting (the pivot is the first largest |entry| of the column, as
-  !> LAPACK's idamax picks it); ipiv as LAPACK's. Stops at an exact zero pivot (info = its column).
-  pure subroutine small_lu(n, a, ipiv, info)
-    integer, intent(in) :: n
-    real(dp), intent(inout) :: a(:, :)
-    integer, intent(inout) :: ipiv(:)
-    integer, intent(out) :: info
-    integer :: i, j, k, p
-    real(dp) :: t, piv_inv
-    info = 0
-    do j = 1, n
-      p = j
-      do i = j + 1, n
-        if (abs(a(i, j)) > abs(a(p, j))) p = i
-      end do
-      ipiv(j) = p
-      if (a(p, j) == 0.0_dp) then
-        if (info == 0) info = j
-        cycle
-      end if
-      if (p /= j) then
-        do k = 1, n
-          t = a(j, k); a(j, k) = a(p, k); a(p, k) = t
-        end do
-      end if
-      piv_inv = 1.0_dp / a(j, j)
-      do i = j + 1, n
-        a(i, j) = a(i, j) * piv_inv
-      end do
-      do k = j + 1, n
-        t = a(j, k)
-        do i = j + 1, n
-          a(i, k) = a(i, k) - a(i, j) * t
-        end do
-      end do
-    end do
-  end subroutine small_lu
-
-  pure subroutine small_lu_solve(n, a, ipiv, b)
-    integer, intent(in) :: n
-    real(dp), intent(in) :: a(:, :)
-    integer, intent(in) :: ipiv(:)
-    real(dp), intent(inout) :: b(:)
-    integer :: i, k
-    real(dp) :: t
-    do i = 1, n
-      if (ipiv(i) /= i) then
-        t = b(i); b(i) = b(ipiv(i)); b(ipiv(i)) = t
-      end if
-    end do
-    do k = 1, n                 ! L y = b (unit diagonal), column by column
-      t = b(k)
-      do i = k + 1, n
-        b(i) = b(i) - a(i, k) * t
-      end do
-    end do
-    do k = n, 1, -1             ! U x = y
-      b(k) = b(k) / a(k, k)
-      t = b(k)
-      do i = 1, k - 1
-        b(i) = b(i) - a(i, k) * t
-      end do
-    end do
-  end subroutine small_lu_solve
 
 
   pure real(dp) function merit(self, r, sc)

@@ -18,7 +18,7 @@ module vci_scheme
   use vci_kinds, only: dp
   use vci_status, only: VCI_OK, VCI_ERR_CALLBACK, VCI_ERR_NONFINITE
   use vci_model_base, only: vci_model_base_t
-  use vci_newton, only: vci_system_t
+  use vci_newton, only: vci_system_t, vci_newton_t, vci_newton_result_t
   implicit none
   private
 
@@ -76,6 +76,7 @@ module vci_scheme
     procedure :: needs_pair_solve
     procedure :: endpoint_direction
     procedure :: forget_jacobian
+    procedure :: fused_substep => no_fused_substep
     procedure :: setup_common
     procedure :: extra_index
     procedure :: get_extra
@@ -323,6 +324,18 @@ contains
   subroutine forget_jacobian(self)
     class(vci_scheme_t), intent(inout) :: self
   end subroutine forget_jacobian
+
+  !> The posed regular sub-step solved in one fused routine, when the scheme has one for this
+  !> system (done true: x solved, res filled); else done false and x untouched: the caller runs
+  !> the general Newton path. Schemes without a fused path keep this default.
+  subroutine no_fused_substep(self, nw, x, res, done)
+    class(vci_scheme_t), intent(inout) :: self
+    type(vci_newton_t), intent(inout) :: nw
+    real(dp), intent(inout) :: x(:)
+    type(vci_newton_result_t), intent(inout) :: res
+    logical, intent(out) :: done
+    done = .false.
+  end subroutine no_fused_substep
 
   !> Position of alpha (stage 1), mu (stage 2) or mu (impulse system) among the unknowns.
   pure integer function extra_index(self, kind)

@@ -18,12 +18,15 @@ module vci_scheme_discrete
   use vci_status, only: VCI_OK
   use vci_model, only: vci_model_t
   use vci_retraction, only: vci_retraction_model_t, RETRACTION_LEFT
-  use vci_newton, only: vci_large_system
+  use vci_newton, only: vci_large_system, vci_newton_t, vci_newton_result_t
   use vci_kernels, only: momentum_terms, kinetic_and_floor, jacobian_sizes
   use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_STAGE1, KIND_STAGE2, KIND_IMPULSE, KIND_PAIR, &
                         VCI_IMPACT_HAMILTONIAN, vci_fd_rel
   implicit none
   private
+  ! for the fused solve's submodule: gfortran gives private module procedures local linkage, which a
+  ! submodule in another file cannot reach (not part of the library's API: `use vci` omits them)
+  public :: constraint_block
 
   type, extends(vci_scheme_t), public :: vci_scheme_discrete_t
     class(vci_model_t), pointer :: model => null()
@@ -53,6 +56,10 @@ module vci_scheme_discrete
     !> Scan every callback's values for NaN/Inf (set only to name the culprit after the residual,
     !> checked once as a whole, turned out non-finite: the hot path checks one sum per residual)
     logical, private :: scan_values = .false.
+    !> Workspace of the fused regular-step solve (vci_scheme_discrete_fused), sized n + m
+    real(dp), allocatable, private :: fjac(:, :), flu(:, :), fr(:), fsc(:), frt(:), fsct(:), fxt(:), &
+                                      fdx(:), frw(:), fx0(:)
+    integer, allocatable, private :: fpiv(:)
   contains
     procedure :: setup
     procedure :: unknowns
@@ -62,10 +69,22 @@ module vci_scheme_discrete
     procedure :: endpoint_direction
     procedure :: momentum_out, energy_out, hamiltonian
     procedure :: forget_jacobian
+    procedure :: fused_substep
     procedure :: use_derivatives
     procedure :: position_carry => discrete_position_carry
     procedure :: restore_position_carry => discrete_restore_carry
   end type vci_scheme_discrete_t
+
+  interface
+    !> The regular sub-step's Newton solve in one routine (vci_scheme_discrete_fused.f90).
+    module subroutine fused_substep(self, nw, x, res, done)
+      class(vci_scheme_discrete_t), intent(inout) :: self
+      type(vci_newton_t), intent(inout) :: nw
+      real(dp), intent(inout) :: x(:)
+      type(vci_newton_result_t), intent(inout) :: res
+      logical, intent(out) :: done
+    end subroutine fused_substep
+  end interface
 
 contains
 
@@ -118,7 +137,14 @@ contains
     nx = n + m + 1
     if (allocated(self%d1)) deallocate (self%d1, self%hess, self%g, self%rp, self%rm, self%sp, self%sm, &
                                         self%xp, self%jscale, self%jabs, self%bb, self%start_key, &
-                                        self%start_lo, self%end_key, self%end_lo, self%kin, self%cjo, self%sizes)
+                                        self%start_lo, self%end_key, self%end_lo, self%kin, self%cjo, self%sizes, &
+                                        self%fjac, self%flu, self%fr, self%fsc, self%frt, self%fsct, self%fxt, &
+                                        self%fdx, self%frw, self%fx0, self%fpiv)
+    allocate (self%fjac(n + m, n + m), self%flu(n + m, n + m), self%fr(n + m), self%fsc(n + m), &
+              self%frt(n + m), self%fsct(n + m), self%fxt(n + m), self%fdx(n + m), self%frw(n + m), &
+              self%fx0(n + m), self%fpiv(n + m), stat=stat)
+    if (stat /= 0) return
+    self%fjac = 0.0_dp
     allocate (self%cjo(m, n), self%sizes(nx), &
               self%d1(n), self%hess(n, n), self%g(max(1, model%n_gaps)), self%bb(n), self%start_key(n), self%start_lo(n), &
               self%end_key(n), self%end_lo(n), self%kin(n), &

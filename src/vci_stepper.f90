@@ -31,6 +31,7 @@ module vci_stepper
   !> Cumulative solver statistics.
   type, public :: vci_solver_stats_t
     integer(i8) :: newton_solves = 0, newton_iterations = 0, fallbacks = 0
+    integer(i8) :: fused_solves = 0   !< of newton_solves, those the scheme's fused routine did
   end type vci_solver_stats_t
 
   !> Where stage 1's first crossing is bracketed: on the chord a -> b (cheap: gap evaluations only)
@@ -48,6 +49,7 @@ module vci_stepper
     type(vci_solver_stats_t) :: stats
     integer :: n = 0, m = 0, ng = 0
     integer :: nsub = 0                             !< unknowns of a regular sub-step (the scheme's)
+    logical :: fused = .true.                       !< try the scheme's fused regular-step solve first
     character(len=VCI_MSG_LEN) :: cause = ''       !< why the last step failed
     real(dp) :: last_residual = 0.0_dp              !< scaled residual of the last Newton solve
     ! Workspace, sized once by setup. Unknown vectors (the scheme's layout, up to the largest system):
@@ -148,12 +150,15 @@ contains
   end function solver_stats
 
   !> Which linear-algebra paths Newton may take: the in-line LU up to small_lu_max unknowns, factor
-  !> reuse from reuse_min unknowns (tests and benchmarks compare each path with LAPACK / full Newton).
-  subroutine set_solver_paths(self, small_lu_max, reuse_min)
+  !> reuse from reuse_min unknowns, the scheme's fused regular-step solve when `fused` (default on;
+  !> tests and benchmarks compare each path with LAPACK / full Newton / the general solve).
+  subroutine set_solver_paths(self, small_lu_max, reuse_min, fused)
     class(vci_stepper_t), intent(inout) :: self
     integer, intent(in) :: small_lu_max, reuse_min
+    logical, intent(in), optional :: fused
     self%newton%small_lu_max = small_lu_max
     self%newton%reuse_min = reuse_min
+    if (present(fused)) self%fused = fused
   end subroutine set_solver_paths
 
   !> LU factorisations of Newton matrices so far.
@@ -413,10 +418,24 @@ contains
     real(dp), intent(in) :: a(:), pa(:), tau
     integer, intent(out) :: stat
     integer :: nx
+    type(vci_newton_result_t) :: res
+    logical :: done
     nx = self%nsub
     call self%sys%pose_substep(a, pa, tau, stat)
     if (stat /= VCI_OK) then
       call set_cause(self, 'constraint forms'); return
+    end if
+    if (self%fused) then
+      ! small analytic systems: the fused solve; anything unusual there is redone on the general path
+      call self%sys%fused_substep(self%newton, self%x(1:nx), res, done)
+      if (done) then
+        self%stats%newton_solves = self%stats%newton_solves + 1
+        self%stats%fused_solves = self%stats%fused_solves + 1
+        self%stats%newton_iterations = self%stats%newton_iterations + res%iterations
+        self%last_residual = res%scaled_residual
+        stat = VCI_OK
+        return
+      end if
     end if
     call run_newton(self, nx, 'regular step', stat)
   end subroutine substep
