@@ -581,8 +581,8 @@ contains
     do i = 1, self%n_impacts
       self%impacts(i)%step = self%k
     end do
-    self%q = self%q_next; self%p = self%p_next
-    if (self%model%m > 0) self%lambda = self%lambda_next
+    self%q(:) = self%q_next; self%p(:) = self%p_next     ! ((:): no reallocation check per step)
+    if (self%model%m > 0) self%lambda(:) = self%lambda_next
     self%k = self%k + direction
     t = self%time()
     self%steps_taken = self%steps_taken + 1

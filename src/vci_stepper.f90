@@ -226,7 +226,7 @@ contains
     call self%sys%set_direction(dir)
     n_impacts = 0
     if (self%cause(1:1) /= ' ') self%cause = ''   ! (causes start with a word; blanking all of it costs per step)
-    self%q_start = q; self%p_start = p; tau = h; consumed = 0.0_dp
+    self%q_start(:) = q; self%p_start(:) = p; tau = h; consumed = 0.0_dp
     ! the regular step, from the extrapolated guess
     if (depth * dir < 0) depth = 0           ! the history runs the other way
     call predict(self, dir, h, q, lambda, vel, vel_before, lambda_before, lambda_before2, abs(depth))
@@ -384,9 +384,9 @@ contains
     integer, intent(in) :: dir, depth
     real(dp), intent(in) :: h, q(:), lambda(:), vel(:), vel_before(:), lambda_before(:), lambda_before2(:)
     if (depth >= 2 .and. .not. self%sys%needs_pair_solve()) then
-      self%q_guess = q + real(dir, dp) * h * (2.0_dp * vel - vel_before)
+      self%q_guess(:) = q + real(dir, dp) * h * (2.0_dp * vel - vel_before)
     else
-      self%q_guess = q + real(dir, dp) * h * vel
+      self%q_guess(:) = q + real(dir, dp) * h * vel
     end if
     call self%sys%put_endpoint(self%x, q, self%q_guess)
     if (self%m == 0) then
