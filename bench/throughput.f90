@@ -162,7 +162,8 @@ contains
   !> The examples' default set-ups (examples/*.f90, docs/DESIGN.md §8).
   subroutine setup_scenes()
     real(dp) :: qd2(2), qd3(3), q2(2), q3(3)
-    integer :: k
+    integer :: k, i, stat
+    character(len=8) :: env
     ! particle: floor, start (0, 1) with velocity (1, 0), pair q(0) -/+ (h/2) qdot, 3 s
     sc(1)%h = 1.0e-2_dp; sc(1)%t0 = -0.5_dp * sc(1)%h; sc(1)%nsteps = 300; sc(1)%expected_impacts = 3
     q2 = [0.0_dp, 1.0_dp]; qd2 = [1.0_dp, 0.0_dp]
@@ -199,6 +200,16 @@ contains
       call integ(4, k)%create(ell(k), sc(4)%h, stat); call must(stat, 'create ellipse-free')
       call integ(5, k)%create(pendf(k), sc(5)%h, stat); call must(stat, 'create pendulum-free')
     end do
+    ! VCI_BENCH_GENERAL=1: the library without its fused regular-step solve (every sub-step on the
+    ! general Newton path), to measure what the fused solve saves (tools/bench/run_bench.sh)
+    call get_environment_variable('VCI_BENCH_GENERAL', env, status=stat)
+    if (stat == 0 .and. env == '1') then
+      do k = 1, 2
+        do i = 1, size(integ, 1)
+          call integ(i, k)%set_solver_paths(8, 16, fused=.false.)
+        end do
+      end do
+    end if
   end subroutine setup_scenes
 
   subroutine must(stat, what)

@@ -38,10 +38,12 @@ if [ "${CALLGRIND:-1}" != 0 ] && command -v valgrind >/dev/null 2>&1; then
     echo
     echo "Counted by \`valgrind --tool=callgrind --toggle-collect='*run_timed*'\` on \`vci_bench_throughput --profile\`"
     echo "(episodes: particle and ellipse 20, pendulum 2). Ratios: library / closed-form hand loop (the floor),"
-    echo "library / same-algorithm hand loop (the yardstick)."
+    echo "library / same-algorithm hand loop (the yardstick). The last columns: the library with analytic H on"
+    echo "its general Newton path only (\`VCI_BENCH_GENERAL=1\`: no fused regular-step solve), and what the fused"
+    echo "solve (src/vci_scheme_discrete_fused.f90) leaves of it."
     echo
-    echo "| scene | library, analytic H | library, differenced H | closed-form loop | same-algorithm loop | analytic / closed form | analytic / same alg. | differenced / same alg. |"
-    echo "|---|---:|---:|---:|---:|---:|---:|---:|"
+    echo "| scene | library, analytic H | library, differenced H | closed-form loop | same-algorithm loop | analytic / closed form | analytic / same alg. | differenced / same alg. | analytic H, general path | fused / general |"
+    echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
     for spec in particle:300:20 ellipse:200:20 pendulum:4999:2 ellipse-free:200:20 pendulum-free:4999:2; do
       name=${spec%%:*}; rest=${spec#*:}; nst=${rest%%:*}; eps=${rest#*:}
       set_counts=""
@@ -51,8 +53,11 @@ if [ "${CALLGRIND:-1}" != 0 ] && command -v valgrind >/dev/null 2>&1; then
                "$EXE" --profile "$name" "$v" "$eps" 2>&1 | awk '/Collected/ {print $4}')
         set_counts="$set_counts $(( ir / (nst * eps) ))"
       done
-      echo "$set_counts" | awk -v s="$name" '{ if ($4 > 0) printf "| %s | %d | %d | %d | %d | %.1f | %.2f | %.2f |\n", s, $1, $2, $3, $4, $1/$3, $1/$4, $2/$4;
-                                               else printf "| %s | %d | %d | %d | n/a | %.1f | n/a | n/a |\n", s, $1, $2, $3, $1/$3 }'
+      ir=$(VCI_BENCH_GENERAL=1 valgrind --tool=callgrind --callgrind-out-file=/dev/null --toggle-collect='*run_timed*' \
+             "$EXE" --profile "$name" 1 "$eps" 2>&1 | awk '/Collected/ {print $4}')
+      set_counts="$set_counts $(( ir / (nst * eps) ))"
+      echo "$set_counts" | awk -v s="$name" '{ if ($4 > 0) printf "| %s | %d | %d | %d | %d | %.1f | %.2f | %.2f | %d | %.2f |\n", s, $1, $2, $3, $4, $1/$3, $1/$4, $2/$4, $5, $1/$5;
+                                               else printf "| %s | %d | %d | %d | n/a | %.1f | n/a | n/a | %d | %.2f |\n", s, $1, $2, $3, $1/$3, $5, $1/$5 }'
     done
     echo
   } >"$CG"
@@ -80,11 +85,11 @@ if [ "${CALLGRIND:-1}" != 0 ] && [ "${PROFILE:-1}" != 0 ] && command -v callgrin
       callgrind_annotate --inclusive=no --threshold=100 "$CGO" 2>/dev/null | awk -v steps=$((nst * eps)) -v scene="$name" '
         /:/ && $1 ~ /^[0-9,]+$/ {
           n = $1; gsub(",", "", n); f = $0
-          if (f ~ /newton_MOD_(small_lu|lu_|linear)|dgetr|dgelsd/) g = "4 LU factorisation and solves"
-          else if (f ~ /newton_MOD/) g = "5 Newton iteration (merit, finiteness, line search, copies)"
+          if (f ~ /newton_MOD_(lu_|linear)|kernels_MOD_(small_lu|equilibrate|substep_direction)|dgetr|dgelsd/) g = "4 LU factorisation and solves (incl. row equilibration)"
+          else if (f ~ /newton_MOD|kernels_MOD_scaled_merit|MOD_fused_substep/) g = "5 Newton iteration (merit, finiteness, line search, copies)"
           else if (f ~ /scene_|vci_scene/ || f ~ /libm|sincos|s_sin|s_cos/) g = "1 model callbacks (scene code, libm)"
-          else if (f ~ /scheme_discrete_MOD_(step_jacobian|fd_column)|dispatch_jacobian|check_matrix|impulse_jacobian/) g = "3 Jacobian assembly (incl. differenced rows)"
-          else if (f ~ /scheme_discrete_MOD_(step_residual|rows|d1s|check_fast)|dispatch_residual|scheme_MOD_check/) g = "2 residual and row scales"
+          else if (f ~ /scheme_discrete_MOD_(step_jacobian|fd_column|momentum_block|constraint_block)|fused_jacobian|kernels_MOD_jacobian_sizes|dispatch_jacobian|check_matrix|impulse_jacobian/) g = "3 Jacobian assembly (incl. differenced rows)"
+          else if (f ~ /scheme_discrete_MOD_(step_residual|rows|d1s|check_fast)|fused_residual|kernels_MOD_(momentum_terms|kinetic_and_floor|substep_rows)|dispatch_residual|scheme_MOD_check/) g = "2 residual and row scales"
           else if (f ~ /energy_out|momentum_out|hamiltonian/) g = "6 new momentum and E_d"
           else if (f ~ /gaps|gap_grad/) g = "7 gap tests"
           else if (f ~ /stepper_MOD|integrator_MOD|scheme_MOD|scheme_discrete_MOD/) g = "8 stepper/driver bookkeeping (pose, put/get, copies)"
