@@ -4,9 +4,11 @@
 !> Why a module of its own: written on the components of a polymorphic object (self%d1(i), ...),
 !> gfortran reloads each array's descriptor at every element, because a store through one dummy
 !> may, for all it knows, change another's descriptor; at n = 2 or 3 that bookkeeping cost more than
-!> the arithmetic (docs/bench/throughput.md, profile). Here every array is a plain explicit-shape
-!> dummy, so the loops compile to straight arithmetic. The callers pass contiguous arrays (whole
-!> allocatables or leading sections of them), so nothing is copied in.
+!> the arithmetic (docs/bench/throughput.md, profile). Here the arrays are plain explicit-shape
+!> dummies, so the loops compile to straight arithmetic. The callers pass contiguous arrays (whole
+!> allocatables or leading sections of them), so nothing is copied in; the one array that is a
+!> section with gaps (the Jacobian in jacobian_sizes) is assumed-shape instead
+!> (test/alloc/test_alloc_free.pf counts the step loop's heap allocations).
 module vci_kernels
   use vci_kinds, only: dp
   implicit none
@@ -56,9 +58,11 @@ contains
   end subroutine kinetic_and_floor
 
   !> jabs = |jac| and jscale(i) = sum_j |jac(i, j)| size(j) (size: |position| or |unknown|).
-  pure subroutine jacobian_sizes(nx, ldj, jac, sizes, lda, jabs, jscale)
-    integer, intent(in) :: nx, ldj, lda
-    real(dp), intent(in) :: jac(ldj, *), sizes(nx)
+  !> jac is assumed-shape: Newton's matrix is the leading nx x nx block of a larger array, which an
+  !> explicit-shape dummy would receive as a packed copy on the heap at every Jacobian.
+  pure subroutine jacobian_sizes(nx, jac, sizes, lda, jabs, jscale)
+    integer, intent(in) :: nx, lda
+    real(dp), intent(in) :: jac(:, :), sizes(nx)
     real(dp), intent(inout) :: jabs(lda, *)
     real(dp), intent(out) :: jscale(nx)
     integer :: i, j

@@ -275,7 +275,8 @@ contains
     integer, intent(in) :: dir
     real(dp), intent(out) :: jac(:, :)
     integer, intent(inout) :: stat
-    integer :: s
+    integer :: s, i, j
+    real(dp) :: t
     if (.not. self%work%has_hessians) then
       jac = 0.0_dp
       call self%not_provided(stat); return
@@ -286,7 +287,14 @@ contains
     if (s /= VCI_OK) then
       stat = s; return
     end if
-    if (dir < 0) jac = -transpose(jac)
+    if (dir >= 0) return
+    ! jac = -transpose(jac) in place: the array expression would put a temporary on the heap
+    do j = 1, size(jac, 2)
+      jac(j, j) = -jac(j, j)
+      do i = j + 1, size(jac, 1)
+        t = jac(i, j); jac(i, j) = -jac(j, i); jac(j, i) = -t
+      end do
+    end do
   end subroutine jacobian_inc
 
   !> omega_d(a, b, h) = Omega(point)^T d / h with the rule's point of the segment based at a.

@@ -468,10 +468,19 @@ contains
     real(dp), intent(out) :: r(:), sc(:)
     integer, intent(out) :: stat
     integer :: m, i, mu
-    real(dp) :: hp, hplus, hminus, d, pmax, noise, pi0
+    real(dp) :: hp, hplus, hminus, d, pmax, noise, pi0, acc
     m = self%m
     self%pplus = self%pa + x(m + 1) * self%grad
-    if (m > 0) self%pplus = self%pplus + matmul(self%omega, x(1:m))
+    if (m > 0) then
+      ! + matmul(omega, x(1:m)), summed in matmul's order: its result would be a heap temporary
+      do i = 1, self%n
+        acc = 0.0_dp
+        do mu = 1, m
+          acc = acc + self%omega(i, mu) * x(mu)
+        end do
+        self%pplus(i) = self%pplus(i) + acc
+      end do
+    end if
     call self%hamiltonian(self%a, self%pplus, hp, stat)
     if (stat /= VCI_OK) return
     r(m + 1) = hp - self%e_minus

@@ -551,7 +551,7 @@ contains
         self%sizes(j) = abs(x(j))
       end if
     end do
-    call jacobian_sizes(nx, size(jac, 1), jac, self%sizes, size(self%jabs, 1), self%jabs, self%jscale)
+    call jacobian_sizes(nx, jac, self%sizes, size(self%jabs, 1), self%jabs, self%jscale)
     self%jac_known = .true.
     if (nx >= vci_large_system) then
       self%kin = 0.0_dp

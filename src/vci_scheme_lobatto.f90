@@ -308,10 +308,12 @@ contains
       do j = 0, s - 1
         rs = 1.0_dp
         if (j == 0) rs = dsign
-        self%tmp = self%rule%b(j) * (self%lq(:, j) - matmul(self%hqv(:, :, j), self%v(:, j)))
-        do i = 0, s
-          self%tmp = self%tmp - (dsign / tau) * self%rule%b(i) * self%rule%d(i, j) * &
-                     matmul(self%hvv(:, :, i), self%v(:, i))
+        self%tmp = self%lq(:, j)
+        call add_mat_vec(self%tmp, -1.0_dp, self%hqv(:, :, j), self%v(:, j))
+        self%tmp = self%rule%b(j) * self%tmp
+        do i = 0, s   ! (y - c t as y + (-c) t: the same bits)
+          call add_mat_vec(self%tmp, -((dsign / tau) * self%rule%b(i) * self%rule%d(i, j)), self%hvv(:, :, i), &
+                           self%v(:, i))
         end do
         jac(j * n + 1:(j + 1) * n, last) = rs * self%tau * self%tmp
       end do
@@ -322,10 +324,12 @@ contains
       jac(1:n, last) = self%grad
       ! dE_d/dy_k = b_k (Lqv_k V_k - Lq_k) + (dir/tau) sum_i b_i D_ik Lvv_i V_i
       do k = 1, s
-        self%tmp = self%rule%b(k) * (matmul(self%hqv(:, :, k), self%v(:, k)) - self%lq(:, k))
+        self%tmp = -self%lq(:, k)
+        call add_mat_vec(self%tmp, 1.0_dp, self%hqv(:, :, k), self%v(:, k))
+        self%tmp = self%rule%b(k) * self%tmp
         do i = 0, s
-          self%tmp = self%tmp + (dsign / tau) * self%rule%b(i) * self%rule%d(i, k) * &
-                     matmul(self%hvv(:, :, i), self%v(:, i))
+          call add_mat_vec(self%tmp, (dsign / tau) * self%rule%b(i) * self%rule%d(i, k), self%hvv(:, :, i), &
+                           self%v(:, i))
         end do
         jac(last, (k - 1) * n + 1:k * n) = self%tmp
       end do
@@ -394,4 +398,22 @@ contains
       self%failed_callback = what
     end if
   end subroutine lagrangian_failure
+
+  !> y = y + c matmul(a, v), the product summed in matmul's order: in an expression such as
+  !> `y = y + c * matmul(a, v)` gfortran puts matmul's result in a temporary on the heap (at -O0 in
+  !> every expression). From y = w, c = -1 it gives w - matmul(a, v) to the bit; from y = -w, c = 1,
+  !> matmul(a, v) - w.
+  pure subroutine add_mat_vec(y, c, a, v)
+    real(dp), intent(inout) :: y(:)
+    real(dp), intent(in) :: c, a(:, :), v(:)
+    integer :: i, j
+    real(dp) :: t
+    do i = 1, size(y)
+      t = 0.0_dp
+      do j = 1, size(v)
+        t = t + a(i, j) * v(j)
+      end do
+      y(i) = y(i) + c * t
+    end do
+  end subroutine add_mat_vec
 end module vci_scheme_lobatto

@@ -457,7 +457,7 @@ contains
     alpha = max(hi, 1.0e-6_dp)
     self%q_guess = self%q_start + alpha * (self%q_end - self%q_start)
     call self%sys%put_endpoint(self%x, self%q_start, self%q_guess)
-    call solve_wall(self, j, tau, alpha, trim(what), stat)
+    call solve_wall(self, j, tau, alpha, what(1:len_trim(what)), stat)   ! (trim() would allocate)
     if (stat == VCI_OK) then
       alpha = self%sys%get_extra(self%x, KIND_STAGE1)
       if (alpha > 0.0_dp .and. alpha <= 1.0_dp) return
@@ -467,7 +467,7 @@ contains
     ! end points of regular sub-steps of length s tau, and start Newton inside that bracket.
     call trajectory_start(self, j, tau, alpha, stat)
     if (stat /= VCI_OK) return
-    call solve_wall(self, j, tau, alpha, trim(what), stat)
+    call solve_wall(self, j, tau, alpha, what(1:len_trim(what)), stat)
     if (stat /= VCI_OK) return
     alpha = self%sys%get_extra(self%x, KIND_STAGE1)
     if (.not. (alpha > 0.0_dp .and. alpha <= 1.0_dp)) then
@@ -603,6 +603,7 @@ contains
     integer :: n, m, nx0, info
     real(dp) :: num, den, mu0
     character(len=40) :: what
+    character(len=48) :: what_impulse
     n = self%n; m = self%m; nx0 = self%nsub
     what = wall_label('stage 2 (reflecting at wall ', j)
     call self%sys%eval_gap_gradients(self%q_wall, self%gap_grads(:, 1:self%ng), stat)
@@ -661,7 +662,9 @@ contains
         call self%newton%linear_solve(m, self%jac, self%rhs, info)
         if (info == 0) self%x(1:m) = self%rhs(1:m)
       end if
-      call run_newton(self, m + 1, trim(what)//' impulse', stat)
+      what_impulse = what   ! what//' impulse' without a heap temporary (trim() and // allocate)
+      what_impulse(len_trim(what) + 1:) = ' impulse'
+      call run_newton(self, m + 1, what_impulse(1:len_trim(what_impulse)), stat)
       if (stat /= VCI_OK) return
       mu0 = self%sys%get_extra(self%x, KIND_IMPULSE)
       if (m > 0) self%constraint_impulse = self%x(1:m)
@@ -677,7 +680,7 @@ contains
       end if
     else if (mu0 /= 0.0_dp) then
       call self%sys%pose_stage2(self%q_wall, self%p_arrive, tau2, j, e_minus)
-      call run_newton(self, self%sys%unknowns(KIND_STAGE2), trim(what), stat)
+      call run_newton(self, self%sys%unknowns(KIND_STAGE2), what(1:len_trim(what)), stat)
       if (stat /= VCI_OK) return
       if (.not. reflected(self, self%sys%get_extra(self%x, KIND_STAGE2), tau2, stat)) then
         if (stat == VCI_OK) stat = VCI_ERR_IMPACT
@@ -722,8 +725,8 @@ contains
     type(vci_impact_t), intent(inout) :: imp
     integer, intent(in) :: dir, j
     real(dp), intent(in) :: h, t, elapsed, e_minus, s1res, tau2
-    integer :: n, stat
-    real(dp) :: mu, e_after
+    integer :: n, stat, i, k
+    real(dp) :: mu, e_after, acc
     n = self%n
     mu = self%sys%get_extra(self%x, KIND_STAGE2)
     imp%t = t + real(dir, dp) * elapsed
@@ -732,8 +735,15 @@ contains
     imp%q = self%q_wall
     imp%p_before = self%p_arrive
     imp%p_after = self%p_arrive + mu * self%sys%grad
-    if (self%m > 0 .and. self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN) &
-      imp%p_after = imp%p_after + matmul(self%sys%omega, self%constraint_impulse)
+    if (self%m > 0 .and. self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN) then
+      do i = 1, n   ! + matmul(omega, nu) in matmul's order: its result would be a heap temporary
+        acc = 0.0_dp
+        do k = 1, self%m
+          acc = acc + self%sys%omega(i, k) * self%constraint_impulse(k)
+        end do
+        imp%p_after(i) = imp%p_after(i) + acc
+      end do
+    end if
     imp%grad_g = self%sys%grad
     imp%impulse = real(dir, dp) * mu
     imp%energy_before = e_minus
@@ -847,7 +857,10 @@ contains
       if (v == 0 .or. pos == 1) exit
       pos = pos - 1
     end do
-    label = prefix//digits(pos:)//')'
+    ! by substrings: a concatenation of these lengths is built in a heap temporary
+    label = prefix
+    label(len(prefix) + 1:) = digits(pos:)
+    label(len(prefix) + len(digits) - pos + 2:) = ')'
   end function wall_label
 
   subroutine set_cause(self, what)
