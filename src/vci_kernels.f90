@@ -239,7 +239,7 @@ contains
     logical, intent(out) :: ok
     integer :: i, j, info
     real(dp) :: s, dmin, dmax
-    call jacobian_sizes(n, n, jac, sizes, lda, jabs, jscale)
+    call jacobian_sizes(n, jac, sizes, lda, jabs, jscale)
     call equilibrate(n, n, jac, lu, r, dx, rw)
     s = 0.0_dp
     do j = 1, n
