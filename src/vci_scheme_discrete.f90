@@ -37,6 +37,7 @@ module vci_scheme_discrete
     logical :: has_constraint_jacobian = .false.   !< the model's d omega_d (user L_d only)
     real(dp), allocatable, private :: cjo(:, :)   !< the model's d omega_d(a, b) / db
     real(dp), allocatable, private :: d1(:), hess(:, :), g(:), rp(:), rm(:), sp(:), sm(:), xp(:), bb(:)
+    real(dp), allocatable, private :: gg(:, :)   !< gap gradients at stage 1's b (its Jacobian's last row)
     !> sum_j |dR_i/dx_j| |x_j| from the last Jacobian: the round-off floor of row i (positions are
     !> often large next to their change over a step), added to each row's scale
     real(dp), allocatable, private :: jscale(:)
@@ -119,8 +120,9 @@ contains
     nx = n + m + 1
     if (allocated(self%d1)) deallocate (self%d1, self%hess, self%g, self%rp, self%rm, self%sp, self%sm, &
                                         self%xp, self%jscale, self%jabs, self%bb, self%start_key, &
-                                        self%start_lo, self%end_key, self%end_lo, self%kin, self%cjo, self%sizes)
-    allocate (self%cjo(m, n), self%sizes(nx), &
+                                        self%start_lo, self%end_key, self%end_lo, self%kin, self%cjo, self%sizes, &
+                                        self%gg)
+    allocate (self%cjo(m, n), self%sizes(nx), self%gg(n, max(1, model%n_gaps)), &
               self%d1(n), self%hess(n, n), self%g(max(1, model%n_gaps)), self%bb(n), self%start_key(n), self%start_lo(n), &
               self%end_key(n), self%end_lo(n), self%kin(n), &
               self%rp(nx), self%rm(nx), self%sp(nx), self%sm(nx), self%xp(nx), self%jscale(nx), &
@@ -505,9 +507,16 @@ contains
         call constraint_block(self, x, tau, jac, stat)   ! only the m constraint rows depend on b besides
         if (stat /= VCI_OK) return
       else if (nx > n .and. analytic_last_row(self)) then
-        ! the last row does not depend on b: no differenced columns of b
+        ! no differenced columns of b: stage 2's Hamiltonian row does not depend on b, stage 1's
+        ! gap row g_j(b) has the gradient grad g_j(b) (d b / d x = I in both layouts)
         if (m > 0) call constraint_block(self, x, tau, jac, stat)
         if (stat /= VCI_OK) return
+        if (self%kind == KIND_STAGE1) then
+          call endpoint_of(self, x)
+          call self%eval_gap_gradients(self%bb, self%gg, stat)
+          if (stat /= VCI_OK) return
+          jac(last, 1:n) = self%gg(:, self%gap)
+        end if
       else if (nx > n) then
         do j = 1, n
           call fd_column(self, x, j, fd_step(position(self, x, j), motion(self, x, j)), .false., jac(:, j), stat)
@@ -564,14 +573,13 @@ contains
     end if
   end subroutine step_jacobian
 
-  !> Is the last row of stage 1 or 2 known in closed form along b? Stage 2 with the Hamiltonian
-  !> condition H(qt, p- + mu grad g) = H(qt, p-): free of b. (Stage 1's row g_j(b) has the gradient
-  !> grad g_j(b), equal to its difference quotients to 1e-7, but the changed round-off path moves
-  !> the ellipse's rare large Hamiltonian-impact energy jumps (docs/RESULTS.md) past the long
-  !> test's bound: kept differenced until those are understood.)
+  !> Is the last row of stage 1 or 2 known in closed form along b? Stage 1's g_j(b): its gradient
+  !> (the model's, else eval_gap_gradients' differences of g alone). Stage 2 with the Hamiltonian
+  !> condition H(qt, p- + mu grad g) = H(qt, p-): free of b. (Stage 2's E_d row stays differenced.)
   pure logical function analytic_last_row(self)
     class(vci_scheme_discrete_t), intent(in) :: self
-    analytic_last_row = self%kind == KIND_STAGE2 .and. self%impact_energy == VCI_IMPACT_HAMILTONIAN
+    analytic_last_row = self%kind == KIND_STAGE1 .or. &
+                        (self%kind == KIND_STAGE2 .and. self%impact_energy == VCI_IMPACT_HAMILTONIAN)
   end function analytic_last_row
 
   !> jac(1:n, 1:n) = d(s D1 L^s)/db from the model's mixed Hessian (its transpose, negated, backward).
