@@ -379,6 +379,8 @@ contains
     self%xt(1:n) = x - self%dx(1:n)
     if (.not. sys%admissible(self%xt(1:n))) return
     call sys%residual(self%xt(1:n), self%rt(1:n), self%sct(1:n), stat)
+    ! an optional step: a failure keeps the converged x, unless the callback said unrecoverable
+    if (stat /= VCI_OK .and. sys%unrecoverable) call fail_eval(res, stat)
     if (stat /= VCI_OK) return
     if (.not. (all_finite(self%rt(1:n)) .and. all_finite(self%sct(1:n)))) return
     phit = merit(self, self%rt(1:n), self%sct(1:n))

@@ -69,6 +69,7 @@ module vci_scheme
     procedure :: set_direction
     procedure :: set_wall_normal
     procedure :: configure_impacts
+    procedure :: impact_momentum
     procedure :: use_derivatives
     procedure :: clear_failure
     procedure :: position_carry
@@ -264,6 +265,17 @@ contains
     real(dp), intent(in) :: grad_g(:)
     self%grad = grad_g
   end subroutine set_wall_normal
+
+  !> The momentum at the end of a sub-step of an impact step (stage 1's arrival, the sub-step that
+  !> leaves the wall): momentum_out, unless the scheme has a form with less round-off there.
+  subroutine impact_momentum(self, x, a, tau, p, stat, pa)
+    class(vci_scheme_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:), a(:), tau
+    real(dp), intent(out) :: p(:)
+    integer, intent(out) :: stat
+    real(dp), intent(in), optional :: pa(:)
+    call self%momentum_out(x, a, tau, p, stat, pa)
+  end subroutine impact_momentum
 
   !> The impact energy condition and Newton's relative tolerance (once per change of settings).
   subroutine configure_impacts(self, impact_energy, rtol)

@@ -40,6 +40,7 @@ module vci_scheme_discrete
     logical :: has_constraint_jacobian = .false.   !< the model's d omega_d (user L_d only)
     real(dp), allocatable, private :: cjo(:, :)   !< the model's d omega_d(a, b) / db
     real(dp), allocatable, private :: d1(:), hess(:, :), g(:), rp(:), rm(:), sp(:), sm(:), xp(:), bb(:)
+    real(dp), allocatable, private :: gg(:, :)   !< gap gradients at stage 1's b (its Jacobian's last row)
     !> sum_j |dR_i/dx_j| |x_j| from the last Jacobian: the round-off floor of row i (positions are
     !> often large next to their change over a step), added to each row's scale
     real(dp), allocatable, private :: jscale(:)
@@ -68,6 +69,7 @@ module vci_scheme_discrete
     procedure :: put_endpoint, get_endpoint, put_multipliers, get_multipliers, momentum_rhs
     procedure :: endpoint_direction
     procedure :: momentum_out, energy_out, hamiltonian
+    procedure :: impact_momentum
     procedure :: forget_jacobian
     procedure :: fused_substep
     procedure :: use_derivatives
@@ -139,13 +141,13 @@ contains
                                         self%xp, self%jscale, self%jabs, self%bb, self%start_key, &
                                         self%start_lo, self%end_key, self%end_lo, self%kin, self%cjo, self%sizes, &
                                         self%fjac, self%flu, self%fr, self%fsc, self%frt, self%fsct, self%fxt, &
-                                        self%fdx, self%frw, self%fx0, self%fpiv)
+                                        self%fdx, self%frw, self%fx0, self%fpiv, self%gg)
     allocate (self%fjac(n + m, n + m), self%flu(n + m, n + m), self%fr(n + m), self%fsc(n + m), &
               self%frt(n + m), self%fsct(n + m), self%fxt(n + m), self%fdx(n + m), self%frw(n + m), &
               self%fx0(n + m), self%fpiv(n + m), stat=stat)
     if (stat /= 0) return
     self%fjac = 0.0_dp
-    allocate (self%cjo(m, n), self%sizes(nx), &
+    allocate (self%cjo(m, n), self%sizes(nx), self%gg(n, max(1, model%n_gaps)), &
               self%d1(n), self%hess(n, n), self%g(max(1, model%n_gaps)), self%bb(n), self%start_key(n), self%start_lo(n), &
               self%end_key(n), self%end_lo(n), self%kin(n), &
               self%rp(nx), self%rm(nx), self%sp(nx), self%sm(nx), self%xp(nx), self%jscale(nx), &
@@ -344,6 +346,34 @@ contains
     call self%check(stat, p, 'D1/D2 of L_d')
   end subroutine momentum_out
 
+  !> The momentum at the end of a sub-step of an impact step (stage 1's arrival, the sub-step that
+  !> leaves the wall), x balancing pa. A user's L_d: p_b = pa - Omega(a) lambda + (s D1 L^s + s D2 L^s),
+  !> where the kinetic terms +-M (b - a) / tau cancel and with them b's rounding, which s D2 L^s alone
+  !> carries divided by the sub-step alpha tau or (1 - alpha) tau: on the ellipse (x ~ 2e5 after
+  !> 1e5 s) H jumped by ~v ulp(x) / sub-step, up to 9e-4 (tools/impact_energy). Regular steps keep
+  !> s D2 L^s: it agrees with the rounded positions, so the next predictor starts at round-off (with
+  !> the impulse there Newton iterated 50 % more). Retractions: momentum_out's impulse already.
+  subroutine impact_momentum(self, x, a, tau, p, stat, pa)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:), a(:), tau
+    real(dp), intent(out) :: p(:)
+    integer, intent(out) :: stat
+    real(dp), intent(in), optional :: pa(:)
+    integer :: i, mu
+    call self%momentum_out(x, a, tau, p, stat, pa)
+    if (stat /= VCI_OK .or. self%increments .or. .not. present(pa)) return
+    if (.not. all(a == self%a)) return   ! Omega(a) is the posed one
+    call d1s(self, a, x(1:self%n), tau, self%d1, stat)
+    if (stat /= VCI_OK) return
+    do i = 1, self%n
+      p(i) = pa(i) + (self%d1(i) + p(i))
+      do mu = 1, self%m
+        p(i) = p(i) - self%omega(i, mu) * x(self%n + mu)
+      end do
+    end do
+    call self%check(stat, p, 'D1/D2 of L_d')
+  end subroutine impact_momentum
+
   !> Discrete energy E_d = -D3 L_d of the segment between a and the endpoint of x (both directions).
   subroutine energy_out(self, x, a, tau, e, stat)
     class(vci_scheme_discrete_t), intent(inout) :: self
@@ -502,9 +532,16 @@ contains
         call constraint_block(self, x, tau, jac, stat)   ! only the m constraint rows depend on b besides
         if (stat /= VCI_OK) return
       else if (nx > n .and. analytic_last_row(self)) then
-        ! the last row does not depend on b: no differenced columns of b
+        ! no differenced columns of b: stage 2's Hamiltonian row does not depend on b, stage 1's
+        ! gap row g_j(b) has the gradient grad g_j(b) (d b / d x = I in both layouts)
         if (m > 0) call constraint_block(self, x, tau, jac, stat)
         if (stat /= VCI_OK) return
+        if (self%kind == KIND_STAGE1) then
+          call endpoint_of(self, x)
+          call self%eval_gap_gradients(self%bb, self%gg, stat)
+          if (stat /= VCI_OK) return
+          jac(last, 1:n) = self%gg(:, self%gap)
+        end if
       else if (nx > n) then
         do j = 1, n
           call fd_column(self, x, j, fd_step(position(self, x, j), motion(self, x, j)), .false., jac(:, j), stat)
@@ -561,14 +598,13 @@ contains
     end if
   end subroutine step_jacobian
 
-  !> Is the last row of stage 1 or 2 known in closed form along b? Stage 2 with the Hamiltonian
-  !> condition H(qt, p- + mu grad g) = H(qt, p-): free of b. (Stage 1's row g_j(b) has the gradient
-  !> grad g_j(b), equal to its difference quotients to 1e-7, but the changed round-off path moves
-  !> the ellipse's rare large Hamiltonian-impact energy jumps (docs/RESULTS.md) past the long
-  !> test's bound: kept differenced until those are understood.)
+  !> Is the last row of stage 1 or 2 known in closed form along b? Stage 1's g_j(b): its gradient
+  !> (the model's, else eval_gap_gradients' differences of g alone). Stage 2 with the Hamiltonian
+  !> condition H(qt, p- + mu grad g) = H(qt, p-): free of b. (Stage 2's E_d row stays differenced.)
   pure logical function analytic_last_row(self)
     class(vci_scheme_discrete_t), intent(in) :: self
-    analytic_last_row = self%kind == KIND_STAGE2 .and. self%impact_energy == VCI_IMPACT_HAMILTONIAN
+    analytic_last_row = self%kind == KIND_STAGE1 .or. &
+                        (self%kind == KIND_STAGE2 .and. self%impact_energy == VCI_IMPACT_HAMILTONIAN)
   end function analytic_last_row
 
   !> jac(1:n, 1:n) = d(s D1 L^s)/db from the model's mixed Hessian (its transpose, negated, backward).

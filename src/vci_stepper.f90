@@ -298,7 +298,13 @@ contains
           end if
         end do
         call self%sys%get_endpoint(self%x_stage1, self%q_wall)
-        call self%sys%momentum_out(self%x_stage1, self%q_start, alpha * tau, self%p_arrive, stat, self%p_start)
+        if (self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN) then
+          call self%sys%impact_momentum(self%x_stage1, self%q_start, alpha * tau, self%p_arrive, stat, self%p_start)
+        else
+          ! E- is E_d of these positions; a p- that agrees with it (s D2 L^s of them) keeps grazing
+          ! reflections exact (test_stab_grazing)
+          call self%sys%momentum_out(self%x_stage1, self%q_start, alpha * tau, self%p_arrive, stat, self%p_start)
+        end if
         if (stat == VCI_OK) then
           if (self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN) then
             call self%sys%hamiltonian(self%q_wall, self%p_arrive, e_minus, stat)
@@ -353,7 +359,7 @@ contains
     if (n_impacts == 0) then
       call self%sys%momentum_out(self%x, self%q_start, tau, pn, stat, self%p_start)
     else
-      call self%sys%momentum_out(self%x, self%q_start, tau, pn, stat, self%p_leave)
+      call self%sys%impact_momentum(self%x, self%q_start, tau, pn, stat, self%p_leave)
     end if
     if (stat == VCI_OK) call self%sys%energy_out(self%x, self%q_start, tau, e_step, stat)
     if (stat /= VCI_OK) then

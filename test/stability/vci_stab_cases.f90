@@ -112,11 +112,12 @@ contains
   !> horizontal speed 1/2, reaching the floor at t* = 1 + alpha h: the impact is at fraction
   !> alpha of step 9. alpha = 0 lands exactly on the floor at the grid point t = 1. 24 steps.
   !> Returns t* and the height at t = 3 against the exact elastic bounce.
-  subroutine alpha_case(alpha, mode, s, t_star, y_err)
+  subroutine alpha_case(alpha, mode, s, t_star, y_err, x0)
     real(dp), intent(in) :: alpha
     integer, intent(in) :: mode
     type(run_summary_t), intent(out) :: s
     real(dp), intent(out) :: t_star, y_err
+    real(dp), intent(in), optional :: x0   !< start abscissa (default 0): the size of the positions
     type(particle_t), target :: model
     type(vci_integrator_t) :: integ
     real(dp), parameter :: g = 8.0_dp, h = 0.125_dp
@@ -127,7 +128,11 @@ contains
     model = particle_on_floor(1.0_dp, g)
     call integ%create(model, h, stat)
     call integ%set_impact_energy(mode, stat)
-    call integ%init_from_momentum(0.0_dp, [0.0_dp, y0], [0.5_dp, 0.0_dp], stat)
+    if (present(x0)) then
+      call integ%init_from_momentum(0.0_dp, [x0, y0], [0.5_dp, 0.0_dp], stat)
+    else
+      call integ%init_from_momentum(0.0_dp, [0.0_dp, y0], [0.5_dp, 0.0_dp], stat)
+    end if
     call run_steps(integ, model, 24_i8, s)
     ! exact: bounces at t*, 3 t*, ... ; between them y = y0 - g (t - t* - k 2 t*)^2 / 2 shifted
     t = integ%time()

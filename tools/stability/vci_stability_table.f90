@@ -227,7 +227,7 @@ contains
     else if (mode == 0) then
       w = 'runs on, but the paper''s condition adds ~m g^2 h^2/8 per impact: bounces wrong (not a failure status)'
     else
-      w = 'runs'
+      w = 'several bounces per step, all resolved, H kept'
     end if
   end function what_bounce
 
@@ -241,6 +241,8 @@ contains
       w = 'resolved; impact-time error from round-off ~ eps t^2/h^2 (velocity re-derived from position differences)'
     else if (dh > 1.0e-2_dp) then
       w = 'first bounce at the right time, but H wrong by the O(h^2) impact-condition change'
+    else if (s%impacts > 1) then
+      w = 'several bounces in the first step, all resolved'
     else
       w = 'first bounce resolved'
     end if
