@@ -15,7 +15,7 @@ module vci_kernels
   private
 
   public :: momentum_terms, kinetic_and_floor, jacobian_sizes, equilibrate, scaled_merit, small_lu, small_lu_solve
-  public :: substep_rows, substep_direction
+  public :: substep_rows, substep_direction, pivots_regular
 
 contains
 
@@ -218,7 +218,7 @@ contains
     end do
     call kinetic_and_floor(n, n + m, ld, jabs, kin, jac_known, fl, jscale, sc)
     phi = 0.0_dp; s = 0.0_dp
-    do i = 1, n + m
+    do i = 1, n + m          ! scaled_merit, and the finiteness sum in the same pass
       phi = max(phi, abs(r(i)) / max(atol + rtol * sc(i), tiny(1.0_dp)))
       s = s + r(i) + sc(i)
     end do
@@ -238,7 +238,7 @@ contains
     integer, intent(inout) :: ipiv(n)
     logical, intent(out) :: ok
     integer :: i, j, info
-    real(dp) :: s, dmin, dmax
+    real(dp) :: s
     call jacobian_sizes(n, jac, sizes, lda, jabs, jscale)
     call equilibrate(n, n, jac, lu, r, dx, rw)
     s = 0.0_dp
@@ -251,12 +251,7 @@ contains
     ok = .false.
     if (.not. abs(s) <= huge(1.0_dp)) return
     call small_lu(n, lu, ipiv, info)
-    if (info /= 0) return
-    dmin = huge(1.0_dp); dmax = 0.0_dp
-    do i = 1, n
-      dmin = min(dmin, abs(lu(i, i))); dmax = max(dmax, abs(lu(i, i)))
-    end do
-    if (.not. dmin > 1.0e-14_dp * dmax) return
+    if (info /= 0 .or. .not. pivots_regular(n, n, lu)) return
     call small_lu_solve(n, lu, ipiv, dx)
     s = 0.0_dp
     do i = 1, n
@@ -264,4 +259,17 @@ contains
     end do
     ok = abs(s) <= huge(1.0_dp)
   end subroutine substep_direction
+
+  !> Is the factorised matrix numerically regular: smallest |U(i, i)| above 1e-14 of the largest?
+  pure logical function pivots_regular(n, ld, lu) result(ok)
+    integer, intent(in) :: n, ld
+    real(dp), intent(in) :: lu(ld, *)
+    integer :: i
+    real(dp) :: dmin, dmax
+    dmin = huge(1.0_dp); dmax = 0.0_dp
+    do i = 1, n
+      dmin = min(dmin, abs(lu(i, i))); dmax = max(dmax, abs(lu(i, i)))
+    end do
+    ok = dmin > 1.0e-14_dp * dmax
+  end function pivots_regular
 end module vci_kernels

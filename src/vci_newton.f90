@@ -16,7 +16,7 @@ module vci_newton
   use vci_kinds, only: dp, i8
   use vci_status, only: VCI_OK, VCI_ERR_NEWTON, VCI_ERR_NONFINITE, VCI_ERR_MEMORY
   use vci_lapack, only: dgetrf, dgetrs, dgelsd
-  use vci_kernels, only: equilibrate, scaled_merit, small_lu, small_lu_solve
+  use vci_kernels, only: equilibrate, scaled_merit, small_lu, small_lu_solve, pivots_regular
   implicit none
   private
 
@@ -329,7 +329,6 @@ contains
     logical, intent(out) :: factored
     type(vci_newton_result_t), intent(inout) :: res
     integer :: i, info, rank
-    real(dp) :: dmin, dmax
     ! rows equilibrated by their largest entry; jac keeps the equilibrated matrix for the fallback
     call equilibrate(n, self%capacity, self%jac, self%lu, self%r, self%dx, self%rw)
     factored = .false.
@@ -341,11 +340,7 @@ contains
     self%factorisations = self%factorisations + 1
     factored = .false.
     if (info == 0) then
-      dmin = huge(1.0_dp); dmax = 0.0_dp
-      do i = 1, n
-        dmin = min(dmin, abs(self%lu(i, i))); dmax = max(dmax, abs(self%lu(i, i)))
-      end do
-      if (dmin > 1.0e-14_dp * dmax) then
+      if (pivots_regular(n, self%capacity, self%lu)) then
         call lu_solve(self, n, self%dx)
         factored = all(ieee_is_finite(self%dx(1:n)))
       end if

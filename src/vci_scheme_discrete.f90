@@ -317,7 +317,6 @@ contains
     real(dp), intent(out) :: p(:)
     integer, intent(out) :: stat
     real(dp), intent(in), optional :: pa(:)
-    integer :: i, mu
     logical :: balanced
     stat = 0
     if (self%increments) then
@@ -328,12 +327,7 @@ contains
         ! of kinetic terms M d / tau, whose rounding had a mean: over 1e7 steps it grew the ellipse's
         ! energy error like t^0.8 (docs/bench/roundoff.md)
         call self%ret%impulse_inc(a, x(1:self%n), tau, self%dir, p, stat)
-        do i = 1, self%n
-          p(i) = pa(i) + p(i)
-          do mu = 1, self%m
-            p(i) = p(i) - self%omega(i, mu) * x(self%n + mu)
-          end do
-        end do
+        call add_balance(self, x, pa, p)
       else
         call self%ret%pout_inc(a, x(1:self%n), tau, self%dir, p, stat)
       end if
@@ -359,20 +353,32 @@ contains
     real(dp), intent(out) :: p(:)
     integer, intent(out) :: stat
     real(dp), intent(in), optional :: pa(:)
-    integer :: i, mu
+    integer :: i
     call self%momentum_out(x, a, tau, p, stat, pa)
     if (stat /= VCI_OK .or. self%increments .or. .not. present(pa)) return
     if (.not. all(a == self%a)) return   ! Omega(a) is the posed one
     call d1s(self, a, x(1:self%n), tau, self%d1, stat)
     if (stat /= VCI_OK) return
     do i = 1, self%n
-      p(i) = pa(i) + (self%d1(i) + p(i))
+      p(i) = self%d1(i) + p(i)
+    end do
+    call add_balance(self, x, pa, p)
+    call self%check(stat, p, 'D1/D2 of L_d')
+  end subroutine impact_momentum
+
+  !> p := pa + p - Omega(a) lambda (lambda from x): the momentum from the terms x's rows balance.
+  subroutine add_balance(self, x, pa, p)
+    class(vci_scheme_discrete_t), intent(in) :: self
+    real(dp), intent(in) :: x(:), pa(:)
+    real(dp), intent(inout) :: p(:)
+    integer :: i, mu
+    do i = 1, self%n
+      p(i) = pa(i) + p(i)
       do mu = 1, self%m
         p(i) = p(i) - self%omega(i, mu) * x(self%n + mu)
       end do
     end do
-    call self%check(stat, p, 'D1/D2 of L_d')
-  end subroutine impact_momentum
+  end subroutine add_balance
 
   !> Discrete energy E_d = -D3 L_d of the segment between a and the endpoint of x (both directions).
   subroutine energy_out(self, x, a, tau, e, stat)
@@ -416,7 +422,7 @@ contains
     logical, intent(in) :: momentum_rows
     integer, intent(out) :: stat
     integer :: n, m, mu, last, i
-    real(dp) :: tau, e, hp, ol, ols
+    real(dp) :: tau, e, hp, ol
     n = self%n; m = self%m; last = n + m + 1
     tau = step_length(self, x)
     stat = VCI_OK
@@ -430,12 +436,7 @@ contains
       end if
     end if
     if (m > 0) then
-      stat = 0
-      if (self%increments) then
-        call self%ret%constraint_inc(self%a, x(1:n), tau, r(n + 1:n + m), stat)
-      else
-        call self%model%discrete_constraint(self%a, x(1:n), tau, r(n + 1:n + m), stat)
-      end if
+      call constraint_values(self, x(1:n), tau, r(n + 1:n + m), stat)
       call check_fast(self, stat, r(n + 1:n + m), 'discrete constraint')
       if (stat /= VCI_OK) return
       do mu = 1, m
@@ -484,7 +485,7 @@ contains
     real(dp), intent(in) :: x(:)
     real(dp), intent(out) :: r(:), scale(:)
     integer, intent(out) :: stat
-    integer :: i, j, n
+    integer :: j, n
     real(dp) :: fl
     n = self%n
     call rows(self, x, r, scale, .true., stat)
@@ -700,6 +701,21 @@ contains
     if (fd_step == 0.0_dp) fd_step = vci_fd_rel
   end function fd_step
 
+  !> out = omega_d(a, b, tau) of the posed start a, with xb = b (or the increment, for retractions);
+  !> stat is the callback's own (not checked here).
+  subroutine constraint_values(self, xb, tau, out, stat)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: xb(:), tau
+    real(dp), intent(out) :: out(:)
+    integer, intent(out) :: stat
+    stat = 0
+    if (self%increments) then
+      call self%ret%constraint_inc(self%a, xb, tau, out, stat)
+    else
+      call self%model%discrete_constraint(self%a, xb, tau, out, stat)
+    end if
+  end subroutine constraint_values
+
   !> Central difference of the discrete constraint omega_d(a, b, tau) along b_j.
   subroutine fd_constraint_column(self, x, j, tau, d, col, stat)
     class(vci_scheme_discrete_t), intent(inout) :: self
@@ -711,20 +727,11 @@ contains
     n = self%n; m = self%m
     self%xp(1:n) = x(1:n)
     self%xp(j) = x(j) + d
-    stat = 0
-    if (self%increments) then
-      call self%ret%constraint_inc(self%a, self%xp(1:n), tau, self%rp(1:m), stat)
-    else
-      call self%model%discrete_constraint(self%a, self%xp(1:n), tau, self%rp(1:m), stat)
-    end if
+    call constraint_values(self, self%xp(1:n), tau, self%rp(1:m), stat)
     call self%check(stat, self%rp(1:m), 'discrete constraint')
     if (stat /= VCI_OK) return
     self%xp(j) = x(j) - d
-    if (self%increments) then
-      call self%ret%constraint_inc(self%a, self%xp(1:n), tau, self%rm(1:m), stat)
-    else
-      call self%model%discrete_constraint(self%a, self%xp(1:n), tau, self%rm(1:m), stat)
-    end if
+    call constraint_values(self, self%xp(1:n), tau, self%rm(1:m), stat)
     call self%check(stat, self%rm(1:m), 'discrete constraint')
     if (stat /= VCI_OK) return
     col = (self%rp(1:m) - self%rm(1:m)) / (2.0_dp * d)

@@ -435,10 +435,8 @@ contains
       ! small analytic systems: the fused solve; anything unusual there is redone on the general path
       call self%sys%fused_substep(self%newton, self%x(1:nx), res, done)
       if (done) then
-        self%stats%newton_solves = self%stats%newton_solves + 1
         self%stats%fused_solves = self%stats%fused_solves + 1
-        self%stats%newton_iterations = self%stats%newton_iterations + res%iterations
-        self%last_residual = res%scaled_residual
+        call count_solve(self, res)
         stat = VCI_OK
         return
       end if
@@ -821,10 +819,7 @@ contains
     call self%sys%clear_failure()
     call self%sys%forget_jacobian()
     call self%newton%solve(self%sys, self%x(1:nx), res)
-    self%stats%newton_solves = self%stats%newton_solves + 1
-    self%stats%newton_iterations = self%stats%newton_iterations + res%iterations
-    if (res%used_fallback) self%stats%fallbacks = self%stats%fallbacks + 1
-    self%last_residual = res%scaled_residual
+    call count_solve(self, res)
     stat = res%status
     if (stat == VCI_OK) return
     select case (res%reason)
@@ -847,6 +842,16 @@ contains
       end if
     end select
   end subroutine run_newton
+
+  !> A finished solve in the statistics (either path).
+  subroutine count_solve(self, res)
+    type(vci_stepper_t), intent(inout) :: self
+    type(vci_newton_result_t), intent(in) :: res
+    self%stats%newton_solves = self%stats%newton_solves + 1
+    self%stats%newton_iterations = self%stats%newton_iterations + res%iterations
+    if (res%used_fallback) self%stats%fallbacks = self%stats%fallbacks + 1
+    self%last_residual = res%scaled_residual
+  end subroutine count_solve
 
   !> prefix//j//')' without formatted I/O (an internal write costs ~2.7k instructions, a few per
   !> cent of an impact, for a label read only when the solve fails).
