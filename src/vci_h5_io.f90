@@ -9,7 +9,7 @@
 !> before use: an attribute holds one value of the right class, a string at most 4096 bytes, a
 !> dataset has the rank and row width asked for. Dims are in Fortran order (the row index last).
 module vci_h5_io
-  use, intrinsic :: iso_c_binding, only: c_ptr, c_loc, c_char, c_int, c_size_t, c_f_pointer, c_null_char, &
+  use, intrinsic :: iso_c_binding, only: c_ptr, c_loc, c_char, c_int, c_size_t, c_f_pointer, &
                                           c_associated, c_funptr, c_funloc, c_int64_t
   use hdf5
   use vci_kinds, only: dp, i8
@@ -57,22 +57,11 @@ module vci_h5_io
       integer(c_int64_t), value :: file, fapl
       type(c_ptr), intent(out) :: handle
     end function h5fget_vfd_handle
-    type(c_ptr) function c_fopen(path, mode) bind(C, name='fopen')
-      import :: c_ptr, c_char
-      character(kind=c_char), intent(in) :: path(*), mode(*)
-    end function c_fopen
-    integer(c_int) function c_fileno(stream) bind(C, name='fileno')
-      import :: c_int, c_ptr
-      type(c_ptr), value :: stream
-    end function c_fileno
-    integer(c_int) function c_fclose(stream) bind(C, name='fclose')
-      import :: c_int, c_ptr
-      type(c_ptr), value :: stream
-    end function c_fclose
-    integer(c_int) function c_dup2(old, new) bind(C, name='dup2')
+    !> src/vci_fd_discard.c: point fd at a sink that takes writes and ftruncate; 0 on success
+    integer(c_int) function vci_discard_fd(fd) bind(C, name='vci_discard_fd')
       import :: c_int
-      integer(c_int), value :: old, new
-    end function c_dup2
+      integer(c_int), value :: fd
+    end function vci_discard_fd
     integer(c_size_t) function c_strlen(s) bind(C, name='strlen')
       import :: c_ptr, c_size_t
       type(c_ptr), value :: s
@@ -130,27 +119,25 @@ contains
   end function take_os_cause
 
   !> A file that cannot be written any more (a full disk; a row dataset's failed write, caught before
-  !> any H5Fflush: see h5io_make_rows): point its descriptor (sec2 driver) at
-  !> /dev/null, so that what HDF5 still holds goes nowhere and its closes complete and free
-  !> everything. The file keeps what reached the disk before (up to the last complete flush).
+  !> any H5Fflush: see h5io_make_rows): point its descriptor (sec2 driver) at a sink (an in-memory
+  !> file, else /dev/null), so that what HDF5 still holds goes nowhere and its closes complete and
+  !> free everything. The file keeps what reached the disk before (up to the last complete flush).
   subroutine h5io_discard_writes(file)
     integer(hid_t), intent(in) :: file
     integer(hid_t) :: fapl, driver
     integer :: e2
     integer(c_int) :: r
-    type(c_ptr) :: handle, devnull
+    type(c_ptr) :: handle
     integer(c_int), pointer :: fd
     call h5fget_access_plist_f(file, fapl, e2)
     if (e2 == 0) call h5pget_driver_f(fapl, driver, e2)
     if (e2 == 0) call h5pclose_f(fapl, e2)
     if (e2 /= 0 .or. driver /= H5FD_SEC2_F) return
     r = h5fget_vfd_handle(int(file, c_int64_t), 0_c_int64_t, handle)
-    devnull = c_fopen('/dev/null'//c_null_char, 'r+'//c_null_char)
-    if (r >= 0 .and. c_associated(handle) .and. c_associated(devnull)) then
+    if (r >= 0 .and. c_associated(handle)) then
       call c_f_pointer(handle, fd)
-      r = c_dup2(c_fileno(devnull), fd)
+      r = vci_discard_fd(fd)   ! (src/vci_fd_discard.c: a sink that also takes HDF5's ftruncate at close)
     end if
-    if (c_associated(devnull)) r = c_fclose(devnull)
   end subroutine h5io_discard_writes
 
   ! --- attributes --------------------------------------------------------------------------------
