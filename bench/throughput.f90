@@ -12,6 +12,8 @@
 !>
 !> Usage: vci_bench_throughput [--quick] [--repeats N] [--min-time S]
 !>        vci_bench_throughput --profile SCENE VARIANT EPISODES   (one variant only, for callgrind)
+!>        vci_bench_throughput --profile-steps SCENE VARIANT EPISODES   (regular and impact steps
+!>          through separate procedures, for callgrind; prints how many of each)
 !> Output: markdown on stdout. Exit status 1 when a trajectory check fails.
 !> Records the impact times of a library run (verification only; the timed runs have no observer).
 module vci_bench_impact_log
@@ -44,6 +46,7 @@ program throughput
   use vci_bench_hand
   use vci_bench_same, only: same_ellipse, same_pendulum
   use vci_bench_impact_log, only: impact_log_t
+  use vci_bench_split, only: counted_regular_step, counted_impact_step
   implicit none
 
   !> Scenes 4 and 5 are 2 and 3 without impacts (the ellipse dropped from high up, the pendulum in a
@@ -99,9 +102,12 @@ program throughput
       i = i + 1; call get_command_argument(i, arg); read (arg, *) min_time
     case ('--profile')
       call profile_mode(i); stop
+    case ('--profile-steps')
+      call profile_steps_mode(i); stop
     case ('--help', '-h')
       write (output_unit, '(a)') 'vci_bench_throughput [--quick] [--repeats N] [--min-time S]'
       write (output_unit, '(a)') 'vci_bench_throughput --profile SCENE VARIANT(1..4) EPISODES'
+      write (output_unit, '(a)') 'vci_bench_throughput --profile-steps SCENE VARIANT(1..2) EPISODES'
       stop
     case default
       write (error_unit, '(a)') 'unknown argument '//trim(arg); error stop 2
@@ -546,4 +552,43 @@ contains
     write (output_unit, '(a,1x,a,1x,f9.1,a,f8.3)') trim(scene_name(is_)), trim(var_name(iv_)), &
       1.0e9_dp * t / real(neps * sc(is_)%nsteps, dp), ' ns/step; Newton it./step', newton_count(is_, iv_)
   end subroutine profile_mode
+
+  !> --profile-steps SCENE VARIANT EPISODES: a first episode finds which steps have an impact; then
+  !> the episodes take those steps through counted_impact_step and the others through
+  !> counted_regular_step (bench/step_split.f90), so that callgrind counts each kind apart. Prints
+  !> the number of steps of each kind.
+  subroutine profile_steps_mode(i)
+    integer, intent(inout) :: i
+    character(len=64) :: a1, a2, a3
+    integer :: iv_, is_, k, nreg, nimp
+    integer(int64) :: neps, e
+    logical, allocatable :: hit(:)
+    call get_command_argument(i + 1, a1); call get_command_argument(i + 2, a2); call get_command_argument(i + 3, a3)
+    is_ = findloc(scene_name, trim(a1), dim=1)
+    read (a2, *) iv_; read (a3, *) neps
+    if (is_ < 1 .or. iv_ < V_LIB .or. iv_ > V_LIB_FD) error stop 'usage: --profile-steps SCENE VARIANT(1..2) EPISODES'
+    allocate (hit(sc(is_)%nsteps))
+    call integ(is_, iv_)%init_from_pair(sc(is_)%t0, sc(is_)%q0, sc(is_)%q1, stat)
+    call must(stat, 'init')
+    do k = 1, int(sc(is_)%nsteps)
+      call integ(is_, iv_)%step(1, stat)
+      call must(stat, 'library step')
+      hit(k) = integ(is_, iv_)%impact_count() > 0
+    end do
+    nreg = 0; nimp = 0
+    do e = 1, neps
+      call integ(is_, iv_)%init_from_pair(sc(is_)%t0, sc(is_)%q0, sc(is_)%q1, stat)
+      call must(stat, 'init')
+      do k = 1, int(sc(is_)%nsteps)
+        if (hit(k)) then
+          call counted_impact_step(integ(is_, iv_), stat); nimp = nimp + 1
+        else
+          call counted_regular_step(integ(is_, iv_), stat); nreg = nreg + 1
+        end if
+        call must(stat, 'library step')
+        if (integ(is_, iv_)%impact_count() > 0 .neqv. hit(k)) error stop 'profile-steps: the episodes differ'
+      end do
+    end do
+    write (output_unit, '(a,1x,i0,1x,a,1x,i0)') 'regular', nreg, 'impact', nimp
+  end subroutine profile_steps_mode
 end program throughput
