@@ -414,13 +414,16 @@ contains
   end subroutine hamiltonian
 
   !> Residual rows; with `momentum_rows` false only the constraint and last rows are evaluated
-  !> (used to difference those rows when the momentum block comes from the analytic Hessian).
-  subroutine rows(self, x, r, sc, momentum_rows, stat)
+  !> (used to difference those rows when the momentum block comes from the analytic Hessian);
+  !> with `gap_row` false stage 1's gap row is left out (r = 0 there: differences along alpha,
+  !> on which g_j(b) does not depend).
+  subroutine rows(self, x, r, sc, momentum_rows, stat, gap_row)
     class(vci_scheme_discrete_t), intent(inout) :: self
     real(dp), intent(in) :: x(:)
     real(dp), intent(out) :: r(:), sc(:)
     logical, intent(in) :: momentum_rows
     integer, intent(out) :: stat
+    logical, intent(in), optional :: gap_row
     integer :: n, m, mu, last, i
     real(dp) :: tau, e, hp, ol
     n = self%n; m = self%m; last = n + m + 1
@@ -449,6 +452,11 @@ contains
     end if
     select case (self%kind)
     case (KIND_STAGE1)
+      if (present(gap_row)) then
+        if (.not. gap_row) then
+          r(last) = 0.0_dp; sc(last) = 1.0_dp; return
+        end if
+      end if
       call endpoint_of(self, x)
       call self%eval_gaps(self%bb, self%g(1:self%n_gaps), stat)
       if (stat /= VCI_OK) return
@@ -562,9 +570,10 @@ contains
       end do
     end do
     select case (self%kind)
-    case (KIND_STAGE1)       ! alpha enters through the sub-step length
+    case (KIND_STAGE1)       ! alpha enters through the sub-step length; g_j(b) does not depend on it
       d = vci_fd_rel * x(last)
-      call fd_column(self, x, last, d, .true., jac(:, last), stat)
+      call fd_column(self, x, last, d, .true., jac(:, last), stat, gap_row=.false.)
+      jac(last, last) = 0.0_dp
     case (KIND_STAGE2)    ! mu enters linearly in the momentum rows
       jac(1:n, last) = self%grad
       if (self%impact_energy == VCI_IMPACT_HAMILTONIAN) then
@@ -738,7 +747,7 @@ contains
   end subroutine fd_constraint_column
 
   !> Central difference of the residual along unknown j (all rows, or only the non-momentum rows).
-  subroutine fd_column(self, x, j, d, all_rows, col, stat)
+  subroutine fd_column(self, x, j, d, all_rows, col, stat, gap_row)
     class(vci_scheme_discrete_t), intent(inout) :: self
     real(dp), intent(in) :: x(:)
     integer, intent(in) :: j
@@ -746,16 +755,17 @@ contains
     logical, intent(in) :: all_rows
     real(dp), intent(inout) :: col(:)
     integer, intent(out) :: stat
+    logical, intent(in), optional :: gap_row   !< rows' gap_row
     integer :: nx, first
     nx = size(x)
     first = 1
     if (.not. all_rows) first = self%n + 1
     self%xp(1:nx) = x
     self%xp(j) = x(j) + d
-    call rows(self, self%xp(1:nx), self%rp(1:nx), self%sp(1:nx), all_rows, stat)
+    call rows(self, self%xp(1:nx), self%rp(1:nx), self%sp(1:nx), all_rows, stat, gap_row)
     if (stat /= VCI_OK) return
     self%xp(j) = x(j) - d
-    call rows(self, self%xp(1:nx), self%rm(1:nx), self%sm(1:nx), all_rows, stat)
+    call rows(self, self%xp(1:nx), self%rm(1:nx), self%sm(1:nx), all_rows, stat, gap_row)
     if (stat /= VCI_OK) return
     col(first:nx) = (self%rp(first:nx) - self%rm(first:nx)) / (2.0_dp * d)
   end subroutine fd_column
