@@ -36,6 +36,8 @@ module vci_integrator
     integer(i8) :: steps = 0, impacts = 0, newton_solves = 0, newton_iterations = 0, fallbacks = 0
     integer(i8) :: factorisations = 0   !< LU factorisations of Newton matrices
     integer(i8) :: fused_solves = 0     !< regular sub-steps solved by the scheme's fused routine
+    !> impacts where no impulse matches the discrete energy (a graze): H(q, p) kept instead
+    integer(i8) :: energy_fallbacks = 0
   end type vci_stats_t
 
   type, public :: vci_integrator_t
@@ -536,6 +538,16 @@ contains
       call self%model%clear_not_provided(); s = 0
       call self%model%gap_gradients(q0, dg, s)
       call self%stepper%use_model_derivatives(gap_gradients=.not. self%model%answered_not_provided())
+      ! H(q, p) for the impacts where the discrete energy condition has no solution (a continuous
+      ! model always has it); the probe's value is discarded
+      if (associated(self%lag)) then
+        call self%stepper%use_model_derivatives(energy=.true.)
+      else
+        call self%model%clear_not_provided(); s = 0
+        hess(:, 1) = 0.0_dp
+        call self%model%energy(q0, hess(:, 1), w2(1), s)
+        call self%stepper%use_model_derivatives(energy=.not. self%model%answered_not_provided())
+      end if
     end if
     stat = VCI_OK
   end subroutine check_init
@@ -857,6 +869,7 @@ contains
     stats%factorisations = self%stepper%factorisations()
     stats%fallbacks = solver%fallbacks
     stats%fused_solves = solver%fused_solves
+    stats%energy_fallbacks = solver%energy_fallbacks
   end function statistics
 
   !> Linear-algebra paths of Newton (docs/DESIGN.md §6): the in-line LU for systems of at most

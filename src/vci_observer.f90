@@ -32,8 +32,11 @@ module vci_observer
     real(dp), allocatable :: q(:)       !< the configuration on the wall
     real(dp), allocatable :: p_before(:), p_after(:)  !< momenta at the wall before/after, in direction of motion
     real(dp), allocatable :: grad_g(:)  !< gradient of the gap at q
-    real(dp) :: energy_before = 0.0_dp  !< E_d of the arriving sub-step (or H(q, p_before))
-    real(dp) :: energy_after = 0.0_dp   !< E_d of the leaving sub-step (or H(q, p_after))
+    !> The impact condition that fixed the impulse: the integrator's setting, or VCI_IMPACT_HAMILTONIAN
+    !> (1) where the discrete energy condition (0) has no solution, near a graze (docs/DESIGN.md §6)
+    integer :: condition = 0
+    real(dp) :: energy_before = 0.0_dp  !< E_d of the arriving sub-step, or H(q, p_before) (condition 1)
+    real(dp) :: energy_after = 0.0_dp   !< E_d of the leaving sub-step, or H(q, p_after) (condition 1)
     real(dp) :: leave_rate = 0.0_dp     !< grad g . (q_next - q) / sub-step: > 0, the motion leaves the wall
     real(dp) :: stage1_residual = 0.0_dp  !< scaled residuals (<= 1 means within tolerance)
     real(dp) :: stage2_residual = 0.0_dp

@@ -32,14 +32,18 @@ module vci_stepper
   type, public :: vci_solver_stats_t
     integer(i8) :: newton_solves = 0, newton_iterations = 0, fallbacks = 0
     integer(i8) :: fused_solves = 0   !< of newton_solves, those the scheme's fused routine did
+    integer(i8) :: energy_fallbacks = 0  !< impacts where E_d could not be matched: H kept instead
   end type vci_solver_stats_t
 
   !> Where stage 1's first crossing is bracketed: on the chord a -> b (cheap: gap evaluations only)
   !> or on the discrete trajectory (regular sub-steps of length s tau: one Newton solve a point).
   integer, parameter :: ALONG_CHORD = 1, ALONG_TRAJECTORY = 2
-  !> Bisections after the samples s = 1/8 .. 7/8: many on the chord, where a point costs a gap
-  !> evaluation; few on the trajectory, where the bracket only seeds Newton and a point costs a solve.
-  integer, parameter :: CHORD_BISECTIONS = 20, TRAJECTORY_BISECTIONS = 8
+  !> After the samples s = 1/8 .. 7/8: on the chord, up to CHORD_REFINEMENTS Illinois (modified
+  !> regula falsi) steps until the bracket is within CHORD_WIDTH (the crossing's g is smooth in s,
+  !> so it converges superlinearly: 3 to 5 gap evaluations where bisection took 20); on the
+  !> trajectory, where the bracket only seeds Newton and a point costs a solve, a few bisections.
+  integer, parameter :: CHORD_REFINEMENTS = 30, TRAJECTORY_BISECTIONS = 8
+  real(dp), parameter :: CHORD_WIDTH = 1.0e-9_dp
 
   type, public :: vci_stepper_t
     private
@@ -70,6 +74,12 @@ module vci_stepper
     real(dp), allocatable :: gaps_start(:), gaps_end(:), gaps_trial(:)
     real(dp), allocatable :: gap_grads(:, :)  !< at q_start (stage 1), at q_wall (stage 2)
     real(dp), allocatable :: lambda_start(:), zero_lambda(:)
+    real(dp), allocatable :: x_try(:)         !< stage 2's start: a point on the impulse line
+    !> The impact condition stage 2 used (the setting, or VCI_IMPACT_HAMILTONIAN where the discrete
+    !> energy condition has no solution) and, then, H(qt, p-).
+    integer :: impact_condition = 0
+    real(dp) :: e_fallback = 0.0_dp
+    logical :: has_energy = .false.           !< the model supplies H(q, p) (probed at initialisation)
     real(dp), allocatable :: constraint_impulse(:)  !< nu of the Hamiltonian impact (m > 0)
   contains
     procedure :: setup
@@ -113,12 +123,13 @@ contains
                                        self%rhs, self%res, self%res_scale, self%q_start, self%p_start, self%q_end, &
                                        self%q_wall, self%p_arrive, self%p_leave, self%chord_velocity, self%q_guess, &
                                        self%q_trial, self%gaps_start, self%gaps_end, self%gaps_trial, self%gap_grads, &
-                                       self%lambda_start, self%zero_lambda, self%constraint_impulse)
+                                       self%lambda_start, self%zero_lambda, self%constraint_impulse, self%x_try)
     allocate (self%x(nx), self%x_stage1(nx), self%x_saved(nx), self%x_low(nx), self%x_high(nx), self%jac(nx, nx), &
               self%rhs(nx), self%res(nx), self%res_scale(nx), self%q_start(n), self%p_start(n), self%q_end(n), &
               self%q_wall(n), self%p_arrive(n), self%p_leave(n), self%chord_velocity(n), self%q_guess(n), &
               self%q_trial(n), self%gaps_start(ngw), self%gaps_end(ngw), self%gaps_trial(ngw), self%gap_grads(n, ngw), &
-              self%lambda_start(m), self%zero_lambda(m), self%constraint_impulse(m), stat=stat)
+              self%lambda_start(m), self%zero_lambda(m), self%constraint_impulse(m), &
+              self%x_try(nx), stat=stat)
     if (stat /= 0) then
       stat = VCI_ERR_MEMORY; return
     end if
@@ -192,10 +203,15 @@ contains
     if (allocated(self%sys)) call self%sys%restore_position_carry(q, lo)
   end subroutine restore_position_carry
 
-  subroutine use_model_derivatives(self, mixed_hessian, gap_gradients, constraint_jacobian)
+  subroutine use_model_derivatives(self, mixed_hessian, gap_gradients, constraint_jacobian, energy)
     class(vci_stepper_t), intent(inout) :: self
     logical, intent(in), optional :: mixed_hessian, gap_gradients, constraint_jacobian
-    call self%sys%use_derivatives(mixed_hessian, gap_gradients, constraint_jacobian)
+    logical, intent(in), optional :: energy   !< the model has H(q, p) (the discrete condition's fallback)
+    if (present(energy)) then
+      self%has_energy = energy
+    else
+      call self%sys%use_derivatives(mixed_hessian, gap_gradients, constraint_jacobian)
+    end if
   end subroutine use_model_derivatives
 
   !> Advance from (q, p) by one step of length h in direction dir (+1/-1).
@@ -500,11 +516,12 @@ contains
   end function departs_into
 
   !> Bracket the first crossing of wall j on s in [0, 1] (s = 1 is the end of the sub-step, known to
-  !> be beyond the wall): samples at s = 1/8, ..., 7/8 up to the first negative gap, then bisections
-  !> (CHORD_BISECTIONS or TRAJECTORY_BISECTIONS). Along the chord the point is q_start + s (q_end -
+  !> be beyond the wall): samples at s = 1/8, ..., 7/8 up to the first negative gap, then Illinois
+  !> steps (chord) or bisections (trajectory). Along the chord the point is q_start + s (q_end -
   !> q_start); along the trajectory it is the end of the regular sub-step of length s tau, and the
   !> sub-step solutions at the bracket's ends are kept in x_low and x_high. On return
-  !> g_j(lo) = glo >= 0 > g_j(hi) = ghi (up to round-off at a start on the wall).
+  !> g_j(lo) = glo >= 0 > g_j(hi) = ghi (up to round-off at a start on the wall), or lo = hi where
+  !> g_j is exactly 0.
   subroutine bracket_crossing(self, along, j, tau, lo, hi, glo, ghi, stat)
     type(vci_stepper_t), intent(inout) :: self
     integer, intent(in) :: along, j
@@ -512,9 +529,8 @@ contains
     real(dp), intent(out) :: lo, hi, glo, ghi
     integer, intent(out) :: stat
     integer, parameter :: samples = 7
-    integer :: i, bisections
-    real(dp) :: s, g
-    bisections = merge(CHORD_BISECTIONS, TRAJECTORY_BISECTIONS, along == ALONG_CHORD)
+    integer :: i, kept
+    real(dp) :: s, g, wlo, whi
     lo = 0.0_dp; hi = 1.0_dp
     glo = self%gaps_start(j); ghi = self%gaps_end(j)
     stat = VCI_OK
@@ -524,9 +540,34 @@ contains
       if (stat /= VCI_OK) return
       if (g < 0.0_dp) exit
     end do
-    do i = 1, bisections
-      call probe(0.5_dp * (lo + hi), g)
+    if (along == ALONG_TRAJECTORY) then
+      do i = 1, TRAJECTORY_BISECTIONS
+        call probe(0.5_dp * (lo + hi), g)
+        if (stat /= VCI_OK) return
+      end do
+      return
+    end if
+    ! Illinois: the secant of the bracket's (weighted) ends; an end kept twice in a row has its
+    ! weight halved, so that both ends move in. Bisection where the secant point is not inside.
+    wlo = max(glo, 0.0_dp); whi = ghi; kept = 0
+    do i = 1, CHORD_REFINEMENTS
+      if (hi - lo <= CHORD_WIDTH) exit
+      s = lo + (hi - lo) * wlo / (wlo - whi)
+      if (.not. (s > lo .and. s < hi)) s = 0.5_dp * (lo + hi)
+      call probe(s, g)
       if (stat /= VCI_OK) return
+      if (g == 0.0_dp) then         ! on the wall: both ends there
+        hi = s; ghi = g; exit
+      end if
+      if (g < 0.0_dp) then          ! hi moved; lo kept
+        whi = g
+        if (kept < 0) wlo = 0.5_dp * wlo
+        kept = -1
+      else                          ! lo moved; hi kept
+        wlo = g
+        if (kept > 0) whi = 0.5_dp * whi
+        kept = 1
+      end if
     end do
   contains
     !> g_j at s; the bracket end it replaces moves to s.
@@ -605,10 +646,11 @@ contains
     real(dp), intent(in) :: tau2, e_minus
     integer, intent(out) :: stat
     integer :: n, m, nx0, info
-    real(dp) :: num, den, mu0
+    real(dp) :: num, den, mu0, mirror
     character(len=40) :: what
     character(len=48) :: what_impulse
     n = self%n; m = self%m; nx0 = self%nsub
+    self%impact_condition = self%settings%impact_energy
     what = wall_label('stage 2 (reflecting at wall ', j)
     call self%sys%eval_gap_gradients(self%q_wall, self%gap_grads(:, 1:self%ng), stat)
     if (stat /= VCI_OK) then
@@ -622,7 +664,7 @@ contains
     if (stat /= VCI_OK) return
     call self%sys%get_endpoint(self%x, self%q_trial)
     num = dot_product(self%sys%grad, self%q_trial - self%q_wall)
-    mu0 = 0.0_dp
+    mu0 = 0.0_dp; mirror = 0.0_dp
     if (num < 0.0_dp) then
       call self%sys%residual(self%x(1:nx0), self%res(1:nx0), self%res_scale(1:nx0), stat)
       if (stat == VCI_OK) call self%sys%jacobian(self%x(1:nx0), self%res(1:nx0), self%jac(1:nx0, 1:nx0), stat)
@@ -641,19 +683,66 @@ contains
       end if
       mu0 = -2.0_dp * num / den
       self%x(1:nx0) = self%x(1:nx0) + mu0 * self%rhs(1:nx0)
+      mirror = mu0
+      if (self%settings%impact_energy /= VCI_IMPACT_HAMILTONIAN) then
+        self%x_saved(1:nx0) = self%x(1:nx0)    ! the mirror start, for a retry or a fallback from it
+        call energy_along(self, nx0, tau2, e_minus, mu0, stat)
+        if (stat /= VCI_OK) then
+          call set_cause(self, trim(what)//' initial guess'); return
+        end if
+      end if
     end if
     ! num >= 0: the free motion from the wall already moves into the admissible set (a graze);
     ! no impulse is needed and the sub-step stands as computed.
     call self%sys%put_extra(self%x, KIND_STAGE2, mu0)
     if (self%m > 0) self%constraint_impulse = 0.0_dp
     if (mu0 /= 0.0_dp .and. self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN) then
-      ! H(qt, p+) = H(qt, p-) fixes the impulse from the momenta alone (with constraints, together
-      ! with the constraint impulse nu that makes the outgoing velocity admissible); the leaving
-      ! sub-step is then a regular one from p- + mu grad g (Omega nu is absorbed by its multiplier).
+      call reflect_hamiltonian(e_minus, stat)
+    else if (mu0 /= 0.0_dp) then
+      call self%sys%pose_stage2(self%q_wall, self%p_arrive, tau2, j, e_minus)
+      call run_newton(self, self%sys%unknowns(KIND_STAGE2), what(1:len_trim(what)), stat)
+      if (stat == VCI_ERR_NEWTON .and. mu0 /= mirror) then
+        ! energy_along's start did not lead to a solution: Newton once more from the mirror
+        self%x(1:nx0) = self%x_saved(1:nx0)
+        call self%sys%put_extra(self%x, KIND_STAGE2, mirror)
+        call run_newton(self, self%sys%unknowns(KIND_STAGE2), what(1:len_trim(what)), stat)
+      end if
+      if (stat == VCI_ERR_NEWTON .and. self%has_energy) then
+        ! No impulse makes E_d of the leaving sub-step equal E-: E_d differs from H by O(h^2)
+        ! terms that depend on the sub-step's length (for uniform gravity H changes by
+        ! m g^2 h^2 (1 - 2 alpha) / 8 at an impact), and near a graze the normal kinetic energy is
+        ! smaller than that difference. This impact keeps H(qt, p+) = H(qt, p-) instead; the record
+        ! says so (vci_impact_t%condition) and the statistics count it (energy_fallbacks).
+        self%x(1:nx0) = self%x_saved(1:nx0)
+        mu0 = mirror
+        call self%sys%hamiltonian(self%q_wall, self%p_arrive, self%e_fallback, stat)
+        if (stat /= VCI_OK) then
+          call set_cause(self, trim(what)//' energy H of the arriving momentum'); return
+        end if
+        self%impact_condition = VCI_IMPACT_HAMILTONIAN
+        self%stats%energy_fallbacks = self%stats%energy_fallbacks + 1
+        call reflect_hamiltonian(self%e_fallback, stat)
+      else if (stat == VCI_OK) then
+        if (.not. reflected(self, self%sys%get_extra(self%x, KIND_STAGE2), tau2, stat)) then
+          if (stat == VCI_OK) stat = VCI_ERR_IMPACT
+          self%cause = trim(what)//': the reflected motion does not leave the wall'
+        end if
+      end if
+    else
+      self%last_residual = 0.0_dp
+    end if
+  contains
+    !> H(qt, p+) = e_ref fixes the impulse from the momenta alone (with constraints, together with
+    !> the constraint impulse nu that makes the outgoing velocity admissible); the leaving sub-step
+    !> is then a regular one from p- + mu grad g (Omega nu is absorbed by its multiplier). x holds
+    !> the mirror start and mu0 its impulse.
+    subroutine reflect_hamiltonian(e_ref, stat)
+      real(dp), intent(in) :: e_ref
+      integer, intent(out) :: stat
       self%x_saved(1:nx0) = self%x(1:nx0)
       self%x(1:m) = 0.0_dp                       ! the impulse system's unknowns: [nu(m), mu]
       call self%sys%put_extra(self%x, KIND_IMPULSE, mu0)
-      call self%sys%pose_impulse(self%q_wall, self%p_arrive, e_minus)
+      call self%sys%pose_impulse(self%q_wall, self%p_arrive, e_ref)
       if (m > 0) then
         ! start nu where the outgoing velocity satisfies the constraints for the estimated mu
         ! (one linear solve: exact when H is quadratic in p)
@@ -680,21 +769,70 @@ contains
       if (.not. reflected(self, mu0, tau2, stat)) then
         if (stat == VCI_OK) stat = VCI_ERR_IMPACT
         self%cause = trim(what)//': the reflected motion does not leave the wall'
-        return
       end if
-    else if (mu0 /= 0.0_dp) then
-      call self%sys%pose_stage2(self%q_wall, self%p_arrive, tau2, j, e_minus)
-      call run_newton(self, self%sys%unknowns(KIND_STAGE2), what(1:len_trim(what)), stat)
-      if (stat /= VCI_OK) return
-      if (.not. reflected(self, self%sys%get_extra(self%x, KIND_STAGE2), tau2, stat)) then
-        if (stat == VCI_OK) stat = VCI_ERR_IMPACT
-        self%cause = trim(what)//': the reflected motion does not leave the wall'
-        return
-      end if
-    else
-      self%last_residual = 0.0_dp
-    end if
+    end subroutine reflect_hamiltonian
   end subroutine stage_reflect
+
+  !> Stage 2's start with the E_d condition: x = x0 + mu d (d = rhs, the sensitivity to the impulse)
+  !> moves mu from the mirror image mu0 towards E_d(x) = E-, by secant steps on that line (a few
+  !> evaluations of E_d where a Newton iteration costs a Jacobian with differenced columns). The
+  !> mirror leaves E_d off by the potential's change over the reflected sub-step (1e-3 relative on
+  !> the ellipse), which took Newton three iterations. The mu with the smallest |E_d - E-| is taken,
+  !> within max_move of mu0 (relative); otherwise the mirror start stays. A callback's
+  !> failure ends the search (Newton meets it again and reports it), unless the callback declared
+  !> it unrecoverable: then stat says so.
+  subroutine energy_along(self, nx0, tau2, e_minus, mu0, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: nx0
+    real(dp), intent(in) :: tau2, e_minus
+    real(dp), intent(inout) :: mu0
+    integer, intent(out) :: stat
+    integer, parameter :: max_secants = 3
+    !> E_d(mu) - E- is about quadratic with roots at the reflection and at the pass-through motion
+    !> (mu = 0), and flat half-way; near a graze the two are close (or E_d never reaches E-): the
+    !> search stays near the mirror, where Newton converges to the reflection.
+    real(dp), parameter :: max_move = 0.25_dp
+    integer :: k
+    real(dp) :: mu_a, mu_b, mu_c, g_a, g_b, g_c, mu_best, g_best
+    call self%sys%clear_failure()
+    mu_best = mu0; g_best = huge(1.0_dp)
+    mu_a = mu0
+    if (energy_gap(mu_a, g_a)) then
+      ! the mirror already meets the energy row's tolerance (e.g. a graze, where E_d hardly
+      ! depends on mu and secants would only move mu by round-off): Newton takes it from there
+      if (g_best <= self%settings%atol + self%settings%rtol * (abs(g_a + e_minus) + abs(e_minus))) then
+        stat = VCI_OK; return
+      end if
+      mu_b = 0.99_dp * mu0
+      if (energy_gap(mu_b, g_b)) then
+        do k = 1, max_secants
+          if (g_b == g_a) exit
+          mu_c = mu_b - g_b * (mu_b - mu_a) / (g_b - g_a)
+          if (.not. (abs(mu_c / mu0 - 1.0_dp) <= max_move)) exit
+          if (.not. energy_gap(mu_c, g_c)) exit
+          if (abs(mu_c - mu_b) <= 1.0e-10_dp * abs(mu0)) exit
+          mu_a = mu_b; g_a = g_b; mu_b = mu_c; g_b = g_c
+        end do
+      end if
+    end if
+    self%x(1:nx0) = self%x(1:nx0) + (mu_best - mu0) * self%rhs(1:nx0)
+    mu0 = mu_best
+    if (self%sys%unrecoverable) stat = VCI_ERR_CALLBACK
+  contains
+    !> E_d - E- at x0 + mu d (in x_try); the best mu so far. False when the evaluation failed.
+    logical function energy_gap(mu, g)
+      real(dp), intent(in) :: mu
+      real(dp), intent(out) :: g
+      self%x_try(1:nx0) = self%x(1:nx0) + (mu - mu0) * self%rhs(1:nx0)
+      call self%sys%energy_out(self%x_try(1:nx0), self%q_wall, tau2, g, stat)
+      g = g - e_minus
+      energy_gap = stat == VCI_OK .and. ieee_is_finite(g)
+      stat = VCI_OK
+      if (energy_gap .and. abs(g) < g_best) then
+        mu_best = mu; g_best = abs(g)
+      end if
+    end function energy_gap
+  end subroutine energy_along
 
   !> Did stage 2 find the reflection? Yes when the sub-step ends on the admissible side of the wall.
   !> A strongly curved sub-step (gravity or a stiff force towards the wall) may leave the wall and
@@ -739,7 +877,7 @@ contains
     imp%q = self%q_wall
     imp%p_before = self%p_arrive
     imp%p_after = self%p_arrive + mu * self%sys%grad
-    if (self%m > 0 .and. self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN) then
+    if (self%m > 0 .and. self%impact_condition == VCI_IMPACT_HAMILTONIAN) then
       do i = 1, n   ! + matmul(omega, nu) in matmul's order: its result would be a heap temporary
         acc = 0.0_dp
         do k = 1, self%m
@@ -751,7 +889,9 @@ contains
     imp%grad_g = self%sys%grad
     imp%impulse = real(dir, dp) * mu
     imp%energy_before = e_minus
-    if (self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN) then
+    imp%condition = self%impact_condition
+    if (self%impact_condition /= self%settings%impact_energy) imp%energy_before = self%e_fallback
+    if (self%impact_condition == VCI_IMPACT_HAMILTONIAN) then
       call self%sys%hamiltonian(self%q_wall, imp%p_after, e_after, stat)
     else
       call self%sys%energy_out(self%x, self%q_wall, tau2, e_after, stat)
