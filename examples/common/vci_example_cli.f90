@@ -271,6 +271,8 @@ contains
     end if
     write (output_unit, '(a,i0,a,i0,a,i0)') 'newton: solves ', stats%newton_solves, '  iterations ', &
       stats%newton_iterations, '  least-squares fallbacks ', stats%fallbacks
+    if (stats%energy_fallbacks > 0) write (output_unit, '(a,i0,a)') 'impacts that kept H (no impulse matches E_d): ', &
+      stats%energy_fallbacks, ' (docs/DESIGN.md §2)'
     write (output_unit, '(a,f0.4,a)') 'wall time: ', real(c1 - c0, dp) / real(rate, dp), ' s'
     call print_state('end state', integ)
     if (.not. opts%no_output) write (output_unit, '(a)') 'output: '//opts%output
