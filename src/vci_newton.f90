@@ -199,6 +199,9 @@ contains
         self%xt(1:n) = x - self%dx(1:n)
         if (.not. sys%admissible(self%xt(1:n))) exit
         call sys%residual(self%xt(1:n), self%rt(1:n), self%sct(1:n), stat)
+        if (stat /= VCI_OK .and. sys%unrecoverable) then
+          call fail_eval(res, stat); return          ! a callback said so: no Newton after it
+        end if
         if (stat /= VCI_OK) exit
         phit = merit(self, self%rt(1:n), self%sct(1:n))
         ! above the tolerance a chord step must contract well (else new factors pay); below it,

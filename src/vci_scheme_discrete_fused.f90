@@ -96,6 +96,10 @@ contains
             x = self%fxt
             phi = phit
           end if
+        else if (self%unrecoverable) then
+          x = self%fx0                              ! the step ends (vci_stepper: substep)
+          self%jac_known = .false.
+          return
         end if
       end if
     end if
@@ -140,14 +144,18 @@ contains
         self%d1(i) = -self%d1(i)
       end do
     end if
-    if (stat /= 0) return
+    if (stat /= 0) then
+      call unrecoverable(self, stat, 'D1/D2 of L_d'); return
+    end if
     if (m > 0) then
       if (self%increments) then          ! (constraint_values, inlined as above)
         call self%ret%constraint_inc(self%a, x(1:n), self%tau, r(n + 1:nx), stat)
       else
         call self%model%discrete_constraint(self%a, x(1:n), self%tau, r(n + 1:nx), stat)
       end if
-      if (stat /= 0) return
+      if (stat /= 0) then
+        call unrecoverable(self, stat, 'discrete constraint'); return
+      end if
     end if
     ! (the round-off floor: a few ulps of sum_j |J_ij| |x_j|, in units of rtol, as step_residual)
     call substep_rows(n, m, x, self%a, self%increments, self%d1, self%pa, self%omega, self%tau, self%jac_known, &
@@ -172,7 +180,9 @@ contains
     else
       call self%model%mixed_hessian(x(1:n), self%a, self%tau, self%hess, stat)
     end if
-    if (stat /= 0) return
+    if (stat /= 0) then
+      call unrecoverable(self, stat, 'mixed Hessian'); return
+    end if
     if (self%increments .or. self%dir > 0) then
       do j = 1, n
         do i = 1, n
@@ -212,4 +222,14 @@ contains
     end do
     ok = .true.
   end subroutine fused_jacobian
+
+  !> A callback's failure in the fused solve: a recoverable one (stat > 0) is left to the general
+  !> path, which solves again and backs off; an unrecoverable one (stat < 0) is noted like the
+  !> general path's checks do, so that the step ends at once instead (vci_stepper: substep).
+  subroutine unrecoverable(self, stat, what)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    integer, intent(in) :: stat
+    character(len=*), intent(in) :: what
+    if (stat < 0) call self%note_failure(stat, what)
+  end subroutine unrecoverable
 end submodule vci_scheme_discrete_fused

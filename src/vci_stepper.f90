@@ -448,12 +448,20 @@ contains
       call set_cause(self, 'constraint forms'); return
     end if
     if (self%fused) then
-      ! small analytic systems: the fused solve; anything unusual there is redone on the general path
+      ! small analytic systems: the fused solve; anything unusual there is redone on the general
+      ! path, except a callback's unrecoverable failure, which ends the step at once
+      call self%sys%clear_failure()
       call self%sys%fused_substep(self%newton, self%x(1:nx), res, done)
       if (done) then
         self%stats%fused_solves = self%stats%fused_solves + 1
         call count_solve(self, res)
         stat = VCI_OK
+        return
+      end if
+      if (self%sys%unrecoverable) then
+        stat = VCI_ERR_CALLBACK
+        self%cause = 'regular step: callback '//trim(self%sys%failed_callback)//' reported failure'// &
+                     trim(stat_text(self%sys%failed_stat))
         return
       end if
     end if
@@ -481,6 +489,8 @@ contains
     if (stat == VCI_OK) then
       alpha = self%sys%get_extra(self%x, KIND_STAGE1)
       if (alpha > 0.0_dp .and. alpha <= 1.0_dp) return
+    else if (self%sys%unrecoverable) then
+      return                                 ! a callback said so: no second start
     end if
     ! The chord is a poor guess when the sub-step is strongly curved (stiff forces, a second
     ! bounce in one step): bracket the crossing on the discrete trajectory itself, i.e. on the
@@ -795,6 +805,7 @@ contains
     integer :: k
     real(dp) :: mu_a, mu_b, mu_c, g_a, g_b, g_c, mu_best, g_best
     call self%sys%clear_failure()
+    self%sys%unrecoverable = .false.
     mu_best = mu0; g_best = huge(1.0_dp)
     mu_a = mu0
     if (energy_gap(mu_a, g_a)) then
