@@ -78,6 +78,7 @@ module vci_scheme
     procedure :: endpoint_direction
     procedure :: forget_jacobian
     procedure :: fused_substep => no_fused_substep
+    procedure :: substep_sensitivity => no_substep_sensitivity
     procedure :: setup_common
     procedure :: extra_index
     procedure :: get_extra
@@ -348,6 +349,16 @@ contains
     logical, intent(out) :: done
     done = .false.
   end subroutine no_fused_substep
+
+  !> Solve J d = rhs with the factors of the last regular sub-step's Newton matrix, when the scheme
+  !> kept them from a fused solve of that sub-step (ok true); else ok false and rhs untouched: the
+  !> caller evaluates and factorises the Jacobian itself.
+  subroutine no_substep_sensitivity(self, rhs, ok)
+    class(vci_scheme_t), intent(inout) :: self
+    real(dp), intent(inout) :: rhs(:)
+    logical, intent(out) :: ok
+    ok = .false.
+  end subroutine no_substep_sensitivity
 
   !> Position of alpha (stage 1), mu (stage 2) or mu (impulse system) among the unknowns.
   pure integer function extra_index(self, kind)

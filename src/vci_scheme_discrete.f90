@@ -61,6 +61,8 @@ module vci_scheme_discrete
     real(dp), allocatable, private :: fjac(:, :), flu(:, :), fr(:), fsc(:), frt(:), fsct(:), fxt(:), &
                                       fdx(:), frw(:), fx0(:)
     integer, allocatable, private :: fpiv(:)
+    !> flu, fpiv, frw hold the factors of the last fused solve's Newton matrix (near its solution)
+    logical, private :: flu_kept = .false.
   contains
     procedure :: setup
     procedure :: unknowns
@@ -72,6 +74,7 @@ module vci_scheme_discrete
     procedure :: impact_momentum
     procedure :: forget_jacobian
     procedure :: fused_substep
+    procedure :: substep_sensitivity
     procedure :: use_derivatives
     procedure :: position_carry => discrete_position_carry
     procedure :: restore_position_carry => discrete_restore_carry
@@ -86,6 +89,12 @@ module vci_scheme_discrete
       type(vci_newton_result_t), intent(inout) :: res
       logical, intent(out) :: done
     end subroutine fused_substep
+    !> J d = rhs with the last fused solve's factors (vci_scheme_discrete_fused.f90).
+    module subroutine substep_sensitivity(self, rhs, ok)
+      class(vci_scheme_discrete_t), intent(inout) :: self
+      real(dp), intent(inout) :: rhs(:)
+      logical, intent(out) :: ok
+    end subroutine substep_sensitivity
   end interface
 
 contains

@@ -29,6 +29,7 @@ contains
     logical :: ok, factored
 
     done = .false.
+    self%flu_kept = .false.
     nx = size(x)
     if (self%kind /= KIND_SUBSTEP .or. nx /= self%n + self%m .or. .not. fusable(self) .or. &
         nx > nw%small_lu_max .or. nx >= nw%reuse_min) return
@@ -105,8 +106,21 @@ contains
     end if
     res%iterations = iterations
     res%scaled_residual = phi
+    self%flu_kept = factored .and. iterations > 0
     done = .true.
   end procedure fused_substep
+
+  module procedure substep_sensitivity   ! (arguments: the interface in vci_scheme_discrete)
+    integer :: i, nx
+    nx = self%n + self%m
+    ok = self%flu_kept .and. size(rhs) == nx
+    if (.not. ok) return
+    do i = 1, nx
+      rhs(i) = rhs(i) * self%frw(i)          ! the rows as equilibrated before factorising
+    end do
+    call small_lu_solve(nx, self%flu, self%fpiv, rhs)
+    ok = abs(sum(rhs)) <= huge(1.0_dp)
+  end procedure substep_sensitivity
 
   !> Is the sub-step's Jacobian analytic (nothing differenced)?
   logical function fusable(self)

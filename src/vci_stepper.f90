@@ -657,6 +657,7 @@ contains
     integer, intent(out) :: stat
     integer :: n, m, nx0, info
     real(dp) :: num, den, mu0, mirror
+    logical :: done
     character(len=40) :: what
     character(len=48) :: what_impulse
     n = self%n; m = self%m; nx0 = self%nsub
@@ -676,14 +677,21 @@ contains
     num = dot_product(self%sys%grad, self%q_trial - self%q_wall)
     mu0 = 0.0_dp; mirror = 0.0_dp
     if (num < 0.0_dp) then
-      call self%sys%residual(self%x(1:nx0), self%res(1:nx0), self%res_scale(1:nx0), stat)
-      if (stat == VCI_OK) call self%sys%jacobian(self%x(1:nx0), self%res(1:nx0), self%jac(1:nx0, 1:nx0), stat)
-      if (stat /= VCI_OK) then
-        call set_cause(self, trim(what)//' initial guess'); return
-      end if
       self%q_trial = -self%sys%grad
       call self%sys%momentum_rhs(self%q_trial, self%rhs(1:nx0))
-      call self%newton%linear_solve(nx0, self%jac, self%rhs, info)
+      ! the sub-step's own Newton factors when its fused solve kept them, else a new Jacobian
+      done = .false.
+      if (self%fused) call self%sys%substep_sensitivity(self%rhs(1:nx0), done)
+      info = 0
+      if (.not. done) then
+        call self%sys%residual(self%x(1:nx0), self%res(1:nx0), self%res_scale(1:nx0), stat)
+        if (stat == VCI_OK) call self%sys%jacobian(self%x(1:nx0), self%res(1:nx0), self%jac(1:nx0, 1:nx0), stat)
+        if (stat /= VCI_OK) then
+          call set_cause(self, trim(what)//' initial guess'); return
+        end if
+        call self%sys%momentum_rhs(self%q_trial, self%rhs(1:nx0))
+        call self%newton%linear_solve(nx0, self%jac, self%rhs, info)
+      end if
       call self%sys%endpoint_direction(self%rhs(1:nx0), self%q_trial)   ! a sensitivity, not a point
       den = dot_product(self%sys%grad, self%q_trial)
       if (info /= 0 .or. .not. (abs(den) > 0.0_dp) .or. .not. ieee_is_finite(den)) then
