@@ -107,13 +107,25 @@ if [ "${CALLGRIND:-1}" != 0 ] && [ "${PROFILE:-1}" != 0 ] && command -v callgrin
     echo "vci_bench_throughput --profile SCENE 1 EPISODES\` and \`callgrind_annotate --inclusive=no\` (impact steps included;"
     echo "groups by function name: see tools/bench/run_bench.sh)."
     echo
-    echo "| group | ellipse | pendulum |"
-    echo "|---|---:|---:|"
-    for spec in ellipse:200:20 pendulum:4999:2; do
-      name=${spec%%:*}; rest=${spec#*:}; nst=${rest%%:*}; eps=${rest#*:}
-      valgrind --tool=callgrind --callgrind-out-file="$CGO" --toggle-collect='*run_timed*' \
-        "$EXE" --profile "$name" 1 "$eps" >/dev/null 2>&1
-      callgrind_annotate --inclusive=no --threshold=100 "$CGO" 2>/dev/null | awk -v steps=$((nst * eps)) -v scene="$name" '
+    echo "The last two columns: the steps with an impact only (\`--profile-steps SCENE 1 EPISODES\`,"
+    echo "\`--toggle-collect='*counted_impact_step*'\`), per impact step."
+    echo
+    echo "| group | ellipse | pendulum | ellipse, impact step | pendulum, impact step |"
+    echo "|---|---:|---:|---:|---:|"
+    # columns: a regular-step profile (every step of the episodes, impacts included) and an
+    # impact-step profile (--profile-steps: only the steps with an impact) per scene
+    for spec in ellipse:20:all pendulum:2:all ellipse:20:impact pendulum:2:impact; do
+      name=${spec%%:*}; rest=${spec#*:}; eps=${rest%%:*}; kind=${rest#*:}
+      if [ "$kind" = all ]; then
+        out=$(valgrind --tool=callgrind --callgrind-out-file="$CGO" --toggle-collect='*run_timed*' \
+          "$EXE" --profile "$name" 1 "$eps" 2>&1)
+        steps=$(( $( [ "$name" = ellipse ] && echo 200 || echo 4999 ) * eps )); col=$name
+      else
+        out=$(valgrind --tool=callgrind --callgrind-out-file="$CGO" --toggle-collect='*counted_impact_step*' \
+          "$EXE" --profile-steps "$name" 1 "$eps" 2>&1)
+        steps=$(echo "$out" | awk '$1 == "regular" { print $4 }'); col="$name-impact"
+      fi
+      callgrind_annotate --inclusive=no --threshold=100 "$CGO" 2>/dev/null | awk -v steps="$steps" -v scene="$col" '
         /:/ && $1 ~ /^[0-9,]+$/ {
           n = $1; gsub(",", "", n); f = $0
           if (f ~ /newton_MOD_(lu_|linear)|kernels_MOD_(small_lu|equilibrate|substep_direction)|dgetr|dgelsd/) g = "4 LU factorisation and solves (incl. row equilibration)"
@@ -121,17 +133,18 @@ if [ "${CALLGRIND:-1}" != 0 ] && [ "${PROFILE:-1}" != 0 ] && command -v callgrin
           else if (f ~ /scene_|vci_scene/ || f ~ /libm|sincos|s_sin|s_cos/) g = "1 model callbacks (scene code, libm)"
           else if (f ~ /scheme_discrete_MOD_(step_jacobian|fd_column|momentum_block|constraint_block)|fused_jacobian|kernels_MOD_jacobian_sizes|dispatch_jacobian|check_matrix|impulse_jacobian/) g = "3 Jacobian assembly (incl. differenced rows)"
           else if (f ~ /scheme_discrete_MOD_(step_residual|rows|d1s|check_fast)|fused_residual|kernels_MOD_(momentum_terms|kinetic_and_floor|substep_rows)|dispatch_residual|scheme_MOD_check/) g = "2 residual and row scales"
-          else if (f ~ /energy_out|momentum_out|hamiltonian/) g = "6 new momentum and E_d"
+          else if (f ~ /energy_out|momentum_out|impact_momentum|hamiltonian/) g = "6 new momentum and E_d"
           else if (f ~ /gaps|gap_grad/) g = "7 gap tests"
-          else if (f ~ /stepper_MOD|integrator_MOD|scheme_MOD|scheme_discrete_MOD/) g = "8 stepper/driver bookkeeping (pose, put/get, copies)"
-          else g = "9 other (runtime, memcpy)"
+          else if (f ~ /probe|bracket_crossing|energy_gap|energy_along/) g = "8 impact starts (stage 1 bracket, stage 2 energy line)"
+          else if (f ~ /stepper_MOD|integrator_MOD|scheme_MOD|scheme_discrete_MOD/) g = "9 stepper/driver bookkeeping (pose, put/get, copies)"
+          else g = "A other (runtime, memcpy)"
           tot[g] += n; all += n
         }
         END { for (g in tot) printf "%s|%s|%.0f\n", scene, g, tot[g] / steps; printf "%s|0 total|%.0f\n", scene, all / steps }'
     done | sort -t'|' -k2,2 | awk -F'|' '
       { v[$2, $1] = $3; if (!($2 in seen)) { seen[$2] = 1; order[++n] = $2 } }
       END { for (i = 1; i <= n; i++) { g = order[i]
-              printf "| %s | %s | %s |\n", substr(g, 3), v[g, "ellipse"], v[g, "pendulum"] } }'
+              printf "| %s | %s | %s | %s | %s |\n", substr(g, 3), v[g, "ellipse"], v[g, "pendulum"], v[g, "ellipse-impact"], v[g, "pendulum-impact"] } }'
     echo
   } >"$PR"
 fi
@@ -241,16 +254,22 @@ awk -v cmd="tools/bench/run_bench.sh${*:+ $*}" '
   echo "state); each routine costs 50 to 300 instructions a call at n = 3, mostly loop and call overhead that"
   echo "a loop written for one n does not have."
   echo
-  echo "An impact step is the regular step that found the wall, then Newton solves on the general path:"
-  echo "stage 1 (alpha, b on the wall) from the chord's crossing, bracketed by 7 samples and Illinois steps on"
-  echo "the gap (was 20 bisections), its alpha column differenced without the gap row; stage 2 (the"
-  echo "reflection) from the linearised reflection, moved towards E_d = E- by secant steps on the impulse"
-  echo "line (one Newton iteration where the mirror took three on the ellipse), with its differenced E_d"
-  echo "row; the checks that the motion departs from and leaves the wall; the impact record. Before these"
-  echo "changes (commit 21b4a64, the same callgrind commands) an impact step cost 79352 (ellipse) / 80639"
-  echo "(pendulum) instructions, 14.5x / 8.5x a regular step. Stage 1 still takes 3 Newton iterations on the ellipse: its"
-  echo "start on the chord is O(h^2) off the trajectory; a start on the parabola through the previous point"
-  echo "(exact there, one iteration) was dropped for its failures at tangential touches (docs/DESIGN.md §6)."
+  echo "An impact step (the profile's last two columns) is the regular step that found the wall, then"
+  echo "Newton solves on the general path: stage 1 (alpha, b on the wall) from the chord's crossing,"
+  echo "bracketed by 7 samples and Illinois steps on the gap (was 20 bisections), its alpha column"
+  echo "differenced without the gap row; stage 2 (the reflection) from the linearised reflection, its"
+  echo "sensitivity solved with the factors the fused solve of the no-impulse sub-step kept, then moved"
+  echo "towards E_d = E- by secant steps on the impulse line (one Newton iteration where the mirror took"
+  echo "three on the ellipse), with its differenced E_d row; the checks that the motion departs from and"
+  echo "leaves the wall; the impact record. Before these changes (commit 21b4a64, the same callgrind"
+  echo "commands) an impact step cost 79352 (ellipse) / 80639 (pendulum) instructions, 14.5x / 8.5x a"
+  echo "regular step. What is left is spread like a regular step's cost, over the general path's layers"
+  echo "(residual rows, Jacobian assembly, LU, bookkeeping), for three Newton solves: stage 1 takes 3"
+  echo "iterations on the ellipse (2 on the pendulum) from its chord start, O(h^2) off the trajectory; a"
+  echo "start on the parabola through the previous point (exact for the ellipse's flight: one iteration)"
+  echo "was tried and dropped for its failures at tangential touches (docs/DESIGN.md §6). In time an"
+  echo "impact step also pays for code that regular steps leave cold (one step in 100 on the ellipse, in"
+  echo "1700 on the pendulum): its time ratio is above its instruction ratio and moves between runs."
 } >>"$OUT"
 if [ "$status" -ne 0 ]; then
   echo "run_bench.sh: benchmark failed (status $status); see the trajectory check in $OUT" >&2
