@@ -505,8 +505,76 @@ def summary_text(rows, summaries, outdir):
                          f"{s['n_impacts']} impacts")
         lines.append(f"- **{scene}**: " + "; ".join(parts) + ".")
     lines.append("")
-    lines.append(SUMMARY_READING)
+    lines.append(SUMMARY_READING.format(**reading_figures(rows, summaries)))
     return "\n".join(lines) + "\n"
+
+
+def reading_figures(rows, summaries):
+    """The numbers that the summary's reading quotes, from this run's data (CPU ratios move by tens
+    of percent between runs on a shared machine; the text must quote the run it sits beside)."""
+    def ratio(scene, peers, lev):
+        """cheapest of `peers` reaching lev / vci's best reaching it (> 1: vci cheaper), or None"""
+        v = best_vci(rows, scene, lev)
+        c = [best_at(rows, scene, m, lev) for m in peers]
+        c = [r for r in c if r]
+        if not (v and c):
+            return None
+        return min(r["cpu_median"] for r in c) / v["cpu_median"]
+
+    def g2(x):
+        return f"{x:.0f}" if x >= 100 else f"{x:.2g}"
+
+    def rng(vals, invert=False):
+        vals = [1.0 / x if invert else x for x in vals if x]
+        if not vals:
+            return "n/a"
+        lo, hi = min(vals), max(vals)
+        return f"{g2(lo)}×" if g2(lo) == g2(hi) else f"{g2(lo)}–{g2(hi)}×"
+
+    def one(x, invert=False):
+        return "n/a" if not x else f"{g2(1.0 / x if invert else x)}×"
+
+    def long_max(scene, method, param=None):
+        for r in summaries:
+            if r["scene"] == scene and r["method"] == method and (param is None or abs(r["param"] - param) <= 1e-3 * param):
+                return r
+        return None
+
+    def e(r):
+        if not r:
+            return "n/a"
+        return f"{r['max_energy_error']:.1e}".replace("e-0", "e-").replace("e+0", "e+")
+
+    adams = ["cvode-adams"]
+    cvode = ["cvode-adams", "cvode-bdf"]
+    mid = [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9]
+    lob4 = long_max("pendulum_walls", "vci-lobatto4-hamiltonian")
+    a12 = long_max("pendulum_walls", "cvode-adams", 1e-12)
+    ea12 = long_max("ellipse", "cvode-adams", 1e-12)
+    lob2 = long_max("ellipse", "vci-lobatto2-hamiltonian")
+    return {
+        "pw_mid": rng([ratio("pendulum_walls", adams, l) for l in mid]),
+        "pw_1e2": one(ratio("pendulum_walls", adams, 1e-2)),
+        "pw_dop": one(ratio("pendulum_walls", ["scipy-dop853"], 1e-10)),
+        "el_mid": rng([ratio("ellipse", adams, l) for l in [1e-2] + mid]),
+        "el_dop": one(ratio("ellipse", ["scipy-dop853"], 1e-10)),
+        "pa_rng": rng([ratio("particle", adams, l) for l in (1e-2, 1e-4, 1e-6, 1e-8, 1e-10)]),
+        "pe_1e2": one(ratio("pendulum", cvode, 1e-2), invert=True),
+        "pe_1e4": one(ratio("pendulum", cvode, 1e-4), invert=True),
+        "pe_1e6": one(ratio("pendulum", cvode, 1e-6), invert=True),
+        "fpu_rng": rng([ratio("fpu_walls", adams, l) for l in (1e-4, 1e-6, 1e-8, 1e-10)], invert=True),
+        "lob4_max": e(lob4), "lob4_cpu": "n/a" if not lob4 else f"{lob4['cpu']:.2g}",
+        "pw_ld_h": e(long_max("pendulum_walls", "vci-ld-hamiltonian")),
+        "pw_a8": e(long_max("pendulum_walls", "cvode-adams", 1e-8)),
+        "pw_a10": e(long_max("pendulum_walls", "cvode-adams", 1e-10)),
+        "pw_a12": e(a12),
+        "pw_a12_cpu": "n/a" if not (a12 and lob4) else f"{a12['cpu'] / lob4['cpu']:.2g}",
+        "pw_a12_err": "n/a" if not (a12 and lob4) else g2(a12['max_energy_error'] / lob4['max_energy_error']),
+        "el_lob2": e(lob2),
+        "el_ld_h": e(long_max("ellipse", "vci-ld-hamiltonian")),
+        "el_a12": e(ea12),
+        "el_a12_cpu": "n/a" if not (ea12 and lob2) else f"{ea12['cpu'] / lob2['cpu']:.2g}",
+    }
 
 
 MEASURED = """\
@@ -585,48 +653,51 @@ percent with the machine's load, so factors below ~1.5 are not robust):
 
 - **Where vci wins.** *Walled pendulum* (nonlinear flight, 18 impacts in 10 s): Lobatto s = 3, 4
   (order 6, 8, kept through the impacts because the impact time and the reflection are solved
-  with the same scheme) take long steps: lobatto4 ends 3.5e-9 off with 100 steps (h = 0.1) and
-  1e-11 off with 200, while CVODE-Adams restarts at order 1 after each of the 18 impacts
-  (CVodeReInit). vci is 1.3–2.0× cheaper than CVODE-Adams at every level 1e-4 … 1e-9, 2.3× at
-  1e-2, and the only one of the two reaching 1e-10 (lobatto4, h = 0.05, either condition; SciPy's
-  DOP853 gets there at 12× the cost). *Ellipse* (flight exact for every scheme, uniform
-  gravity): vci-ld-hamiltonian from the exact start is exact to round-off at any step, so its
-  coarsest run (h = 0.1, 30 steps) is 1.3–1.5× cheaper than CVODE-Adams at every level
-  1e-2 … 1e-9, and below 1e-10 only vci and SciPy's DOP853 (76× dearer) arrive. **The issue's sweep goal (vci at its best
-  scheme cheaper than CVODE-Adams at every level 1e-4 … 1e-10) is met on both scenes in this run.**
-- **Where a peer wins.** *Particle*: CVODE-Adams is 1.3–1.6× cheaper (0.04 against 0.06 ms: both
-  exact, vci's per-run set-up dominates). *Nonholonomic pendulum*: CVODE is 2–7× cheaper at
-  1e-2 … 1e-4 and 75× at 1e-6; vci's best there is `midpoint` from L (second order; the paper's
-  L_d and `left` are first order) and its sweep (h ≥ 1e-4) stops at 2e-7; Lobatto, which would
-  close the gap, is refused by the library for nonholonomic constraints (m > 0). *FPU chain*
-  (32 DOF, 64 walls, 41 impacts in 2 s): CVODE-Adams is 2.3–8× cheaper at 1e-4 … 1e-10. vci's
-  cost there is the impacts: each one brackets the impact time and solves the stage-1 and
-  stage-2 systems of s·n + 1 unknowns with dense LU factorisations, so lobatto4 costs ~0.13 s
-  whatever the step (it is at round-off, 1.4e-11, already at h = 0.2, 10 steps), while explicit
-  Adams pays O(n) per step and a cheap restart per impact.
-- **Long runs (≥ 10⁵ impacts).** *Walled pendulum*: vci-lobatto4-hamiltonian (h = 0.1, 9 s CPU)
-  keeps |E − E0| at ~2e-9 for most of the run, with isolated jumps to 2.4e-8 at the end (a
-  random walk of round-off, slope ½, not a drift); vci-ld-hamiltonian (h = 1e-2) is bounded at
-  2.2e-4 (slope 0, the midpoint rule's O(h²) oscillation). Every CVODE run drifts linearly
-  (slope 1): CVODE-Adams ends at 6.8e-2 at 8 s, 3.9e-5 at 11 s and 1.6e-5 at 18 s (rtol 1e-8,
-  1e-10, 1e-12) — ~670× above the Lobatto run at twice its cost. *Ellipse*: **not met.** vci's
-  energy error does not drift in time but moves in isolated jumps at a few impacts (the first
-  edition traced such jumps to the momentum after an impact being a position difference over the
-  short remaining sub-step (1 − α)h, which amplifies round-off): vci-lobatto2-hamiltonian (h = 0.1, 5.4 s) ends
-  at 3.8e-5, vci-ld-hamiltonian at 2.8e-4, while CVODE-Adams at rtol 1e-12 (4.0 s) ends at
-  2.3e-6, growing linearly at 2e-11 per second — it would reach vci's level only after a ~17×
-  longer run. The paper's impact condition grows on both scenes (slopes 0.3–0.7). SciPy's ellipse
+  with the same scheme) take long steps (lobatto4: 3.5e-9 off with 100 steps, h = 0.1, and 9e-12
+  with 200), while CVODE-Adams restarts at order 1 after each of the 18 impacts (CVodeReInit).
+  CVODE-Adams costs {pw_mid} vci's best at the levels 1e-4 … 1e-9 ({pw_1e2} at 1e-2), and only vci
+  reaches 1e-10 of the two (SciPy's DOP853 gets there at {pw_dop} vci's cost). *Ellipse* (flight
+  exact for every scheme, uniform gravity): from the exact start vci-ld-hamiltonian and `midpoint`
+  are exact to round-off at any step, so their coarsest runs (h = 0.1, 30 steps) win: CVODE-Adams
+  costs {el_mid} vci's best at 1e-2 … 1e-9, and below 1e-10 only vci and SciPy's DOP853 ({el_dop}
+  dearer) arrive. *Particle*: exact for vci; CVODE-Adams costs {pa_rng} vci's best (both under
+  0.1 ms: set-up dominates, so these ratios move most between runs). **The issue's sweep goal (vci
+  at its best scheme cheaper than CVODE-Adams at every level 1e-4 … 1e-10) is met on both scenes
+  in this run** (the table above).
+- **Where a peer wins.** *Nonholonomic pendulum*: vci's best costs {pe_1e2} CVODE's at 1e-2,
+  {pe_1e4} at 1e-4 and {pe_1e6} at 1e-6, and its sweep (h ≥ 1e-4) does not reach 1e-8; vci's best
+  there is `midpoint` from L (second order; the paper's L_d and `left` are first order); Lobatto,
+  which would close the gap, is refused by the library for nonholonomic constraints (m > 0). *FPU
+  chain* (32 DOF, 64 walls, 41 impacts in 2 s): vci costs {fpu_rng} CVODE-Adams at 1e-4 … 1e-10.
+  Its cost there is the impacts: each one brackets the impact time and solves the stage-1 and
+  stage-2 systems of s·n + 1 unknowns with dense LU factorisations, so lobatto4 costs ~0.14 s
+  whatever the step (it is at round-off already at h = 0.2, 10 steps), while explicit Adams pays
+  O(n) per step and a cheap restart per impact.
+- **Long runs (≥ 10⁵ impacts).** *Walled pendulum*: vci-lobatto4-hamiltonian (h = 0.1,
+  {lob4_cpu} s CPU) keeps |E − E0| below {lob4_max} (a random walk of round-off, not a drift);
+  vci-ld-hamiltonian (h = 1e-2) is bounded at {pw_ld_h} (slope 0, the midpoint rule's O(h²)
+  oscillation). Every CVODE run drifts linearly (slope 1): CVODE-Adams reaches {pw_a8}, {pw_a10} and
+  {pw_a12} (rtol 1e-8, 1e-10, 1e-12; the last at {pw_a12_cpu}× the Lobatto run's CPU and
+  {pw_a12_err}× its error). *Ellipse*: vci-lobatto2-hamiltonian (h = 0.1) stays below {el_lob2}
+  and vci-ld-hamiltonian (h = 1e-2) below {el_ld_h}, while CVODE-Adams at rtol 1e-12 ({el_a12_cpu}×
+  the Lobatto run's CPU) reaches {el_a12}, growing linearly. vci's error there is not a drift but a
+  few round-off jumps over 10⁵ impacts (a fitted slope above 1 is that of the window maxima of such
+  jumps from 1e-13). The earlier editions' jumps (3.8e-5 and 2.8e-4 here) came from the momenta at
+  the ends of the short sub-steps beside an impact, position differences over them (docs/DESIGN.md
+  §6: now the momentum balance); in this edition's first run, before the Lobatto scheme had it, a
+  double impact with a sub-step of length ~0 moved lobatto2's H by 48 at once. The paper's impact
+  condition grows or wanders on both scenes (it moves H by O(h²) at every impact). SciPy's ellipse
   run fell through the floor (a missed event) even at rtol 1e-10; Siconos keeps the walled
-  pendulum's energy bounded (4e-4) but is first order.
+  pendulum's energy bounded but is first order.
 """
 
 READING = """\
 - **Same start.** From `init_from_momentum` the particle and the ellipse are integrated exactly
-  by every `-hamiltonian` row at every h (errors 1e-14 … 1e-11 at h ≥ 5e-3). Below that the
+  by every `-hamiltonian` row at every h (errors 1e-14 … 1e-10 at h ≥ 5e-3). Below that the
   hand-written L_d's error grows with the number of steps (round-off: ~1e-7 at h = 1e-4 and 2e-5
   at h = 1e-5 on the ellipse — the negative "order" in the ellipse's fits is that, not
   truncation); `midpoint` from L, which solves for the increment and carries the rounding of the
-  positions over (docs/SCHEMES.md), stays below 3e-11 down to h = 1e-4. From the paper's initial
+  positions over (docs/SCHEMES.md), stays below 4e-11 down to h = 1e-4. From the paper's initial
   pair (rows `-pair`) the same model is second order, because the pair is O(h²) off the exact
   trajectory.
 - **Orders through impacts** (walled pendulum, fits in its section): midpoint 2, Lobatto
@@ -652,7 +723,8 @@ READING = """\
   run is not a valid trajectory.
 - **Failures** (listed below with the messages). The nonholonomic pendulum at h = 0.1 with the
   first-order L_d (the scene's and `left`): Newton fails at θ near π, the step is too long for it.
-  `left` on the ellipse at h = 0.05: Newton fails at an impact. Every Lobatto row on the walled
+  (`left` on the ellipse at h = 0.05 failed at an impact in earlier editions; it runs in this one,
+  with the impact steps' new starts and fallback, docs/DESIGN.md §2.) Every Lobatto row on the walled
   pendulum at h = 0.4 (0.7 of the ~0.55 s between impacts): stage 2 finds that the reflected
   motion does not leave the wall, and the library refuses the step; h ≤ 0.3 runs. On the FPU
   chain Lobatto at h ≥ 0.25 exceeds the 8 impacts allowed per step, so its sweep starts at 0.2.
