@@ -1,5 +1,5 @@
 !> An observer that writes a run as CSV: one row per state (step, t, q, p, lambda, E_d) in FILE and
-!> one row per impact in FILE.impacts.csv. Full precision (17 significant digits), so a run can be
+!> one row per impact in FILE.impacts.csv (step, t, alpha, gap, impulse, energies, condition). Full precision (17 significant digits), so a run can be
 !> continued or reversed from its last row like init_from_momentum; it stores no checkpoint
 !> (keeps_checkpoints is false), so such a continuation is not bit for bit. Replaced by the HDF5
 !> observer when that is built.
@@ -76,7 +76,7 @@ contains
       head = head//',lambda'//itoa(i)
     end do
     write (self%unit, '(a)') head//',energy'
-    write (self%impact_unit, '(a)') 'step,t,alpha,gap,impulse,energy_before,energy_after'
+    write (self%impact_unit, '(a)') 'step,t,alpha,gap,impulse,energy_before,energy_after,condition'
     call write_row(self, info%step0, info%t0, q, p, [(0.0_dp, i=1, info%m)], 0.0_dp)
   end subroutine csv_start
 
@@ -99,8 +99,10 @@ contains
     class(vci_csv_writer_t), intent(inout) :: self
     type(vci_impact_t), intent(in) :: impact
     integer, intent(inout) :: stat
-    write (self%impact_unit, '(i0,2(",",'//realfmt//'),",",i0,3(",",'//realfmt//'))') impact%step, impact%t, &
-      impact%alpha, impact%gap, impact%impulse, impact%energy_before, impact%energy_after
+    ! condition: the impact condition that fixed the impulse (0 discrete, 1 Hamiltonian: also where
+    ! the discrete one had no solution); the energies are E_d or H accordingly
+    write (self%impact_unit, '(i0,2(",",'//realfmt//'),",",i0,3(",",'//realfmt//'),",",i0)') impact%step, impact%t, &
+      impact%alpha, impact%gap, impact%impulse, impact%energy_before, impact%energy_after, impact%condition
   end subroutine csv_impact
 
   subroutine csv_finish(self, status, message, stat)
