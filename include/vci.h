@@ -274,6 +274,12 @@ int  vci_get_index(vci_integrator integ, int64_t *k);
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle; VCI_ERR_STATE: busy. */
 int  vci_get_stats(vci_integrator integ, int64_t *steps, int64_t *impacts, int64_t *newton_iterations);
 
+/** Impacts at which the discrete energy condition had no solution (a soft impact: the normal kinetic
+ *  energy below E_d's O(h^2) mismatch with H) and H(q, p) was kept instead; only with a model that
+ *  supplies energy (else such an impact fails the step). count may be NULL.
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle; VCI_ERR_STATE: busy. */
+int  vci_get_energy_fallbacks(vci_integrator integ, int64_t *count);
+
 /** Call fn(..., user) at every impact of later steps; fn = NULL removes it.
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle; VCI_ERR_STATE: busy. */
 int  vci_set_impact_callback(vci_integrator integ, vci_impact_fn fn, void *user);

@@ -45,6 +45,7 @@ module vci_capi
   public :: vci_set_tolerances, vci_set_impact_energy, vci_set_max_impacts
   public :: vci_init_from_pair, vci_init_from_momentum, vci_step, vci_integrate
   public :: vci_get_state, vci_get_multipliers, vci_get_energy, vci_get_index, vci_get_stats
+  public :: vci_get_energy_fallbacks
   public :: vci_set_impact_callback, vci_open_output, vci_close_output
   public :: vci_last_error, vci_status_string, vci_version
 
@@ -1487,6 +1488,26 @@ contains
       l = int(v, c_int64_t)
     end subroutine put_count
   end function vci_get_stats
+
+  !> int vci_get_energy_fallbacks(vci_integrator integ, int64_t *count): impacts where the discrete
+  !> energy condition had no solution and H(q, p) was kept instead (docs/DESIGN.md §2).
+  integer(c_int) function vci_get_energy_fallbacks(integ, count) bind(C, name='vci_get_energy_fallbacks')
+    type(c_ptr), value :: integ, count
+    type(c_integrator_t), pointer :: ip
+    type(vci_stats_t) :: stats
+    integer :: stat
+    integer(c_int64_t), pointer :: l
+    call enter(integ, 'vci_get_energy_fallbacks', ip, stat)
+    if (stat == VCI_OK) then
+      if (c_associated(count)) then
+        stats = ip%integ%statistics()
+        call c_f_pointer(count, l)
+        l = int(stats%energy_fallbacks, c_int64_t)
+      end if
+      call leave(ip)
+    end if
+    vci_get_energy_fallbacks = stat
+  end function vci_get_energy_fallbacks
 
   !> int vci_set_impact_callback(vci_integrator integ, vci_impact_fn fn, void *user): NULL fn removes it.
   integer(c_int) function vci_set_impact_callback(integ, fn, user) bind(C, name='vci_set_impact_callback')
