@@ -159,7 +159,7 @@ contains
       end do
     end if
     if (stat /= 0) then
-      call unrecoverable(self, stat, 'D1/D2 of L_d'); return
+      call note_if_unrecoverable(self, stat, 'D1/D2 of L_d'); return
     end if
     if (m > 0) then
       if (self%increments) then          ! (constraint_values, inlined as above)
@@ -168,7 +168,7 @@ contains
         call self%model%discrete_constraint(self%a, x(1:n), self%tau, r(n + 1:nx), stat)
       end if
       if (stat /= 0) then
-        call unrecoverable(self, stat, 'discrete constraint'); return
+        call note_if_unrecoverable(self, stat, 'discrete constraint'); return
       end if
     end if
     ! (the round-off floor: a few ulps of sum_j |J_ij| |x_j|, in units of rtol, as step_residual)
@@ -195,7 +195,7 @@ contains
       call self%model%mixed_hessian(x(1:n), self%a, self%tau, self%hess, stat)
     end if
     if (stat /= 0) then
-      call unrecoverable(self, stat, 'mixed Hessian'); return
+      call note_if_unrecoverable(self, stat, 'mixed Hessian'); return
     end if
     if (self%increments .or. self%dir > 0) then
       do j = 1, n
@@ -240,10 +240,10 @@ contains
   !> A callback's failure in the fused solve: a recoverable one (stat > 0) is left to the general
   !> path, which solves again and backs off; an unrecoverable one (stat < 0) is noted like the
   !> general path's checks do, so that the step ends at once instead (vci_stepper: substep).
-  subroutine unrecoverable(self, stat, what)
+  subroutine note_if_unrecoverable(self, stat, what)
     class(vci_scheme_discrete_t), intent(inout) :: self
     integer, intent(in) :: stat
     character(len=*), intent(in) :: what
     if (stat < 0) call self%note_failure(stat, what)
-  end subroutine unrecoverable
+  end subroutine note_if_unrecoverable
 end submodule vci_scheme_discrete_fused

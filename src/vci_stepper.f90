@@ -207,11 +207,8 @@ contains
     class(vci_stepper_t), intent(inout) :: self
     logical, intent(in), optional :: mixed_hessian, gap_gradients, constraint_jacobian
     logical, intent(in), optional :: energy   !< the model has H(q, p) (the discrete condition's fallback)
-    if (present(energy)) then
-      self%has_energy = energy
-    else
-      call self%sys%use_derivatives(mixed_hessian, gap_gradients, constraint_jacobian)
-    end if
+    if (present(energy)) self%has_energy = energy
+    call self%sys%use_derivatives(mixed_hessian, gap_gradients, constraint_jacobian)
   end subroutine use_model_derivatives
 
   !> Advance from (q, p) by one step of length h in direction dir (+1/-1).
@@ -449,8 +446,9 @@ contains
     end if
     if (self%fused) then
       ! small analytic systems: the fused solve; anything unusual there is redone on the general
-      ! path, except a callback's unrecoverable failure, which ends the step at once
-      call self%sys%clear_failure()
+      ! path, except a callback's unrecoverable failure, which ends the step at once (the flag is
+      ! reset, not the message buffer: blanking that every step costs; a failure writes it anew)
+      self%sys%unrecoverable = .false.
       call self%sys%fused_substep(self%newton, self%x(1:nx), res, done)
       if (done) then
         self%stats%fused_solves = self%stats%fused_solves + 1
