@@ -3,7 +3,7 @@
 !> Handles are not addresses: a handle is a token (serial number, slot) into a registry of live
 !> objects. Serial numbers are never reused, so NULL, destroyed, foreign or garbage handles give
 !> VCI_ERR_ARGUMENT instead of a crash even after malloc has reused the memory of a destroyed object.
-!> The registry is guarded by a lock (src/vci_capi_sync.c), so handles may be created, used and
+!> The registry is guarded by a lock (src/bindings/vci_capi_sync.c), so handles may be created, used and
 !> destroyed from any thread.
 !>
 !> No mutable state is shared between integrators: a model is immutable once created, and each
@@ -127,7 +127,7 @@ module vci_capi
     end function c_impact_fn
   end interface
 
-  ! src/vci_capi_sync.c
+  ! src/bindings/vci_capi_sync.c
   interface
     pure integer(c_size_t) function c_strlen(s) bind(C, name='strlen')
       import :: c_size_t, c_ptr
