@@ -3,11 +3,14 @@
 !> (reach the first wall) and stage 2 (reflect with the energy and tangential-momentum conditions) on
 !> the remaining fraction of the step, up to a bound on the number of impacts.
 !>
-!> The stepper owns the impact algorithm and the one settings object of a run; it knows nothing of
-!> how L_d is built (the scheme lays out the unknowns and is reached through its accessors) and
-!> nothing of the driver's state (the state, the impact records and the step index are arguments).
+!> This module holds the stepper's data (the scheme, Newton, the settings, the workspace) and the
+!> regular step; the impact algorithm (stage 1, its bracketing, stage 2 with the energy conditions,
+!> the impact record) is its submodule vci_impacts (vci_impacts.f90), Newton's start is
+!> vci_predictor. The stepper knows nothing of how L_d is built (the scheme lays out the unknowns
+!> and is reached through its accessors); the driver's state comes in whole (vci_state_t) and is
+!> committed only when the step succeeds.
 module vci_stepper
-  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_value, ieee_quiet_nan
   use vci_kinds, only: dp, i8
   use vci_status
   use vci_newton, only: vci_newton_t, vci_newton_result_t, NEWTON_MAX_ITERATIONS, NEWTON_NO_DESCENT, &
@@ -15,25 +18,11 @@ module vci_stepper
   use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_STAGE1, KIND_STAGE2, KIND_IMPULSE, &
                         VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN
   use vci_observer, only: vci_impact_t
+  use vci_settings, only: vci_settings_t, vci_solver_stats_t
+  use vci_state, only: vci_state_t, vci_impact_buffer_t
+  use vci_predictor, only: vci_predict_start
   implicit none
   private
-
-  !> Solver and impact settings: one object, held by the stepper; the driver changes it through
-  !> `configure`, which hands Newton and the scheme their part once per change (never per step).
-  type, public :: vci_settings_t
-    real(dp) :: atol = 0.0_dp            !< absolute floor of Newton's per-row tolerance
-    real(dp) :: rtol = 1.0e-12_dp        !< Newton tolerance relative to the size of each row's terms
-    integer :: max_iterations = 30       !< Newton iteration cap per solve
-    integer :: max_impacts_per_step = 16 !< beyond this: VCI_ERR_TOO_MANY_IMPACTS (contact, chatter)
-    integer :: impact_energy = VCI_IMPACT_DISCRETE
-  end type vci_settings_t
-
-  !> Cumulative solver statistics.
-  type, public :: vci_solver_stats_t
-    integer(i8) :: newton_solves = 0, newton_iterations = 0, fallbacks = 0
-    integer(i8) :: fused_solves = 0   !< of newton_solves, those the scheme's fused routine did
-    integer(i8) :: energy_fallbacks = 0  !< impacts where E_d could not be matched: H kept instead
-  end type vci_solver_stats_t
 
   !> Where stage 1's first crossing is bracketed: on the chord a -> b (cheap: gap evaluations only)
   !> or on the discrete trajectory (regular sub-steps of length s tau: one Newton solve a point).
@@ -81,6 +70,9 @@ module vci_stepper
     real(dp) :: e_fallback = 0.0_dp
     logical :: has_energy = .false.           !< the model supplies H(q, p) (probed at initialisation)
     real(dp), allocatable :: constraint_impulse(:)  !< nu of the Hamiltonian impact (m > 0)
+    ! The step's outcome, committed to the state when the step succeeds:
+    real(dp), allocatable :: q_new(:), p_new(:), lambda_new(:)
+    real(dp) :: e_new = 0.0_dp
   contains
     procedure :: setup
     procedure :: configure
@@ -96,7 +88,27 @@ module vci_stepper
     procedure :: pair_momentum
   end type vci_stepper_t
 
-  public :: vci_reserve_impacts
+
+  interface
+    !> The impacts of the step whose regular sub-step ends in x (vci_impacts.f90): while the end
+    !> leaves the admissible set, stage 1 and stage 2 on the rest of the step; `landed` when stage 1
+    !> reached a wall exactly at the step's end (then the outcome is in q_new, p_new, lambda_new,
+    !> e_new and the state's history is updated); else x holds the last sub-step from q_start of
+    !> length tau.
+    module subroutine resolve_impacts(self, state, dir, tau, impacts, landed, stat)
+      type(vci_stepper_t), intent(inout) :: self
+      type(vci_state_t), intent(inout) :: state
+      integer, intent(in) :: dir
+      real(dp), intent(inout) :: tau
+      type(vci_impact_buffer_t), intent(inout) :: impacts
+      logical, intent(out) :: landed
+      integer, intent(out) :: stat
+    end subroutine resolve_impacts
+  end interface
+
+  ! For the submodule vci_impacts. Public because gfortran 12 (-O2 and above) inlines a private
+  ! procedure into its callers in this module and then emits no symbol for the submodule's calls.
+  public :: substep, run_newton, set_cause
 
   real(dp), parameter :: landing_fraction = 1.0e-10_dp  ! stage 1 within this of the step's end: landed on the wall
 
@@ -123,13 +135,14 @@ contains
                                        self%rhs, self%res, self%res_scale, self%q_start, self%p_start, self%q_end, &
                                        self%q_wall, self%p_arrive, self%p_leave, self%chord_velocity, self%q_guess, &
                                        self%q_trial, self%gaps_start, self%gaps_end, self%gaps_trial, self%gap_grads, &
-                                       self%lambda_start, self%zero_lambda, self%constraint_impulse, self%x_try)
+                                       self%lambda_start, self%zero_lambda, self%constraint_impulse, self%x_try, &
+                                       self%q_new, self%p_new, self%lambda_new)
     allocate (self%x(nx), self%x_stage1(nx), self%x_saved(nx), self%x_low(nx), self%x_high(nx), self%jac(nx, nx), &
               self%rhs(nx), self%res(nx), self%res_scale(nx), self%q_start(n), self%p_start(n), self%q_end(n), &
               self%q_wall(n), self%p_arrive(n), self%p_leave(n), self%chord_velocity(n), self%q_guess(n), &
               self%q_trial(n), self%gaps_start(ngw), self%gaps_end(ngw), self%gaps_trial(ngw), self%gap_grads(n, ngw), &
               self%lambda_start(m), self%zero_lambda(m), self%constraint_impulse(m), &
-              self%x_try(nx), stat=stat)
+              self%x_try(nx), self%q_new(n), self%p_new(n), self%lambda_new(m), stat=stat)
     if (stat /= 0) then
       stat = VCI_ERR_MEMORY; return
     end if
@@ -211,225 +224,88 @@ contains
     call self%sys%use_derivatives(mixed_hessian, gap_gradients, constraint_jacobian)
   end subroutine use_model_derivatives
 
-  !> Advance from (q, p) by one step of length h in direction dir (+1/-1).
-  !> vel: forward-time velocity of the last sub-step; vel_before, lambda_before, lambda_before2: the
-  !> velocity and multipliers of the steps before it; depth: how many consecutive regular steps in
-  !> direction sign(depth) they come from (the predictor's history, updated; see predict).
-  !> e_arrive: E_d of the sub-step that arrived at q in this direction (needed only when q is on a
-  !> wall and the motion goes into it).
-  !> On success qn, pn, lambdan hold the new state, e_step the E_d of the step's last sub-step and
-  !> impacts(1:n_impacts) the impacts of the step (the records grow on demand, up to
-  !> settings%max_impacts_per_step of them, which may be huge).
-  subroutine advance(self, dir, h, t, q, p, lambda, vel, vel_before, lambda_before, lambda_before2, depth, &
-                     e_arrive, qn, pn, lambdan, e_step, impacts, n_impacts, stat)
+  !> One step of length state%h in direction dir (+1/-1) from the state, through its impacts.
+  !> On success the state holds the new step (q, p, lambda, E_d, index, history) and
+  !> impacts%records(1:impacts%count) the step's impacts (the records grow on demand, up to
+  !> settings%max_impacts_per_step of them, which may be huge). On failure q, p, lambda, the index
+  !> and E_d stay; the arriving energy is marked unknown (arriving_direction = 0).
+  subroutine advance(self, state, dir, impacts, stat)
     class(vci_stepper_t), intent(inout) :: self
+    type(vci_state_t), intent(inout) :: state
     integer, intent(in) :: dir
-    real(dp), intent(in) :: h, t, q(:), p(:), lambda(:)
-    real(dp), intent(inout) :: vel(:), vel_before(:), lambda_before(:), lambda_before2(:), e_arrive
-    integer, intent(inout) :: depth
-    real(dp), intent(out) :: qn(:), pn(:), lambdan(:), e_step
-    type(vci_impact_t), allocatable, intent(inout) :: impacts(:)
-    integer, intent(out) :: n_impacts
+    type(vci_impact_buffer_t), intent(inout) :: impacts
     integer, intent(out) :: stat
-    integer :: n, m, j, jstar, last_gap
-    real(dp) :: tau, alpha, alpha_j, consumed, e_minus, s1res
+    integer :: i
+    if (state%arriving_direction /= dir) state%arriving_energy = ieee_value(1.0_dp, ieee_quiet_nan)
+    call take_step(self, state, dir, impacts, stat)
+    if (stat /= VCI_OK) then
+      state%arriving_direction = 0
+      return
+    end if
+    state%arriving_direction = dir
+    do i = 1, impacts%count
+      impacts%records(i)%step = state%k
+    end do
+    state%q(:) = self%q_new; state%p(:) = self%p_new     ! ((:): no reallocation check per step)
+    if (self%m > 0) state%lambda(:) = self%lambda_new
+    state%step_energy = self%e_new
+    state%k = state%k + dir
+  end subroutine advance
+
+  !> The step itself: the regular sub-step from the predictor's start, the impacts, the momentum
+  !> and E_d of the last sub-step. The outcome goes to q_new, p_new, lambda_new, e_new; the
+  !> history (velocity, predictor depth, arriving energy) is updated in the state.
+  subroutine take_step(self, state, dir, impacts, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    type(vci_state_t), intent(inout) :: state
+    integer, intent(in) :: dir
+    type(vci_impact_buffer_t), intent(inout) :: impacts
+    integer, intent(out) :: stat
+    real(dp) :: tau
     logical :: landed
 
-    n = self%n; m = self%m
     call self%sys%set_direction(dir)
-    n_impacts = 0
+    impacts%count = 0
     if (self%cause(1:1) /= ' ') self%cause = ''   ! (causes start with a word; blanking all of it costs per step)
-    self%q_start(:) = q; self%p_start(:) = p; tau = h; consumed = 0.0_dp
+    self%q_start(:) = state%q; self%p_start(:) = state%p; tau = state%h
     ! the regular step, from the extrapolated guess
-    if (depth * dir < 0) depth = 0           ! the history runs the other way
-    call predict(self, dir, h, q, lambda, vel, vel_before, lambda_before, lambda_before2, abs(depth))
+    if (state%predictor_depth * dir < 0) state%predictor_depth = 0    ! the history runs the other way
+    call vci_predict_start(self%sys, state, dir, abs(state%predictor_depth), self%x, self%q_guess, self%lambda_start)
     call substep(self, self%q_start, self%p_start, tau, stat)
     if (stat /= VCI_OK) return
 
-    landed = .false.
-    last_gap = 0
-    do
-      if (self%ng == 0) exit
-      call self%sys%get_endpoint(self%x, self%q_end)
-      call self%sys%eval_gaps(self%q_end, self%gaps_end(1:self%ng), stat)
-      if (stat /= VCI_OK) then
-        call set_cause(self, 'gap evaluation'); return
-      end if
-      if (all(self%gaps_end(1:self%ng) >= 0.0_dp)) exit
-      if (n_impacts >= self%settings%max_impacts_per_step) then
-        stat = VCI_ERR_TOO_MANY_IMPACTS
-        write (self%cause, '(a,i0,a)') 'more than ', self%settings%max_impacts_per_step, &
-          ' impacts in one step (persistent contact or chatter)'
-        return
-      end if
-      call self%sys%eval_gaps(self%q_start, self%gaps_start(1:self%ng), stat)
-      if (stat == VCI_OK) call self%sys%eval_gap_gradients(self%q_start, self%gap_grads(:, 1:self%ng), stat)
-      if (stat /= VCI_OK) then
-        call set_cause(self, 'gap evaluation at the start of the sub-step'); return
-      end if
+    if (self%ng > 0) then
+      call resolve_impacts(self, state, dir, tau, impacts, landed, stat)
+      if (stat /= VCI_OK .or. landed) return
+    end if
 
-      ! Already on a wall and moving into it: the impact is at the start of this sub-step.
-      jstar = 0
-      do j = 1, self%ng
-        if (j == last_gap) cycle   ! just reflected there: the motion leaves it (checked in stage 2)
-        if (self%gaps_end(j) < 0.0_dp .and. on_wall(self, j) .and. &
-            dot_product(self%gap_grads(:, j), self%q_end - self%q_start) < 0.0_dp) then
-          ! the chord points into the wall; so must the motion as it departs (a curved sub-step
-          ! may leave the wall first and come back: that is stage 1's business)
-          if (departs_into(self, j, tau, stat)) then
-            jstar = j; exit
-          end if
-          if (stat /= VCI_OK) return
-        end if
-      end do
-      if (jstar > 0) then
-        alpha = 0.0_dp
-        self%q_wall = self%q_start; self%p_arrive = self%p_start
-        if (self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN) then
-          call self%sys%hamiltonian(self%q_wall, self%p_arrive, e_minus, stat)
-        else
-          if (.not. ieee_is_finite(e_arrive)) call arriving_energy(self, dir, h, e_arrive, stat)
-          e_minus = e_arrive
-        end if
-        if (stat /= VCI_OK) then
-          call set_cause(self, 'energy of the arriving sub-step'); return
-        end if
-        s1res = 0.0_dp
-        call self%sys%get_multipliers(self%x, self%lambda_start)
-        call self%sys%put_multipliers(self%x_stage1, self%lambda_start)
-      else
-        ! Stage 1 on every violated wall; the first one reached (smallest alpha) is the impact.
-        alpha = huge(1.0_dp)
-        do j = 1, self%ng
-          if (self%gaps_end(j) >= 0.0_dp) cycle
-          call stage_wall(self, j, tau, alpha_j, stat)
-          if (stat /= VCI_OK) return
-          if (alpha_j < alpha) then
-            alpha = alpha_j; jstar = j
-            self%x_stage1(1:self%nsub + 1) = self%x(1:self%nsub + 1)
-            s1res = self%last_residual
-          end if
-        end do
-        call self%sys%get_endpoint(self%x_stage1, self%q_wall)
-        if (self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN) then
-          call self%sys%impact_momentum(self%x_stage1, self%q_start, alpha * tau, self%p_arrive, stat, self%p_start)
-        else
-          ! E- is E_d of these positions; a p- that agrees with it (s D2 L^s of them) keeps grazing
-          ! reflections exact (test_stab_grazing)
-          call self%sys%momentum_out(self%x_stage1, self%q_start, alpha * tau, self%p_arrive, stat, self%p_start)
-        end if
-        if (stat == VCI_OK) then
-          if (self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN) then
-            call self%sys%hamiltonian(self%q_wall, self%p_arrive, e_minus, stat)
-          else
-            call self%sys%energy_out(self%x_stage1, self%q_start, alpha * tau, e_minus, stat)
-          end if
-        end if
-        if (stat /= VCI_OK) then
-          call set_cause(self, 'momentum at the wall'); return
-        end if
-        ! Reached the wall (to round-off) exactly at the end of the step: no reflection yet;
-        ! the next step starts on the wall and reflects there.
-        if (1.0_dp - alpha <= landing_fraction) then
-          self%q_start = self%q_wall; self%p_start = self%p_arrive
-          call self%sys%get_multipliers(self%x_stage1, lambdan)
-          qn = self%q_wall; pn = self%p_arrive; e_step = e_minus
-          vel = real(dir, dp) * (self%q_wall - q) / h
-          depth = 0
-          e_arrive = e_minus
-          landed = .true.
-          exit
-        end if
-      end if
-
-      ! Stage 2: reflect from (qt, p_minus) over the rest of the sub-step.
-      if (n_impacts == size(impacts)) then
-        call vci_reserve_impacts(impacts, min(2 * size(impacts), self%settings%max_impacts_per_step), n, stat)
-        if (stat /= VCI_OK) then
-          self%cause = 'cannot allocate the record of another impact'; return
-        end if
-      end if
-      self%chord_velocity = (self%q_end - self%q_start) / tau
-      call stage_reflect(self, jstar, (1.0_dp - alpha) * tau, e_minus, stat)
-      if (stat /= VCI_OK) return
-      n_impacts = n_impacts + 1
-      call record_impact(self, impacts(n_impacts), dir, h, t, consumed + alpha * tau, jstar, e_minus, s1res, &
-                         (1.0_dp - alpha) * tau)
-      consumed = consumed + alpha * tau
-      tau = (1.0_dp - alpha) * tau
-      last_gap = jstar
-      self%q_start = self%q_wall
-      self%p_start = impacts(n_impacts)%p_after
-      e_arrive = e_minus
-    end do
-    if (landed) return
-
-    call self%sys%get_endpoint(self%x, qn)
-    call self%sys%get_multipliers(self%x, lambdan)
+    call self%sys%get_endpoint(self%x, self%q_new)
+    call self%sys%get_multipliers(self%x, self%lambda_new)
     ! x balances p_start, or after an impact p- + mu grad g (with the Hamiltonian condition the
     ! constraint impulse is in x's multipliers, not in that momentum)
-    if (n_impacts > 0) self%p_leave = self%p_arrive + self%sys%get_extra(self%x, KIND_STAGE2) * self%sys%grad
-    if (n_impacts == 0) then
-      call self%sys%momentum_out(self%x, self%q_start, tau, pn, stat, self%p_start)
+    if (impacts%count > 0) self%p_leave = self%p_arrive + self%sys%get_extra(self%x, KIND_STAGE2) * self%sys%grad
+    if (impacts%count == 0) then
+      call self%sys%momentum_out(self%x, self%q_start, tau, self%p_new, stat, self%p_start)
     else
-      call self%sys%impact_momentum(self%x, self%q_start, tau, pn, stat, self%p_leave)
+      call self%sys%impact_momentum(self%x, self%q_start, tau, self%p_new, stat, self%p_leave)
     end if
-    if (stat == VCI_OK) call self%sys%energy_out(self%x, self%q_start, tau, e_step, stat)
+    if (stat == VCI_OK) call self%sys%energy_out(self%x, self%q_start, tau, self%e_new, stat)
     if (stat /= VCI_OK) then
       call set_cause(self, 'momentum of the new state'); return
     end if
-    if (n_impacts == 0) then
+    if (impacts%count == 0) then
       ! a regular step: it extends the predictor's history
-      vel_before = vel
+      state%velocity_before = state%velocity
       if (self%m > 0) then
-        lambda_before2 = lambda_before; lambda_before = lambda
+        state%lambda_before2 = state%lambda_before; state%lambda_before = state%lambda
       end if
-      depth = dir * min(abs(depth) + 1, 3)
+      state%predictor_depth = dir * min(abs(state%predictor_depth) + 1, 3)
     else
-      depth = 0                              ! an impact breaks the smooth history
+      state%predictor_depth = 0              ! an impact breaks the smooth history
     end if
-    vel = real(dir, dp) * (qn - self%q_start) / tau
-    e_arrive = e_step
-  end subroutine advance
-
-  !> Newton's start for the regular step from q: after `depth` consecutive regular steps the
-  !> configuration and multipliers are extrapolated from the last ones (q quadratic from depth 2:
-  !> 3 q_k - 3 q_{k-1} + q_{k-2}; lambda linear at depth 2, quadratic at 3); before, q + h v and the
-  !> last multipliers. Exact for the quadratic free flight of uniform gravity (no iteration then),
-  !> else O(h^3) from the solution. Schemes with interior stages (Lobatto) keep q + h v: their stage
-  !> values start on the chord to the guess, so a better endpoint alone is not a better start.
-  subroutine predict(self, dir, h, q, lambda, vel, vel_before, lambda_before, lambda_before2, depth)
-    type(vci_stepper_t), intent(inout) :: self
-    integer, intent(in) :: dir, depth
-    real(dp), intent(in) :: h, q(:), lambda(:), vel(:), vel_before(:), lambda_before(:), lambda_before2(:)
-    if (depth >= 2 .and. .not. self%sys%needs_pair_solve()) then
-      self%q_guess(:) = q + real(dir, dp) * h * (2.0_dp * vel - vel_before)
-    else
-      self%q_guess(:) = q + real(dir, dp) * h * vel
-    end if
-    call self%sys%put_endpoint(self%x, q, self%q_guess)
-    if (self%m == 0) then
-      call self%sys%put_multipliers(self%x, lambda)
-    else if (depth >= 3) then
-      self%lambda_start = 3.0_dp * (lambda - lambda_before) + lambda_before2
-      call self%sys%put_multipliers(self%x, self%lambda_start)
-    else if (depth == 2) then
-      self%lambda_start = 2.0_dp * lambda - lambda_before
-      call self%sys%put_multipliers(self%x, self%lambda_start)
-    else
-      call self%sys%put_multipliers(self%x, lambda)
-    end if
-  end subroutine predict
-
-  !> Is configuration a (the sub-step's start) on wall j, to solver tolerance?
-  logical function on_wall(self, j)
-    type(vci_stepper_t), intent(in) :: self
-    integer, intent(in) :: j
-    real(dp) :: scale
-    ! the size of g's terms and of its change over the sub-step (as in stage 1's gap row)
-    scale = abs(self%gaps_start(j)) + sum(abs(self%gap_grads(:, j)) * (abs(self%q_start) + abs(self%q_end - self%q_start)))
-    on_wall = self%gaps_start(j) <= 10.0_dp * (self%settings%atol + self%settings%rtol * scale)
-  end function on_wall
+    state%velocity = real(dir, dp) * (self%q_new - self%q_start) / tau
+    state%arriving_energy = self%e_new
+  end subroutine take_step
 
   !> Regular sub-step of length tau from (a, pa); x holds the initial guess and returns the solution.
   subroutine substep(self, a, pa, tau, stat)
@@ -465,481 +341,6 @@ contains
     end if
     call run_newton(self, nx, 'regular step', stat)
   end subroutine substep
-
-  !> Stage 1 for wall j: find alpha in (0, 1], b on the wall, lambda. Initial guess from the chord a -> b.
-  subroutine stage_wall(self, j, tau, alpha, stat)
-    type(vci_stepper_t), intent(inout) :: self
-    integer, intent(in) :: j
-    real(dp), intent(in) :: tau
-    real(dp), intent(out) :: alpha
-    integer, intent(out) :: stat
-    real(dp) :: lo, hi, glo, ghi
-    character(len=40) :: what
-    what = wall_label('stage 1 (reaching wall ', j)
-    call self%sys%get_multipliers(self%x, self%lambda_start)
-    ! Initial guess: the first crossing along the chord a -> b (g is cheap).
-    call bracket_crossing(self, ALONG_CHORD, j, tau, lo, hi, glo, ghi, stat)
-    if (stat /= VCI_OK) return
-    alpha = max(hi, 1.0e-6_dp)
-    self%q_guess = self%q_start + alpha * (self%q_end - self%q_start)
-    call self%sys%put_endpoint(self%x, self%q_start, self%q_guess)
-    call solve_wall(self, j, tau, alpha, what(1:len_trim(what)), stat)   ! (trim() would allocate)
-    if (stat == VCI_OK) then
-      alpha = self%sys%get_extra(self%x, KIND_STAGE1)
-      if (alpha > 0.0_dp .and. alpha <= 1.0_dp) return
-    else if (self%sys%unrecoverable) then
-      return                                 ! a callback said so: no second start
-    end if
-    ! The chord is a poor guess when the sub-step is strongly curved (stiff forces, a second
-    ! bounce in one step): bracket the crossing on the discrete trajectory itself, i.e. on the
-    ! end points of regular sub-steps of length s tau, and start Newton inside that bracket.
-    call trajectory_start(self, j, tau, alpha, stat)
-    if (stat /= VCI_OK) return
-    call solve_wall(self, j, tau, alpha, what(1:len_trim(what)), stat)
-    if (stat /= VCI_OK) return
-    alpha = self%sys%get_extra(self%x, KIND_STAGE1)
-    if (.not. (alpha > 0.0_dp .and. alpha <= 1.0_dp)) then
-      stat = VCI_ERR_IMPACT
-      write (self%cause, '(a,es10.3,a)') trim(what)//': impact fraction ', alpha, ' outside (0, 1]'
-    end if
-  end subroutine stage_wall
-
-  !> Does the motion from (a, pa) depart into wall j? Sign of grad g_j . (b_eps - a) for the end
-  !> b_eps of a regular sub-step of length 1e-3 tau. Leaves x as it found it.
-  logical function departs_into(self, j, tau, stat)
-    type(vci_stepper_t), intent(inout) :: self
-    integer, intent(in) :: j
-    real(dp), intent(in) :: tau
-    integer, intent(out) :: stat
-    real(dp), parameter :: eps_frac = 1.0e-3_dp
-    integer :: nx
-    nx = self%nsub
-    self%x_saved(1:nx) = self%x(1:nx)
-    self%q_guess = self%q_start + eps_frac * (self%q_end - self%q_start)
-    call self%sys%put_endpoint(self%x, self%q_start, self%q_guess)
-    call substep(self, self%q_start, self%p_start, eps_frac * tau, stat)
-    call self%sys%get_endpoint(self%x, self%q_trial)
-    departs_into = stat == VCI_OK .and. dot_product(self%gap_grads(:, j), self%q_trial - self%q_start) < 0.0_dp
-    self%x(1:nx) = self%x_saved(1:nx)
-  end function departs_into
-
-  !> Bracket the first crossing of wall j on s in [0, 1] (s = 1 is the end of the sub-step, known to
-  !> be beyond the wall): samples at s = 1/8, ..., 7/8 up to the first negative gap, then Illinois
-  !> steps (chord) or bisections (trajectory). Along the chord the point is q_start + s (q_end -
-  !> q_start); along the trajectory it is the end of the regular sub-step of length s tau, and the
-  !> sub-step solutions at the bracket's ends are kept in x_low and x_high. On return
-  !> g_j(lo) = glo >= 0 > g_j(hi) = ghi (up to round-off at a start on the wall), or lo = hi where
-  !> g_j is exactly 0.
-  subroutine bracket_crossing(self, along, j, tau, lo, hi, glo, ghi, stat)
-    type(vci_stepper_t), intent(inout) :: self
-    integer, intent(in) :: along, j
-    real(dp), intent(in) :: tau
-    real(dp), intent(out) :: lo, hi, glo, ghi
-    integer, intent(out) :: stat
-    integer, parameter :: samples = 7
-    integer :: i, kept
-    real(dp) :: s, g, wlo, whi
-    lo = 0.0_dp; hi = 1.0_dp
-    glo = self%gaps_start(j); ghi = self%gaps_end(j)
-    stat = VCI_OK
-    do i = 1, samples
-      s = real(i, dp) / real(samples + 1, dp)
-      call probe(s, g)
-      if (stat /= VCI_OK) return
-      if (g < 0.0_dp) exit
-    end do
-    if (along == ALONG_TRAJECTORY) then
-      do i = 1, TRAJECTORY_BISECTIONS
-        call probe(0.5_dp * (lo + hi), g)
-        if (stat /= VCI_OK) return
-      end do
-      return
-    end if
-    ! Illinois: the secant of the bracket's (weighted) ends; an end kept twice in a row has its
-    ! weight halved, so that both ends move in. Bisection where the secant point is not inside.
-    wlo = max(glo, 0.0_dp); whi = ghi; kept = 0
-    do i = 1, CHORD_REFINEMENTS
-      if (hi - lo <= CHORD_WIDTH) exit
-      s = lo + (hi - lo) * wlo / (wlo - whi)
-      if (.not. (s > lo .and. s < hi)) s = 0.5_dp * (lo + hi)
-      call probe(s, g)
-      if (stat /= VCI_OK) return
-      if (g == 0.0_dp) then         ! on the wall: both ends there
-        hi = s; ghi = g; exit
-      end if
-      if (g < 0.0_dp) then          ! hi moved; lo kept
-        whi = g
-        if (kept < 0) wlo = 0.5_dp * wlo
-        kept = -1
-      else                          ! lo moved; hi kept
-        wlo = g
-        if (kept > 0) whi = 0.5_dp * whi
-        kept = 1
-      end if
-    end do
-  contains
-    !> g_j at s; the bracket end it replaces moves to s.
-    subroutine probe(s, g)
-      real(dp), intent(in) :: s
-      real(dp), intent(out) :: g
-      integer :: nm
-      nm = self%nsub
-      if (along == ALONG_CHORD) then
-        self%q_trial = self%q_start + s * (self%q_end - self%q_start)
-      else
-        ! Newton starts from the interpolation between the bracket's ends
-        self%x(1:nm) = self%x_low(1:nm) + (s - lo) / (hi - lo) * (self%x_high(1:nm) - self%x_low(1:nm))
-        call substep(self, self%q_start, self%p_start, s * tau, stat)
-        if (stat /= VCI_OK) return
-        call self%sys%get_endpoint(self%x, self%q_trial)
-      end if
-      call self%sys%eval_gaps(self%q_trial, self%gaps_trial(1:self%ng), stat)
-      if (stat /= VCI_OK) then
-        call set_cause(self, 'gap evaluation'); return
-      end if
-      g = self%gaps_trial(j)
-      if (g < 0.0_dp) then
-        hi = s; ghi = g
-        if (along == ALONG_TRAJECTORY) self%x_high(1:nm) = self%x(1:nm)
-      else
-        lo = s; glo = g
-        if (along == ALONG_TRAJECTORY) self%x_low(1:nm) = self%x(1:nm)
-      end if
-    end subroutine probe
-  end subroutine bracket_crossing
-
-  !> Stage 1's start when the chord fails: the crossing bracketed on regular sub-steps of length
-  !> s tau, then linear interpolation of g_j; leaves the interpolated (b, lambda) in x and alpha.
-  subroutine trajectory_start(self, j, tau, alpha, stat)
-    type(vci_stepper_t), intent(inout) :: self
-    integer, intent(in) :: j
-    real(dp), intent(in) :: tau
-    real(dp), intent(out) :: alpha
-    integer, intent(out) :: stat
-    integer :: nm
-    real(dp) :: lo, hi, glo, ghi
-    nm = self%nsub
-    call self%sys%put_endpoint(self%x_low, self%q_start, self%q_start)
-    call self%sys%put_multipliers(self%x_low, self%lambda_start)
-    call self%sys%put_endpoint(self%x_high, self%q_start, self%q_end)
-    call self%sys%put_multipliers(self%x_high, self%lambda_start)
-    call bracket_crossing(self, ALONG_TRAJECTORY, j, tau, lo, hi, glo, ghi, stat)
-    if (stat /= VCI_OK) return
-    glo = max(glo, 0.0_dp)                ! a start on the wall may be below it by round-off
-    alpha = lo + (hi - lo) * glo / max(glo - ghi, tiny(1.0_dp))
-    alpha = min(max(alpha, lo + 1.0e-3_dp * (hi - lo)), hi)
-    self%x(1:nm) = self%x_low(1:nm) + (alpha - lo) / (hi - lo) * (self%x_high(1:nm) - self%x_low(1:nm))
-  end subroutine trajectory_start
-
-  !> Newton on stage 1 from x(1:n) (and lambda in lam0) with alpha.
-  subroutine solve_wall(self, j, tau, alpha, what, stat)
-    type(vci_stepper_t), intent(inout) :: self
-    integer, intent(in) :: j
-    real(dp), intent(in) :: tau, alpha
-    character(len=*), intent(in) :: what
-    integer, intent(out) :: stat
-    call self%sys%put_extra(self%x, KIND_STAGE1, alpha)
-    call self%sys%pose_stage1(self%q_start, self%p_start, tau, j, self%gap_grads(:, j), stat)
-    if (stat /= VCI_OK) then
-      call set_cause(self, 'constraint forms'); return
-    end if
-    call run_newton(self, self%sys%unknowns(KIND_STAGE1), what, stat)
-  end subroutine solve_wall
-
-  !> Stage 2 on wall j from (qt, p_minus) over tau2: q_next, lambda, impulse mu. Newton starts from
-  !> the linearised reflection so that it converges to the reflected root, not the pass-through one.
-  subroutine stage_reflect(self, j, tau2, e_minus, stat)
-    type(vci_stepper_t), intent(inout) :: self
-    integer, intent(in) :: j
-    real(dp), intent(in) :: tau2, e_minus
-    integer, intent(out) :: stat
-    integer :: n, m, nx0, info
-    real(dp) :: num, den, mu0, mirror
-    logical :: done
-    character(len=40) :: what
-    character(len=48) :: what_impulse
-    n = self%n; m = self%m; nx0 = self%nsub
-    self%impact_condition = self%settings%impact_energy
-    what = wall_label('stage 2 (reflecting at wall ', j)
-    call self%sys%eval_gap_gradients(self%q_wall, self%gap_grads(:, 1:self%ng), stat)
-    if (stat /= VCI_OK) then
-      call set_cause(self, 'gap gradients at the wall'); return
-    end if
-    call self%sys%set_wall_normal(self%gap_grads(:, j))
-    ! the motion with no impulse, and its sensitivity d = d(q_next, lambda)/d mu
-    self%q_guess = self%q_wall + tau2 * self%chord_velocity
-    call self%sys%put_endpoint(self%x, self%q_wall, self%q_guess)
-    call substep(self, self%q_wall, self%p_arrive, tau2, stat)
-    if (stat /= VCI_OK) return
-    call self%sys%get_endpoint(self%x, self%q_trial)
-    num = dot_product(self%sys%grad, self%q_trial - self%q_wall)
-    mu0 = 0.0_dp; mirror = 0.0_dp
-    if (num < 0.0_dp) then
-      self%q_trial = -self%sys%grad
-      call self%sys%momentum_rhs(self%q_trial, self%rhs(1:nx0))
-      ! the sub-step's own Newton factors when its fused solve kept them, else a new Jacobian
-      done = .false.
-      if (self%fused) call self%sys%substep_sensitivity(self%rhs(1:nx0), done)
-      info = 0
-      if (.not. done) then
-        call self%sys%residual(self%x(1:nx0), self%res(1:nx0), self%res_scale(1:nx0), stat)
-        if (stat == VCI_OK) call self%sys%jacobian(self%x(1:nx0), self%res(1:nx0), self%jac(1:nx0, 1:nx0), stat)
-        if (stat /= VCI_OK) then
-          call set_cause(self, trim(what)//' initial guess'); return
-        end if
-        call self%sys%momentum_rhs(self%q_trial, self%rhs(1:nx0))
-        call self%newton%linear_solve(nx0, self%jac, self%rhs, info)
-      end if
-      call self%sys%endpoint_direction(self%rhs(1:nx0), self%q_trial)   ! a sensitivity, not a point
-      den = dot_product(self%sys%grad, self%q_trial)
-      if (info /= 0 .or. .not. (abs(den) > 0.0_dp) .or. .not. ieee_is_finite(den)) then
-        stat = VCI_ERR_IMPACT
-        self%cause = trim(what)//': the motion does not depend on the impulse (singular normal direction)'
-        return
-      end if
-      mu0 = -2.0_dp * num / den
-      self%x(1:nx0) = self%x(1:nx0) + mu0 * self%rhs(1:nx0)
-      mirror = mu0
-      if (self%settings%impact_energy /= VCI_IMPACT_HAMILTONIAN) then
-        self%x_saved(1:nx0) = self%x(1:nx0)    ! the mirror start, for a retry or a fallback from it
-        call energy_along(self, nx0, tau2, e_minus, mu0, stat)
-        if (stat /= VCI_OK) then
-          call set_cause(self, trim(what)//' initial guess'); return
-        end if
-      end if
-    end if
-    ! num >= 0: the free motion from the wall already moves into the admissible set (a graze);
-    ! no impulse is needed and the sub-step stands as computed.
-    call self%sys%put_extra(self%x, KIND_STAGE2, mu0)
-    if (self%m > 0) self%constraint_impulse = 0.0_dp
-    if (mu0 /= 0.0_dp .and. self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN) then
-      call reflect_hamiltonian(e_minus, stat)
-    else if (mu0 /= 0.0_dp) then
-      call self%sys%pose_stage2(self%q_wall, self%p_arrive, tau2, j, e_minus)
-      call run_newton(self, self%sys%unknowns(KIND_STAGE2), what(1:len_trim(what)), stat)
-      if (stat == VCI_ERR_NEWTON .and. mu0 /= mirror) then
-        ! energy_along's start did not lead to a solution: Newton once more from the mirror
-        self%x(1:nx0) = self%x_saved(1:nx0)
-        call self%sys%put_extra(self%x, KIND_STAGE2, mirror)
-        call run_newton(self, self%sys%unknowns(KIND_STAGE2), what(1:len_trim(what)), stat)
-      end if
-      if (stat == VCI_ERR_NEWTON .and. self%has_energy) then
-        ! No impulse makes E_d of the leaving sub-step equal E-: E_d differs from H by O(h^2)
-        ! terms that depend on the sub-step's length (for uniform gravity H changes by
-        ! m g^2 h^2 (1 - 2 alpha) / 8 at an impact), and near a graze the normal kinetic energy is
-        ! smaller than that difference. This impact keeps H(qt, p+) = H(qt, p-) instead; the record
-        ! says so (vci_impact_t%condition) and the statistics count it (energy_fallbacks).
-        self%x(1:nx0) = self%x_saved(1:nx0)
-        mu0 = mirror
-        call self%sys%hamiltonian(self%q_wall, self%p_arrive, self%e_fallback, stat)
-        if (stat /= VCI_OK) then
-          call set_cause(self, trim(what)//' energy H of the arriving momentum'); return
-        end if
-        self%impact_condition = VCI_IMPACT_HAMILTONIAN
-        self%stats%energy_fallbacks = self%stats%energy_fallbacks + 1
-        call reflect_hamiltonian(self%e_fallback, stat)
-      else if (stat == VCI_OK) then
-        if (.not. reflected(self, self%sys%get_extra(self%x, KIND_STAGE2), tau2, stat)) then
-          if (stat == VCI_OK) stat = VCI_ERR_IMPACT
-          self%cause = trim(what)//': the reflected motion does not leave the wall'
-        end if
-      end if
-    else
-      self%last_residual = 0.0_dp
-    end if
-  contains
-    !> H(qt, p+) = e_ref fixes the impulse from the momenta alone (with constraints, together with
-    !> the constraint impulse nu that makes the outgoing velocity admissible); the leaving sub-step
-    !> is then a regular one from p- + mu grad g (Omega nu is absorbed by its multiplier). x holds
-    !> the mirror start and mu0 its impulse.
-    subroutine reflect_hamiltonian(e_ref, stat)
-      real(dp), intent(in) :: e_ref
-      integer, intent(out) :: stat
-      self%x_saved(1:nx0) = self%x(1:nx0)
-      self%x(1:m) = 0.0_dp                       ! the impulse system's unknowns: [nu(m), mu]
-      call self%sys%put_extra(self%x, KIND_IMPULSE, mu0)
-      call self%sys%pose_impulse(self%q_wall, self%p_arrive, e_ref)
-      if (m > 0) then
-        ! start nu where the outgoing velocity satisfies the constraints for the estimated mu
-        ! (one linear solve: exact when H is quadratic in p)
-        call self%sys%residual(self%x(1:m + 1), self%res(1:m + 1), self%res_scale(1:m + 1), stat)
-        if (stat == VCI_OK) call self%sys%jacobian(self%x(1:m + 1), self%res(1:m + 1), self%jac(1:m + 1, 1:m + 1), stat)
-        if (stat /= VCI_OK) then
-          call set_cause(self, trim(what)//' impulse initial guess'); return
-        end if
-        self%rhs(1:m) = -self%res(1:m)
-        call self%newton%linear_solve(m, self%jac, self%rhs, info)
-        if (info == 0) self%x(1:m) = self%rhs(1:m)
-      end if
-      what_impulse = what   ! what//' impulse' without a heap temporary (trim() and // allocate)
-      what_impulse(len_trim(what) + 1:) = ' impulse'
-      call run_newton(self, m + 1, what_impulse(1:len_trim(what_impulse)), stat)
-      if (stat /= VCI_OK) return
-      mu0 = self%sys%get_extra(self%x, KIND_IMPULSE)
-      if (m > 0) self%constraint_impulse = self%x(1:m)
-      self%x(1:nx0) = self%x_saved(1:nx0)
-      self%p_leave = self%p_arrive + mu0 * self%sys%grad
-      call substep(self, self%q_wall, self%p_leave, tau2, stat)
-      if (stat /= VCI_OK) return
-      call self%sys%put_extra(self%x, KIND_STAGE2, mu0)
-      if (.not. reflected(self, mu0, tau2, stat)) then
-        if (stat == VCI_OK) stat = VCI_ERR_IMPACT
-        self%cause = trim(what)//': the reflected motion does not leave the wall'
-      end if
-    end subroutine reflect_hamiltonian
-  end subroutine stage_reflect
-
-  !> Stage 2's start with the E_d condition: x = x0 + mu d (d = rhs, the sensitivity to the impulse)
-  !> moves mu from the mirror image mu0 towards E_d(x) = E-, by secant steps on that line (a few
-  !> evaluations of E_d where a Newton iteration costs a Jacobian with differenced columns). The
-  !> mirror leaves E_d off by the potential's change over the reflected sub-step (1e-3 relative on
-  !> the ellipse), which took Newton three iterations. The mu with the smallest |E_d - E-| is taken,
-  !> within max_move of mu0 (relative); otherwise the mirror start stays. A callback's
-  !> failure ends the search (Newton meets it again and reports it), unless the callback declared
-  !> it unrecoverable: then stat says so.
-  subroutine energy_along(self, nx0, tau2, e_minus, mu0, stat)
-    type(vci_stepper_t), intent(inout) :: self
-    integer, intent(in) :: nx0
-    real(dp), intent(in) :: tau2, e_minus
-    real(dp), intent(inout) :: mu0
-    integer, intent(out) :: stat
-    integer, parameter :: max_secants = 3
-    !> E_d(mu) - E- is about quadratic with roots at the reflection and at the pass-through motion
-    !> (mu = 0), and flat half-way; near a graze the two are close (or E_d never reaches E-): the
-    !> search stays near the mirror, where Newton converges to the reflection.
-    real(dp), parameter :: max_move = 0.25_dp
-    integer :: k
-    real(dp) :: mu_a, mu_b, mu_c, g_a, g_b, g_c, mu_best, g_best
-    call self%sys%clear_failure()
-    self%sys%unrecoverable = .false.
-    mu_best = mu0; g_best = huge(1.0_dp)
-    mu_a = mu0
-    if (energy_gap(mu_a, g_a)) then
-      ! the mirror already meets the energy row's tolerance (e.g. a graze, where E_d hardly
-      ! depends on mu and secants would only move mu by round-off): Newton takes it from there
-      if (g_best <= self%settings%atol + self%settings%rtol * (abs(g_a + e_minus) + abs(e_minus))) then
-        stat = VCI_OK; return
-      end if
-      mu_b = 0.99_dp * mu0
-      if (energy_gap(mu_b, g_b)) then
-        do k = 1, max_secants
-          if (g_b == g_a) exit
-          mu_c = mu_b - g_b * (mu_b - mu_a) / (g_b - g_a)
-          if (.not. (abs(mu_c / mu0 - 1.0_dp) <= max_move)) exit
-          if (.not. energy_gap(mu_c, g_c)) exit
-          if (abs(mu_c - mu_b) <= 1.0e-10_dp * abs(mu0)) exit
-          mu_a = mu_b; g_a = g_b; mu_b = mu_c; g_b = g_c
-        end do
-      end if
-    end if
-    self%x(1:nx0) = self%x(1:nx0) + (mu_best - mu0) * self%rhs(1:nx0)
-    mu0 = mu_best
-    if (self%sys%unrecoverable) stat = VCI_ERR_CALLBACK
-  contains
-    !> E_d - E- at x0 + mu d (in x_try); the best mu so far. False when the evaluation failed.
-    logical function energy_gap(mu, g)
-      real(dp), intent(in) :: mu
-      real(dp), intent(out) :: g
-      self%x_try(1:nx0) = self%x(1:nx0) + (mu - mu0) * self%rhs(1:nx0)
-      call self%sys%energy_out(self%x_try(1:nx0), self%q_wall, tau2, g, stat)
-      g = g - e_minus
-      energy_gap = stat == VCI_OK .and. ieee_is_finite(g)
-      stat = VCI_OK
-      if (energy_gap .and. abs(g) < g_best) then
-        mu_best = mu; g_best = abs(g)
-      end if
-    end function energy_gap
-  end subroutine energy_along
-
-  !> Did stage 2 find the reflection? Yes when the sub-step ends on the admissible side of the wall.
-  !> A strongly curved sub-step (gravity or a stiff force towards the wall) may leave the wall and
-  !> come back to end beyond it: then the motion must depart from the wall — the end of a short
-  !> sub-step (1e-3 tau2) from (qt, p- + mu grad g) is on the admissible side — and the re-entry is
-  !> the next impact of this step. The pass-through root departs into the wall.
-  logical function reflected(self, mu, tau2, stat)
-    type(vci_stepper_t), intent(inout) :: self
-    real(dp), intent(in) :: mu, tau2
-    integer, intent(out) :: stat
-    real(dp), parameter :: eps_frac = 1.0e-3_dp
-    integer :: nx
-    stat = VCI_OK
-    call self%sys%get_endpoint(self%x, self%q_trial)
-    reflected = dot_product(self%sys%grad, self%q_trial - self%q_wall) > 0.0_dp
-    if (reflected) return
-    nx = self%sys%unknowns(KIND_STAGE2)
-    self%x_saved(1:nx) = self%x(1:nx)
-    self%q_guess = self%q_wall + eps_frac * (self%q_trial - self%q_wall)
-    call self%sys%put_endpoint(self%x, self%q_wall, self%q_guess)
-    self%p_leave = self%p_arrive + mu * self%sys%grad
-    call substep(self, self%q_wall, self%p_leave, eps_frac * tau2, stat)
-    call self%sys%get_endpoint(self%x, self%q_trial)
-    reflected = stat == VCI_OK .and. dot_product(self%sys%grad, self%q_trial - self%q_wall) > 0.0_dp
-    self%x(1:nx) = self%x_saved(1:nx)
-    if (.not. reflected) stat = VCI_OK
-  end function reflected
-
-  !> The impact just resolved (stage 1 in x_stage1 / q_wall, stage 2 in x), into imp.
-  subroutine record_impact(self, imp, dir, h, t, elapsed, j, e_minus, s1res, tau2)
-    type(vci_stepper_t), intent(inout) :: self
-    type(vci_impact_t), intent(inout) :: imp
-    integer, intent(in) :: dir, j
-    real(dp), intent(in) :: h, t, elapsed, e_minus, s1res, tau2
-    integer :: n, stat, i, k
-    real(dp) :: mu, e_after, acc
-    n = self%n
-    mu = self%sys%get_extra(self%x, KIND_STAGE2)
-    imp%t = t + real(dir, dp) * elapsed
-    imp%alpha = elapsed / h
-    imp%gap = j
-    imp%q = self%q_wall
-    imp%p_before = self%p_arrive
-    imp%p_after = self%p_arrive + mu * self%sys%grad
-    if (self%m > 0 .and. self%impact_condition == VCI_IMPACT_HAMILTONIAN) then
-      do i = 1, n   ! + matmul(omega, nu) in matmul's order: its result would be a heap temporary
-        acc = 0.0_dp
-        do k = 1, self%m
-          acc = acc + self%sys%omega(i, k) * self%constraint_impulse(k)
-        end do
-        imp%p_after(i) = imp%p_after(i) + acc
-      end do
-    end if
-    imp%grad_g = self%sys%grad
-    imp%impulse = real(dir, dp) * mu
-    imp%energy_before = e_minus
-    imp%condition = self%impact_condition
-    if (self%impact_condition /= self%settings%impact_energy) imp%energy_before = self%e_fallback
-    if (self%impact_condition == VCI_IMPACT_HAMILTONIAN) then
-      call self%sys%hamiltonian(self%q_wall, imp%p_after, e_after, stat)
-    else
-      call self%sys%energy_out(self%x, self%q_wall, tau2, e_after, stat)
-    end if
-    imp%energy_after = e_after
-    call self%sys%get_endpoint(self%x, self%q_trial)
-    imp%leave_rate = dot_product(self%sys%grad, self%q_trial - self%q_wall) / tau2
-    imp%stage1_residual = s1res
-    imp%stage2_residual = self%last_residual
-  end subroutine record_impact
-
-  !> E_d of the sub-step that would have arrived at the current point in direction dir: one
-  !> regular sub-step in the opposite direction (walls ignored). Needed only when a run starts on
-  !> a wall moving into it and no previous step is known.
-  subroutine arriving_energy(self, dir, h, e, stat)
-    type(vci_stepper_t), intent(inout) :: self
-    integer, intent(in) :: dir
-    real(dp), intent(in) :: h
-    real(dp), intent(out) :: e
-    integer, intent(out) :: stat
-    integer :: nx
-    nx = self%sys%unknowns(KIND_STAGE2)
-    self%x_saved(1:nx) = self%x(1:nx)
-    call self%sys%set_direction(-dir)
-    call self%sys%put_endpoint(self%x, self%q_start, self%q_start)
-    call self%sys%put_multipliers(self%x, self%zero_lambda)
-    call substep(self, self%q_start, self%p_start, h, stat)
-    if (stat == VCI_OK) call self%sys%energy_out(self%x, self%q_start, h, e, stat)
-    call self%sys%set_direction(dir)
-    self%x(1:nx) = self%x_saved(1:nx)
-  end subroutine arriving_energy
 
   !> The momentum p1 at q1 and the discrete energy of the segment from q0 to q1 of length h, forward
   !> (the paper's initial pair). Schemes with interior stages solve for them first (KIND_PAIR).
@@ -1010,26 +411,6 @@ contains
     self%last_residual = res%scaled_residual
   end subroutine count_solve
 
-  !> prefix//j//')' without formatted I/O (an internal write costs ~2.7k instructions, a few per
-  !> cent of an impact, for a label read only when the solve fails).
-  pure function wall_label(prefix, j) result(label)
-    character(len=*), intent(in) :: prefix
-    integer, intent(in) :: j
-    character(len=40) :: label
-    character(len=11) :: digits
-    integer :: v, pos
-    v = abs(j); pos = len(digits); digits = ''
-    do
-      digits(pos:pos) = achar(iachar('0') + mod(v, 10))
-      v = v / 10
-      if (v == 0 .or. pos == 1) exit
-      pos = pos - 1
-    end do
-    ! by substrings: a concatenation of these lengths is built in a heap temporary
-    label = prefix
-    label(len(prefix) + 1:) = digits(pos:)
-    label(len(prefix) + len(digits) - pos + 2:) = ')'
-  end function wall_label
 
   subroutine set_cause(self, what)
     type(vci_stepper_t), intent(inout) :: self
@@ -1056,37 +437,4 @@ contains
     text = ' (stat = '//trim(k)//trim(merge(', recoverable  ', ', unrecoverable', stat > 0))//')'
   end function stat_text
 
-  !> Room for at least `count` impact records of n coordinates, keeping those already recorded.
-  !> stat = VCI_ERR_MEMORY when an allocation fails (the records are then unchanged).
-  subroutine vci_reserve_impacts(impacts, count, n, stat)
-    type(vci_impact_t), allocatable, intent(inout) :: impacts(:)
-    integer, intent(in) :: count, n
-    integer, intent(out) :: stat
-    type(vci_impact_t), allocatable :: grown(:)
-    integer :: i, k
-    stat = VCI_OK
-    k = 0
-    if (allocated(impacts)) k = size(impacts)
-    if (k >= max(1, count)) return
-    allocate (grown(max(1, count)), stat=stat)
-    do i = k + 1, size(grown)
-      if (stat /= 0) exit
-      allocate (grown(i)%q(n), grown(i)%p_before(n), grown(i)%p_after(n), grown(i)%grad_g(n), stat=stat)
-    end do
-    if (stat /= 0) then
-      stat = VCI_ERR_MEMORY; return
-    end if
-    do i = 1, k
-      call move_alloc(impacts(i)%q, grown(i)%q)
-      call move_alloc(impacts(i)%p_before, grown(i)%p_before)
-      call move_alloc(impacts(i)%p_after, grown(i)%p_after)
-      call move_alloc(impacts(i)%grad_g, grown(i)%grad_g)
-      grown(i)%t = impacts(i)%t; grown(i)%step = impacts(i)%step; grown(i)%alpha = impacts(i)%alpha
-      grown(i)%gap = impacts(i)%gap; grown(i)%impulse = impacts(i)%impulse
-      grown(i)%energy_before = impacts(i)%energy_before; grown(i)%energy_after = impacts(i)%energy_after
-      grown(i)%leave_rate = impacts(i)%leave_rate
-      grown(i)%stage1_residual = impacts(i)%stage1_residual; grown(i)%stage2_residual = impacts(i)%stage2_residual
-    end do
-    call move_alloc(grown, impacts)
-  end subroutine vci_reserve_impacts
 end module vci_stepper
