@@ -136,7 +136,7 @@ if [ "${CALLGRIND:-1}" != 0 ] && [ "${PROFILE:-1}" != 0 ] && command -v callgrin
           else if (f ~ /energy_out|momentum_out|impact_momentum|hamiltonian/) g = "6 new momentum and E_d"
           else if (f ~ /gaps|gap_grad/) g = "7 gap tests"
           else if (f ~ /probe|bracket_crossing|energy_gap|energy_along/) g = "8 impact starts (stage 1 bracket, stage 2 energy line)"
-          else if (f ~ /stepper_MOD|integrator_MOD|scheme_MOD|scheme_discrete_MOD/) g = "9 stepper/driver bookkeeping (pose, put/get, copies)"
+          else if (f ~ /stepper_MOD|impacts_MOD|predictor_MOD|state_MOD|integrator_MOD|scheme_MOD|scheme_discrete_MOD/) g = "9 stepper/driver bookkeeping (pose, put/get, copies)"
           else g = "A other (runtime, memcpy)"
           tot[g] += n; all += n
         }
