@@ -2,7 +2,7 @@
 !> with. Each regular step does what the library's regular step does, written by hand for one scene
 !> with no model type, no callbacks and no LAPACK:
 !>
-!> - the library's predictor (src/vci_stepper.f90, predict): after two regular steps the quadratic
+!> - the library's predictor (src/integrate/vci_predictor.f90, vci_predict_start): after two regular steps the quadratic
 !>   extrapolation q_k + h (2 v_k - v_{k-1}) (v the steps' velocities), before that q_k + h v_k; the
 !>   multiplier extrapolated linearly after two and quadratically after three regular steps; the
 !>   history reset at impacts. A start within the tolerance is kept only at round-off (merit <= 1e-3);

@@ -1,5 +1,5 @@
 /* vci.h -- C interface of vci, variational collision integrators for nonholonomic Lagrangian
- * systems with impacts. Hand-written; the Fortran side is src/vci_capi.F90.
+ * systems with impacts. Hand-written; the Fortran side is src/bindings/vci_capi.F90.
  *
  * Usage: fill a vci_callbacks initialised with VCI_CALLBACKS_INIT, vci_model_create,
  * vci_integrator_create, vci_init_from_pair (or _from_momentum), vci_integrate, vci_get_state,

@@ -40,7 +40,7 @@ if [ "${CALLGRIND:-1}" != 0 ] && command -v valgrind >/dev/null 2>&1; then
     echo "(episodes: particle and ellipse 20, pendulum 2). Ratios: library / closed-form hand loop (the floor),"
     echo "library / same-algorithm hand loop (the yardstick). The last columns: the library with analytic H on"
     echo "its general Newton path only (\`VCI_BENCH_GENERAL=1\`: no fused regular-step solve), and what the fused"
-    echo "solve (src/vci_scheme_discrete_fused.f90) leaves of it."
+    echo "solve (src/schemes/vci_scheme_discrete_fused.f90) leaves of it."
     echo
     echo "| scene | library, analytic H | library, differenced H | closed-form loop | same-algorithm loop | analytic / closed form | analytic / same alg. | differenced / same alg. | analytic H, general path | fused / general |"
     echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
@@ -136,7 +136,7 @@ if [ "${CALLGRIND:-1}" != 0 ] && [ "${PROFILE:-1}" != 0 ] && command -v callgrin
           else if (f ~ /energy_out|momentum_out|impact_momentum|hamiltonian/) g = "6 new momentum and E_d"
           else if (f ~ /gaps|gap_grad/) g = "7 gap tests"
           else if (f ~ /probe|bracket_crossing|energy_gap|energy_along/) g = "8 impact starts (stage 1 bracket, stage 2 energy line)"
-          else if (f ~ /stepper_MOD|integrator_MOD|scheme_MOD|scheme_discrete_MOD/) g = "9 stepper/driver bookkeeping (pose, put/get, copies)"
+          else if (f ~ /stepper_MOD|impacts_MOD|predictor_MOD|state_MOD|integrator_MOD|scheme_MOD|scheme_discrete_MOD/) g = "9 stepper/driver bookkeeping (pose, put/get, copies)"
           else g = "A other (runtime, memcpy)"
           tot[g] += n; all += n
         }
@@ -180,7 +180,7 @@ mkdir -p "$(dirname "$OUT")"
   echo "\`OPENBLAS_NUM_THREADS=1 vci_bench_chain\` (bench/chain.f90): an FPU-beta chain of n unit masses between"
   echo "fixed ends, walls on every particle (2n gaps, not reached), h = 0.05; each row times the step and one"
   echo "dgetrf of a dense n x n matrix in the same process (medians of 5 interleaved repeats). From n = 16 the"
-  echo "Newton matrix's factors are reused across steps (simplified Newton, src/vci_newton.f90)."
+  echo "Newton matrix's factors are reused across steps (simplified Newton, src/core/vci_newton.f90)."
   echo
   OPENBLAS_NUM_THREADS=1 "$BUILD_DIR/bin/vci_bench_chain"
   echo
@@ -229,7 +229,7 @@ awk -v cmd="tools/bench/run_bench.sh${*:+ $*}" '
     print "factorisation (**met**: " chain "x, FPU chain, simplified Newton)."
     print ""
     print "Why the regular-step targets are missed (profile table of docs/bench/throughput.md): the regular step'"'"'s"
-    print "solve is already fused (src/vci_scheme_discrete_fused.f90: the same algorithm in one routine on the"
+    print "solve is already fused (src/schemes/vci_scheme_discrete_fused.f90: the same algorithm in one routine on the"
     print "scheme'"'"'s storage, without the generic layers), which took the ellipse from " gen["ellipse"] " to " ir["ellipse"] " and the pendulum"
     print "from " gen["pendulum"] " to " ir["pendulum"] " instructions a step (same run, `VCI_BENCH_GENERAL=1`). What is left is no single"
     print "layer: the model'"'"'s callbacks (reached through the type-bound interface with array descriptors, each"
@@ -247,7 +247,7 @@ awk -v cmd="tools/bench/run_bench.sh${*:+ $*}" '
   sed -n '/^Targets of issue 14/,$p' "$SUMMARY" | sed 's/^Targets of issue 14: //'
   echo
   echo "In detail, from the profile table above. Done in issue 14: the quadratic predictor, the hot loops as"
-  echo "explicit-shape kernels (src/vci_kernels.f90), the model's constraint Jacobian instead of differences,"
+  echo "explicit-shape kernels (src/core/vci_kernels.f90), the model's constraint Jacobian instead of differences,"
   echo "one finiteness test per matrix, no per-step blanking of message buffers, no heap temporaries (test"
   echo "alloc_free), and the fused regular-step solve (the instruction table's last columns: what it leaves of"
   echo "the general path). The remaining cost per step is spread: the callbacks, the residual's kernels (row"

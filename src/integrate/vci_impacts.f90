@@ -1,262 +1,37 @@
-!> One step of the (+) or (-) scheme with elastic impacts (paper, Theorem and Algorithm 1;
-!> docs/DESIGN.md §1-2): a regular sub-step, and while its end leaves the admissible set, stage 1
-!> (reach the first wall) and stage 2 (reflect with the energy and tangential-momentum conditions) on
-!> the remaining fraction of the step, up to a bound on the number of impacts.
-!>
-!> The stepper owns the impact algorithm and the one settings object of a run; it knows nothing of
-!> how L_d is built (the scheme lays out the unknowns and is reached through its accessors) and
-!> nothing of the driver's state (the state, the impact records and the step index are arguments).
-module vci_stepper
-  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
-  use vci_kinds, only: dp, i8
-  use vci_status
-  use vci_newton, only: vci_newton_t, vci_newton_result_t, NEWTON_MAX_ITERATIONS, NEWTON_NO_DESCENT, &
-                        NEWTON_SINGULAR, NEWTON_EVALUATION, NEWTON_NONFINITE
-  use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_STAGE1, KIND_STAGE2, KIND_IMPULSE, &
-                        VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN
-  use vci_observer, only: vci_impact_t
+!> The impact algorithm of a step (paper, Theorem and Algorithm 1; docs/DESIGN.md §1-2): while the
+!> regular sub-step's end leaves the admissible set, stage 1 reaches the first wall (bracketing the
+!> crossing on the chord or on the discrete trajectory, then Newton on the scheme's stage-1 system),
+!> stage 2 reflects with the energy condition (the paper's discrete one, or H kept) and the
+!> tangential-momentum conditions on the rest of the sub-step, and the impact is recorded.
+!> A submodule of vci_stepper: it works on the stepper's scheme, Newton and workspace.
+submodule (vci_stepper) vci_impacts
   implicit none
-  private
-
-  !> Solver and impact settings: one object, held by the stepper; the driver changes it through
-  !> `configure`, which hands Newton and the scheme their part once per change (never per step).
-  type, public :: vci_settings_t
-    real(dp) :: atol = 0.0_dp            !< absolute floor of Newton's per-row tolerance
-    real(dp) :: rtol = 1.0e-12_dp        !< Newton tolerance relative to the size of each row's terms
-    integer :: max_iterations = 30       !< Newton iteration cap per solve
-    integer :: max_impacts_per_step = 16 !< beyond this: VCI_ERR_TOO_MANY_IMPACTS (contact, chatter)
-    integer :: impact_energy = VCI_IMPACT_DISCRETE
-  end type vci_settings_t
-
-  !> Cumulative solver statistics.
-  type, public :: vci_solver_stats_t
-    integer(i8) :: newton_solves = 0, newton_iterations = 0, fallbacks = 0
-    integer(i8) :: fused_solves = 0   !< of newton_solves, those the scheme's fused routine did
-    integer(i8) :: energy_fallbacks = 0  !< impacts where E_d could not be matched: H kept instead
-  end type vci_solver_stats_t
-
-  !> Where stage 1's first crossing is bracketed: on the chord a -> b (cheap: gap evaluations only)
-  !> or on the discrete trajectory (regular sub-steps of length s tau: one Newton solve a point).
-  integer, parameter :: ALONG_CHORD = 1, ALONG_TRAJECTORY = 2
-  !> After the samples s = 1/8 .. 7/8: on the chord, up to CHORD_REFINEMENTS Illinois (modified
-  !> regula falsi) steps until the bracket is within CHORD_WIDTH (the crossing's g is smooth in s,
-  !> so it converges superlinearly: 3 to 5 gap evaluations where bisection took 20); on the
-  !> trajectory, where the bracket only seeds Newton and a point costs a solve, a few bisections.
-  integer, parameter :: CHORD_REFINEMENTS = 30, TRAJECTORY_BISECTIONS = 8
-  real(dp), parameter :: CHORD_WIDTH = 1.0e-9_dp
-
-  type, public :: vci_stepper_t
-    private
-    class(vci_scheme_t), allocatable :: sys   !< owns the unknowns' layout; the stepper uses its accessors
-    type(vci_newton_t) :: newton
-    type(vci_settings_t) :: settings
-    type(vci_solver_stats_t) :: stats
-    integer :: n = 0, m = 0, ng = 0
-    integer :: nsub = 0                             !< unknowns of a regular sub-step (the scheme's)
-    logical :: fused = .true.                       !< try the scheme's fused regular-step solve first
-    character(len=VCI_MSG_LEN) :: cause = ''       !< why the last step failed
-    real(dp) :: last_residual = 0.0_dp              !< scaled residual of the last Newton solve
-    ! Workspace, sized once by setup. Unknown vectors (the scheme's layout, up to the largest system):
-    real(dp), allocatable :: x(:)             !< the unknowns Newton works on
-    real(dp), allocatable :: x_stage1(:)      !< stage 1's solution for the first wall reached
-    real(dp), allocatable :: x_saved(:)       !< the unknowns kept across a side computation
-    real(dp), allocatable :: x_low(:), x_high(:)  !< trajectory bracket: sub-step solutions at its ends
-    real(dp), allocatable :: jac(:, :), rhs(:), res(:), res_scale(:)  !< stage 2's linearised start
-    ! Configurations and momenta (n):
-    real(dp), allocatable :: q_start(:), p_start(:)  !< start of the current sub-step
-    real(dp), allocatable :: q_end(:)         !< end of the regular sub-step from q_start
-    real(dp), allocatable :: q_wall(:)        !< impact point (stage 1's end)
-    real(dp), allocatable :: p_arrive(:)      !< momentum arriving at the wall (p-)
-    real(dp), allocatable :: p_leave(:)       !< momentum leaving it (p- + mu grad g)
-    real(dp), allocatable :: chord_velocity(:)  !< (q_end - q_start) / tau: stage 2's first guess
-    real(dp), allocatable :: q_guess(:), q_trial(:)  !< a Newton start; an end point being examined
-    ! Walls (n_gaps) and constraints (m):
-    real(dp), allocatable :: gaps_start(:), gaps_end(:), gaps_trial(:)
-    real(dp), allocatable :: gap_grads(:, :)  !< at q_start (stage 1), at q_wall (stage 2)
-    real(dp), allocatable :: lambda_start(:), zero_lambda(:)
-    real(dp), allocatable :: x_try(:)         !< stage 2's start: a point on the impulse line
-    !> The impact condition stage 2 used (the setting, or VCI_IMPACT_HAMILTONIAN where the discrete
-    !> energy condition has no solution) and, then, H(qt, p-).
-    integer :: impact_condition = 0
-    real(dp) :: e_fallback = 0.0_dp
-    logical :: has_energy = .false.           !< the model supplies H(q, p) (probed at initialisation)
-    real(dp), allocatable :: constraint_impulse(:)  !< nu of the Hamiltonian impact (m > 0)
-  contains
-    procedure :: setup
-    procedure :: configure
-    procedure :: current_settings
-    procedure :: solver_stats
-    procedure :: set_solver_paths
-    procedure :: factorisations
-    procedure :: failure_cause
-    procedure :: use_model_derivatives
-    procedure :: position_carry
-    procedure :: restore_position_carry
-    procedure :: advance
-    procedure :: pair_momentum
-  end type vci_stepper_t
-
-  public :: vci_reserve_impacts
-
-  real(dp), parameter :: landing_fraction = 1.0e-10_dp  ! stage 1 within this of the step's end: landed on the wall
 
 contains
 
-  !> Take over a scheme already bound to its model (the integrator builds it) and size the workspace.
-  !> The settings stay as configured. stat = VCI_ERR_MEMORY when an allocation fails.
-  subroutine setup(self, scheme, stat)
-    class(vci_stepper_t), intent(inout) :: self
-    class(vci_scheme_t), allocatable, intent(inout) :: scheme
-    integer, intent(out) :: stat
-    integer :: n, m, ng, nx, ngw
-    n = scheme%n; m = scheme%m; ng = scheme%n_gaps; ngw = max(1, ng)
-    self%n = n; self%m = m; self%ng = ng
-    self%stats = vci_solver_stats_t()
-    if (allocated(self%sys)) deallocate (self%sys)
-    call move_alloc(scheme, self%sys)
-    self%nsub = self%sys%unknowns(KIND_SUBSTEP)
-    nx = max(self%sys%unknowns(KIND_STAGE1), self%sys%unknowns(KIND_STAGE2), self%sys%unknowns(KIND_IMPULSE))
-    call self%newton%reserve(nx, stat)
-    if (stat /= VCI_OK) return
-    call self%configure(self%settings)
-    if (allocated(self%x)) deallocate (self%x, self%x_stage1, self%x_saved, self%x_low, self%x_high, self%jac, &
-                                       self%rhs, self%res, self%res_scale, self%q_start, self%p_start, self%q_end, &
-                                       self%q_wall, self%p_arrive, self%p_leave, self%chord_velocity, self%q_guess, &
-                                       self%q_trial, self%gaps_start, self%gaps_end, self%gaps_trial, self%gap_grads, &
-                                       self%lambda_start, self%zero_lambda, self%constraint_impulse, self%x_try)
-    allocate (self%x(nx), self%x_stage1(nx), self%x_saved(nx), self%x_low(nx), self%x_high(nx), self%jac(nx, nx), &
-              self%rhs(nx), self%res(nx), self%res_scale(nx), self%q_start(n), self%p_start(n), self%q_end(n), &
-              self%q_wall(n), self%p_arrive(n), self%p_leave(n), self%chord_velocity(n), self%q_guess(n), &
-              self%q_trial(n), self%gaps_start(ngw), self%gaps_end(ngw), self%gaps_trial(ngw), self%gap_grads(n, ngw), &
-              self%lambda_start(m), self%zero_lambda(m), self%constraint_impulse(m), &
-              self%x_try(nx), stat=stat)
-    if (stat /= 0) then
-      stat = VCI_ERR_MEMORY; return
-    end if
-    self%x = 0.0_dp; self%zero_lambda = 0.0_dp
-  end subroutine setup
-
-  !> Replace the settings (validated by the driver) and hand Newton and the scheme their part.
-  subroutine configure(self, settings)
-    class(vci_stepper_t), intent(inout) :: self
-    type(vci_settings_t), intent(in) :: settings
-    self%settings = settings
-    self%newton%atol = settings%atol
-    self%newton%rtol = settings%rtol
-    self%newton%max_iterations = settings%max_iterations
-    if (.not. allocated(self%sys)) return
-    call self%sys%configure_impacts(settings%impact_energy, settings%rtol)
-  end subroutine configure
-
-  pure function current_settings(self) result(settings)
-    class(vci_stepper_t), intent(in) :: self
-    type(vci_settings_t) :: settings
-    settings = self%settings
-  end function current_settings
-
-  pure function solver_stats(self) result(stats)
-    class(vci_stepper_t), intent(in) :: self
-    type(vci_solver_stats_t) :: stats
-    stats = self%stats
-  end function solver_stats
-
-  !> Which linear-algebra paths Newton may take: the in-line LU up to small_lu_max unknowns, factor
-  !> reuse from reuse_min unknowns, the scheme's fused regular-step solve when `fused` (default on;
-  !> tests and benchmarks compare each path with LAPACK / full Newton / the general solve).
-  subroutine set_solver_paths(self, small_lu_max, reuse_min, fused)
-    class(vci_stepper_t), intent(inout) :: self
-    integer, intent(in) :: small_lu_max, reuse_min
-    logical, intent(in), optional :: fused
-    self%newton%small_lu_max = small_lu_max
-    self%newton%reuse_min = reuse_min
-    if (present(fused)) self%fused = fused
-  end subroutine set_solver_paths
-
-  !> LU factorisations of Newton matrices so far.
-  pure integer(i8) function factorisations(self)
-    class(vci_stepper_t), intent(in) :: self
-    factorisations = self%newton%factorisations
-  end function factorisations
-
-  !> Why the last advance or pair_momentum failed.
-  !> (Fixed length, trailing blanks: gfortran's deferred-length results are not thread-safe.)
-  pure function failure_cause(self) result(cause)
-    class(vci_stepper_t), intent(in) :: self
-    character(len=VCI_MSG_LEN) :: cause
-    cause = self%cause
-  end function failure_cause
-
-  !> Which optional derivatives the model supplies (probed by the driver): the mixed Hessian of a
-  !> user's L_d (else differenced) and the gap gradients (else differenced).
-  !> The compensated-summation carry of position q (for a checkpoint), and its restore.
-  subroutine position_carry(self, q, lo)
-    class(vci_stepper_t), intent(in) :: self
-    real(dp), intent(in) :: q(:)
-    real(dp), intent(out) :: lo(:)
-    lo = 0.0_dp
-    if (allocated(self%sys)) call self%sys%position_carry(q, lo)
-  end subroutine position_carry
-
-  subroutine restore_position_carry(self, q, lo)
-    class(vci_stepper_t), intent(inout) :: self
-    real(dp), intent(in) :: q(:), lo(:)
-    if (allocated(self%sys)) call self%sys%restore_position_carry(q, lo)
-  end subroutine restore_position_carry
-
-  subroutine use_model_derivatives(self, mixed_hessian, gap_gradients, constraint_jacobian, energy)
-    class(vci_stepper_t), intent(inout) :: self
-    logical, intent(in), optional :: mixed_hessian, gap_gradients, constraint_jacobian
-    logical, intent(in), optional :: energy   !< the model has H(q, p) (the discrete condition's fallback)
-    if (present(energy)) self%has_energy = energy
-    call self%sys%use_derivatives(mixed_hessian, gap_gradients, constraint_jacobian)
-  end subroutine use_model_derivatives
-
-  !> Advance from (q, p) by one step of length h in direction dir (+1/-1).
-  !> vel: forward-time velocity of the last sub-step; vel_before, lambda_before, lambda_before2: the
-  !> velocity and multipliers of the steps before it; depth: how many consecutive regular steps in
-  !> direction sign(depth) they come from (the predictor's history, updated; see predict).
-  !> e_arrive: E_d of the sub-step that arrived at q in this direction (needed only when q is on a
-  !> wall and the motion goes into it).
-  !> On success qn, pn, lambdan hold the new state, e_step the E_d of the step's last sub-step and
-  !> impacts(1:n_impacts) the impacts of the step (the records grow on demand, up to
-  !> settings%max_impacts_per_step of them, which may be huge).
-  subroutine advance(self, dir, h, t, q, p, lambda, vel, vel_before, lambda_before, lambda_before2, depth, &
-                     e_arrive, qn, pn, lambdan, e_step, impacts, n_impacts, stat)
-    class(vci_stepper_t), intent(inout) :: self
+  module subroutine resolve_impacts(self, state, dir, tau, impacts, landed, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    type(vci_state_t), intent(inout) :: state
     integer, intent(in) :: dir
-    real(dp), intent(in) :: h, t, q(:), p(:), lambda(:)
-    real(dp), intent(inout) :: vel(:), vel_before(:), lambda_before(:), lambda_before2(:), e_arrive
-    integer, intent(inout) :: depth
-    real(dp), intent(out) :: qn(:), pn(:), lambdan(:), e_step
-    type(vci_impact_t), allocatable, intent(inout) :: impacts(:)
-    integer, intent(out) :: n_impacts
+    real(dp), intent(inout) :: tau
+    type(vci_impact_buffer_t), intent(inout) :: impacts
+    logical, intent(out) :: landed
     integer, intent(out) :: stat
-    integer :: n, m, j, jstar, last_gap
-    real(dp) :: tau, alpha, alpha_j, consumed, e_minus, s1res
-    logical :: landed
-
-    n = self%n; m = self%m
-    call self%sys%set_direction(dir)
-    n_impacts = 0
-    if (self%cause(1:1) /= ' ') self%cause = ''   ! (causes start with a word; blanking all of it costs per step)
-    self%q_start(:) = q; self%p_start(:) = p; tau = h; consumed = 0.0_dp
-    ! the regular step, from the extrapolated guess
-    if (depth * dir < 0) depth = 0           ! the history runs the other way
-    call predict(self, dir, h, q, lambda, vel, vel_before, lambda_before, lambda_before2, abs(depth))
-    call substep(self, self%q_start, self%p_start, tau, stat)
-    if (stat /= VCI_OK) return
-
+    integer :: n, j, jstar, last_gap
+    real(dp) :: h, t, alpha, alpha_j, consumed, e_minus, s1res
+    n = self%n; h = state%h; t = state%time()
+    consumed = 0.0_dp
+    stat = VCI_OK
     landed = .false.
     last_gap = 0
     do
-      if (self%ng == 0) exit
       call self%sys%get_endpoint(self%x, self%q_end)
       call self%sys%eval_gaps(self%q_end, self%gaps_end(1:self%ng), stat)
       if (stat /= VCI_OK) then
         call set_cause(self, 'gap evaluation'); return
       end if
       if (all(self%gaps_end(1:self%ng) >= 0.0_dp)) exit
-      if (n_impacts >= self%settings%max_impacts_per_step) then
+      if (impacts%count >= self%settings%max_impacts_per_step) then
         stat = VCI_ERR_TOO_MANY_IMPACTS
         write (self%cause, '(a,i0,a)') 'more than ', self%settings%max_impacts_per_step, &
           ' impacts in one step (persistent contact or chatter)'
@@ -288,8 +63,8 @@ contains
         if (self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN) then
           call self%sys%hamiltonian(self%q_wall, self%p_arrive, e_minus, stat)
         else
-          if (.not. ieee_is_finite(e_arrive)) call arriving_energy(self, dir, h, e_arrive, stat)
-          e_minus = e_arrive
+          if (.not. ieee_is_finite(state%arriving_energy)) call arriving_energy(self, dir, h, state%arriving_energy, stat)
+          e_minus = state%arriving_energy
         end if
         if (stat /= VCI_OK) then
           call set_cause(self, 'energy of the arriving sub-step'); return
@@ -332,19 +107,19 @@ contains
         ! the next step starts on the wall and reflects there.
         if (1.0_dp - alpha <= landing_fraction) then
           self%q_start = self%q_wall; self%p_start = self%p_arrive
-          call self%sys%get_multipliers(self%x_stage1, lambdan)
-          qn = self%q_wall; pn = self%p_arrive; e_step = e_minus
-          vel = real(dir, dp) * (self%q_wall - q) / h
-          depth = 0
-          e_arrive = e_minus
+          call self%sys%get_multipliers(self%x_stage1, self%lambda_new)
+          self%q_new = self%q_wall; self%p_new = self%p_arrive; self%e_new = e_minus
+          state%velocity = real(dir, dp) * (self%q_wall - state%q) / h
+          state%predictor_depth = 0
+          state%arriving_energy = e_minus
           landed = .true.
           exit
         end if
       end if
 
       ! Stage 2: reflect from (qt, p_minus) over the rest of the sub-step.
-      if (n_impacts == size(impacts)) then
-        call vci_reserve_impacts(impacts, min(2 * size(impacts), self%settings%max_impacts_per_step), n, stat)
+      if (impacts%count == size(impacts%records)) then
+        call impacts%reserve(min(2 * size(impacts%records), self%settings%max_impacts_per_step), n, stat)
         if (stat /= VCI_OK) then
           self%cause = 'cannot allocate the record of another impact'; return
         end if
@@ -352,74 +127,17 @@ contains
       self%chord_velocity = (self%q_end - self%q_start) / tau
       call stage_reflect(self, jstar, (1.0_dp - alpha) * tau, e_minus, stat)
       if (stat /= VCI_OK) return
-      n_impacts = n_impacts + 1
-      call record_impact(self, impacts(n_impacts), dir, h, t, consumed + alpha * tau, jstar, e_minus, s1res, &
+      impacts%count = impacts%count + 1
+      call record_impact(self, impacts%records(impacts%count), dir, h, t, consumed + alpha * tau, jstar, e_minus, s1res, &
                          (1.0_dp - alpha) * tau)
       consumed = consumed + alpha * tau
       tau = (1.0_dp - alpha) * tau
       last_gap = jstar
       self%q_start = self%q_wall
-      self%p_start = impacts(n_impacts)%p_after
-      e_arrive = e_minus
+      self%p_start = impacts%records(impacts%count)%p_after
+      state%arriving_energy = e_minus
     end do
-    if (landed) return
-
-    call self%sys%get_endpoint(self%x, qn)
-    call self%sys%get_multipliers(self%x, lambdan)
-    ! x balances p_start, or after an impact p- + mu grad g (with the Hamiltonian condition the
-    ! constraint impulse is in x's multipliers, not in that momentum)
-    if (n_impacts > 0) self%p_leave = self%p_arrive + self%sys%get_extra(self%x, KIND_STAGE2) * self%sys%grad
-    if (n_impacts == 0) then
-      call self%sys%momentum_out(self%x, self%q_start, tau, pn, stat, self%p_start)
-    else
-      call self%sys%impact_momentum(self%x, self%q_start, tau, pn, stat, self%p_leave)
-    end if
-    if (stat == VCI_OK) call self%sys%energy_out(self%x, self%q_start, tau, e_step, stat)
-    if (stat /= VCI_OK) then
-      call set_cause(self, 'momentum of the new state'); return
-    end if
-    if (n_impacts == 0) then
-      ! a regular step: it extends the predictor's history
-      vel_before = vel
-      if (self%m > 0) then
-        lambda_before2 = lambda_before; lambda_before = lambda
-      end if
-      depth = dir * min(abs(depth) + 1, 3)
-    else
-      depth = 0                              ! an impact breaks the smooth history
-    end if
-    vel = real(dir, dp) * (qn - self%q_start) / tau
-    e_arrive = e_step
-  end subroutine advance
-
-  !> Newton's start for the regular step from q: after `depth` consecutive regular steps the
-  !> configuration and multipliers are extrapolated from the last ones (q quadratic from depth 2:
-  !> 3 q_k - 3 q_{k-1} + q_{k-2}; lambda linear at depth 2, quadratic at 3); before, q + h v and the
-  !> last multipliers. Exact for the quadratic free flight of uniform gravity (no iteration then),
-  !> else O(h^3) from the solution. Schemes with interior stages (Lobatto) keep q + h v: their stage
-  !> values start on the chord to the guess, so a better endpoint alone is not a better start.
-  subroutine predict(self, dir, h, q, lambda, vel, vel_before, lambda_before, lambda_before2, depth)
-    type(vci_stepper_t), intent(inout) :: self
-    integer, intent(in) :: dir, depth
-    real(dp), intent(in) :: h, q(:), lambda(:), vel(:), vel_before(:), lambda_before(:), lambda_before2(:)
-    if (depth >= 2 .and. .not. self%sys%needs_pair_solve()) then
-      self%q_guess(:) = q + real(dir, dp) * h * (2.0_dp * vel - vel_before)
-    else
-      self%q_guess(:) = q + real(dir, dp) * h * vel
-    end if
-    call self%sys%put_endpoint(self%x, q, self%q_guess)
-    if (self%m == 0) then
-      call self%sys%put_multipliers(self%x, lambda)
-    else if (depth >= 3) then
-      self%lambda_start = 3.0_dp * (lambda - lambda_before) + lambda_before2
-      call self%sys%put_multipliers(self%x, self%lambda_start)
-    else if (depth == 2) then
-      self%lambda_start = 2.0_dp * lambda - lambda_before
-      call self%sys%put_multipliers(self%x, self%lambda_start)
-    else
-      call self%sys%put_multipliers(self%x, lambda)
-    end if
-  end subroutine predict
+  end subroutine resolve_impacts
 
   !> Is configuration a (the sub-step's start) on wall j, to solver tolerance?
   logical function on_wall(self, j)
@@ -431,40 +149,6 @@ contains
     on_wall = self%gaps_start(j) <= 10.0_dp * (self%settings%atol + self%settings%rtol * scale)
   end function on_wall
 
-  !> Regular sub-step of length tau from (a, pa); x holds the initial guess and returns the solution.
-  subroutine substep(self, a, pa, tau, stat)
-    type(vci_stepper_t), intent(inout) :: self
-    real(dp), intent(in) :: a(:), pa(:), tau
-    integer, intent(out) :: stat
-    integer :: nx
-    type(vci_newton_result_t) :: res
-    logical :: done
-    nx = self%nsub
-    call self%sys%pose_substep(a, pa, tau, stat)
-    if (stat /= VCI_OK) then
-      call set_cause(self, 'constraint forms'); return
-    end if
-    if (self%fused) then
-      ! small analytic systems: the fused solve; anything unusual there is redone on the general
-      ! path, except a callback's unrecoverable failure, which ends the step at once (the flag is
-      ! reset, not the message buffer: blanking that every step costs; a failure writes it anew)
-      self%sys%unrecoverable = .false.
-      call self%sys%fused_substep(self%newton, self%x(1:nx), res, done)
-      if (done) then
-        self%stats%fused_solves = self%stats%fused_solves + 1
-        call count_solve(self, res)
-        stat = VCI_OK
-        return
-      end if
-      if (self%sys%unrecoverable) then
-        stat = VCI_ERR_CALLBACK
-        self%cause = 'regular step: callback '//trim(self%sys%failed_callback)//' reported failure'// &
-                     trim(stat_text(self%sys%failed_stat))
-        return
-      end if
-    end if
-    call run_newton(self, nx, 'regular step', stat)
-  end subroutine substep
 
   !> Stage 1 for wall j: find alpha in (0, 1], b on the wall, lambda. Initial guess from the chord a -> b.
   subroutine stage_wall(self, j, tau, alpha, stat)
@@ -941,74 +625,6 @@ contains
     self%x(1:nx) = self%x_saved(1:nx)
   end subroutine arriving_energy
 
-  !> The momentum p1 at q1 and the discrete energy of the segment from q0 to q1 of length h, forward
-  !> (the paper's initial pair). Schemes with interior stages solve for them first (KIND_PAIR).
-  subroutine pair_momentum(self, q0, q1, h, p1, e, stat)
-    class(vci_stepper_t), intent(inout) :: self
-    real(dp), intent(in) :: q0(:), q1(:), h
-    real(dp), intent(out) :: p1(:), e
-    integer, intent(out) :: stat
-    call self%sys%set_direction(1)
-    self%cause = ''
-    call self%sys%put_endpoint(self%x, q0, q1)
-    call self%sys%put_multipliers(self%x, self%zero_lambda)
-    if (self%sys%needs_pair_solve()) then
-      call self%sys%pose_pair(q0, q1, h)
-      call run_newton(self, self%nsub, 'interior stages of the initial pair', stat)
-      if (stat /= VCI_OK) return
-    end if
-    call self%sys%momentum_out(self%x, q0, h, p1, stat)
-    if (stat == VCI_OK) call self%sys%energy_out(self%x, q0, h, e, stat)
-    if (stat == VCI_OK) return
-    if (self%sys%needs_pair_solve()) then
-      call set_cause(self, 'momentum of the initial pair')
-    else
-      self%cause = 'callback '//trim(self%sys%failed_callback)//' failed or returned NaN/Inf at the initial pair'
-    end if
-  end subroutine pair_momentum
-
-  subroutine run_newton(self, nx, what, stat)
-    type(vci_stepper_t), intent(inout) :: self
-    integer, intent(in) :: nx
-    character(len=*), intent(in) :: what
-    integer, intent(out) :: stat
-    type(vci_newton_result_t) :: res
-    call self%sys%clear_failure()
-    call self%sys%forget_jacobian()
-    call self%newton%solve(self%sys, self%x(1:nx), res)
-    call count_solve(self, res)
-    stat = res%status
-    if (stat == VCI_OK) return
-    select case (res%reason)
-    case (NEWTON_MAX_ITERATIONS)
-      write (self%cause, '(a,i0,a,es9.2,a)') what//': Newton did not converge in ', res%iterations, &
-        ' iterations (scaled residual ', res%scaled_residual, ')'
-    case (NEWTON_NO_DESCENT)
-      write (self%cause, '(a,es9.2,a)') what//': Newton line search found no decrease (scaled residual ', &
-        res%scaled_residual, ')'
-    case (NEWTON_SINGULAR)
-      self%cause = what//': Newton matrix singular and least-squares solve failed'
-    case (NEWTON_NONFINITE)
-      self%cause = what//': residual or Newton matrix not finite (callback values overflow)'
-    case (NEWTON_EVALUATION)
-      if (stat == VCI_ERR_NONFINITE) then
-        self%cause = what//': callback '//trim(self%sys%failed_callback)//' returned NaN or Inf'
-      else
-        self%cause = what//': callback '//trim(self%sys%failed_callback)//' reported failure'// &
-                     trim(stat_text(self%sys%failed_stat))
-      end if
-    end select
-  end subroutine run_newton
-
-  !> A finished solve in the statistics (either path).
-  subroutine count_solve(self, res)
-    type(vci_stepper_t), intent(inout) :: self
-    type(vci_newton_result_t), intent(in) :: res
-    self%stats%newton_solves = self%stats%newton_solves + 1
-    self%stats%newton_iterations = self%stats%newton_iterations + res%iterations
-    if (res%used_fallback) self%stats%fallbacks = self%stats%fallbacks + 1
-    self%last_residual = res%scaled_residual
-  end subroutine count_solve
 
   !> prefix//j//')' without formatted I/O (an internal write costs ~2.7k instructions, a few per
   !> cent of an impact, for a label read only when the solve fails).
@@ -1030,63 +646,4 @@ contains
     label(len(prefix) + 1:) = digits(pos:)
     label(len(prefix) + len(digits) - pos + 2:) = ')'
   end function wall_label
-
-  subroutine set_cause(self, what)
-    type(vci_stepper_t), intent(inout) :: self
-    character(len=*), intent(in) :: what
-    if (len_trim(self%sys%failed_callback) > 0 .and. self%sys%failed_stat /= 0) then
-      self%cause = what//': callback '//trim(self%sys%failed_callback)//' reported failure'// &
-                   trim(stat_text(self%sys%failed_stat))
-    else if (len_trim(self%sys%failed_callback) > 0) then
-      self%cause = what//': callback '//trim(self%sys%failed_callback)//' failed or returned NaN/Inf'
-    else
-      self%cause = what//' failed'
-    end if
-  end subroutine set_cause
-
-  !> " (stat = k, recoverable)" or " (stat = k, unrecoverable)": the callback's own code. Fixed
-  !> length: gfortran's deferred-length function results are not thread-safe.
-  function stat_text(stat) result(text)
-    integer, intent(in) :: stat
-    character(len=48) :: text
-    character(len=16) :: k
-    text = ''
-    if (stat == 0) return
-    write (k, '(i0)') stat
-    text = ' (stat = '//trim(k)//trim(merge(', recoverable  ', ', unrecoverable', stat > 0))//')'
-  end function stat_text
-
-  !> Room for at least `count` impact records of n coordinates, keeping those already recorded.
-  !> stat = VCI_ERR_MEMORY when an allocation fails (the records are then unchanged).
-  subroutine vci_reserve_impacts(impacts, count, n, stat)
-    type(vci_impact_t), allocatable, intent(inout) :: impacts(:)
-    integer, intent(in) :: count, n
-    integer, intent(out) :: stat
-    type(vci_impact_t), allocatable :: grown(:)
-    integer :: i, k
-    stat = VCI_OK
-    k = 0
-    if (allocated(impacts)) k = size(impacts)
-    if (k >= max(1, count)) return
-    allocate (grown(max(1, count)), stat=stat)
-    do i = k + 1, size(grown)
-      if (stat /= 0) exit
-      allocate (grown(i)%q(n), grown(i)%p_before(n), grown(i)%p_after(n), grown(i)%grad_g(n), stat=stat)
-    end do
-    if (stat /= 0) then
-      stat = VCI_ERR_MEMORY; return
-    end if
-    do i = 1, k
-      call move_alloc(impacts(i)%q, grown(i)%q)
-      call move_alloc(impacts(i)%p_before, grown(i)%p_before)
-      call move_alloc(impacts(i)%p_after, grown(i)%p_after)
-      call move_alloc(impacts(i)%grad_g, grown(i)%grad_g)
-      grown(i)%t = impacts(i)%t; grown(i)%step = impacts(i)%step; grown(i)%alpha = impacts(i)%alpha
-      grown(i)%gap = impacts(i)%gap; grown(i)%impulse = impacts(i)%impulse
-      grown(i)%energy_before = impacts(i)%energy_before; grown(i)%energy_after = impacts(i)%energy_after
-      grown(i)%leave_rate = impacts(i)%leave_rate
-      grown(i)%stage1_residual = impacts(i)%stage1_residual; grown(i)%stage2_residual = impacts(i)%stage2_residual
-    end do
-    call move_alloc(grown, impacts)
-  end subroutine vci_reserve_impacts
-end module vci_stepper
+end submodule vci_impacts

@@ -57,7 +57,7 @@ module vci_h5_io
       integer(c_int64_t), value :: file, fapl
       type(c_ptr), intent(out) :: handle
     end function h5fget_vfd_handle
-    !> src/vci_fd_discard.c: point fd at a sink that takes writes and ftruncate; 0 on success
+    !> src/io/vci_fd_discard.c: point fd at a sink that takes writes and ftruncate; 0 on success
     integer(c_int) function vci_discard_fd(fd) bind(C, name='vci_discard_fd')
       import :: c_int
       integer(c_int), value :: fd
@@ -136,7 +136,7 @@ contains
     r = h5fget_vfd_handle(int(file, c_int64_t), 0_c_int64_t, handle)
     if (r >= 0 .and. c_associated(handle)) then
       call c_f_pointer(handle, fd)
-      r = vci_discard_fd(fd)   ! (src/vci_fd_discard.c: a sink that also takes HDF5's ftruncate at close)
+      r = vci_discard_fd(fd)   ! (src/io/vci_fd_discard.c: a sink that also takes HDF5's ftruncate at close)
     end if
   end subroutine h5io_discard_writes
 

@@ -16,7 +16,9 @@ module vci_integrator
   use vci_model, only: vci_model_t
   use vci_lagrangian, only: vci_lagrangian_t
   use vci_limits, only: vci_size_problem
-  use vci_stepper, only: vci_stepper_t, vci_settings_t, vci_solver_stats_t, vci_reserve_impacts
+  use vci_settings, only: vci_settings_t, vci_solver_stats_t
+  use vci_state, only: vci_state_t, vci_impact_buffer_t
+  use vci_stepper, only: vci_stepper_t
   use vci_scheme, only: vci_scheme_t, VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN, VCI_SCHEME_DISCRETE, &
                         VCI_SCHEME_LEFT, VCI_SCHEME_MIDPOINT, VCI_SCHEME_LOBATTO
   use vci_scheme_discrete, only: vci_scheme_discrete_t
@@ -53,24 +55,10 @@ module vci_integrator
     integer :: n_stages = 0                     !< s of the lobatto scheme
     type(vci_stepper_t) :: stepper              !< holds the scheme and the one settings object
     logical :: created = .false., initialized = .false.
-    ! the state: t = t0 + k h without drift
-    real(dp) :: h = 0.0_dp
-    real(dp) :: t0 = 0.0_dp
-    integer(i8) :: k = 0_i8
-    real(dp), allocatable :: q(:), p(:), lambda(:)
-    real(dp) :: step_energy = 0.0_dp            !< E_d of the last step (of its last sub-step)
-    ! solver memory carried from step to step (part of a checkpoint)
-    real(dp), allocatable :: velocity(:)        !< forward-time velocity of the last sub-step: Newton's first guess
-    !> the predictor's history (vci_stepper's predict): the velocity and multipliers of the steps
-    !> before the last, from predictor_depth consecutive regular steps in its sign's direction
-    real(dp), allocatable :: velocity_before(:), lambda_before(:), lambda_before2(:)
-    integer :: predictor_depth = 0
-    real(dp) :: arriving_energy = 0.0_dp        !< E_d of the sub-step that arrived at q
-    integer :: arriving_direction = 0           !< direction in which arriving_energy is known (0: unknown)
-    ! the step being taken, and what it found
-    real(dp), allocatable :: q_next(:), p_next(:), lambda_next(:)
-    type(vci_impact_t), allocatable :: impacts(:)   !< impacts of the last step, 1:n_impacts
-    integer :: n_impacts = 0
+    !> the state and the history the next step needs (t = t0 + k h, q, p, lambda, E_d, the
+    !> predictor's and the energy condition's memory): handed to the stepper whole
+    type(vci_state_t) :: state
+    type(vci_impact_buffer_t) :: impacts        !< impacts of the last step, records(1:count)
     ! outcome
     integer :: last_status = VCI_OK             !< status of the last call
     character(len=VCI_MSG_LEN) :: last_message = ''  !< what went wrong in the last call, naming step and time
@@ -182,7 +170,7 @@ contains
     integer, intent(out) :: stat
     character(len=80) :: why
     self%created = .false.; self%initialized = .false.
-    self%steps_taken = 0_i8; self%impacts_found = 0_i8; self%n_impacts = 0
+    self%steps_taken = 0_i8; self%impacts_found = 0_i8; self%impacts%count = 0
     ! sizes checked before anything is allocated (vci_limits)
     why = vci_size_problem(model%n, model%m, model%n_gaps)
     if (why /= '') then
@@ -195,18 +183,11 @@ contains
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
     self%model => model
-    self%h = h
-    if (allocated(self%q)) deallocate (self%q, self%p, self%lambda, self%velocity, self%q_next, self%p_next, &
-                                       self%lambda_next, self%velocity_before, self%lambda_before, self%lambda_before2)
-    allocate (self%q(model%n), self%p(model%n), self%lambda(model%m), self%velocity(model%n), &
-              self%q_next(model%n), self%p_next(model%n), self%lambda_next(model%m), self%velocity_before(model%n), &
-              self%lambda_before(model%m), self%lambda_before2(model%m), stat=stat)
-    if (stat /= 0) then
+    self%state%h = h
+    call self%state%reserve(model%n, model%m, stat)
+    if (stat /= VCI_OK) then
       call out_of_memory(self, model, stat); return
     end if
-    self%lambda = 0.0_dp; self%q = 0.0_dp; self%p = 0.0_dp; self%velocity = 0.0_dp
-    call forget_history(self)
-    stat = VCI_OK
   end subroutine bind_sizes
 
   !> Build the scheme object for the current model and scheme choice and hand it to the stepper.
@@ -258,9 +239,8 @@ contains
     if (stat == VCI_OK) call self%stepper%setup(sch, stat)
     ! records for the impacts of one step, grown on demand up to the bound (which may be huge)
     settings = self%stepper%current_settings()
-    self%n_impacts = 0
-    if (stat == VCI_OK) call vci_reserve_impacts(self%impacts, min(settings%max_impacts_per_step, 16), &
-                                                 self%model%n, stat)
+    self%impacts%count = 0
+    if (stat == VCI_OK) call self%impacts%reserve(min(settings%max_impacts_per_step, 16), self%model%n, stat)
     if (stat /= VCI_OK) then
       call out_of_memory(self, self%model, stat); return
     end if
@@ -368,7 +348,7 @@ contains
       ! (the probe's values are discarded; q, p are zero before initialisation)
       if (.not. associated(self%lag)) then
         call self%model%clear_not_provided(); s = 0
-        call self%model%energy(self%q, self%p, e, s)
+        call self%model%energy(self%state%q, self%state%p, e, s)
       end if
       if (.not. associated(self%lag) .and. self%model%answered_not_provided()) then
         self%last_message = 'set_impact_energy: the hamiltonian condition needs the model''s energy(q, p), '// &
@@ -406,22 +386,22 @@ contains
     integer, intent(out) :: stat
     call check_init(self, 'init_from_pair', t0, q0, q1, stat, q1)
     if (stat /= VCI_OK) return
-    if (.not. ieee_is_finite(t0 + self%h)) then
+    if (.not. ieee_is_finite(t0 + self%state%h)) then
       self%initialized = .false.
-      write (self%last_message, '(a,es12.4,a,es12.4,a)') 'init_from_pair: t0 + h = ', t0, ' + ', self%h, ' overflows'
+      write (self%last_message, '(a,es12.4,a,es12.4,a)') 'init_from_pair: t0 + h = ', t0, ' + ', self%state%h, ' overflows'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
-    call self%stepper%pair_momentum(q0, q1, self%h, self%p, self%step_energy, stat)
+    call self%stepper%pair_momentum(q0, q1, self%state%h, self%state%p, self%state%step_energy, stat)
     if (stat /= VCI_OK) then
       self%last_message = 'init_from_pair: '//trim(self%stepper%failure_cause())
       call keep_failure(self, stat); return
     end if
-    self%t0 = t0; self%k = 1_i8
-    self%q = q1
-    self%lambda = 0.0_dp
-    self%velocity = (q1 - q0) / self%h
-    call forget_history(self)
-    self%arriving_energy = self%step_energy; self%arriving_direction = 1
+    self%state%t0 = t0; self%state%k = 1_i8
+    self%state%q = q1
+    self%state%lambda = 0.0_dp
+    self%state%velocity = (q1 - q0) / self%state%h
+    call self%state%forget_history()
+    self%state%arriving_energy = self%state%step_energy; self%state%arriving_direction = 1
     self%initialized = .true.
     call finish(self, VCI_OK, stat)
   end subroutine init_from_pair
@@ -433,13 +413,13 @@ contains
     integer, intent(out) :: stat
     call check_init(self, 'init_from_momentum', t0, q0, p0, stat)
     if (stat /= VCI_OK) return
-    self%t0 = t0; self%k = 0_i8
-    self%q = q0; self%p = p0
-    self%lambda = 0.0_dp
-    self%velocity = 0.0_dp
-    call forget_history(self)
-    self%step_energy = ieee_value(1.0_dp, ieee_quiet_nan)
-    self%arriving_direction = 0
+    self%state%t0 = t0; self%state%k = 0_i8
+    self%state%q = q0; self%state%p = p0
+    self%state%lambda = 0.0_dp
+    self%state%velocity = 0.0_dp
+    call self%state%forget_history()
+    self%state%step_energy = ieee_value(1.0_dp, ieee_quiet_nan)
+    self%state%arriving_direction = 0
     self%initialized = .true.
     call finish(self, VCI_OK, stat)
   end subroutine init_from_momentum
@@ -478,7 +458,7 @@ contains
     end if
     if (associated(self%discrete)) then
       call self%model%clear_not_provided(); s = 0
-      call self%discrete%mixed_hessian(q0, v0, self%h, hess, s)
+      call self%discrete%mixed_hessian(q0, v0, self%state%h, hess, s)
       call self%stepper%use_model_derivatives(mixed_hessian=.not. self%model%answered_not_provided())
     end if
     if (self%model%m > 0) then
@@ -495,7 +475,7 @@ contains
         call finish(self, VCI_ERR_CALLBACK, stat); return
       end if
       call self%model%clear_not_provided(); s = 0
-      if (associated(self%discrete)) call self%discrete%discrete_constraint(q0, q0, self%h, w, s)
+      if (associated(self%discrete)) call self%discrete%discrete_constraint(q0, q0, self%state%h, w, s)
       if (self%model%answered_not_provided()) then
         write (self%last_message, '(a,i0,a)') who//': the model has m = ', self%model%m, &
           ' constraints but does not supply discrete_constraint'
@@ -503,7 +483,7 @@ contains
       end if
       if (associated(self%discrete)) then
         call self%model%clear_not_provided(); s = 0
-        call self%discrete%discrete_constraint_jacobian(q0, v0, self%h, cjo, s)
+        call self%discrete%discrete_constraint_jacobian(q0, v0, self%state%h, cjo, s)
         call self%stepper%use_model_derivatives(constraint_jacobian=.not. self%model%answered_not_provided())
       end if
     end if
@@ -571,44 +551,33 @@ contains
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
     t = self%time()
-    if (.not. ieee_is_finite(self%t0 + real(self%k + direction, dp) * self%h)) then
-      write (self%last_message, '(a,i0,a,es14.7,a,es10.3,a)') 'step from index ', self%k, ' (t = ', t, &
-        '): the time of the next state overflows (h = ', self%h, ')'
+    if (.not. ieee_is_finite(self%state%t0 + real(self%state%k + direction, dp) * self%state%h)) then
+      write (self%last_message, '(a,i0,a,es14.7,a,es10.3,a)') 'step from index ', self%state%k, ' (t = ', t, &
+        '): the time of the next state overflows (h = ', self%state%h, ')'
       call finish(self, VCI_ERR_NONFINITE, stat); return
     end if
-    if (self%arriving_direction /= direction) self%arriving_energy = ieee_value(1.0_dp, ieee_quiet_nan)
-    call self%stepper%advance(direction, self%h, t, self%q, self%p, self%lambda, self%velocity, &
-                              self%velocity_before, self%lambda_before, self%lambda_before2, self%predictor_depth, &
-                              self%arriving_energy, self%q_next, self%p_next, self%lambda_next, self%step_energy, &
-                              self%impacts, self%n_impacts, stat)
+    call self%stepper%advance(self%state, direction, self%impacts, stat)
     if (stat /= VCI_OK) then
       dname = 'forward'
       if (direction < 0) dname = 'backward'
-      write (self%last_message, '(a,i0,a,es14.7,a)') 'step from index ', self%k, ' (t = ', t, ', '// &
+      write (self%last_message, '(a,i0,a,es14.7,a)') 'step from index ', self%state%k, ' (t = ', t, ', '// &
         trim(dname)//'): '//trim(self%stepper%failure_cause())
-      self%arriving_direction = 0
       call keep_failure(self, stat); return
     end if
-    self%arriving_direction = direction
-    do i = 1, self%n_impacts
-      self%impacts(i)%step = self%k
-    end do
-    self%q(:) = self%q_next; self%p(:) = self%p_next     ! ((:): no reallocation check per step)
-    if (self%model%m > 0) self%lambda(:) = self%lambda_next
-    self%k = self%k + direction
     t = self%time()
     self%steps_taken = self%steps_taken + 1
-    self%impacts_found = self%impacts_found + self%n_impacts
+    self%impacts_found = self%impacts_found + self%impacts%count
     stat = VCI_OK
     if (present(observer)) then
       ostat = 0
-      do i = 1, self%n_impacts
-        call observer%on_impact(self%impacts(i), ostat)
+      do i = 1, self%impacts%count
+        call observer%on_impact(self%impacts%records(i), ostat)
       end do
       if (ostat == 0 .and. observer%wants_checkpoint()) call observer%on_checkpoint(self%checkpoint(), ostat)
-      if (ostat == 0) call observer%on_step(self%k, t, self%q, self%p, self%lambda, self%step_energy, ostat)
+      if (ostat == 0) call observer%on_step(self%state%k, t, self%state%q, self%state%p, self%state%lambda, &
+                                            self%state%step_energy, ostat)
       if (ostat /= 0) then
-        write (self%last_message, '(a,i0,a,es14.7,a)') 'observer failed after step to index ', self%k, &
+        write (self%last_message, '(a,i0,a,es14.7,a)') 'observer failed after step to index ', self%state%k, &
           ' (t = ', t, ')'
         call append_observer_cause(self, observer)
         call finish(self, VCI_ERR_IO, stat); return
@@ -642,7 +611,7 @@ contains
     if (present(observer)) then
       ostat = 0
       if (observer%wants_checkpoint()) call observer%on_checkpoint(self%checkpoint(), ostat)
-      if (ostat == 0) call observer%on_start(self%run_info(direction), self%q, self%p, ostat)
+      if (ostat == 0) call observer%on_start(self%run_info(direction), self%state%q, self%state%p, ostat)
       if (ostat /= 0) then
         self%last_message = 'integrate: observer failed at the start of the run'
         call append_observer_cause(self, observer)
@@ -683,27 +652,10 @@ contains
   function checkpoint(self) result(cp)
     class(vci_integrator_t), intent(in) :: self
     type(vci_checkpoint_t) :: cp
-    cp%t0 = self%t0; cp%h = self%h; cp%step = self%k
-    allocate (cp%q, source=self%q)
-    allocate (cp%p, source=self%p)
-    allocate (cp%lambda, source=self%lambda)
-    allocate (cp%velocity, source=self%velocity)
-    allocate (cp%velocity_before, source=self%velocity_before)
-    allocate (cp%lambda_before, source=self%lambda_before)
-    allocate (cp%lambda_before2, source=self%lambda_before2)
-    cp%predictor_depth = self%predictor_depth
-    allocate (cp%position_lo(size(self%q)))
-    call self%stepper%position_carry(self%q, cp%position_lo)
-    cp%step_energy = self%step_energy
-    cp%arriving_energy = self%arriving_energy; cp%arriving_direction = self%arriving_direction
+    cp = self%state%to_checkpoint()
+    allocate (cp%position_lo(size(self%state%q)))
+    call self%stepper%position_carry(self%state%q, cp%position_lo)
   end function checkpoint
-
-  !> No predictor history: the next step starts from q + h velocity and the last multipliers.
-  subroutine forget_history(self)
-    type(vci_integrator_t), intent(inout) :: self
-    self%velocity_before = 0.0_dp; self%lambda_before = 0.0_dp; self%lambda_before2 = 0.0_dp
-    self%predictor_depth = 0
-  end subroutine forget_history
 
   !> Continue from a checkpoint taken with the same model and step length.
   subroutine restore(self, cp, stat)
@@ -718,28 +670,16 @@ contains
       self%last_message = 'restore: empty checkpoint'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
-    if (size(cp%q) /= self%model%n .or. size(cp%lambda) /= self%model%m .or. cp%h /= self%h) then
+    if (size(cp%q) /= self%model%n .or. size(cp%lambda) /= self%model%m .or. cp%h /= self%state%h) then
       self%last_message = 'restore: checkpoint does not match this model or step length'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
     call check_init(self, 'restore', cp%t0, cp%q, cp%p, stat)
     if (stat /= VCI_OK) return
-    self%t0 = cp%t0; self%k = cp%step
-    self%q = cp%q; self%p = cp%p; self%lambda = cp%lambda; self%velocity = cp%velocity
-    call forget_history(self)
-    if (allocated(cp%velocity_before) .and. allocated(cp%lambda_before) .and. allocated(cp%lambda_before2)) then
-      if (size(cp%velocity_before) == self%model%n .and. size(cp%lambda_before) == self%model%m .and. &
-          size(cp%lambda_before2) == self%model%m) then
-        self%velocity_before = cp%velocity_before
-        self%lambda_before = cp%lambda_before; self%lambda_before2 = cp%lambda_before2
-        self%predictor_depth = cp%predictor_depth
-      end if
-    end if
+    call self%state%from_checkpoint(cp)
     if (allocated(cp%position_lo)) then
-      if (size(cp%position_lo) == self%model%n) call self%stepper%restore_position_carry(self%q, cp%position_lo)
+      if (size(cp%position_lo) == self%model%n) call self%stepper%restore_position_carry(self%state%q, cp%position_lo)
     end if
-    self%step_energy = cp%step_energy
-    self%arriving_energy = cp%arriving_energy; self%arriving_direction = cp%arriving_direction
     self%initialized = .true.
     call finish(self, VCI_OK, stat)
   end subroutine restore
@@ -752,7 +692,7 @@ contains
     type(vci_settings_t) :: settings
     settings = self%stepper%current_settings()
     info%n = self%model%n; info%m = self%model%m; info%n_gaps = self%model%n_gaps
-    info%direction = direction; info%h = self%h; info%t0 = self%time(); info%step0 = self%k
+    info%direction = direction; info%h = self%state%h; info%t0 = self%time(); info%step0 = self%state%k
     info%impact_energy = settings%impact_energy
   end function run_info
 
@@ -801,52 +741,52 @@ contains
   !> Time of the current state, t0 + k h.
   pure real(dp) function current_time(self)
     class(vci_integrator_t), intent(in) :: self
-    current_time = self%t0 + real(self%k, dp) * self%h
+    current_time = self%state%t0 + real(self%state%k, dp) * self%state%h
   end function current_time
 
   !> Index k of the current state.
   pure integer(i8) function step_index(self)
     class(vci_integrator_t), intent(in) :: self
-    step_index = self%k
+    step_index = self%state%k
   end function step_index
 
   pure real(dp) function step_length(self)
     class(vci_integrator_t), intent(in) :: self
-    step_length = self%h
+    step_length = self%state%h
   end function step_length
 
   !> q of the current state (size n).
   pure function configuration(self) result(q)
     class(vci_integrator_t), intent(in) :: self
     real(dp), allocatable :: q(:)
-    q = self%q
+    q = self%state%q
   end function configuration
 
   !> p of the current state (size n).
   pure function momentum(self) result(p)
     class(vci_integrator_t), intent(in) :: self
     real(dp), allocatable :: p(:)
-    p = self%p
+    p = self%state%p
   end function momentum
 
   !> The multipliers lambda of the last step (size m).
   pure function multipliers(self) result(lambda)
     class(vci_integrator_t), intent(in) :: self
     real(dp), allocatable :: lambda(:)
-    lambda = self%lambda
+    lambda = self%state%lambda
   end function multipliers
 
   !> E_d of the last step (of its last sub-step when it had impacts); NaN before the first step
   !> from (q, p).
   pure real(dp) function energy(self)
     class(vci_integrator_t), intent(in) :: self
-    energy = self%step_energy
+    energy = self%state%step_energy
   end function energy
 
   !> Number of impacts of the last step.
   pure integer function impact_count(self)
     class(vci_integrator_t), intent(in) :: self
-    impact_count = self%n_impacts
+    impact_count = self%impacts%count
   end function impact_count
 
   !> Impact i (1 .. impact_count()) of the last step. Assign the result (`imp = integ%impact(i)`):
@@ -855,7 +795,7 @@ contains
     class(vci_integrator_t), intent(in) :: self
     integer, intent(in) :: i
     type(vci_impact_t) :: imp
-    if (i >= 1 .and. i <= self%n_impacts) imp = self%impacts(i)
+    if (i >= 1 .and. i <= self%impacts%count) imp = self%impacts%records(i)
   end function impact
 
   !> Counters over the integrator's life (since create).

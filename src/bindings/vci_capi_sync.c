@@ -1,4 +1,4 @@
-/* What Fortran 2008 cannot express portably, for the C ABI (src/vci_capi.F90): the locks that make
+/* What Fortran 2008 cannot express portably, for the C ABI (src/bindings/vci_capi_registry.f90): the locks that make
  * the handle registry and the HDF5 output thread-safe, and the per-thread message of failures that
  * have no live integrator to hold them (read with vci_last_error(NULL, ...)). Statically
  * initialised, so there is no initialisation race; hidden from the library's users. */

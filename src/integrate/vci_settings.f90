@@ -1,0 +1,25 @@
+!> The settings of a run's solver and impacts, and the solver's counters: plain data shared by the
+!> stepper (which holds the one settings object) and the driver (which validates and reports them).
+module vci_settings
+  use vci_kinds, only: dp, i8
+  use vci_scheme, only: VCI_IMPACT_DISCRETE
+  implicit none
+  private
+
+  !> Solver and impact settings: one object, held by the stepper; the driver changes it through
+  !> `configure`, which hands Newton and the scheme their part once per change (never per step).
+  type, public :: vci_settings_t
+    real(dp) :: atol = 0.0_dp            !< absolute floor of Newton's per-row tolerance
+    real(dp) :: rtol = 1.0e-12_dp        !< Newton tolerance relative to the size of each row's terms
+    integer :: max_iterations = 30       !< Newton iteration cap per solve
+    integer :: max_impacts_per_step = 16 !< beyond this: VCI_ERR_TOO_MANY_IMPACTS (contact, chatter)
+    integer :: impact_energy = VCI_IMPACT_DISCRETE
+  end type vci_settings_t
+
+  !> Cumulative solver statistics.
+  type, public :: vci_solver_stats_t
+    integer(i8) :: newton_solves = 0, newton_iterations = 0, fallbacks = 0
+    integer(i8) :: fused_solves = 0   !< of newton_solves, those the scheme's fused routine did
+    integer(i8) :: energy_fallbacks = 0  !< impacts where E_d could not be matched: H kept instead
+  end type vci_solver_stats_t
+end module vci_settings

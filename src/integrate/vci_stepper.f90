@@ -1,0 +1,440 @@
+!> One step of the (+) or (-) scheme with elastic impacts (paper, Theorem and Algorithm 1;
+!> docs/DESIGN.md §1-2): a regular sub-step, and while its end leaves the admissible set, stage 1
+!> (reach the first wall) and stage 2 (reflect with the energy and tangential-momentum conditions) on
+!> the remaining fraction of the step, up to a bound on the number of impacts.
+!>
+!> This module holds the stepper's data (the scheme, Newton, the settings, the workspace) and the
+!> regular step; the impact algorithm (stage 1, its bracketing, stage 2 with the energy conditions,
+!> the impact record) is its submodule vci_impacts (vci_impacts.f90), Newton's start is
+!> vci_predictor. The stepper knows nothing of how L_d is built (the scheme lays out the unknowns
+!> and is reached through its accessors); the driver's state comes in whole (vci_state_t) and is
+!> committed only when the step succeeds.
+module vci_stepper
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_value, ieee_quiet_nan
+  use vci_kinds, only: dp, i8
+  use vci_status
+  use vci_newton, only: vci_newton_t, vci_newton_result_t, NEWTON_MAX_ITERATIONS, NEWTON_NO_DESCENT, &
+                        NEWTON_SINGULAR, NEWTON_EVALUATION, NEWTON_NONFINITE
+  use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_STAGE1, KIND_STAGE2, KIND_IMPULSE, &
+                        VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN
+  use vci_observer, only: vci_impact_t
+  use vci_settings, only: vci_settings_t, vci_solver_stats_t
+  use vci_state, only: vci_state_t, vci_impact_buffer_t
+  use vci_predictor, only: vci_predict_start
+  implicit none
+  private
+
+  !> Where stage 1's first crossing is bracketed: on the chord a -> b (cheap: gap evaluations only)
+  !> or on the discrete trajectory (regular sub-steps of length s tau: one Newton solve a point).
+  integer, parameter :: ALONG_CHORD = 1, ALONG_TRAJECTORY = 2
+  !> After the samples s = 1/8 .. 7/8: on the chord, up to CHORD_REFINEMENTS Illinois (modified
+  !> regula falsi) steps until the bracket is within CHORD_WIDTH (the crossing's g is smooth in s,
+  !> so it converges superlinearly: 3 to 5 gap evaluations where bisection took 20); on the
+  !> trajectory, where the bracket only seeds Newton and a point costs a solve, a few bisections.
+  integer, parameter :: CHORD_REFINEMENTS = 30, TRAJECTORY_BISECTIONS = 8
+  real(dp), parameter :: CHORD_WIDTH = 1.0e-9_dp
+
+  type, public :: vci_stepper_t
+    private
+    class(vci_scheme_t), allocatable :: sys   !< owns the unknowns' layout; the stepper uses its accessors
+    type(vci_newton_t) :: newton
+    type(vci_settings_t) :: settings
+    type(vci_solver_stats_t) :: stats
+    integer :: n = 0, m = 0, ng = 0
+    integer :: nsub = 0                             !< unknowns of a regular sub-step (the scheme's)
+    logical :: fused = .true.                       !< try the scheme's fused regular-step solve first
+    character(len=VCI_MSG_LEN) :: cause = ''       !< why the last step failed
+    real(dp) :: last_residual = 0.0_dp              !< scaled residual of the last Newton solve
+    ! Workspace, sized once by setup. Unknown vectors (the scheme's layout, up to the largest system):
+    real(dp), allocatable :: x(:)             !< the unknowns Newton works on
+    real(dp), allocatable :: x_stage1(:)      !< stage 1's solution for the first wall reached
+    real(dp), allocatable :: x_saved(:)       !< the unknowns kept across a side computation
+    real(dp), allocatable :: x_low(:), x_high(:)  !< trajectory bracket: sub-step solutions at its ends
+    real(dp), allocatable :: jac(:, :), rhs(:), res(:), res_scale(:)  !< stage 2's linearised start
+    ! Configurations and momenta (n):
+    real(dp), allocatable :: q_start(:), p_start(:)  !< start of the current sub-step
+    real(dp), allocatable :: q_end(:)         !< end of the regular sub-step from q_start
+    real(dp), allocatable :: q_wall(:)        !< impact point (stage 1's end)
+    real(dp), allocatable :: p_arrive(:)      !< momentum arriving at the wall (p-)
+    real(dp), allocatable :: p_leave(:)       !< momentum leaving it (p- + mu grad g)
+    real(dp), allocatable :: chord_velocity(:)  !< (q_end - q_start) / tau: stage 2's first guess
+    real(dp), allocatable :: q_guess(:), q_trial(:)  !< a Newton start; an end point being examined
+    ! Walls (n_gaps) and constraints (m):
+    real(dp), allocatable :: gaps_start(:), gaps_end(:), gaps_trial(:)
+    real(dp), allocatable :: gap_grads(:, :)  !< at q_start (stage 1), at q_wall (stage 2)
+    real(dp), allocatable :: lambda_start(:), zero_lambda(:)
+    real(dp), allocatable :: x_try(:)         !< stage 2's start: a point on the impulse line
+    !> The impact condition stage 2 used (the setting, or VCI_IMPACT_HAMILTONIAN where the discrete
+    !> energy condition has no solution) and, then, H(qt, p-).
+    integer :: impact_condition = 0
+    real(dp) :: e_fallback = 0.0_dp
+    logical :: has_energy = .false.           !< the model supplies H(q, p) (probed at initialisation)
+    real(dp), allocatable :: constraint_impulse(:)  !< nu of the Hamiltonian impact (m > 0)
+    ! The step's outcome, committed to the state when the step succeeds:
+    real(dp), allocatable :: q_new(:), p_new(:), lambda_new(:)
+    real(dp) :: e_new = 0.0_dp
+  contains
+    procedure :: setup
+    procedure :: configure
+    procedure :: current_settings
+    procedure :: solver_stats
+    procedure :: set_solver_paths
+    procedure :: factorisations
+    procedure :: failure_cause
+    procedure :: use_model_derivatives
+    procedure :: position_carry
+    procedure :: restore_position_carry
+    procedure :: advance
+    procedure :: pair_momentum
+  end type vci_stepper_t
+
+
+  interface
+    !> The impacts of the step whose regular sub-step ends in x (vci_impacts.f90): while the end
+    !> leaves the admissible set, stage 1 and stage 2 on the rest of the step; `landed` when stage 1
+    !> reached a wall exactly at the step's end (then the outcome is in q_new, p_new, lambda_new,
+    !> e_new and the state's history is updated); else x holds the last sub-step from q_start of
+    !> length tau.
+    module subroutine resolve_impacts(self, state, dir, tau, impacts, landed, stat)
+      type(vci_stepper_t), intent(inout) :: self
+      type(vci_state_t), intent(inout) :: state
+      integer, intent(in) :: dir
+      real(dp), intent(inout) :: tau
+      type(vci_impact_buffer_t), intent(inout) :: impacts
+      logical, intent(out) :: landed
+      integer, intent(out) :: stat
+    end subroutine resolve_impacts
+  end interface
+
+  ! For the submodule vci_impacts. Public because gfortran 12 (-O2 and above) inlines a private
+  ! procedure into its callers in this module and then emits no symbol for the submodule's calls.
+  public :: substep, run_newton, set_cause
+
+  real(dp), parameter :: landing_fraction = 1.0e-10_dp  ! stage 1 within this of the step's end: landed on the wall
+
+contains
+
+  !> Take over a scheme already bound to its model (the integrator builds it) and size the workspace.
+  !> The settings stay as configured. stat = VCI_ERR_MEMORY when an allocation fails.
+  subroutine setup(self, scheme, stat)
+    class(vci_stepper_t), intent(inout) :: self
+    class(vci_scheme_t), allocatable, intent(inout) :: scheme
+    integer, intent(out) :: stat
+    integer :: n, m, ng, nx, ngw
+    n = scheme%n; m = scheme%m; ng = scheme%n_gaps; ngw = max(1, ng)
+    self%n = n; self%m = m; self%ng = ng
+    self%stats = vci_solver_stats_t()
+    if (allocated(self%sys)) deallocate (self%sys)
+    call move_alloc(scheme, self%sys)
+    self%nsub = self%sys%unknowns(KIND_SUBSTEP)
+    nx = max(self%sys%unknowns(KIND_STAGE1), self%sys%unknowns(KIND_STAGE2), self%sys%unknowns(KIND_IMPULSE))
+    call self%newton%reserve(nx, stat)
+    if (stat /= VCI_OK) return
+    call self%configure(self%settings)
+    if (allocated(self%x)) deallocate (self%x, self%x_stage1, self%x_saved, self%x_low, self%x_high, self%jac, &
+                                       self%rhs, self%res, self%res_scale, self%q_start, self%p_start, self%q_end, &
+                                       self%q_wall, self%p_arrive, self%p_leave, self%chord_velocity, self%q_guess, &
+                                       self%q_trial, self%gaps_start, self%gaps_end, self%gaps_trial, self%gap_grads, &
+                                       self%lambda_start, self%zero_lambda, self%constraint_impulse, self%x_try, &
+                                       self%q_new, self%p_new, self%lambda_new)
+    allocate (self%x(nx), self%x_stage1(nx), self%x_saved(nx), self%x_low(nx), self%x_high(nx), self%jac(nx, nx), &
+              self%rhs(nx), self%res(nx), self%res_scale(nx), self%q_start(n), self%p_start(n), self%q_end(n), &
+              self%q_wall(n), self%p_arrive(n), self%p_leave(n), self%chord_velocity(n), self%q_guess(n), &
+              self%q_trial(n), self%gaps_start(ngw), self%gaps_end(ngw), self%gaps_trial(ngw), self%gap_grads(n, ngw), &
+              self%lambda_start(m), self%zero_lambda(m), self%constraint_impulse(m), &
+              self%x_try(nx), self%q_new(n), self%p_new(n), self%lambda_new(m), stat=stat)
+    if (stat /= 0) then
+      stat = VCI_ERR_MEMORY; return
+    end if
+    self%x = 0.0_dp; self%zero_lambda = 0.0_dp
+  end subroutine setup
+
+  !> Replace the settings (validated by the driver) and hand Newton and the scheme their part.
+  subroutine configure(self, settings)
+    class(vci_stepper_t), intent(inout) :: self
+    type(vci_settings_t), intent(in) :: settings
+    self%settings = settings
+    self%newton%atol = settings%atol
+    self%newton%rtol = settings%rtol
+    self%newton%max_iterations = settings%max_iterations
+    if (.not. allocated(self%sys)) return
+    call self%sys%configure_impacts(settings%impact_energy, settings%rtol)
+  end subroutine configure
+
+  pure function current_settings(self) result(settings)
+    class(vci_stepper_t), intent(in) :: self
+    type(vci_settings_t) :: settings
+    settings = self%settings
+  end function current_settings
+
+  pure function solver_stats(self) result(stats)
+    class(vci_stepper_t), intent(in) :: self
+    type(vci_solver_stats_t) :: stats
+    stats = self%stats
+  end function solver_stats
+
+  !> Which linear-algebra paths Newton may take: the in-line LU up to small_lu_max unknowns, factor
+  !> reuse from reuse_min unknowns, the scheme's fused regular-step solve when `fused` (default on;
+  !> tests and benchmarks compare each path with LAPACK / full Newton / the general solve).
+  subroutine set_solver_paths(self, small_lu_max, reuse_min, fused)
+    class(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: small_lu_max, reuse_min
+    logical, intent(in), optional :: fused
+    self%newton%small_lu_max = small_lu_max
+    self%newton%reuse_min = reuse_min
+    if (present(fused)) self%fused = fused
+  end subroutine set_solver_paths
+
+  !> LU factorisations of Newton matrices so far.
+  pure integer(i8) function factorisations(self)
+    class(vci_stepper_t), intent(in) :: self
+    factorisations = self%newton%factorisations
+  end function factorisations
+
+  !> Why the last advance or pair_momentum failed.
+  !> (Fixed length, trailing blanks: gfortran's deferred-length results are not thread-safe.)
+  pure function failure_cause(self) result(cause)
+    class(vci_stepper_t), intent(in) :: self
+    character(len=VCI_MSG_LEN) :: cause
+    cause = self%cause
+  end function failure_cause
+
+  !> Which optional derivatives the model supplies (probed by the driver): the mixed Hessian of a
+  !> user's L_d (else differenced) and the gap gradients (else differenced).
+  !> The compensated-summation carry of position q (for a checkpoint), and its restore.
+  subroutine position_carry(self, q, lo)
+    class(vci_stepper_t), intent(in) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: lo(:)
+    lo = 0.0_dp
+    if (allocated(self%sys)) call self%sys%position_carry(q, lo)
+  end subroutine position_carry
+
+  subroutine restore_position_carry(self, q, lo)
+    class(vci_stepper_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), lo(:)
+    if (allocated(self%sys)) call self%sys%restore_position_carry(q, lo)
+  end subroutine restore_position_carry
+
+  subroutine use_model_derivatives(self, mixed_hessian, gap_gradients, constraint_jacobian, energy)
+    class(vci_stepper_t), intent(inout) :: self
+    logical, intent(in), optional :: mixed_hessian, gap_gradients, constraint_jacobian
+    logical, intent(in), optional :: energy   !< the model has H(q, p) (the discrete condition's fallback)
+    if (present(energy)) self%has_energy = energy
+    call self%sys%use_derivatives(mixed_hessian, gap_gradients, constraint_jacobian)
+  end subroutine use_model_derivatives
+
+  !> One step of length state%h in direction dir (+1/-1) from the state, through its impacts.
+  !> On success the state holds the new step (q, p, lambda, E_d, index, history) and
+  !> impacts%records(1:impacts%count) the step's impacts (the records grow on demand, up to
+  !> settings%max_impacts_per_step of them, which may be huge). On failure q, p, lambda, the index
+  !> and E_d stay; the arriving energy is marked unknown (arriving_direction = 0).
+  subroutine advance(self, state, dir, impacts, stat)
+    class(vci_stepper_t), intent(inout) :: self
+    type(vci_state_t), intent(inout) :: state
+    integer, intent(in) :: dir
+    type(vci_impact_buffer_t), intent(inout) :: impacts
+    integer, intent(out) :: stat
+    integer :: i
+    if (state%arriving_direction /= dir) state%arriving_energy = ieee_value(1.0_dp, ieee_quiet_nan)
+    call take_step(self, state, dir, impacts, stat)
+    if (stat /= VCI_OK) then
+      state%arriving_direction = 0
+      return
+    end if
+    state%arriving_direction = dir
+    do i = 1, impacts%count
+      impacts%records(i)%step = state%k
+    end do
+    state%q(:) = self%q_new; state%p(:) = self%p_new     ! ((:): no reallocation check per step)
+    if (self%m > 0) state%lambda(:) = self%lambda_new
+    state%step_energy = self%e_new
+    state%k = state%k + dir
+  end subroutine advance
+
+  !> The step itself: the regular sub-step from the predictor's start, the impacts, the momentum
+  !> and E_d of the last sub-step. The outcome goes to q_new, p_new, lambda_new, e_new; the
+  !> history (velocity, predictor depth, arriving energy) is updated in the state.
+  subroutine take_step(self, state, dir, impacts, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    type(vci_state_t), intent(inout) :: state
+    integer, intent(in) :: dir
+    type(vci_impact_buffer_t), intent(inout) :: impacts
+    integer, intent(out) :: stat
+    real(dp) :: tau
+    logical :: landed
+
+    call self%sys%set_direction(dir)
+    impacts%count = 0
+    if (self%cause(1:1) /= ' ') self%cause = ''   ! (causes start with a word; blanking all of it costs per step)
+    self%q_start(:) = state%q; self%p_start(:) = state%p; tau = state%h
+    ! the regular step, from the extrapolated guess
+    if (state%predictor_depth * dir < 0) state%predictor_depth = 0    ! the history runs the other way
+    call vci_predict_start(self%sys, state, dir, abs(state%predictor_depth), self%x, self%q_guess, self%lambda_start)
+    call substep(self, self%q_start, self%p_start, tau, stat)
+    if (stat /= VCI_OK) return
+
+    if (self%ng > 0) then
+      call resolve_impacts(self, state, dir, tau, impacts, landed, stat)
+      if (stat /= VCI_OK .or. landed) return
+    end if
+
+    call self%sys%get_endpoint(self%x, self%q_new)
+    call self%sys%get_multipliers(self%x, self%lambda_new)
+    ! x balances p_start, or after an impact p- + mu grad g (with the Hamiltonian condition the
+    ! constraint impulse is in x's multipliers, not in that momentum)
+    if (impacts%count > 0) self%p_leave = self%p_arrive + self%sys%get_extra(self%x, KIND_STAGE2) * self%sys%grad
+    if (impacts%count == 0) then
+      call self%sys%momentum_out(self%x, self%q_start, tau, self%p_new, stat, self%p_start)
+    else
+      call self%sys%impact_momentum(self%x, self%q_start, tau, self%p_new, stat, self%p_leave)
+    end if
+    if (stat == VCI_OK) call self%sys%energy_out(self%x, self%q_start, tau, self%e_new, stat)
+    if (stat /= VCI_OK) then
+      call set_cause(self, 'momentum of the new state'); return
+    end if
+    if (impacts%count == 0) then
+      ! a regular step: it extends the predictor's history
+      state%velocity_before = state%velocity
+      if (self%m > 0) then
+        state%lambda_before2 = state%lambda_before; state%lambda_before = state%lambda
+      end if
+      state%predictor_depth = dir * min(abs(state%predictor_depth) + 1, 3)
+    else
+      state%predictor_depth = 0              ! an impact breaks the smooth history
+    end if
+    state%velocity = real(dir, dp) * (self%q_new - self%q_start) / tau
+    state%arriving_energy = self%e_new
+  end subroutine take_step
+
+  !> Regular sub-step of length tau from (a, pa); x holds the initial guess and returns the solution.
+  subroutine substep(self, a, pa, tau, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    real(dp), intent(in) :: a(:), pa(:), tau
+    integer, intent(out) :: stat
+    integer :: nx
+    type(vci_newton_result_t) :: res
+    logical :: done
+    nx = self%nsub
+    call self%sys%pose_substep(a, pa, tau, stat)
+    if (stat /= VCI_OK) then
+      call set_cause(self, 'constraint forms'); return
+    end if
+    if (self%fused) then
+      ! small analytic systems: the fused solve; anything unusual there is redone on the general
+      ! path, except a callback's unrecoverable failure, which ends the step at once (the flag is
+      ! reset, not the message buffer: blanking that every step costs; a failure writes it anew)
+      self%sys%unrecoverable = .false.
+      call self%sys%fused_substep(self%newton, self%x(1:nx), res, done)
+      if (done) then
+        self%stats%fused_solves = self%stats%fused_solves + 1
+        call count_solve(self, res)
+        stat = VCI_OK
+        return
+      end if
+      if (self%sys%unrecoverable) then
+        stat = VCI_ERR_CALLBACK
+        self%cause = 'regular step: callback '//trim(self%sys%failed_callback)//' reported failure'// &
+                     trim(stat_text(self%sys%failed_stat))
+        return
+      end if
+    end if
+    call run_newton(self, nx, 'regular step', stat)
+  end subroutine substep
+
+  !> The momentum p1 at q1 and the discrete energy of the segment from q0 to q1 of length h, forward
+  !> (the paper's initial pair). Schemes with interior stages solve for them first (KIND_PAIR).
+  subroutine pair_momentum(self, q0, q1, h, p1, e, stat)
+    class(vci_stepper_t), intent(inout) :: self
+    real(dp), intent(in) :: q0(:), q1(:), h
+    real(dp), intent(out) :: p1(:), e
+    integer, intent(out) :: stat
+    call self%sys%set_direction(1)
+    self%cause = ''
+    call self%sys%put_endpoint(self%x, q0, q1)
+    call self%sys%put_multipliers(self%x, self%zero_lambda)
+    if (self%sys%needs_pair_solve()) then
+      call self%sys%pose_pair(q0, q1, h)
+      call run_newton(self, self%nsub, 'interior stages of the initial pair', stat)
+      if (stat /= VCI_OK) return
+    end if
+    call self%sys%momentum_out(self%x, q0, h, p1, stat)
+    if (stat == VCI_OK) call self%sys%energy_out(self%x, q0, h, e, stat)
+    if (stat == VCI_OK) return
+    if (self%sys%needs_pair_solve()) then
+      call set_cause(self, 'momentum of the initial pair')
+    else
+      self%cause = 'callback '//trim(self%sys%failed_callback)//' failed or returned NaN/Inf at the initial pair'
+    end if
+  end subroutine pair_momentum
+
+  subroutine run_newton(self, nx, what, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: nx
+    character(len=*), intent(in) :: what
+    integer, intent(out) :: stat
+    type(vci_newton_result_t) :: res
+    call self%sys%clear_failure()
+    call self%sys%forget_jacobian()
+    call self%newton%solve(self%sys, self%x(1:nx), res)
+    call count_solve(self, res)
+    stat = res%status
+    if (stat == VCI_OK) return
+    select case (res%reason)
+    case (NEWTON_MAX_ITERATIONS)
+      write (self%cause, '(a,i0,a,es9.2,a)') what//': Newton did not converge in ', res%iterations, &
+        ' iterations (scaled residual ', res%scaled_residual, ')'
+    case (NEWTON_NO_DESCENT)
+      write (self%cause, '(a,es9.2,a)') what//': Newton line search found no decrease (scaled residual ', &
+        res%scaled_residual, ')'
+    case (NEWTON_SINGULAR)
+      self%cause = what//': Newton matrix singular and least-squares solve failed'
+    case (NEWTON_NONFINITE)
+      self%cause = what//': residual or Newton matrix not finite (callback values overflow)'
+    case (NEWTON_EVALUATION)
+      if (stat == VCI_ERR_NONFINITE) then
+        self%cause = what//': callback '//trim(self%sys%failed_callback)//' returned NaN or Inf'
+      else
+        self%cause = what//': callback '//trim(self%sys%failed_callback)//' reported failure'// &
+                     trim(stat_text(self%sys%failed_stat))
+      end if
+    end select
+  end subroutine run_newton
+
+  !> A finished solve in the statistics (either path).
+  subroutine count_solve(self, res)
+    type(vci_stepper_t), intent(inout) :: self
+    type(vci_newton_result_t), intent(in) :: res
+    self%stats%newton_solves = self%stats%newton_solves + 1
+    self%stats%newton_iterations = self%stats%newton_iterations + res%iterations
+    if (res%used_fallback) self%stats%fallbacks = self%stats%fallbacks + 1
+    self%last_residual = res%scaled_residual
+  end subroutine count_solve
+
+
+  subroutine set_cause(self, what)
+    type(vci_stepper_t), intent(inout) :: self
+    character(len=*), intent(in) :: what
+    if (len_trim(self%sys%failed_callback) > 0 .and. self%sys%failed_stat /= 0) then
+      self%cause = what//': callback '//trim(self%sys%failed_callback)//' reported failure'// &
+                   trim(stat_text(self%sys%failed_stat))
+    else if (len_trim(self%sys%failed_callback) > 0) then
+      self%cause = what//': callback '//trim(self%sys%failed_callback)//' failed or returned NaN/Inf'
+    else
+      self%cause = what//' failed'
+    end if
+  end subroutine set_cause
+
+  !> " (stat = k, recoverable)" or " (stat = k, unrecoverable)": the callback's own code. Fixed
+  !> length: gfortran's deferred-length function results are not thread-safe.
+  function stat_text(stat) result(text)
+    integer, intent(in) :: stat
+    character(len=48) :: text
+    character(len=16) :: k
+    text = ''
+    if (stat == 0) return
+    write (k, '(i0)') stat
+    text = ' (stat = '//trim(k)//trim(merge(', recoverable  ', ', unrecoverable', stat > 0))//')'
+  end function stat_text
+
+end module vci_stepper
