@@ -273,4 +273,4 @@ def _hamiltonian(Lp, pq, pv, pp):
     v = M.LUsolve(sp.Matrix(pp) - b)
     vsub = dict(zip(pv, list(v)))
     H = sum(pp[i] * v[i] for i in range(n)) - Lp.xreplace(vsub)
-    return sp.simplify(H)
+    return H
