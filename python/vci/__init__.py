@@ -30,4 +30,7 @@ def __getattr__(name):
     if name == "formula":
         import importlib
         return importlib.import_module(".formula", __name__)
+    if name == "read_output":
+        from .output import read_output
+        return read_output
     raise AttributeError(f"module 'vci' has no attribute {name!r}")
