@@ -1,0 +1,172 @@
+#!/usr/bin/python3
+"""Cost of the Python package against the C client, on the same run: the walled pendulum
+(theta'' = -9.8 sin theta, walls at +-1 rad, theta(0) = 0, theta'(0) = 4), lobatto s = 4,
+h = 0.05, Newton rtol 1e-15.
+
+  C         bench/python/pendulum_walls.c through vci.h (compiled here with cc -O3)
+  formula   vci.formula.lagrangian_model (sympy -> numba cfuncs), Integrator.integrate
+  numba     hand-written numba cfuncs
+  python    Python callables (cffi callbacks); a shorter run, compared per step
+  formula-python   the formula's generated code run by the interpreter (backend="python")
+
+Each timing is the best of REPEATS of the library's integrate call alone (model building, numba
+compilation and integrator creation are timed apart). The runs' final states are compared with
+the C client's, so the ratios are of the same computation.
+
+Usage: /usr/bin/python3 bench/python/bench_python.py [--steps N] [--repeats R] [--callgrind]
+  --callgrind: also count instructions of the C and the formula runs inside vci_integrate
+  (valgrind --tool=callgrind --toggle-collect=vci_integrate; slow: numba compiles under valgrind).
+Environment: VCI_LIBRARY (default build/src/libvci.so).
+"""
+import argparse
+import math
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+REPO = os.path.normpath(os.path.join(HERE, os.pardir, os.pardir))
+sys.path.insert(0, os.path.join(REPO, "python"))
+os.environ.setdefault("VCI_LIBRARY", os.path.join(REPO, "build", "src", "libvci.so"))
+
+H, STAGES, RTOL = 0.05, 4, 1e-15
+
+
+def build_c(tmp):
+    exe = os.path.join(tmp, "pendulum_walls_c")
+    libdir = os.path.dirname(os.path.abspath(os.environ["VCI_LIBRARY"]))
+    subprocess.run(["cc", "-O3", "-std=c11", "-I", os.path.join(REPO, "include"),
+                    os.path.join(HERE, "pendulum_walls.c"), "-o", exe, "-L", libdir, "-lvci", "-lm",
+                    f"-Wl,-rpath,{libdir}"], check=True)
+    return exe
+
+
+def run_c(exe, steps, repeats, prefix=()):
+    out = subprocess.run([*prefix, exe, str(steps), str(repeats)], check=True, capture_output=True, text=True)
+    lines = out.stdout.split("\n")
+    best = float(lines[0])
+    t, q, p, imp = lines[1].split()
+    return best, (float(t), float(q), float(p), int(imp)), out.stderr
+
+
+def timed(model, steps, repeats):
+    import vci
+    best = math.inf
+    for _ in range(repeats):
+        it = vci.Integrator(model, H, scheme="lobatto", stages=STAGES, rtol=RTOL)
+        it.init_from_momentum(0.0, [0.0], [4.0])
+        t0 = time.perf_counter()
+        st = it.integrate(steps)
+        best = min(best, time.perf_counter() - t0)
+    return best, (st.t, st.q[0], st.p[0], it.stats.impacts)
+
+
+def python_model():
+    import vci
+    g = 9.8
+    return vci.LagrangianModel(
+        1, 0, 2,
+        lagrangian=lambda q, v: 0.5 * v[0] ** 2 + g * math.cos(q[0]),
+        dl_dq=lambda q, v: [-g * math.sin(q[0])],
+        dl_dv=lambda q, v: [v[0]],
+        hessians=lambda q, v: ([[-g * math.cos(q[0])]], [[0.0]], [[1.0]]),
+        gaps=lambda q: [1.0 - q[0], q[0] + 1.0],
+        gap_gradients=lambda q: [[-1.0], [1.0]])
+
+
+def formula_model(backend="numba"):
+    import sympy as sp
+    import vci.formula
+    th, om = sp.symbols("theta omega")
+    return vci.formula.lagrangian_model(om ** 2 / 2 + 9.8 * sp.cos(th), [th], [om], gaps=[1 - th, th + 1],
+                                        backend=backend)
+
+
+def numba_model():
+    sys.path.insert(0, os.path.join(REPO, "python", "tests"))
+    import models  # the hand-written cfuncs of the tests
+    return models.walls_numba()
+
+
+def callgrind_ir(cmd, tmp, tag):
+    out = os.path.join(tmp, f"callgrind.{tag}")
+    subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", "--collect-atstart=no",
+                    "--toggle-collect=vci_integrate", *cmd], check=True, capture_output=True, text=True,
+                   env=dict(os.environ, PYTHONPATH=os.path.join(REPO, "python")))
+    text = open(out).read()
+    m = re.search(r"^summary:\s+(\d+)", text, flags=re.M) or re.search(r"^totals:\s+(\d+)", text, flags=re.M)
+    return int(m.group(1))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--steps", type=int, default=20000)
+    ap.add_argument("--python-steps", type=int, default=1000)
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--callgrind", action="store_true")
+    ap.add_argument("--one", choices=["formula"], help=argparse.SUPPRESS)  # the callgrind child
+    args = ap.parse_args()
+
+    if args.one == "formula":
+        m = formula_model()
+        timed(m, args.steps, 1)
+        return
+
+    import vci
+    print(f"libvci: {vci.library_path}")
+    print(f"run: walled pendulum, lobatto s = {STAGES}, h = {H}, rtol = {RTOL}, {args.steps} steps "
+          f"(t = {args.steps * H:g} s), best of {args.repeats}")
+    with tempfile.TemporaryDirectory() as tmp:
+        exe = build_c(tmp)
+        c_time, c_state, _ = run_c(exe, args.steps, args.repeats)
+        rows = [("C (vci.h, cc -O3)", c_time, c_state, args.steps, None)]
+
+        t0 = time.perf_counter()
+        fm = formula_model()
+        build_formula = time.perf_counter() - t0
+        f_time, f_state = timed(fm, args.steps, args.repeats)
+        rows.append(("formula (sympy -> numba)", f_time, f_state, args.steps, build_formula))
+
+        t0 = time.perf_counter()
+        nm = numba_model()
+        build_numba = time.perf_counter() - t0
+        n_time, n_state = timed(nm, args.steps, args.repeats)
+        rows.append(("numba cfuncs by hand", n_time, n_state, args.steps, build_numba))
+
+        pm = python_model()
+        ps = args.python_steps
+        c_short, c_short_state, _ = run_c(exe, ps, args.repeats)
+        p_time, p_state = timed(pm, ps, max(1, args.repeats // 2))
+        rows.append(("C, short run", c_short, c_short_state, ps, None))
+        rows.append(("Python callables", p_time, p_state, ps, 0.0))
+        t0 = time.perf_counter()
+        fpm = formula_model("python")
+        build_fp = time.perf_counter() - t0
+        fp_time, fp_state = timed(fpm, ps, max(1, args.repeats // 2))
+        rows.append(("formula, backend='python'", fp_time, fp_state, ps, build_fp))
+
+        print(f"{'path':28s} {'steps':>6s} {'seconds':>10s} {'us/step':>9s} {'x C':>8s} {'build s':>8s}  final state - C's")
+        for name, sec, state, steps, build in rows:
+            ref_sec, ref_state = (c_time, c_state) if steps == args.steps else (c_short, c_short_state)
+            diff = max(abs(state[1] - ref_state[1]), abs(state[2] - ref_state[2]))
+            same = state[3] == ref_state[3] and state[0] == ref_state[0]
+            b = "" if build is None else f"{build:8.2f}"
+            print(f"{name:28s} {steps:6d} {sec:10.4f} {1e6 * sec / steps:9.2f} {sec / ref_sec:8.2f} {b:>8s}  "
+                  f"{diff:.1e}{'' if same else ' (impacts or t differ!)'}")
+        print(f"formula / C = {f_time / c_time:.2f} (target <= 1.5)")
+        print(f"Python callables / C = {p_time / c_short:.1f} per step")
+
+        if args.callgrind:
+            cs = min(args.steps, 2000)
+            ir_c = callgrind_ir([exe, str(cs), "1"], tmp, "c")
+            ir_f = callgrind_ir([sys.executable, os.path.abspath(__file__), "--one", "formula", "--steps", str(cs)],
+                                tmp, "formula")
+            print(f"callgrind, {cs} steps, instructions inside vci_integrate: C {ir_c}, formula {ir_f}, "
+                  f"ratio {ir_f / ir_c:.3f}")
+
+
+if __name__ == "__main__":
+    main()
