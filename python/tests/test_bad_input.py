@@ -236,3 +236,22 @@ def test_formula_other_errors():
         vci.formula.lagrangian_model(om ** 2 / 2, ["theta"], [om])
     with pytest.raises(vci.FormulaError, match="quadratic"):
         vci.formula.lagrangian_model(om ** 4, [th], [om], energy=True, backend="python")
+
+
+def test_recorded_run_that_fails_keeps_its_states():
+    calls = [0]
+
+    def dl_dq(q, v):
+        calls[0] += 1
+        if calls[0] > 200:
+            raise ValueError("out of model")
+        return [-9.8 * math.sin(q[0])]
+
+    it = started(simple(dl_dq=dl_dq))
+    with pytest.raises(vci.CallbackError) as info:
+        it.integrate(200, record=True)
+    traj = info.value.trajectory
+    # the states up to the last accepted step, the last one the integrator's current state
+    assert 1 < len(traj.t) < 201 and len(traj.energy) == len(traj.t) - 1
+    assert traj.t[-1] == it.t and traj.q[-1, 0] == it.q[0] and traj.p[-1, 0] == it.p[0]
+    assert np.all(np.diff(traj.t) > 0)
