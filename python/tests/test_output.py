@@ -15,7 +15,12 @@ def test_hdf5_file_holds_the_run(tmp_path):
     path = tmp_path / "walls.h5"
     it = vci.Integrator(models.walls_formula(), 0.05, scheme="lobatto", stages=4, rtol=1e-15)
     it.init_from_momentum(0.0, [0.0], [4.0])
-    it.open_output(path)
+    try:
+        it.open_output(path)
+    except vci.OutputError as exc:
+        if "built without HDF5" in str(exc):  # the no-hdf5 preset: the library says so, nothing to read
+            pytest.skip(str(exc))
+        raise
     traj = it.integrate(200, record=True)
     it.close_output()
     got, attrs = vci.read_output(path)
