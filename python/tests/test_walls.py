@@ -128,3 +128,15 @@ def test_backward_returns(exact):
     st = it.state
     assert st.t == pytest.approx(0.0, abs=1e-12)
     assert abs(st.q[0]) < 1e-10 and abs(st.p[0] - 4.0) < 1e-10
+
+
+def test_cffi_function_pointers(exact):
+    # a cffi function pointer, or a void * holding one, is passed through; other pointers are refused
+    numba_model = models.walls_numba()
+    cbs = dict(numba_model.callbacks)
+    cbs["dl_dq"] = ffi.cast("void *", cbs["dl_dq"].address)
+    cbs["dl_dv"] = ffi.cast("vci_lagrangian_grad_fn", cbs["dl_dv"].address)
+    state, impacts = run(vci.LagrangianModel(1, 0, 2, **cbs), 0.05, scheme="lobatto", stages=4)
+    assert errors(state, impacts, exact)[0] <= 1e-9
+    with pytest.raises(vci.ArgumentError, match="double \\* is not a function pointer"):
+        vci.LagrangianModel(1, 0, 2, **dict(cbs, dl_dq=ffi.new("double *")))

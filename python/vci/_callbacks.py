@@ -185,8 +185,10 @@ def to_c(kind, name, obj, log, m=0, ngaps=0):
     """(cdata function pointer, object to keep alive) for the callback `name` given as obj."""
     ctype = SIGNATURES[kind][0]
     if isinstance(obj, ffi.CData):
-        if ffi.typeof(obj).kind != "function" and ffi.typeof(obj).kind != "pointer":
-            raise ArgumentError(f"{name}: a cffi object of type {ffi.typeof(obj).cname} is not a function pointer")
+        t = ffi.typeof(obj)
+        if not (t.kind == "function" or (t.kind == "pointer" and t.item.cname == "void")):
+            raise ArgumentError(f"{name}: a cffi object of type {t.cname} is not a function pointer "
+                                "(give a function pointer, or void * holding one)")
         if obj == ffi.NULL:
             raise ArgumentError(f"{name}: a NULL function pointer")
         return ffi.cast(ctype, obj), obj
