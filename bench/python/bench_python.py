@@ -197,15 +197,17 @@ def main():
         f_time, p_time = best["formula"][0], best["python"][0]
 
         print(f"{'path':28s} {'steps':>6s} {'seconds':>10s} {'us/step':>9s} {'x C':>8s} {'build s':>8s}  final state - C's")
+        per_step_c = c_time / args.steps
         for name, sec, state, steps, build in rows:
-            ref_sec, ref_state = (c_time, c_state) if steps == args.steps else (c_short, c_short_state)
+            ref_state = c_state if steps == args.steps else c_short_state
             diff = max(abs(state[1] - ref_state[1]), abs(state[2] - ref_state[2]))
             same = state[3] == ref_state[3] and state[0] == ref_state[0]
             b = "" if build is None else f"{build:8.2f}"
-            print(f"{name:28s} {steps:6d} {sec:10.4f} {1e6 * sec / steps:9.2f} {sec / ref_sec:8.2f} {b:>8s}  "
+            # "x C": time a step over the long C run's time a step (a short run is too short to time well)
+            print(f"{name:28s} {steps:6d} {sec:10.4f} {1e6 * sec / steps:9.2f} {sec / steps / per_step_c:8.2f} {b:>8s}  "
                   f"{diff:.1e}{'' if same else ' (impacts or t differ!)'}")
         print(f"formula / C = {f_time / c_time:.2f} (target <= 1.5)")
-        print(f"Python callables / C = {p_time / c_short:.1f} per step")
+        print(f"Python callables / C = {p_time / ps / per_step_c:.1f} a step")
 
         if args.callgrind:
             shim = build_shim(tmp)
