@@ -255,3 +255,40 @@ def test_recorded_run_that_fails_keeps_its_states():
     assert 1 < len(traj.t) < 201 and len(traj.energy) == len(traj.t) - 1
     assert traj.t[-1] == it.t and traj.q[-1, 0] == it.q[0] and traj.p[-1, 0] == it.p[0]
     assert np.all(np.diff(traj.t) > 0)
+
+
+def _fail_once_at(k, exc_type):
+    calls = [0]
+
+    def dl_dq(q, v):
+        calls[0] += 1
+        if calls[0] == k:
+            raise exc_type("once")
+        return [-9.8 * math.sin(q[0])]
+
+    it = vci.Integrator(simple(dl_dq=dl_dq), 0.05, rtol=1e-15)
+    # (creating the integrator probes the callbacks once at q = v = 0 and discards what they return,
+    # failures included: src/vci_integrator.f90, create_continuous; count the calls after it)
+    calls[0] = 0
+    it.init_from_momentum(0.0, [0.0], [4.0])
+    return it.integrate(20)
+
+
+def test_recoverable_failure_is_absorbed_at_trial_points_unrecoverable_never():
+    # vci.h: a recoverable failure at a trial point of Newton's line search makes the solver back
+    # off (the run goes on to the same solution); anywhere else, and for an unrecoverable failure
+    # anywhere, the step fails. Fail once at the k-th call of dl_dq, k = 1..40.
+    clean = _fail_once_at(0, RuntimeError)
+    absorbed = []
+    for k in range(1, 41):
+        try:
+            state = _fail_once_at(k, vci.RecoverableError)
+        except vci.CallbackError as err:
+            assert "recoverable" in str(err) and "unrecoverable" not in str(err)
+            continue
+        absorbed.append(k)
+        assert abs(state.q[0] - clean.q[0]) < 1e-12 and abs(state.p[0] - clean.p[0]) < 1e-12
+    assert 0 < len(absorbed) < 40  # some calls are trial points, some are not
+    for k in absorbed:
+        with pytest.raises(vci.CallbackError, match="unrecoverable"):
+            _fail_once_at(k, ValueError)
