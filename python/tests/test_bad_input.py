@@ -292,3 +292,16 @@ def test_recoverable_failure_is_absorbed_at_trial_points_unrecoverable_never():
     for k in absorbed:
         with pytest.raises(vci.CallbackError, match="unrecoverable"):
             _fail_once_at(k, ValueError)
+
+
+def test_formula_python_backend_failure_is_named_and_silent(capfd):
+    # sqrt of a negative number in the generated code (backend "python"): an unrecoverable
+    # failure named with the Python error, and nothing printed
+    th, om = sp.symbols("theta omega")
+    model = vci.formula.lagrangian_model(om ** 2 / 2 - sp.sqrt(th - 0.1), [th], [om], backend="python")
+    it = vci.Integrator(model, 0.05)
+    with pytest.raises(vci.CallbackError, match="ValueError: math domain error"):
+        it.init_from_momentum(0.0, [0.0], [1.0])
+        it.step()
+    out, err = capfd.readouterr()
+    assert out == "" and err == ""

@@ -236,6 +236,7 @@ def lagrangian_model(L, q, qdot, *, forms=None, gaps=None, params=None, energy=F
 
     sources = {}
     pointers = {}
+    holder = {}
     for kind, outs in outputs.items():
         src = _source(f"vci_{kind}", kind, outs, pq, pp if kind == "energy" else pv)
         sources[kind] = src
@@ -245,13 +246,23 @@ def lagrangian_model(L, q, qdot, *, forms=None, gaps=None, params=None, energy=F
         if backend == "numba":
             pointers[kind] = _numba_compile(kind, func)
         else:
-            pointers[kind] = ffi.callback(_KINDS[kind][0], func, error=-1)
+            # an exception (math domain error, division by zero) becomes an unrecoverable failure
+            # whose message the integrator finds, as for any Python callable; cffi prints nothing
+            pointers[kind] = ffi.callback(_KINDS[kind][0], func, error=-1, onerror=_recorder(holder, kind))
 
     model = LagrangianModel(n, m, ngaps, **pointers)
+    holder["log"] = model._log
     back = {v: k for k, v in to_ph.items()} | {p: sp.Symbol(f"p_{s}") for p, s in zip(pp, qs)}
     model.formula = Formula(L=L, q=qs, qdot=vs, forms=form_rows, gaps=gap_list, backend=backend,
                             derived={k: _back(v, back) for k, v in derived.items()}, sources=sources)
     return model
+
+
+def _recorder(holder, name):
+    def onerror(exc_type, exc, tb):
+        log = holder.get("log")
+        return log.record(name, exc) if log is not None else -1
+    return onerror
 
 
 def _back(x, back):
