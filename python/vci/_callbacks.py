@@ -86,14 +86,33 @@ class FailureLog:
 
 def _view(ptr, count):
     # a copy: the caller's arrays live only during the call
-    return np.frombuffer(ffi.buffer(ptr, 8 * count), dtype=np.float64).copy()
+    return np.frombuffer(ffi.buffer(ptr, 8 * count)).copy()
+
+
+class _Out:
+    """An output array of the library, written through cffi (a flat list of numbers: directly) or
+    NumPy (anything else)."""
+    __slots__ = ("ptr", "count")
+
+    def __init__(self, ptr, count):
+        self.ptr, self.count = ptr, count
 
 
 def _out(ptr, count):
-    return np.frombuffer(ffi.buffer(ptr, 8 * count), dtype=np.float64)
+    return _Out(ptr, count)
 
 
 def _put(name, dest, value, shape, order="C"):
+    if len(shape) == 1 and type(value) in (list, tuple) and len(value) == dest.count:
+        try:
+            dest.ptr[0:dest.count] = value  # the fast path: a flat list of numbers
+            return
+        except TypeError:
+            pass  # not all numbers: NumPy says why below
+    _put_numpy(name, np.frombuffer(ffi.buffer(dest.ptr, 8 * dest.count)), value, shape, order)
+
+
+def _put_numpy(name, dest, value, shape, order):
     arr = np.asarray(value, dtype=np.float64)
     if arr.shape != shape and not (arr.size == 1 and int(np.prod(shape)) == 1):
         raise ArgumentError(f"{name} returned an array of shape {arr.shape}, expected {shape}")
@@ -104,6 +123,8 @@ def _put(name, dest, value, shape, order="C"):
 
 
 def _scalar(name, value):
+    if type(value) is float:
+        return value
     arr = np.asarray(value, dtype=np.float64)
     if arr.size != 1:
         raise ArgumentError(f"{name} returned an array of shape {arr.shape}, expected a number")
