@@ -1,0 +1,117 @@
+"""The declarations of include/vci.h that the package uses, in one place.
+
+Written by hand from the header (cffi's ABI mode needs them as C text). tests/test_header.py checks
+them against the real header: the prototypes and typedefs are compiled together with vci.h (a C
+compiler refuses a conflicting redeclaration), the constants by static assertions, the structs'
+sizes and member offsets against a compiled program, and every function of the header must be
+either bound here or listed in UNBOUND with the reason.
+"""
+
+#: Integer constants of vci.h (enum values and macros), name -> value.
+CONSTANTS = {
+    "VCI_OK": 0,
+    "VCI_ERR_ARGUMENT": 1,
+    "VCI_ERR_CALLBACK": 2,
+    "VCI_ERR_NONFINITE": 3,
+    "VCI_ERR_NEWTON": 4,
+    "VCI_ERR_IMPACT": 5,
+    "VCI_ERR_TOO_MANY_IMPACTS": 6,
+    "VCI_ERR_INADMISSIBLE": 7,
+    "VCI_ERR_IO": 8,
+    "VCI_ERR_STATE": 9,
+    "VCI_ERR_MEMORY": 10,
+    "VCI_IMPACT_DISCRETE": 0,
+    "VCI_IMPACT_HAMILTONIAN": 1,
+    "VCI_SCHEME_DISCRETE": 0,
+    "VCI_SCHEME_LEFT": 1,
+    "VCI_SCHEME_MIDPOINT": 2,
+    "VCI_SCHEME_LOBATTO": 3,
+    "VCI_LOBATTO_MAX_STAGES": 8,
+    "VCI_VERSION_MAJOR": 0,
+    "VCI_VERSION_MINOR": 2,
+}
+
+#: Typedefs and prototypes, valid C that may be redeclared after #include "vci.h".
+DECLARATIONS = """
+typedef struct vci_model_s *vci_model;
+typedef struct vci_integrator_s *vci_integrator;
+
+typedef int (*vci_ld_grad_fn)(int n, const double *q, const double *v, double h, double *out, void *user);
+typedef int (*vci_ld_dh_fn)(int n, const double *q, const double *v, double h, double *out, void *user);
+typedef int (*vci_hessian_fn)(int n, const double *q, const double *v, double h, double *hess, void *user);
+typedef int (*vci_forms_fn)(int n, int m, const double *q, double *omega, void *user);
+typedef int (*vci_dconstraint_fn)(int n, int m, const double *base, const double *other, double h,
+                                  double *out, void *user);
+typedef int (*vci_gaps_fn)(int n, int ngaps, const double *q, double *g, void *user);
+typedef int (*vci_gap_grads_fn)(int n, int ngaps, const double *q, double *dg, void *user);
+typedef int (*vci_energy_fn)(int n, const double *q, const double *p, double *e, void *user);
+typedef int (*vci_impact_fn)(double t, double alpha, int gap_index, const double *q, double impulse, void *user);
+typedef int (*vci_lagrangian_value_fn)(int n, const double *q, const double *v, double *l, void *user);
+typedef int (*vci_lagrangian_grad_fn)(int n, const double *q, const double *v, double *out, void *user);
+typedef int (*vci_lagrangian_hessians_fn)(int n, const double *q, const double *v, double *lqq, double *lqv,
+                                          double *lvv, void *user);
+
+int  vci_model_create_v2(vci_model *model, int n, int m, int ngaps, const vci_callbacks *cb, void *user);
+int  vci_model_create_lagrangian(vci_model *model, int n, int m, int ngaps, const vci_lagrangian_callbacks *cb,
+                                 void *user);
+int  vci_set_scheme(vci_integrator integ, int scheme, int stages);
+void vci_model_destroy(vci_model *model);
+int  vci_integrator_create(vci_integrator *integ, vci_model model, double h);
+void vci_integrator_destroy(vci_integrator *integ);
+int  vci_set_tolerances(vci_integrator integ, double atol, double rtol, int max_iterations);
+int  vci_set_impact_energy(vci_integrator integ, int mode);
+int  vci_set_max_impacts(vci_integrator integ, int max_impacts);
+int  vci_init_from_pair(vci_integrator integ, double t0, const double *q0, const double *q1);
+int  vci_init_from_momentum(vci_integrator integ, double t0, const double *q0, const double *p0);
+int  vci_step(vci_integrator integ, int direction);
+int  vci_integrate(vci_integrator integ, int64_t nsteps, int direction);
+int  vci_get_state(vci_integrator integ, double *t, double *q, double *p);
+int  vci_get_multipliers(vci_integrator integ, double *lambda);
+int  vci_get_energy(vci_integrator integ, double *energy);
+int  vci_get_index(vci_integrator integ, int64_t *k);
+int  vci_get_stats(vci_integrator integ, int64_t *steps, int64_t *impacts, int64_t *newton_iterations);
+int  vci_get_energy_fallbacks(vci_integrator integ, int64_t *count);
+int  vci_set_impact_callback(vci_integrator integ, vci_impact_fn fn, void *user);
+int  vci_open_output(vci_integrator integ, const char *path);
+int  vci_close_output(vci_integrator integ);
+int  vci_last_error(vci_integrator integ, char *buffer, int size);
+const char *vci_status_string(int status);
+int  vci_version(void);
+"""
+
+#: The two callback structs, member for member (cffi needs the whole layout).
+STRUCTS = """
+typedef struct vci_callbacks {
+  size_t size;
+  vci_ld_grad_fn d1_ld, d2_ld; vci_ld_dh_fn d3_ld;
+  vci_hessian_fn mixed_hessian;
+  vci_forms_fn constraint_forms;
+  vci_dconstraint_fn discrete_constraint;
+  vci_gaps_fn gaps;
+  vci_gap_grads_fn gap_gradients;
+  vci_energy_fn energy;
+  vci_dconstraint_fn discrete_constraint_jacobian;
+} vci_callbacks;
+
+typedef struct vci_lagrangian_callbacks {
+  size_t size;
+  vci_lagrangian_value_fn lagrangian;
+  vci_lagrangian_grad_fn dl_dq, dl_dv;
+  vci_lagrangian_hessians_fn hessians;
+  vci_forms_fn constraint_forms;
+  vci_gaps_fn gaps;
+  vci_gap_grads_fn gap_gradients;
+  vci_energy_fn energy;
+} vci_lagrangian_callbacks;
+"""
+
+#: Functions of vci.h deliberately not bound, with the reason.
+UNBOUND = {
+    "vci_model_create": "a macro for vci_model_create_v2; the symbol is the 0.1 entry (struct without size)",
+}
+
+
+def cdef_text():
+    """The whole text handed to ffi.cdef (the structs need the typedefs before them)."""
+    head, _, protos = DECLARATIONS.partition("int  vci_model_create_v2")
+    return head + STRUCTS + "int  vci_model_create_v2" + protos
