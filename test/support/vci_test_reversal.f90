@@ -41,6 +41,7 @@ module vci_test_reversal
     integer :: impacts_fwd = 0, impacts_bwd = 0
     integer :: multi_steps = 0           !< forward steps with two or more impacts
     integer :: fallbacks_fwd = 0, fallbacks_bwd = 0
+    integer :: touches = 0               !< impacts with no impulse (tangential touches), both directions
   end type reversal_result_t
 
   public :: random_scene, round_trip, scene_label
@@ -163,24 +164,42 @@ contains
     do i = 1, s%nsteps
       call integ%step(1, stat)
       if (stat /= VCI_OK) then
-        r%stat = stat; r%message = 'forward: '//integ%message(); return
+        r%stat = stat; r%message = 'forward: '//integ%message()
+        st = integ%statistics(); r%fallbacks_fwd = int(st%energy_fallbacks)
+        return
       end if
       here = integ%impact_count()
       r%impacts_fwd = r%impacts_fwd + here
+      r%touches = r%touches + touches(integ)
       if (here >= 2) r%multi_steps = r%multi_steps + 1
     end do
     st = integ%statistics(); r%fallbacks_fwd = int(st%energy_fallbacks - fb0); fb0 = st%energy_fallbacks
     do i = 1, s%nsteps
       call integ%step(-1, stat)
       if (stat /= VCI_OK) then
-        r%stat = stat; r%message = 'backward: '//integ%message(); return
+        r%stat = stat; r%message = 'backward: '//integ%message()
+        st = integ%statistics(); r%fallbacks_bwd = int(st%energy_fallbacks - fb0)
+        return
       end if
       r%impacts_bwd = r%impacts_bwd + integ%impact_count()
+      r%touches = r%touches + touches(integ)
     end do
     st = integ%statistics(); fb = int(st%energy_fallbacks - fb0); r%fallbacks_bwd = fb
     r%err_q = norm2(integ%configuration() - q0) / norm2(q0)
     r%err_p = norm2(integ%momentum() - p0) / norm2(p0)
   end subroutine run
+
+  !> Impacts of the last step with no impulse: the free motion from the wall already left it.
+  integer function touches(integ)
+    type(vci_integrator_t), intent(in) :: integ
+    type(vci_impact_t) :: imp
+    integer :: i
+    touches = 0
+    do i = 1, integ%impact_count()
+      imp = integ%impact(i)
+      if (imp%impulse == 0.0_dp) touches = touches + 1
+    end do
+  end function touches
 
   ! ---- L and its partials ----
 
