@@ -155,9 +155,10 @@ contains
   !> reversal was off by 1e-2 (issue 24). Secant steps on imp's impulse mu until E_d(q_start, wall j,
   !> alpha tau) = E- of imp, the condition both directions pose; each evaluation is a regular
   !> sub-step from p- + mu grad g and stage 1 to wall j. On return stage 1 (x_stage1, q_wall,
-  !> p_arrive, alpha, e_minus, s1res) belongs to the final mu, and imp and p_start say so. Where an
-  !> evaluation fails (the motion no longer reaches wall j), the impulse that had the smallest
-  !> mismatch stays.
+  !> p_arrive, alpha, e_minus, s1res) belongs to the final mu, and imp and p_start say so. Where no
+  !> impulse meets the condition (near a graze, where E_d hardly depends on mu, or the motion no
+  !> longer reaches wall j), the state of the impulse stage 2 found is put back: that impact keeps
+  !> its condition on the whole rest of the step, as before (docs/BACKWARD.md: not reversible).
   subroutine tie_to_wall(self, imp, dir, tau, j, alpha, e_minus, s1res, stat)
     type(vci_stepper_t), intent(inout) :: self
     type(vci_impact_t), intent(inout) :: imp
@@ -167,7 +168,7 @@ contains
     integer, intent(out) :: stat
     integer, parameter :: max_secants = 12
     integer :: k, nx
-    real(dp) :: mu_a, mu_b, mu_c, f_a, f_b, f_c, mu_best, f_best, tol, mu_state
+    real(dp) :: mu_a, mu_b, mu_c, f_a, f_b, f_c, mu_best, f_best, tol, mu_state, alpha0, e0, s10
     logical :: consistent
     stat = VCI_OK
     nx = self%nsub
@@ -175,6 +176,9 @@ contains
     f_a = e_minus - imp%energy_before
     tol = self%settings%atol + self%settings%rtol * (abs(e_minus) + abs(imp%energy_before))
     if (abs(f_a) <= 0.01_dp * tol) return      ! free flight: E_d does not depend on the length
+    self%tie_x(1:nx + 1, 1) = self%x(1:nx + 1); self%tie_x(1:nx + 1, 2) = self%x_stage1(1:nx + 1)
+    self%tie_q(:, 1) = self%q_end; self%tie_q(:, 2) = self%q_wall; self%tie_q(:, 3) = self%p_arrive
+    alpha0 = alpha; e0 = e_minus; s10 = s1res
     call self%sys%get_multipliers(self%x, self%lambda_start)
     mu_best = mu_a; f_best = f_a
     mu_state = mu_a; consistent = .true.     ! the stage-1 state in hand belongs to mu_state
@@ -188,6 +192,14 @@ contains
       end do
     end if
     if (stat /= VCI_OK) return
+    if (.not. (abs(f_best) <= tol)) then
+      ! no root: back to stage 2's impulse and the stage 1 that followed it
+      self%x(1:nx + 1) = self%tie_x(1:nx + 1, 1); self%x_stage1(1:nx + 1) = self%tie_x(1:nx + 1, 2)
+      self%q_end = self%tie_q(:, 1); self%q_wall = self%tie_q(:, 2); self%p_arrive = self%tie_q(:, 3)
+      alpha = alpha0; e_minus = e0; s1res = s10
+      self%p_start = imp%p_after
+      return
+    end if
     ! the state of the evaluation at the best impulse
     if (.not. (consistent .and. mu_state == mu_best)) then
       if (.not. evaluate(mu_best, f_c)) then
@@ -443,7 +455,7 @@ contains
     integer, intent(out) :: stat
     integer :: n, m, nx0, info
     real(dp) :: num, den, mu0, mirror
-    logical :: done
+    logical :: done, passed_through
     character(len=40) :: what
     character(len=48) :: what_impulse
     n = self%n; m = self%m; nx0 = self%nsub
@@ -512,18 +524,22 @@ contains
         call self%sys%put_extra(self%x, KIND_STAGE2, mirror)
         call run_newton(self, self%sys%unknowns(KIND_STAGE2), what(1:len_trim(what)), stat)
       end if
+      passed_through = .false.
       if (stat == VCI_OK) then
         if (.not. reflected(self, self%sys%get_extra(self%x, KIND_STAGE2), tau2, stat)) then
           if (stat /= VCI_OK) return
           stat = VCI_ERR_NEWTON               ! the pass-through root: not the reflection
+          passed_through = .true.
         end if
       end if
       if (stat == VCI_ERR_NEWTON) then
         call reflect_from_departure(self, j, nx0, tau2, e_minus, mirror, what(1:len_trim(what)), stat)
         if (stat == VCI_OK) then
+          passed_through = .false.
           if (.not. reflected(self, self%sys%get_extra(self%x, KIND_STAGE2), tau2, stat)) then
             if (stat /= VCI_OK) return
             stat = VCI_ERR_NEWTON
+            passed_through = .true.
           end if
         end if
         self%x_saved(1:nx0) = self%x_low(1:nx0)
@@ -543,7 +559,7 @@ contains
         self%impact_condition = VCI_IMPACT_HAMILTONIAN
         self%stats%energy_fallbacks = self%stats%energy_fallbacks + 1
         call reflect_hamiltonian(self%e_fallback, stat)
-      else if (stat == VCI_ERR_NEWTON) then
+      else if (stat == VCI_ERR_NEWTON .and. passed_through) then
         stat = VCI_ERR_IMPACT
         self%cause = trim(what)//': the reflected motion does not leave the wall'
       end if
@@ -593,13 +609,14 @@ contains
   end subroutine stage_reflect
 
   !> Stage 2's second start, when Newton from the mirror failed or found the pass-through root. The
-  !> mirror mirrors the end of the free sub-step; where forces bend that sub-step back towards the
-  !> wall (gravity, a spring: its end is only just beyond the wall) or the mass depends on the
-  !> velocity (L quartic in it), that impulse is a fraction of the reflection's (0.05 for 0.6), and
-  !> Newton converged to mu = 0 (issue 24). This start mirrors the free motion's departure instead (a
-  !> regular sub-step of 1e-3 tau2 from the wall), and the secant search on the impulse line may move
-  !> it as far as the reflection's branch goes (no 25 % cap: see energy_along). On entry x_low holds
-  !> the mirror start, rhs the sensitivity d; on return x holds Newton's result.
+  !> mirror mirrors the end of the free sub-step: where a force bends that sub-step back towards the
+  !> wall (its end only just beyond it) the impulse is a fraction of the reflection's (0.050 for 0.47
+  !> in core_reversal) and Newton converged to mu = 0; where the mass depends on the velocity (L
+  !> quartic in it) the linearised impulse is off by more than the search's 25 % (issue 24). This
+  !> start mirrors the free motion's departure instead (a regular sub-step of 1e-3 tau2 from the
+  !> wall), and the secant search on the impulse line may move it as far as the reflection's branch
+  !> goes (see energy_along). On entry x_low holds the mirror start, rhs the sensitivity d; on return
+  !> x holds Newton's result (stat VCI_ERR_NEWTON when there is none).
   subroutine reflect_from_departure(self, j, nx0, tau2, e_minus, mirror, what, stat)
     type(vci_stepper_t), intent(inout) :: self
     integer, intent(in) :: j, nx0
