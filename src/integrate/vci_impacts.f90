@@ -2,7 +2,9 @@
 !> regular sub-step's end leaves the admissible set, stage 1 reaches the first wall (bracketing the
 !> crossing on the chord or on the discrete trajectory, then Newton on the scheme's stage-1 system),
 !> stage 2 reflects with the energy condition (the paper's discrete one, or H kept) and the
-!> tangential-momentum conditions on the rest of the sub-step, and the impact is recorded.
+!> tangential-momentum conditions on the rest of the sub-step, and the impact is recorded. With
+!> several impacts in a step, an impact's energy condition is held on the sub-step that really
+!> leaves it (up to the next wall: tie_to_wall), so that a backward run poses the same conditions.
 !> A submodule of vci_stepper: it works on the stepper's scheme, Newton and workspace.
 submodule (vci_stepper) vci_impacts
   implicit none
