@@ -2,7 +2,9 @@
 !> regular sub-step's end leaves the admissible set, stage 1 reaches the first wall (bracketing the
 !> crossing on the chord or on the discrete trajectory, then Newton on the scheme's stage-1 system),
 !> stage 2 reflects with the energy condition (the paper's discrete one, or H kept) and the
-!> tangential-momentum conditions on the rest of the sub-step, and the impact is recorded.
+!> tangential-momentum conditions on the rest of the sub-step, and the impact is recorded. With
+!> several impacts in a step, an impact's energy condition is held on the sub-step that really
+!> leaves it (up to the next wall: tie_to_wall), so that a backward run poses the same conditions.
 !> A submodule of vci_stepper: it works on the stepper's scheme, Newton and workspace.
 submodule (vci_stepper) vci_impacts
   implicit none
@@ -103,6 +105,14 @@ contains
         if (stat /= VCI_OK) then
           call set_cause(self, 'momentum at the wall'); return
         end if
+        ! The previous impact of this step met its energy condition on a sub-step over the whole rest
+        ! of the step, but its motion ends here: hold the condition on the sub-step it really leaves on
+        if (last_gap > 0) then
+          if (impacts%records(impacts%count)%condition == VCI_IMPACT_DISCRETE) then
+            call tie_to_wall(self, impacts%records(impacts%count), dir, tau, jstar, alpha, e_minus, s1res, stat)
+            if (stat /= VCI_OK) return
+          end if
+        end if
         ! Reached the wall (to round-off) exactly at the end of the step: no reflection yet;
         ! the next step starts on the wall and reflects there.
         if (1.0_dp - alpha <= landing_fraction) then
@@ -138,6 +148,114 @@ contains
       state%arriving_energy = e_minus
     end do
   end subroutine resolve_impacts
+
+  !> Several impacts in one step (docs/DESIGN.md §2, "Several impacts in one step"). Stage 2 of the
+  !> previous impact (imp, at q_start) matched E_d over the whole rest tau of the sub-step, but the
+  !> motion leaving it reaches wall j after alpha tau: the sub-step that really leaves imp ends there.
+  !> E_d depends on the sub-step's length (gravity, springs), so its E_d differs from imp's E-, and a
+  !> backward run, which reflects first at wall j, poses the condition on other sub-steps: the
+  !> reversal was off by 1e-2 (issue 24). Secant steps on imp's impulse mu until E_d(q_start, wall j,
+  !> alpha tau) = E- of imp, the condition both directions pose; each evaluation is a regular
+  !> sub-step from p- + mu grad g and stage 1 to wall j. On return stage 1 (x_stage1, q_wall,
+  !> p_arrive, alpha, e_minus, s1res) belongs to the final mu, and imp and p_start say so. Where no
+  !> impulse meets the condition (near a graze, where E_d hardly depends on mu, or the motion no
+  !> longer reaches wall j), the state of the impulse stage 2 found is put back: that impact keeps
+  !> its condition on the whole rest of the step, as before (docs/BACKWARD.md: not reversible).
+  subroutine tie_to_wall(self, imp, dir, tau, j, alpha, e_minus, s1res, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    type(vci_impact_t), intent(inout) :: imp
+    integer, intent(in) :: dir, j
+    real(dp), intent(in) :: tau
+    real(dp), intent(inout) :: alpha, e_minus, s1res
+    integer, intent(out) :: stat
+    integer, parameter :: max_secants = 12
+    integer :: k, nx
+    real(dp) :: mu_a, mu_b, mu_c, f_a, f_b, f_c, mu_best, f_best, tol, mu_state, alpha0, e0, s10
+    logical :: consistent
+    stat = VCI_OK
+    nx = self%nsub
+    mu_a = real(dir, dp) * imp%impulse
+    f_a = e_minus - imp%energy_before
+    tol = self%settings%atol + self%settings%rtol * (abs(e_minus) + abs(imp%energy_before))
+    if (abs(f_a) <= 0.01_dp * tol) return      ! free flight: E_d does not depend on the length
+    self%tie_x(1:nx + 1, 1) = self%x(1:nx + 1); self%tie_x(1:nx + 1, 2) = self%x_stage1(1:nx + 1)
+    self%tie_q(:, 1) = self%q_end; self%tie_q(:, 2) = self%q_wall; self%tie_q(:, 3) = self%p_arrive
+    alpha0 = alpha; e0 = e_minus; s10 = s1res
+    call self%sys%get_multipliers(self%x, self%lambda_start)
+    mu_best = mu_a; f_best = f_a
+    mu_state = mu_a; consistent = .true.     ! the stage-1 state in hand belongs to mu_state
+    mu_b = mu_a * (1.0_dp + 1.0e-6_dp)
+    if (evaluate(mu_b, f_b)) then
+      do k = 1, max_secants
+        if (abs(f_b) <= 0.01_dp * tol .or. f_b == f_a) exit
+        mu_c = mu_b - f_b * (mu_b - mu_a) / (f_b - f_a)
+        if (.not. evaluate(mu_c, f_c)) exit
+        mu_a = mu_b; f_a = f_b; mu_b = mu_c; f_b = f_c
+      end do
+    end if
+    if (stat /= VCI_OK) return
+    if (.not. (abs(f_best) <= tol)) then
+      ! no root: back to stage 2's impulse and the stage 1 that followed it
+      self%x(1:nx + 1) = self%tie_x(1:nx + 1, 1); self%x_stage1(1:nx + 1) = self%tie_x(1:nx + 1, 2)
+      self%q_end = self%tie_q(:, 1); self%q_wall = self%tie_q(:, 2); self%p_arrive = self%tie_q(:, 3)
+      alpha = alpha0; e_minus = e0; s1res = s10
+      self%p_start = imp%p_after
+      return
+    end if
+    ! the state of the evaluation at the best impulse
+    if (.not. (consistent .and. mu_state == mu_best)) then
+      if (.not. evaluate(mu_best, f_c)) then
+        if (stat == VCI_OK) stat = VCI_ERR_IMPACT
+        self%cause = 'stage 1 after a change of the previous impulse (several impacts in one step)'
+        return
+      end if
+    end if
+    imp%impulse = real(dir, dp) * mu_best
+    imp%p_after = imp%p_before + mu_best * imp%grad_g
+    imp%energy_after = e_minus
+    imp%leave_rate = dot_product(imp%grad_g, self%q_wall - imp%q) / (alpha * tau)
+    imp%stage2_residual = abs(f_best) / tol
+  contains
+    !> Regular sub-step and stage 1 to wall j from (q_start, p- + mu grad g); f = E_d - E-. False when
+    !> the motion misses wall j or a solve fails (stat then says whether that is fatal).
+    logical function evaluate(mu, f)
+      real(dp), intent(in) :: mu
+      real(dp), intent(out) :: f
+      evaluate = .false.
+      consistent = .false.
+      f = huge(1.0_dp)
+      self%p_start = imp%p_before + mu * imp%grad_g
+      call self%sys%put_endpoint(self%x, self%q_start, self%q_end)
+      call self%sys%put_multipliers(self%x, self%lambda_start)
+      call substep(self, self%q_start, self%p_start, tau, stat)
+      if (stat /= VCI_OK) return
+      call self%sys%get_endpoint(self%x, self%q_end)
+      call self%sys%eval_gaps(self%q_end, self%gaps_end(1:self%ng), stat)
+      if (stat /= VCI_OK) then
+        call set_cause(self, 'gap evaluation'); return
+      end if
+      if (self%gaps_end(j) >= 0.0_dp) return
+      call stage_wall(self, j, tau, alpha, stat)
+      if (stat /= VCI_OK) then
+        if (.not. self%sys%unrecoverable) stat = VCI_OK
+        return
+      end if
+      self%x_stage1(1:nx + 1) = self%x(1:nx + 1)
+      s1res = self%last_residual
+      call self%sys%get_endpoint(self%x_stage1, self%q_wall)
+      call self%sys%momentum_out(self%x_stage1, self%q_start, alpha * tau, self%p_arrive, stat, self%p_start)
+      if (stat == VCI_OK) call self%sys%energy_out(self%x_stage1, self%q_start, alpha * tau, e_minus, stat)
+      if (stat /= VCI_OK) then
+        call set_cause(self, 'momentum at the wall'); return
+      end if
+      f = e_minus - imp%energy_before
+      evaluate = ieee_is_finite(f)
+      consistent = .true.; mu_state = mu
+      if (evaluate .and. abs(f) < abs(f_best)) then
+        mu_best = mu; f_best = f
+      end if
+    end function evaluate
+  end subroutine tie_to_wall
 
   !> Is configuration a (the sub-step's start) on wall j, to solver tolerance?
   logical function on_wall(self, j)
@@ -339,7 +457,7 @@ contains
     integer, intent(out) :: stat
     integer :: n, m, nx0, info
     real(dp) :: num, den, mu0, mirror
-    logical :: done
+    logical :: done, passed_through
     character(len=40) :: what
     character(len=48) :: what_impulse
     n = self%n; m = self%m; nx0 = self%nsub
@@ -386,7 +504,8 @@ contains
       mirror = mu0
       if (self%settings%impact_energy /= VCI_IMPACT_HAMILTONIAN) then
         self%x_saved(1:nx0) = self%x(1:nx0)    ! the mirror start, for a retry or a fallback from it
-        call energy_along(self, nx0, tau2, e_minus, mu0, stat)
+        self%x_low(1:nx0) = self%x(1:nx0)      ! (x_saved is scratch for reflected())
+        call energy_along(self, nx0, tau2, e_minus, mu0, 0.25_dp, stat)
         if (stat /= VCI_OK) then
           call set_cause(self, trim(what)//' initial guess'); return
         end if
@@ -407,6 +526,26 @@ contains
         call self%sys%put_extra(self%x, KIND_STAGE2, mirror)
         call run_newton(self, self%sys%unknowns(KIND_STAGE2), what(1:len_trim(what)), stat)
       end if
+      passed_through = .false.
+      if (stat == VCI_OK) then
+        if (.not. reflected(self, self%sys%get_extra(self%x, KIND_STAGE2), tau2, stat)) then
+          if (stat /= VCI_OK) return
+          stat = VCI_ERR_NEWTON               ! the pass-through root: not the reflection
+          passed_through = .true.
+        end if
+      end if
+      if (stat == VCI_ERR_NEWTON) then
+        call reflect_from_departure(self, j, nx0, tau2, e_minus, mirror, what(1:len_trim(what)), stat)
+        if (stat == VCI_OK) then
+          passed_through = .false.
+          if (.not. reflected(self, self%sys%get_extra(self%x, KIND_STAGE2), tau2, stat)) then
+            if (stat /= VCI_OK) return
+            stat = VCI_ERR_NEWTON
+            passed_through = .true.
+          end if
+        end if
+        self%x_saved(1:nx0) = self%x_low(1:nx0)
+      end if
       if (stat == VCI_ERR_NEWTON .and. self%has_energy) then
         ! No impulse makes E_d of the leaving sub-step equal E-: E_d differs from H by O(h^2)
         ! terms that depend on the sub-step's length (for uniform gravity H changes by
@@ -422,11 +561,9 @@ contains
         self%impact_condition = VCI_IMPACT_HAMILTONIAN
         self%stats%energy_fallbacks = self%stats%energy_fallbacks + 1
         call reflect_hamiltonian(self%e_fallback, stat)
-      else if (stat == VCI_OK) then
-        if (.not. reflected(self, self%sys%get_extra(self%x, KIND_STAGE2), tau2, stat)) then
-          if (stat == VCI_OK) stat = VCI_ERR_IMPACT
-          self%cause = trim(what)//': the reflected motion does not leave the wall'
-        end if
+      else if (stat == VCI_ERR_NEWTON .and. passed_through) then
+        stat = VCI_ERR_IMPACT
+        self%cause = trim(what)//': the reflected motion does not leave the wall'
       end if
     else
       self%last_residual = 0.0_dp
@@ -473,6 +610,48 @@ contains
     end subroutine reflect_hamiltonian
   end subroutine stage_reflect
 
+  !> Stage 2's second start, when Newton from the mirror failed or found the pass-through root. The
+  !> mirror mirrors the end of the free sub-step: where a force bends that sub-step back towards the
+  !> wall (its end only just beyond it) the impulse is a fraction of the reflection's (0.050 for 0.47
+  !> in core_reversal) and Newton converged to mu = 0; where the mass depends on the velocity (L
+  !> quartic in it) the linearised impulse is off by more than the search's 25 % (issue 24). This
+  !> start mirrors the free motion's departure instead (a regular sub-step of 1e-3 tau2 from the
+  !> wall), and the secant search on the impulse line may move it as far as the reflection's branch
+  !> goes (see energy_along). On entry x_low holds the mirror start, rhs the sensitivity d; on return
+  !> x holds Newton's result (stat VCI_ERR_NEWTON when there is none).
+  subroutine reflect_from_departure(self, j, nx0, tau2, e_minus, mirror, what, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: j, nx0
+    real(dp), intent(in) :: tau2, e_minus, mirror
+    character(len=*), intent(in) :: what
+    integer, intent(out) :: stat
+    real(dp), parameter :: eps_frac = 1.0e-3_dp
+    real(dp) :: den, num, mu
+    ! the free sub-step's start (mu = 0) from the mirror start
+    self%x_high(1:nx0) = self%x_low(1:nx0) - mirror * self%rhs(1:nx0)
+    call self%sys%endpoint_direction(self%rhs(1:nx0), self%q_trial)
+    den = dot_product(self%sys%grad, self%q_trial)
+    self%q_guess = self%q_wall + eps_frac * tau2 * self%chord_velocity
+    call self%sys%put_endpoint(self%x, self%q_wall, self%q_guess)
+    call substep(self, self%q_wall, self%p_arrive, eps_frac * tau2, stat)
+    if (stat /= VCI_OK) then
+      if (.not. self%sys%unrecoverable) stat = VCI_ERR_NEWTON
+      return
+    end if
+    call self%sys%get_endpoint(self%x, self%q_trial)
+    num = dot_product(self%sys%grad, self%q_trial - self%q_wall) / eps_frac
+    stat = VCI_ERR_NEWTON
+    if (.not. (num < 0.0_dp .and. abs(den) > 0.0_dp)) return     ! departs from the wall: no reflection
+    mu = -2.0_dp * num / den
+    if (.not. ieee_is_finite(mu)) return
+    self%x(1:nx0) = self%x_high(1:nx0) + mu * self%rhs(1:nx0)
+    call energy_along(self, nx0, tau2, e_minus, mu, 3.0_dp, stat)
+    if (stat /= VCI_OK) return
+    call self%sys%put_extra(self%x, KIND_STAGE2, mu)
+    call self%sys%pose_stage2(self%q_wall, self%p_arrive, tau2, j, e_minus)
+    call run_newton(self, self%sys%unknowns(KIND_STAGE2), what, stat)
+  end subroutine reflect_from_departure
+
   !> Stage 2's start with the E_d condition: x = x0 + mu d (d = rhs, the sensitivity to the impulse)
   !> moves mu from the mirror image mu0 towards E_d(x) = E-, by secant steps on that line (a few
   !> evaluations of E_d where a Newton iteration costs a Jacobian with differenced columns). The
@@ -481,18 +660,21 @@ contains
   !> within max_move of mu0 (relative); otherwise the mirror start stays. A callback's
   !> failure ends the search (Newton meets it again and reports it), unless the callback declared
   !> it unrecoverable: then stat says so.
-  subroutine energy_along(self, nx0, tau2, e_minus, mu0, stat)
+  !> E_d(mu) - E- is about quadratic with roots at the reflection and at the pass-through motion
+  !> (mu = 0), and flat half-way; near a graze the two are close (or E_d never reaches E-). With
+  !> max_move = 0.25 (the first start) the search stays near the mirror, where Newton converges to
+  !> the reflection. A larger max_move (the second start) goes as far as the reflection's branch:
+  !> every secant step must keep mu's sign and a slope of the reflection's sign (E_d - E- grows with
+  !> |mu| past the reflection; half-way to mu = 0 the slope changes sign), so that it cannot cross
+  !> the flat part to the pass-through root.
+  subroutine energy_along(self, nx0, tau2, e_minus, mu0, max_move, stat)
     type(vci_stepper_t), intent(inout) :: self
     integer, intent(in) :: nx0
-    real(dp), intent(in) :: tau2, e_minus
+    real(dp), intent(in) :: tau2, e_minus, max_move
     real(dp), intent(inout) :: mu0
     integer, intent(out) :: stat
-    integer, parameter :: max_secants = 3
-    !> E_d(mu) - E- is about quadratic with roots at the reflection and at the pass-through motion
-    !> (mu = 0), and flat half-way; near a graze the two are close (or E_d never reaches E-): the
-    !> search stays near the mirror, where Newton converges to the reflection.
-    real(dp), parameter :: max_move = 0.25_dp
-    integer :: k
+    integer, parameter :: max_secants = 3, max_branch_secants = 8
+    integer :: k, secants
     real(dp) :: mu_a, mu_b, mu_c, g_a, g_b, g_c, mu_best, g_best
     call self%sys%clear_failure()
     self%sys%unrecoverable = .false.
@@ -505,11 +687,14 @@ contains
         stat = VCI_OK; return
       end if
       mu_b = 0.99_dp * mu0
+      secants = max_secants
+      if (max_move > 0.25_dp) secants = max_branch_secants
       if (energy_gap(mu_b, g_b)) then
-        do k = 1, max_secants
+        do k = 1, secants
           if (g_b == g_a) exit
+          if (max_move > 0.25_dp .and. .not. ((g_b - g_a) / (mu_b - mu_a) * sign(1.0_dp, mu0) > 0.0_dp)) exit
           mu_c = mu_b - g_b * (mu_b - mu_a) / (g_b - g_a)
-          if (.not. (abs(mu_c / mu0 - 1.0_dp) <= max_move)) exit
+          if (.not. (abs(mu_c / mu0 - 1.0_dp) <= max_move .and. mu_c / mu0 > 0.0_dp)) exit
           if (.not. energy_gap(mu_c, g_c)) exit
           if (abs(mu_c - mu_b) <= 1.0e-10_dp * abs(mu0)) exit
           mu_a = mu_b; g_a = g_b; mu_b = mu_c; g_b = g_c

@@ -64,6 +64,9 @@ module vci_stepper
     real(dp), allocatable :: gap_grads(:, :)  !< at q_start (stage 1), at q_wall (stage 2)
     real(dp), allocatable :: lambda_start(:), zero_lambda(:)
     real(dp), allocatable :: x_try(:)         !< stage 2's start: a point on the impulse line
+    !> Several impacts in one step: stage 1's state (x, x_stage1; q_end, q_wall, p_arrive) kept while
+    !> the previous impact's impulse is adjusted, to go back to when that finds no root
+    real(dp), allocatable :: tie_x(:, :), tie_q(:, :)
     !> The impact condition stage 2 used (the setting, or VCI_IMPACT_HAMILTONIAN where the discrete
     !> energy condition has no solution) and, then, H(qt, p-).
     integer :: impact_condition = 0
@@ -147,6 +150,11 @@ contains
       stat = VCI_ERR_MEMORY; return
     end if
     self%x = 0.0_dp; self%zero_lambda = 0.0_dp
+    if (allocated(self%tie_x)) deallocate (self%tie_x, self%tie_q)
+    allocate (self%tie_x(nx, 2), self%tie_q(n, 3), stat=stat)
+    if (stat /= 0) then
+      stat = VCI_ERR_MEMORY; return
+    end if
   end subroutine setup
 
   !> Replace the settings (validated by the driver) and hand Newton and the scheme their part.

@@ -1,0 +1,67 @@
+!> The reversal property over random scenes (issue 24, item 1), longer than the default suite's
+!> fixed seeds (test/core/test_reversal.pf): for each seed, a box scene with L quartic in the
+!> velocity, a magnetic term, gravity and a spring, N steps forward and N back must return the
+!> start to solver tolerance, with the same impacts and the same energy fallbacks in both
+!> directions (test/support/vci_test_reversal.f90). Prints one line per failing seed and a summary.
+!>
+!>   vci_reversal_fuzz SEED_FIRST SEED_COUNT [SECONDS [TOL [firm|wide]]]   (defaults: 60 s, 1e-9, firm)
+!>
+!> firm: impacts away from grazes (the property the default suite asserts); wide: soft impacts too
+!>
+!> Exit status 1 when a seed failed.
+program vci_reversal_fuzz
+  use vci
+  use vci_test_reversal
+  implicit none
+  integer :: first, count, seed, failed, run, multi, fallbacks, soft
+  real(dp) :: seconds, tol, worst_q, worst_p
+  integer(i8) :: c0, c1, rate
+  character(len=64) :: arg
+  type(reversal_scene_t) :: s
+  type(reversal_result_t) :: r
+  logical :: bad, firm
+  first = 1; count = 100; seconds = 60.0_dp; tol = 1.0e-9_dp; firm = .true.
+  if (command_argument_count() >= 1) then
+    call get_command_argument(1, arg); read (arg, *) first
+  end if
+  if (command_argument_count() >= 2) then
+    call get_command_argument(2, arg); read (arg, *) count
+  end if
+  if (command_argument_count() >= 3) then
+    call get_command_argument(3, arg); read (arg, *) seconds
+  end if
+  if (command_argument_count() >= 4) then
+    call get_command_argument(4, arg); read (arg, *) tol
+  end if
+  if (command_argument_count() >= 5) then
+    call get_command_argument(5, arg); firm = trim(arg) /= 'wide'
+  end if
+  call system_clock(c0, rate)
+  failed = 0; soft = 0; run = 0; multi = 0; fallbacks = 0; worst_q = 0.0_dp; worst_p = 0.0_dp
+  do seed = first, first + count - 1
+    s = random_scene(seed, firm)
+    r = round_trip(s)
+    run = run + 1
+    bad = r%stat /= VCI_OK
+    if (.not. bad) bad = .not. (r%err_q <= tol .and. r%err_p <= tol) .or. r%impacts_fwd /= r%impacts_bwd &
+                         .or. r%fallbacks_fwd /= r%fallbacks_bwd
+    if (r%stat == VCI_OK) then
+      worst_q = max(worst_q, r%err_q); worst_p = max(worst_p, r%err_p)
+      multi = multi + r%multi_steps; fallbacks = fallbacks + r%fallbacks_fwd
+    end if
+    if (bad) then
+      failed = failed + 1
+      if (r%fallbacks_fwd + r%fallbacks_bwd + r%touches > 0) soft = soft + 1
+      print '(a,i0,a,a)', 'seed ', seed, ': ', trim(scene_label(s))
+      print '(a,i0,a,es10.3,a,es10.3,a,i0,a,i0,a,i0,a,i0,a,i0,a,a)', '  stat ', r%stat, ' err q ', r%err_q, ' p ', r%err_p, &
+        ' impacts ', r%impacts_fwd, '/', r%impacts_bwd, ' fallbacks ', r%fallbacks_fwd, '/', r%fallbacks_bwd, &
+        ' touches ', r%touches, ' ', trim(r%message)
+    end if
+    call system_clock(c1)
+    if (real(c1 - c0, dp) / real(rate, dp) > seconds) exit
+  end do
+  print '(a,i0,a,i0,a,i0,a,i0,a,i0,a,es9.2,a,es9.2)', 'seeds run ', run, ', failed ', failed, ' (', soft, &
+    ' with a fallback or a touch), steps with several impacts ', multi, ', fallbacks ', fallbacks, &
+    ', worst err q ', worst_q, ' p ', worst_p
+  if (failed > 0) error stop 1
+end program vci_reversal_fuzz
