@@ -27,7 +27,7 @@ module vci_ensemble_h5
   use vci_kinds, only: dp, i8
   use vci_status, only: VCI_OK, VCI_ERR_IO, VCI_ERR_ARGUMENT, VCI_MSG_LEN
   use vci_h5_io, only: h5io_put_attr, h5io_get_attr, h5io_string_type, h5io_check_dims, h5io_discard_writes, &
-                       h5io_os_cause
+                       h5io_os_cause, h5io_free_bytes
   use vci_ensemble, only: vci_ensemble_config_t, vci_ensemble_table_t, vci_ensemble_results_t, &
                           vci_ensemble_samples, vci_ensemble_results_alloc, vci_ensemble_size, &
                           VCI_MEMBER_NOT_RUN, VCI_START_PAIR, VCI_START_MOMENTUM
@@ -99,6 +99,9 @@ contains
 #endif
     integer(hid_t) :: fapl, g
     integer :: err, e2, nm
+#ifdef VCI_HAVE_MPI
+    integer :: rank
+#endif
     logical :: replace
     character(len=16) :: start_kind
 
@@ -125,6 +128,11 @@ contains
     if (err /= 0) then
       call fail(self, 'the HDF5 library could not be initialised', stat); return
     end if
+    ! every dataset is written in full (fill values) at creation: a file the disk cannot hold is
+    ! refused before a byte is written (ranks agree: each asks the file system itself)
+    call check_room(self, stat)
+    call sync(self, stat)
+    if (stat /= VCI_OK) return
     call h5pcreate_f(H5P_FILE_ACCESS_F, fapl, err)
 #ifdef VCI_HAVE_MPI
     if (err == 0) call h5pset_fapl_mpio_f(fapl, comm%MPI_VAL, MPI_INFO_NULL%MPI_VAL, err)
@@ -231,8 +239,69 @@ contains
       if (err /= 0) call fail(self, 'cannot flush the new file'//os_cause(), stat)
     end if
     call sync(self, stat)
+#ifdef VCI_HAVE_MPI
+    if (stat == VCI_OK) then
+      call MPI_Comm_rank(comm, rank, err)
+      call fill_share(self, int(int(nm, i8) * rank / ranks) + 1, int(int(nm, i8) * (rank + 1) / ranks), stat)
+      call sync(self, stat)
+    end if
+    if (stat == VCI_OK) then
+      call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
+      if (err /= 0) call fail(self, 'cannot flush the new file'//os_cause(), stat)
+      call sync(self, stat)
+    end if
+#endif
     if (stat /= VCI_OK) call drop_new_file(self)
   end subroutine f_create
+
+#ifdef VCI_HAVE_MPI
+  !> The fill values ("not run") of members first .. last in every dataset, written by this rank
+  !> alone (independent I/O), in blocks of at most 2^18 values.
+  subroutine fill_share(self, first, last, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    integer, intent(in) :: first, last
+    integer, intent(inout) :: stat
+    integer, parameter :: max_values = 2**18
+    real(dp), allocatable, target :: r(:)
+    integer, allocatable, target :: k(:)
+    integer(i8), allocatable, target :: l(:)
+    character(len=VCI_ENSEMBLE_MESSAGE_LEN), allocatable, target :: c(:)
+    integer, allocatable :: dims(:)
+    integer(hid_t) :: stype
+    integer :: i, j, lead, block, at, cnt, err, e2
+    do j = 1, N_DSETS
+      if (self%d(j) < 0 .or. stat /= VCI_OK) cycle
+      dims = dims_of(self, j)
+      lead = max(1, product(dims(1:size(dims) - 1)))
+      block = max(1, max_values / lead)
+      do at = first, last, block
+        cnt = min(block, last - at + 1)
+        select case (j)
+        case (D_STATUS, D_RANK, D_THREAD, D_IMPGAP, D_EKIND, D_TRCOUNT)
+          k = [(merge(-1, 0, j == D_STATUS .or. j == D_RANK .or. j == D_THREAD), i=1, lead * cnt)]
+          call put_raw(self, j, H5T_NATIVE_INTEGER, c_loc(k), dims(1:size(dims) - 1), at, cnt, stat)
+        case (D_STEPS, D_IMPACTS, D_NEWTON)
+          l = [(0_i8, i=1, lead * cnt)]
+          call put_raw(self, j, h5kind_to_type(i8, H5_INTEGER_KIND), c_loc(l), dims(1:size(dims) - 1), at, cnt, stat)
+        case (D_MESSAGE)
+          allocate (c(cnt))
+          c = repeat(achar(0), VCI_ENSEMBLE_MESSAGE_LEN)
+          call h5io_string_type(VCI_ENSEMBLE_MESSAGE_LEN, stype, err)
+          if (err == 0) call put_raw(self, j, stype, c_loc(c), dims(1:size(dims) - 1), at, cnt, stat)
+          call h5tclose_f(stype, e2)
+          deallocate (c)
+        case (D_T0, D_Q0, D_V0, D_PARAMS)
+          r = [(0.0_dp, i=1, lead * cnt)]
+          call put_raw(self, j, H5T_NATIVE_DOUBLE, c_loc(r), dims(1:size(dims) - 1), at, cnt, stat)
+        case default
+          r = [(ieee_value(1.0_dp, ieee_quiet_nan), i=1, lead * cnt)]
+          call put_raw(self, j, H5T_NATIVE_DOUBLE, c_loc(r), dims(1:size(dims) - 1), at, cnt, stat)
+        end select
+        if (stat /= VCI_OK) exit
+      end do
+    end do
+  end subroutine fill_share
+#endif
 
   !> Write the starts and parameters of members first .. first + count - 1 (each rank its share).
   subroutine f_write_table(self, table, first, count, stat)
@@ -337,11 +406,13 @@ contains
     class(vci_ensemble_file_t), intent(inout) :: self
     integer :: i, err
     if (.not. self%is_open) return
-    if (.not. self%discarded) call h5io_discard_writes(self%file)
+    if (.not. self%discarded) call discard(self)
     self%discarded = .true.
     ! a metadata flush that failed half-way (a full disk) is completed into the sink: HDF5 1.10
     ! can neither close a file with such a flush pending nor leave it (it crashed at exit)
+#ifndef VCI_HAVE_MPI
     call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
+#endif
     do i = 1, N_DSETS
       if (self%d(i) >= 0) call h5dclose_f(self%d(i), err)
       self%d(i) = -1
@@ -366,6 +437,27 @@ contains
     if (ios == 0) self%message = trim(self%message)//' (the file was removed: it held no member yet)'
   end subroutine drop_new_file
 
+  !> The file's size (every dataset of this ensemble, as f_create makes them) against the room on its
+  !> file system; a failure (VCI_ERR_IO) saying both when it does not fit.
+  subroutine check_room(self, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    integer, intent(inout) :: stat
+    real(dp) :: per_member, bytes
+    integer(i8) :: free
+    character(len=300) :: why
+    ! in real(dp): the product of sizes read from a command line may not fit an integer
+    per_member = 4 + VCI_ENSEMBLE_MESSAGE_LEN + 8 * (1 + 4 * real(self%n, dp) + self%n_params) + 8 + 24 + 4 + 24 &
+                 + 12 * real(self%impact_cap, dp) + 4 + 8 + 4 + 8
+    if (self%samples > 0) per_member = per_member + 4 + real(self%samples, dp) * (8 + 16 * real(self%n, dp))
+    bytes = per_member * real(self%n_members, dp)
+    free = h5io_free_bytes(self%path)
+    if (free < 0 .or. bytes <= real(free, dp)) return
+    write (why, '(a,es10.3,a,i0,a,i0,a,i0,a,es10.3,a)') 'the file would take ', bytes, ' bytes (', self%n_members, &
+      ' members, ', self%samples, ' trajectory samples and ', self%impact_cap, ' impact times each), the file '// &
+      'system has ', real(free, dp), ' free; nothing was written'
+    call fail(self, trim(why), stat)
+  end subroutine check_room
+
   !> Under MPI, a failure on any rank becomes every rank's (the lowest failing rank's status and
   !> message), so that all ranks take the same branch before the next collective call.
   subroutine sync(self, stat)
@@ -384,6 +476,17 @@ contains
     if (stat /= VCI_OK .and. len_trim(self%message) == 0) self%message = 'ensemble file: failed'
 #endif
   end subroutine sync
+
+  !> Point the file's descriptor at a sink (vci_h5_io). Serial files only: the MPI-IO driver has no
+  !> descriptor to redirect, and asking HDF5 for the driver of such a file is itself collective
+  !> (H5Fget_access_plist duplicates the communicator), which one failed rank cannot call alone.
+  subroutine discard(self)
+    type(vci_ensemble_file_t), intent(inout) :: self
+#ifndef VCI_HAVE_MPI
+    call h5io_discard_writes(self%file)
+#endif
+    self%discarded = .true.
+  end subroutine discard
 
   !> ': ' and the operating system's reason for HDF5's last failure (say "No space left on device"),
   !> or nothing; right after the failing call.
@@ -537,6 +640,12 @@ contains
     if (err == 0) call h5pcreate_f(H5P_DATASET_CREATE_F, dcpl, err)
     ! space allocated now (parallel HDF5 requires it): later writes never touch metadata
     if (err == 0) call h5pset_alloc_time_f(dcpl, H5D_ALLOC_TIME_EARLY_F, err)
+#ifdef VCI_HAVE_MPI
+    ! parallel HDF5 writes fill values inside the collective H5Dcreate and waits at a barrier after:
+    ! a rank whose write failed (a full disk) leaves the others there for ever. Each rank writes its
+    ! share of the fill itself instead (fill_share), outside any collective call.
+    if (err == 0) call h5pset_fill_time_f(dcpl, H5D_FILL_TIME_NEVER_F, err)
+#endif
     if (err == 0 .and. present(fill_nan)) then
       fnan = ieee_value(1.0_dp, ieee_quiet_nan)
       call h5pset_fill_value_f(dcpl, H5T_NATIVE_DOUBLE, c_loc(fnan), err)
@@ -605,7 +714,7 @@ contains
     if (mspace >= 0) call h5sclose_f(mspace, e2)
     call h5sclose_f(fspace, e2)
     if (err /= 0) then           ! (a full disk): nothing more may reach the file
-      call h5io_discard_writes(self%file)
+      call discard(self)
       self%discarded = .true.
     end if
   end subroutine put_raw
