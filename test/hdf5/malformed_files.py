@@ -143,8 +143,10 @@ for label, src, damage, expected in CASES:
         print("%-4s %-34s --%-6s exit %s: %s" % ("ok" if ok else "FAIL", label, mode, rc, err.strip()[:110]))
         failures += not ok
 # --from a FIFO (or anything else that is not a regular file): refused at once, never opened
-os.mkfifo("fifo.h5")
-os.mkfifo("fifo.csv")
+for fifo in ("fifo.h5", "fifo.csv"):
+    if os.path.lexists(fifo):
+        os.remove(fifo)      # (a previous run's)
+    os.mkfifo(fifo)
 for path in ("fifo.h5", "fifo.csv"):
     for mode in ("from", "append"):
         cmd = [ellipse, "--from", path, "--t-final", "4", "--quiet"]
