@@ -527,7 +527,12 @@ contains
     if (allocated(self%be)) deallocate (self%be)
     if (allocated(self%bl)) deallocate (self%bl)
     allocate (self%bt(c), self%bq(self%n, c), self%bp(self%n, c), self%be(c), self%bl(self%m, c), stat=s1)
-    if (allocated(self%it)) deallocate (self%it, self%is, self%ia, self%ig, self%iq, self%ii)
+    if (allocated(self%it)) deallocate (self%it)
+    if (allocated(self%is)) deallocate (self%is)
+    if (allocated(self%ia)) deallocate (self%ia)
+    if (allocated(self%ig)) deallocate (self%ig)
+    if (allocated(self%iq)) deallocate (self%iq)
+    if (allocated(self%ii)) deallocate (self%ii)
     allocate (self%it(16), self%is(16), self%ia(16), self%ig(16), self%iq(self%n, 16), self%ii(16), stat=s2)
     if (s1 /= 0 .or. s2 /= 0) call fail(self, 'no memory for a buffer of flush_every rows (lower flush_every)', stat)
   end subroutine alloc_buffers
