@@ -31,6 +31,9 @@ program ellipse_ensemble
   integer :: n_members = 121, rank = 0, nranks = 1, stat, i, n_failed
   real(dp) :: h = 1.0e-2_dp, t_final = 30.0_dp, min_size = 1.0e-14_dp, max_size = 1.0e-2_dp, tol = 1.0e-2_dp
   integer :: stride = 10, threads = 0, chunk = 0, impact_cap = 256
+  ! bounds of the command line's sizes (--help states them); the file's size is checked by the library
+  integer, parameter :: members_max = 10000000, impact_cap_max = 1000000, threads_max = 1024
+  real(dp), parameter :: h_max = 1.0e6_dp, t_max = 1.0e12_dp, steps_max = 2.0_dp**53
   logical :: quiet = .false., no_output = .false.
   character(len=:), allocatable :: output
   type(vci_prototype_factory_t) :: factory
@@ -65,7 +68,11 @@ program ellipse_ensemble
 #endif
 
   ! the table: member 1 unperturbed, member i >= 2 moved by sizes(i) along a fixed direction of its own
-  allocate (sizes(n_members), table%t0(n_members), table%q0(3, n_members), table%v0(3, n_members))
+  allocate (sizes(n_members), table%t0(n_members), table%q0(3, n_members), table%v0(3, n_members), stat=i)
+  if (i /= 0) then
+    if (rank == 0) write (error_unit, '(a,i0,a)') 'ellipse_ensemble: no memory for a table of ', n_members, ' members'
+    call finish(2)
+  end if
   do i = 1, n_members
     sizes(i) = 0.0_dp
     if (i >= 2) sizes(i) = min_size * (max_size / min_size)**(real(i - 2, dp) / real(max(n_members - 2, 1), dp))
@@ -73,7 +80,7 @@ program ellipse_ensemble
   end do
   allocate (factory%prototype, source=ellipse_model())
   cfg%h = h
-  cfg%nsteps = int(nint((t_final - (table%t0(1) + h)) / h), i8)
+  cfg%nsteps = nint((t_final - (table%t0(1) + h)) / h, i8)   ! bounded by parse_arguments (steps_max)
   cfg%stride = stride; cfg%threads = threads; cfg%chunk = chunk; cfg%impact_cap = impact_cap
   cfg%name = 'ellipse_ensemble: perturbations of the paper''s bouncing ellipse'
 
@@ -263,14 +270,16 @@ contains
       case ('--help', '-h')
         if (rank == 0) then
           write (output_unit, '(a)') 'ellipse_ensemble: perturbations of the paper''s bouncing ellipse'
-          write (output_unit, '(a)') '  --members N         members, the first unperturbed (121)'
-          write (output_unit, '(a)') '  --t-final T         seconds (30)'
-          write (output_unit, '(a)') '  --h H               step length (1e-2)'
+          write (output_unit, '(a)') '  --members N         members, the first unperturbed, 2 <= N <= 1e7 (121)'
+          write (output_unit, '(a)') '  --t-final T         seconds, h < T <= 1e12, at most 2^53 steps of h (30)'
+          write (output_unit, '(a)') '  --h H               step length, 0 < H <= 1e6 (1e-2)'
           write (output_unit, '(a)') '  --min-size S, --max-size S   perturbation sizes, log-spaced (1e-14, 1e-2)'
           write (output_unit, '(a)') '  --tol TAU           impact-time difference that counts as leaving (1e-2 s)'
           write (output_unit, '(a)') '  --stride K          keep every K-th state in the file (10; 0: none)'
-          write (output_unit, '(a)') '  --impact-cap K      impact times kept per member (256)'
-          write (output_unit, '(a)') '  --threads T, --chunk C   OpenMP threads (OMP_NUM_THREADS), members per claim'
+          write (output_unit, '(a)') '  --impact-cap K      impact times kept per member, 1 <= K <= 1e6 (256)'
+          write (output_unit, '(a)') '  --threads T, --chunk C   OpenMP threads (OMP_NUM_THREADS), 0 <= T <= 1024;'
+          write (output_unit, '(a)') '                      members per claim, C >= 0 (0: automatic)'
+          write (output_unit, '(a)') '  (a file larger than its file system''s free space is refused before it is written)'
           write (output_unit, '(a)') '  --output FILE       the ensemble file (ellipse_ensemble.h5); --no-output'
           write (output_unit, '(a)') '  --quiet             no per-member table'
         end if
@@ -295,13 +304,29 @@ contains
       end select
       k = k + 1
     end do
-    if (n_members < 2 .or. .not. (h > 0.0_dp .and. t_final > h .and. min_size > 0.0_dp .and. &
-        max_size >= min_size .and. tol > 0.0_dp) .or. stride < 0 .or. impact_cap < 1) then
-      if (rank == 0) write (error_unit, '(a)') 'ellipse_ensemble: need members >= 2, h > 0, t-final > h, '// &
-        '0 < min-size <= max-size, tol > 0, stride >= 0, impact-cap >= 1'
+    if (n_members < 2 .or. n_members > members_max) call refuse('--members must be in [2, 1e7]')
+    if (.not. (h > 0.0_dp .and. h <= h_max)) call refuse('--h must be in (0, 1e6]')
+    if (.not. (t_final > h .and. t_final <= t_max)) call refuse('--t-final must be in (h, 1e12]')
+    if (.not. (min_size > 0.0_dp .and. max_size >= min_size)) call refuse('need 0 < --min-size <= --max-size')
+    if (.not. (tol > 0.0_dp)) call refuse('--tol must be positive')
+    if (stride < 0) call refuse('--stride must be >= 0')
+    if (impact_cap < 1 .or. impact_cap > impact_cap_max) call refuse('--impact-cap must be in [1, 1e6]')
+    if (threads < 0 .or. threads > threads_max) call refuse('--threads must be in [0, 1024]')
+    if (chunk < 0) call refuse('--chunk must be >= 0')
+    ! steps of h from the start pair's second state (t = h / 2) to t-final, before any conversion
+    ! to an integer (nint of a larger value wraps)
+    if ((t_final - 0.5_dp * h) / h > steps_max) then
+      if (rank == 0) write (error_unit, '(a,es10.3,a,es10.3,a)') 'ellipse_ensemble: reaching --t-final ', t_final, &
+        ' takes more than 2^53 steps of h = ', h, ' (lower --t-final or raise --h)'
       call finish(2)
     end if
   end subroutine parse_arguments
+
+  subroutine refuse(why)
+    character(len=*), intent(in) :: why
+    if (rank == 0) write (error_unit, '(a)') 'ellipse_ensemble: '//why
+    call finish(2)
+  end subroutine refuse
 
   !> Whether an MPI launcher started this process as one of several (OpenMPI's mpirun, MPICH's).
   logical function launched_by_mpirun()

@@ -64,6 +64,8 @@ module vci_example_cli
   ! ranges of the numeric flags (--help states them)
   real(dp), parameter :: h_max = 1.0e6_dp, t_max = 1.0e12_dp, rtol_min = 1.0e-16_dp, rtol_max = 1.0e-4_dp
   integer, parameter :: max_impacts_max = 1000000
+  !> Largest --flush-every: the HDF5 writer's (its buffer holds that many rows); the same without HDF5
+  integer, parameter :: flush_every_max = 1048576
   !> The program's name, for the messages of to_real/to_int (set by parse_options).
   character(len=32) :: program_name = 'vci example'
   !> Most steps a run may ask for: step indices stay exact in the float64 time grid t0 + k h.
@@ -104,7 +106,8 @@ contains
         write (output_unit, '(a)') '  --backward            integrate backward in time with the (-) scheme'
         write (output_unit, '(a)') '  --from FILE           start from the last state written by a previous run (.h5 or .csv)'
         write (output_unit, '(a)') '  --append              continue the --from file (.h5, same direction) instead of a new one'
-        write (output_unit, '(a)') '  --flush-every K       HDF5: write and flush every K >= 1 steps (4096) and after every impact'
+        write (output_unit, '(a)') '  --flush-every K       HDF5: write and flush every K steps, 1 <= K <= 1048576 (4096),'
+        write (output_unit, '(a)') '                        and after every impact'
         write (output_unit, '(a)') '  --impact-energy MODE  discrete (paper, default) or hamiltonian'
         write (output_unit, '(a)') '  --rtol R              Newton tolerance relative to term sizes, 1e-16 <= R <= 1e-4 (1e-12)'
         write (output_unit, '(a)') '  --max-impacts K       impacts allowed in one step, 1 <= K <= 1000000 (16)'
@@ -121,7 +124,7 @@ contains
         val = get_arg(i)
         select case (arg)
         case ('--h'); opts%h = to_real(val, arg, 0.0_dp, h_max, low_open=.true.); opts%h_given = .true.
-        case ('--flush-every'); opts%flush_every = to_int(val, arg, 1, huge(1))
+        case ('--flush-every'); opts%flush_every = to_int(val, arg, 1, flush_every_max)
         case ('--t-final'); opts%t_final = to_real(val, arg, -t_max, t_max); opts%t_final_given = .true.
         case ('--output'); opts%output = val
         case ('--from'); opts%from = val
@@ -156,6 +159,9 @@ contains
     if (allocated(opts%from)) then
       inquire (file=opts%from, exist=exists)
       if (.not. exists .and. .not. has_extension(opts%from)) opts%from = opts%from//default_extension
+      ! never opened when it is not a regular file: reading a FIFO blocks until a writer comes
+      if (c_path_kind(opts%from//c_null_char) == 2) &
+        call die(name//': --from '//opts%from//' is not a regular file (a FIFO, a device or a directory)')
     end if
   end subroutine parse_options
 

@@ -8,19 +8,26 @@
 !> status is written last, so a killed run leaves a file that opens and holds every member whose
 !> status is not -1.
 !>
-!> create, write_table (with each rank's share), and close are collective under MPI; write_results is
-!> independent. Nothing here stops or prints (HDF5's own error printing is switched off); failures
-!> give VCI_ERR_IO and a message naming the file.
+!> create, write_table (with each rank's share), close and abandon are collective under MPI;
+!> write_results is independent. Nothing here stops or prints (HDF5's own error printing is switched
+!> off); failures give VCI_ERR_IO and a message naming the file.
+!>
+!> A write that fails (a full disk) ends the file's writing: its descriptor is pointed at a sink
+!> (vci_h5_io's h5io_discard_writes, as the run writer does), so that HDF5 closes it without touching
+!> the disk again, and the disk keeps the metadata flushed at creation and every block written
+!> before. Under MPI a failure inside create is made every rank's before the next collective call.
 module vci_ensemble_h5
   use, intrinsic :: iso_c_binding, only: c_ptr, c_loc, c_null_ptr
   use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
   use hdf5
 #ifdef VCI_HAVE_MPI
-  use mpi_f08, only: MPI_Comm, MPI_INFO_NULL
+  use mpi_f08, only: MPI_Comm, MPI_INFO_NULL, MPI_Allreduce, MPI_Bcast, MPI_Comm_rank, MPI_IN_PLACE, &
+                     MPI_INTEGER, MPI_CHARACTER, MPI_MAX, MPI_MIN
 #endif
   use vci_kinds, only: dp, i8
   use vci_status, only: VCI_OK, VCI_ERR_IO, VCI_ERR_ARGUMENT, VCI_MSG_LEN
-  use vci_h5_io, only: h5io_put_attr, h5io_get_attr, h5io_string_type, h5io_check_dims
+  use vci_h5_io, only: h5io_put_attr, h5io_get_attr, h5io_string_type, h5io_check_dims, h5io_discard_writes, &
+                       h5io_os_cause, h5io_free_bytes
   use vci_ensemble, only: vci_ensemble_config_t, vci_ensemble_table_t, vci_ensemble_results_t, &
                           vci_ensemble_samples, vci_ensemble_results_alloc, vci_ensemble_size, &
                           VCI_MEMBER_NOT_RUN, VCI_START_PAIR, VCI_START_MOMENTUM
@@ -56,11 +63,16 @@ module vci_ensemble_h5
     integer :: n_members = 0, n = 0, n_params = 0, impact_cap = 0, samples = 0
     integer(hid_t), private :: file = -1
     integer(hid_t), private :: d(N_DSETS) = -1
+    logical, private :: discarded = .false.   !< a write failed: nothing more reaches the file
+#ifdef VCI_HAVE_MPI
+    type(MPI_Comm), private :: comm
+#endif
   contains
     procedure :: create => f_create
     procedure :: write_table => f_write_table
     procedure :: write_results => f_write_results
     procedure :: close => f_close
+    procedure :: abandon => f_abandon
   end type vci_ensemble_file_t
 
   public :: vci_ensemble_read
@@ -87,6 +99,9 @@ contains
 #endif
     integer(hid_t) :: fapl, g
     integer :: err, e2, nm
+#ifdef VCI_HAVE_MPI
+    integer :: rank
+#endif
     logical :: replace
     character(len=16) :: start_kind
 
@@ -101,6 +116,10 @@ contains
     self%impact_cap = config%impact_cap
     self%samples = vci_ensemble_samples(config)
     self%d = -1
+    self%discarded = .false.
+#ifdef VCI_HAVE_MPI
+    self%comm = comm
+#endif
     replace = .false.
     if (present(overwrite)) replace = overwrite
 
@@ -109,6 +128,11 @@ contains
     if (err /= 0) then
       call fail(self, 'the HDF5 library could not be initialised', stat); return
     end if
+    ! every dataset is written in full (fill values) at creation: a file the disk cannot hold is
+    ! refused before a byte is written (ranks agree: each asks the file system itself)
+    call check_room(self, stat)
+    call sync(self, stat)
+    if (stat /= VCI_OK) return
     call h5pcreate_f(H5P_FILE_ACCESS_F, fapl, err)
 #ifdef VCI_HAVE_MPI
     if (err == 0) call h5pset_fapl_mpio_f(fapl, comm%MPI_VAL, MPI_INFO_NULL%MPI_VAL, err)
@@ -126,13 +150,17 @@ contains
     call h5pclose_f(fapl, e2)
     if (err /= 0) then
       if (replace) then
-        call fail(self, 'cannot create the file', stat)
+        call fail(self, 'cannot create the file'//os_cause(), stat)
       else
         call fail(self, 'cannot create the file (an existing file is kept; ask to overwrite it)', stat)
       end if
+    end if
+    self%is_open = err == 0
+    call sync(self, stat)
+    if (stat /= VCI_OK) then
+      if (self%is_open) call drop_new_file(self)
       return
     end if
-    self%is_open = .true.
 
     call h5gcreate_f(self%file, 'members', g, err)
     call h5gclose_f(g, e2)
@@ -142,8 +170,10 @@ contains
     end if
     if (err == 0) call h5gcreate_f(self%file, 'run', g, err)
     call h5gclose_f(g, e2)
-    if (err /= 0) then
-      call fail(self, 'cannot create the groups', stat); return
+    if (err /= 0) call fail(self, 'cannot create the groups', stat)
+    call sync(self, stat)
+    if (stat /= VCI_OK) then
+      call drop_new_file(self); return
     end if
 
     call new_dset(self, D_STATUS, H5T_STD_I32LE, [nm], stat, fill_int=VCI_MEMBER_NOT_RUN)
@@ -175,7 +205,9 @@ contains
     call new_dset(self, D_RANK, H5T_STD_I32LE, [nm], stat, fill_int=-1)
     call new_dset(self, D_THREAD, H5T_STD_I32LE, [nm], stat, fill_int=-1)
     call new_dset(self, D_SECONDS, H5T_IEEE_F64LE, [nm], stat, fill_nan=.true.)
-    if (stat /= VCI_OK) return
+    if (stat /= VCI_OK) then     ! (new_dset made every rank see it)
+      call drop_new_file(self); return
+    end if
 
     start_kind = 'pair'
     if (config%start_kind /= VCI_START_PAIR) start_kind = 'momentum'
@@ -201,11 +233,75 @@ contains
     call h5io_put_attr(self%file, 'complete', 0, stat, self%message, who(self))
     call h5io_put_attr(self%file, 'members_run', 0, stat, self%message, who(self))
     call h5io_put_attr(self%file, 'members_failed', 0, stat, self%message, who(self))
-    if (stat /= VCI_OK) return
     ! metadata on disk now: from here on only raw data are written until close
-    call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
-    if (err /= 0) call fail(self, 'cannot flush the new file', stat)
+    if (stat == VCI_OK) then
+      call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
+      if (err /= 0) call fail(self, 'cannot flush the new file'//os_cause(), stat)
+    end if
+    call sync(self, stat)
+#ifdef VCI_HAVE_MPI
+    if (stat == VCI_OK) then
+      call MPI_Comm_rank(comm, rank, err)
+      call fill_share(self, int(int(nm, i8) * rank / ranks) + 1, int(int(nm, i8) * (rank + 1) / ranks), stat)
+      call sync(self, stat)
+    end if
+    if (stat == VCI_OK) then
+      call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
+      if (err /= 0) call fail(self, 'cannot flush the new file'//os_cause(), stat)
+      call sync(self, stat)
+    end if
+#endif
+    if (stat /= VCI_OK) call drop_new_file(self)
   end subroutine f_create
+
+#ifdef VCI_HAVE_MPI
+  !> The fill values ("not run") of members first .. last in every dataset, written by this rank
+  !> alone (independent I/O), in blocks of at most 2^18 values.
+  subroutine fill_share(self, first, last, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    integer, intent(in) :: first, last
+    integer, intent(inout) :: stat
+    integer, parameter :: max_values = 2**18
+    real(dp), allocatable, target :: r(:)
+    integer, allocatable, target :: k(:)
+    integer(i8), allocatable, target :: l(:)
+    character(len=VCI_ENSEMBLE_MESSAGE_LEN), allocatable, target :: c(:)
+    integer, allocatable :: dims(:)
+    integer(hid_t) :: stype
+    integer :: i, j, lead, block, at, cnt, err, e2
+    do j = 1, N_DSETS
+      if (self%d(j) < 0 .or. stat /= VCI_OK) cycle
+      dims = dims_of(self, j)
+      lead = max(1, product(dims(1:size(dims) - 1)))
+      block = max(1, max_values / lead)
+      do at = first, last, block
+        cnt = min(block, last - at + 1)
+        select case (j)
+        case (D_STATUS, D_RANK, D_THREAD, D_IMPGAP, D_EKIND, D_TRCOUNT)
+          k = [(merge(-1, 0, j == D_STATUS .or. j == D_RANK .or. j == D_THREAD), i=1, lead * cnt)]
+          call put_raw(self, j, H5T_NATIVE_INTEGER, c_loc(k), dims(1:size(dims) - 1), at, cnt, stat)
+        case (D_STEPS, D_IMPACTS, D_NEWTON)
+          l = [(0_i8, i=1, lead * cnt)]
+          call put_raw(self, j, h5kind_to_type(i8, H5_INTEGER_KIND), c_loc(l), dims(1:size(dims) - 1), at, cnt, stat)
+        case (D_MESSAGE)
+          allocate (c(cnt))
+          c = repeat(achar(0), VCI_ENSEMBLE_MESSAGE_LEN)
+          call h5io_string_type(VCI_ENSEMBLE_MESSAGE_LEN, stype, err)
+          if (err == 0) call put_raw(self, j, stype, c_loc(c), dims(1:size(dims) - 1), at, cnt, stat)
+          call h5tclose_f(stype, e2)
+          deallocate (c)
+        case (D_T0, D_Q0, D_V0, D_PARAMS)
+          r = [(0.0_dp, i=1, lead * cnt)]
+          call put_raw(self, j, H5T_NATIVE_DOUBLE, c_loc(r), dims(1:size(dims) - 1), at, cnt, stat)
+        case default
+          r = [(ieee_value(1.0_dp, ieee_quiet_nan), i=1, lead * cnt)]
+          call put_raw(self, j, H5T_NATIVE_DOUBLE, c_loc(r), dims(1:size(dims) - 1), at, cnt, stat)
+        end select
+        if (stat /= VCI_OK) exit
+      end do
+    end do
+  end subroutine fill_share
+#endif
 
   !> Write the starts and parameters of members first .. first + count - 1 (each rank its share).
   subroutine f_write_table(self, table, first, count, stat)
@@ -279,9 +375,21 @@ contains
     integer :: i, err
     stat = VCI_OK
     if (.not. self%is_open) return
+    if (self%discarded) then      ! the message says why; the disk keeps every block written before
+      call f_abandon(self)
+      stat = VCI_ERR_IO; return
+    end if
     call h5io_put_attr(self%file, 'members_run', members_run, stat, self%message, who(self))
     call h5io_put_attr(self%file, 'members_failed', members_failed, stat, self%message, who(self))
     call h5io_put_attr(self%file, 'complete', merge(1, 0, members_run == self%n_members), stat, self%message, who(self))
+    ! flushed before closing: a full disk here must not leave HDF5 a metadata flush it cannot finish
+    if (stat == VCI_OK) then
+      call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
+      if (err /= 0) call fail(self, 'cannot record the totals'//os_cause(), stat)
+    end if
+    if (stat /= VCI_OK) then
+      call f_abandon(self); return
+    end if
     do i = 1, N_DSETS
       if (self%d(i) >= 0) call h5dclose_f(self%d(i), err)
       self%d(i) = -1
@@ -290,6 +398,105 @@ contains
     if (err /= 0 .and. stat == VCI_OK) call fail(self, 'cannot close the file', stat)
     self%is_open = .false.
   end subroutine f_close
+
+  !> Stop writing: what HDF5 still holds goes to a sink (serial files; see the module's head), then
+  !> close. The file keeps its metadata as flushed at creation and every block of members written
+  !> before: it opens, and holds every member whose status is not -1. Collective under MPI.
+  subroutine f_abandon(self)
+    class(vci_ensemble_file_t), intent(inout) :: self
+    integer :: i, err
+    if (.not. self%is_open) return
+    if (.not. self%discarded) call discard(self)
+    self%discarded = .true.
+    ! a metadata flush that failed half-way (a full disk) is completed into the sink: HDF5 1.10
+    ! can neither close a file with such a flush pending nor leave it (it crashed at exit)
+#ifndef VCI_HAVE_MPI
+    call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
+#endif
+    do i = 1, N_DSETS
+      if (self%d(i) >= 0) call h5dclose_f(self%d(i), err)
+      self%d(i) = -1
+    end do
+    call h5fclose_f(self%file, err)
+    self%is_open = .false.
+  end subroutine f_abandon
+
+  !> Creation failed (on some rank): close without writing more and remove the file, which holds no
+  !> member and whose metadata never reached the disk. Collective under MPI.
+  subroutine drop_new_file(self)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    integer :: u, ios, rank
+    call f_abandon(self)
+    rank = 0
+#ifdef VCI_HAVE_MPI
+    call MPI_Comm_rank(self%comm, rank, ios)
+#endif
+    if (rank /= 0) return
+    open (newunit=u, file=self%path, status='old', iostat=ios)
+    if (ios == 0) close (u, status='delete', iostat=ios)
+    if (ios == 0) self%message = trim(self%message)//' (the file was removed: it held no member yet)'
+  end subroutine drop_new_file
+
+  !> The file's size (every dataset of this ensemble, as f_create makes them) against the room on its
+  !> file system; a failure (VCI_ERR_IO) saying both when it does not fit.
+  subroutine check_room(self, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    integer, intent(inout) :: stat
+    real(dp) :: per_member, bytes
+    integer(i8) :: free
+    character(len=300) :: why
+    ! in real(dp): the product of sizes read from a command line may not fit an integer
+    per_member = 4 + VCI_ENSEMBLE_MESSAGE_LEN + 8 * (1 + 4 * real(self%n, dp) + self%n_params) + 8 + 24 + 4 + 24 &
+                 + 12 * real(self%impact_cap, dp) + 4 + 8 + 4 + 8
+    if (self%samples > 0) per_member = per_member + 4 + real(self%samples, dp) * (8 + 16 * real(self%n, dp))
+    bytes = per_member * real(self%n_members, dp)
+    free = h5io_free_bytes(self%path)
+    if (free < 0 .or. bytes <= real(free, dp)) return
+    write (why, '(a,es10.3,a,i0,a,i0,a,i0,a,es10.3,a)') 'the file would take ', bytes, ' bytes (', self%n_members, &
+      ' members, ', self%samples, ' trajectory samples and ', self%impact_cap, ' impact times each), the file '// &
+      'system has ', real(free, dp), ' free; nothing was written'
+    call fail(self, trim(why), stat)
+  end subroutine check_room
+
+  !> Under MPI, a failure on any rank becomes every rank's (the lowest failing rank's status and
+  !> message), so that all ranks take the same branch before the next collective call.
+  subroutine sync(self, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    integer, intent(inout) :: stat
+#ifdef VCI_HAVE_MPI
+    integer :: owner, rank, ierr
+    call MPI_Comm_rank(self%comm, rank, ierr)
+    owner = huge(1)
+    if (stat /= VCI_OK) owner = rank
+    call MPI_Allreduce(MPI_IN_PLACE, owner, 1, MPI_INTEGER, MPI_MIN, self%comm, ierr)
+    if (owner == huge(1)) return
+    call MPI_Bcast(stat, 1, MPI_INTEGER, owner, self%comm, ierr)
+    call MPI_Bcast(self%message, len(self%message), MPI_CHARACTER, owner, self%comm, ierr)
+#else
+    if (stat /= VCI_OK .and. len_trim(self%message) == 0) self%message = 'ensemble file: failed'
+#endif
+  end subroutine sync
+
+  !> Point the file's descriptor at a sink (vci_h5_io). Serial files only: the MPI-IO driver has no
+  !> descriptor to redirect, and asking HDF5 for the driver of such a file is itself collective
+  !> (H5Fget_access_plist duplicates the communicator), which one failed rank cannot call alone.
+  subroutine discard(self)
+    type(vci_ensemble_file_t), intent(inout) :: self
+#ifndef VCI_HAVE_MPI
+    call h5io_discard_writes(self%file)
+#endif
+    self%discarded = .true.
+  end subroutine discard
+
+  !> ': ' and the operating system's reason for HDF5's last failure (say "No space left on device"),
+  !> or nothing; right after the failing call.
+  function os_cause() result(s)
+    character(len=:), allocatable :: s
+    character(len=256) :: cause
+    cause = h5io_os_cause()
+    s = ''
+    if (len_trim(cause) > 0) s = ': '//trim(cause)
+  end function os_cause
 
   !> Read a whole ensemble file (any number of ranks wrote it) into `results` (all members) and,
   !> optionally, its table and the configuration it was run with (threads and chunk as recorded).
@@ -433,6 +640,12 @@ contains
     if (err == 0) call h5pcreate_f(H5P_DATASET_CREATE_F, dcpl, err)
     ! space allocated now (parallel HDF5 requires it): later writes never touch metadata
     if (err == 0) call h5pset_alloc_time_f(dcpl, H5D_ALLOC_TIME_EARLY_F, err)
+#ifdef VCI_HAVE_MPI
+    ! parallel HDF5 writes fill values inside the collective H5Dcreate and waits at a barrier after:
+    ! a rank whose write failed (a full disk) leaves the others there for ever. Each rank writes its
+    ! share of the fill itself instead (fill_share), outside any collective call.
+    if (err == 0) call h5pset_fill_time_f(dcpl, H5D_FILL_TIME_NEVER_F, err)
+#endif
     if (err == 0 .and. present(fill_nan)) then
       fnan = ieee_value(1.0_dp, ieee_quiet_nan)
       call h5pset_fill_value_f(dcpl, H5T_NATIVE_DOUBLE, c_loc(fnan), err)
@@ -442,9 +655,10 @@ contains
       call h5pset_fill_value_f(dcpl, H5T_NATIVE_INTEGER, c_loc(fint), err)
     end if
     if (err == 0) call h5dcreate_f(self%file, trim(names(which)), ftype, space, self%d(which), err, dcpl_id=dcpl)
+    if (err /= 0) call fail(self, 'cannot create dataset /'//trim(names(which))//os_cause(), stat)
     call h5pclose_f(dcpl, e2)
     call h5sclose_f(space, e2)
-    if (err /= 0) call fail(self, 'cannot create dataset /'//trim(names(which)), stat)
+    call sync(self, stat)       ! collective: no rank may go on to the next H5Dcreate alone
   end subroutine new_dset
 
   subroutine new_string_dset(self, which, nm, stat)
@@ -491,11 +705,18 @@ contains
     integer(hid_t) :: fspace, mspace
     integer :: err, e2
     if (stat /= VCI_OK) return
+    if (self%discarded) then
+      call fail(self, 'writes stopped after an earlier failure', stat); return
+    end if
     call select_members(self, which, lead, first, count, fspace, mspace, err)
     if (err == 0) call h5dwrite_f(self%d(which), mtype, buf, err, mspace, fspace)
+    if (err /= 0) call fail(self, 'cannot write /'//trim(names(which))//os_cause(), stat)
     if (mspace >= 0) call h5sclose_f(mspace, e2)
     call h5sclose_f(fspace, e2)
-    if (err /= 0) call fail(self, 'cannot write /'//trim(names(which)), stat)
+    if (err /= 0) then           ! (a full disk): nothing more may reach the file
+      call discard(self)
+      self%discarded = .true.
+    end if
   end subroutine put_raw
 
   subroutine put_f64(self, which, buf, lead, first, count, stat)

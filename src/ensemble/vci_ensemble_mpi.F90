@@ -64,8 +64,8 @@ contains
     type(vci_ensemble_file_t) :: file
     type(vci_ensemble_results_t) :: res
     character(len=VCI_MSG_LEN) :: msg
-    integer :: rank, nranks, nt, chunk, n_members, first, cnt, i, s, run, failed, share0, share1, take, taken
-    integer(i8) :: next_local
+    integer :: rank, nranks, nt, chunk, n_members, first, cnt, i, s, run, failed, share0, share1, take
+    integer(i8) :: next_local, first8, taken
 
     rank = 0; nranks = 1
     msg = ''
@@ -121,7 +121,7 @@ contains
     call agree(stat, msg, com)
 #endif
     if (stat /= VCI_OK) then
-      if (file%is_open) call file%close(0, 0, s)
+      call file%abandon()        ! (create removed its file itself when it failed)
       if (present(message)) message = msg
       return
     end if
@@ -132,18 +132,25 @@ contains
     next_local = 0
     taken = 0
     do
-      take = claim_size(config%chunk, nt, nranks, n_members - taken)
+      take = claim_size(config%chunk, nt, nranks, int(max(0_i8, n_members - taken)))
+      ! 64-bit: the counter passes n_members by up to a claim a rank (a chunk may be huge(1))
 #ifdef VCI_HAVE_MPI
-      first = int(counter_take(win, take)) + 1
+      first8 = counter_take(win, take) + 1
 #else
-      first = int(next_local) + 1
+      first8 = next_local + 1
       next_local = next_local + take
 #endif
-      if (first > n_members) exit
-      taken = first - 1 + take          ! members handed out, as far as this rank knows
-      cnt = min(take, n_members - first + 1)
+      if (first8 > n_members) exit
+      first = int(first8)
+      taken = first8 - 1 + take          ! members handed out, as far as this rank knows
+      cnt = int(min(int(take, i8), n_members - first8 + 1))
       call vci_ensemble_results_alloc(res, config, size(table%q0, 1), first, cnt, stat, msg)
-      if (stat /= VCI_OK) exit
+      if (stat /= VCI_OK) then
+#ifdef VCI_HAVE_MPI
+        call counter_stop(win, n_members)
+#endif
+        exit
+      end if
       !$omp parallel do num_threads(nt) schedule(dynamic, 1) default(none) &
       !$omp   shared(factory, config, table, res, first, cnt) private(i)
       do i = first, first + cnt - 1
@@ -153,7 +160,12 @@ contains
       call file%write_results(res, rank, stat)
       if (stat /= VCI_OK) then
         msg = file%message
-        exit        ! this rank stops taking members; the others go on
+        ! the file takes no more members (a full disk is every rank's): the others stop claiming,
+        ! finish the block they hold, and meet this rank at the collective calls below
+#ifdef VCI_HAVE_MPI
+        call counter_stop(win, n_members)
+#endif
+        exit
       end if
       run = run + cnt
       failed = failed + count(res%status /= VCI_OK)
@@ -165,9 +177,13 @@ contains
     run = stats(1); failed = stats(2)
     call agree(stat, msg, com)
 #endif
-    call file%close(run, failed, s)
-    if (stat == VCI_OK .and. s /= VCI_OK) then
-      stat = s; msg = file%message
+    if (stat /= VCI_OK) then
+      call file%abandon()     ! every rank knows: no rank writes the totals of a file that failed
+    else
+      call file%close(run, failed, s)
+      if (s /= VCI_OK) then
+        stat = s; msg = file%message
+      end if
     end if
 #ifdef VCI_HAVE_MPI
     call agree(stat, msg, com)
@@ -250,6 +266,14 @@ contains
     call MPI_Win_flush(0, win, ierr)
     before = old
   end function counter_take
+
+  !> Push the counter past the last member: every rank's next claim finds nothing left.
+  subroutine counter_stop(win, n_members)
+    type(MPI_Win), intent(in) :: win
+    integer, intent(in) :: n_members
+    integer(i8) :: before
+    before = counter_take(win, n_members)
+  end subroutine counter_stop
 
   subroutine counter_close(win)
     type(MPI_Win), intent(inout) :: win

@@ -10,14 +10,14 @@
 !> dataset has the rank and row width asked for. Dims are in Fortran order (the row index last).
 module vci_h5_io
   use, intrinsic :: iso_c_binding, only: c_ptr, c_loc, c_char, c_int, c_size_t, c_f_pointer, &
-                                          c_associated, c_funptr, c_funloc, c_int64_t
+                                          c_associated, c_funptr, c_funloc, c_int64_t, c_long_long, c_null_char
   use hdf5
   use vci_kinds, only: dp, i8
   use vci_status, only: VCI_OK, VCI_ERR_IO
   implicit none
   private
 
-  public :: h5io_fail, h5io_os_cause, h5io_discard_writes
+  public :: h5io_fail, h5io_os_cause, h5io_discard_writes, h5io_free_bytes, h5io_path_kind
   public :: h5io_put_attr, h5io_get_attr
   public :: h5io_make_rows, h5io_open_dset, h5io_rows, h5io_append_rows, h5io_read_row, h5io_check_dims
   public :: h5io_put_vector, h5io_get_vector, h5io_close_dset, h5io_string_type
@@ -62,6 +62,16 @@ module vci_h5_io
       import :: c_int
       integer(c_int), value :: fd
     end function vci_discard_fd
+    !> src/io/vci_fs_space.c: bytes free where path would be written, -1 when unknown
+    integer(c_long_long) function vci_free_bytes(path) bind(C, name='vci_free_bytes')
+      import :: c_long_long, c_char
+      character(kind=c_char), intent(in) :: path(*)
+    end function vci_free_bytes
+    !> src/io/vci_fs_space.c: 0 nothing there, 1 a regular file, 2 anything else (FIFO, device, ...)
+    integer(c_int) function vci_path_kind(path) bind(C, name='vci_path_kind')
+      import :: c_int, c_char
+      character(kind=c_char), intent(in) :: path(*)
+    end function vci_path_kind
     integer(c_size_t) function c_strlen(s) bind(C, name='strlen')
       import :: c_ptr, c_size_t
       type(c_ptr), value :: s
@@ -139,6 +149,19 @@ contains
       r = vci_discard_fd(fd)   ! (src/io/vci_fd_discard.c: a sink that also takes HDF5's ftruncate at close)
     end if
   end subroutine h5io_discard_writes
+
+  !> Bytes free on the file system that would hold PATH (the file need not exist); -1 when unknown.
+  integer(i8) function h5io_free_bytes(path)
+    character(len=*), intent(in) :: path
+    h5io_free_bytes = int(vci_free_bytes(path//c_null_char), i8)
+  end function h5io_free_bytes
+
+  !> What PATH names, told without opening it: 0 nothing, 1 a regular file, 2 anything else (a FIFO,
+  !> whose opening for reading blocks until a writer comes; a device; a directory).
+  integer function h5io_path_kind(path)
+    character(len=*), intent(in) :: path
+    h5io_path_kind = int(vci_path_kind(path//c_null_char))
+  end function h5io_path_kind
 
   ! --- attributes --------------------------------------------------------------------------------
 
@@ -450,8 +473,43 @@ contains
     if (dims(want) > int(huge(1_i8), hsize_t)) then
       call h5io_fail('dataset '//name//' has too many rows', stat, message, who); return
     end if
+    call check_extent_fits(dset, name, real(dims(want), dp) * max(width, 1), stat, message, who)
+    if (stat /= VCI_OK) return
     rows = int(dims(want), i8)
   end function h5io_rows
+
+  !> A dataset of `elements` values must fit in its file's bytes: an extent a damaged file claims
+  !> (2^40 rows in 100 kB) is refused before anything is read, cut or allocated by it (cutting it
+  !> with H5Dset_extent visits every chunk of the extent: hours).
+  subroutine check_extent_fits(dset, name, elements, stat, message, who)
+    integer(hid_t), intent(in) :: dset
+    character(len=*), intent(in) :: name, who
+    real(dp), intent(in) :: elements     ! (real: a damaged extent times the width may pass 2^63)
+    integer, intent(inout) :: stat
+    character(len=*), intent(inout) :: message
+    integer(hid_t) :: file, dtype
+    integer(hsize_t) :: file_bytes
+    integer(size_t) :: type_bytes
+    integer :: err, e2
+    character(len=200) :: why
+    if (stat /= VCI_OK) return
+    call h5iget_file_id_f(dset, file, err)
+    if (err == 0) call h5fget_filesize_f(file, file_bytes, err)
+    if (err == 0) call h5fclose_f(file, e2)      ! (closes the identifier only; the file stays open)
+    type_bytes = 1
+    call h5dget_type_f(dset, dtype, e2)
+    if (e2 == 0) then
+      call h5tget_size_f(dtype, type_bytes, e2)
+      call h5tclose_f(dtype, e2)
+    end if
+    if (err /= 0) then
+      call h5io_fail('cannot tell the size of the file holding dataset '//name, stat, message, who); return
+    end if
+    if (elements * real(max(type_bytes, 1_size_t), dp) <= real(file_bytes, dp)) return
+    write (why, '(a,es10.3,a,i0,a)') 'dataset '//name//' claims ', elements, &
+      ' values, more than the file''s ', file_bytes, ' bytes can hold (a damaged extent)'
+    call h5io_fail(trim(why), stat, message, who)
+  end subroutine check_extent_fits
 
   !> Check that a dataset has exactly the Fortran shape `dims` (rank and every extent) before it is
   !> read whole into a buffer of that shape.

@@ -39,6 +39,8 @@ module vci_hdf5_output
 
   !> Default number of steps between flushes.
   integer, parameter, public :: VCI_HDF5_FLUSH_EVERY = 4096
+  !> Most steps between flushes (the buffer holds that many rows of t, q, p, energy, lambda).
+  integer, parameter, public :: VCI_HDF5_FLUSH_MAX = 1048576
 
   ! rows per chunk: states and steps, impacts (few, so small chunks)
   integer, parameter :: chunk_rows = 1024, impact_chunk_rows = 64
@@ -73,6 +75,8 @@ module vci_hdf5_output
     integer(i8), allocatable, private :: is(:)
     integer, allocatable, private :: ig(:)
     real(dp), allocatable, private :: cp_rec(:)   !< the file's checkpoint, when it is valid (reading)
+    integer, private :: cp_version = 0            !< its layout version (attribute /checkpoint version)
+    logical, private :: cp_version_written = .false.   !< this session wrote /checkpoint's version
   contains
     procedure :: open => w_open
     procedure :: close => w_close
@@ -118,14 +122,14 @@ contains
       self%scene = ''
     end if
     if (present(flush_every)) then
-      if (flush_every < 1) then
-        call fail(self, 'flush_every must be >= 1', stat); return
+      if (flush_every < 1 .or. flush_every > VCI_HDF5_FLUSH_MAX) then
+        call fail(self, 'flush_every must be in [1, 1048576]', stat); return
       end if
       self%flush_every = flush_every
     end if
     self%started = .false.; self%flush_pending = .false.
     self%ns = 0; self%ne = 0; self%ni = 0
-    self%have_cp = .false.; self%discarded = .false.
+    self%have_cp = .false.; self%discarded = .false.; self%cp_version_written = .false.
 
     call h5open_f(err)
     if (err == 0) call h5eset_auto_f(0, err)   ! the library never prints
@@ -137,6 +141,9 @@ contains
     if (self%append) then
       if (.not. exists) then
         call fail(self, 'cannot append: the file does not exist', stat); return
+      end if
+      if (h5io_path_kind(path) /= 1) then     ! never opened: opening a FIFO blocks
+        call fail(self, 'cannot append: not a regular file (a FIFO, a device or a directory)', stat); return
       end if
       call h5fopen_f(path, H5F_ACC_RDWR_F, self%file, err)
       if (err /= 0) then
@@ -271,7 +278,8 @@ contains
     if (err == 0 .and. ex) call h5gopen_f(self%file, 'checkpoint', self%g_cp, err)
     if (allocated(self%cp_rec)) deallocate (self%cp_rec)
     if (self%g_cp >= 0) then
-      row_cp = checkpoint_row(self, min(rows_t, rows_q, rows_p) - 1, min(rows_e, rows_l))
+      row_cp = checkpoint_row(self, min(rows_t, rows_q, rows_p) - 1, min(rows_e, rows_l), stat)
+      if (stat /= VCI_OK) return
       if (row_cp >= 0) self%steps = row_cp
     end if
     self%rows = self%steps + 1
@@ -293,14 +301,33 @@ contains
     if (self%append) call truncate_to_trusted(self, stat)
   end subroutine open_existing
 
-  !> The row of /checkpoint/record when it is a valid checkpoint of that row (its q and p are the
-  !> row's, the row is within max_row and its step within max_steps), else -1; kept in cp_rec.
-  integer(i8) function checkpoint_row(self, max_row, max_steps) result(row)
+  !> The row of /checkpoint/record when it is a valid checkpoint of that row (its layout version is
+  !> this library's, its time, q and p are the row's, the row is within max_row and its step within
+  !> max_steps), else -1; kept in cp_rec. A checkpoint of a newer layout than this library knows
+  !> refuses the file (stat): a newer vci wrote it, and this one would continue it differently.
+  integer(i8) function checkpoint_row(self, max_row, max_steps, stat) result(row)
     type(vci_hdf5_writer_t), intent(inout) :: self
     integer(i8), intent(in) :: max_row, max_steps
+    integer, intent(inout) :: stat
     real(dp), allocatable :: rec(:), qr(:, :), pr(:, :)
+    real(dp) :: tr(1), t_cp
     integer :: n, s, st
+    logical :: ex_version
     row = -1
+    ! the layout version; files written before it was stored hold version 3 (the last unversioned)
+    s = VCI_OK
+    self%cp_version = 3
+    call h5aexists_f(self%g_cp, 'version', ex_version, st)
+    if (st == 0 .and. ex_version) call h5io_get_attr(self%g_cp, 'version', self%cp_version, s, self%message, self%path)
+    if (s /= VCI_OK) then
+      self%message = ''; return      ! unreadable: no usable checkpoint, the last row serves
+    end if
+    if (self%cp_version > VCI_CHECKPOINT_VERSION) then
+      write (self%message, '(a,i0,a,i0,a)') self%path//': its checkpoint has layout version ', self%cp_version, &
+        ', newer than this library''s ', VCI_CHECKPOINT_VERSION, ' (written by a newer vci: continue it with that one)'
+      stat = VCI_ERR_IO; return
+    end if
+    if (self%cp_version /= VCI_CHECKPOINT_VERSION) return   ! an older layout: the last row serves
     n = self%n
     allocate (rec(1 + vci_checkpoint_record_size(n, self%m)), qr(n, 1), pr(n, 1), stat=st)
     if (st /= 0) return
@@ -318,10 +345,16 @@ contains
     if (rec(4) /= self%h) return
     call h5io_read_row(self%d_q, n, int(rec(1), i8), qr, s, self%message, self%path)
     call h5io_read_row(self%d_p, n, int(rec(1), i8), pr, s, self%message, self%path)
+    call h5io_read_row(self%d_t, 0, int(rec(1), i8), tr, s, self%message, self%path)
     if (s /= VCI_OK) then
       self%message = ''; return
     end if
     if (any(qr(:, 1) /= rec(8:7 + n)) .or. any(pr(:, 1) /= rec(8 + n:7 + 2 * n))) return
+    ! its time t0 + k h must be the row's t (both are the driver's t0 + k h; a few ulps allow for
+    ! rounding): a damaged step index or t0 would restart the run at another time
+    t_cp = rec(3) + rec(2) * rec(4)
+    if (.not. ieee_is_finite(t_cp)) return
+    if (.not. abs(t_cp - tr(1)) <= 4 * epsilon(1.0_dp) * (abs(rec(3)) + abs(rec(2) * rec(4)))) return
     row = int(rec(1), i8)
     call move_alloc(rec, self%cp_rec)
   end function checkpoint_row
@@ -398,8 +431,8 @@ contains
     else
       call start_new(self, info, s)
     end if
+    if (s == VCI_OK) call alloc_buffers(self, s)
     if (s == VCI_OK) then
-      call alloc_buffers(self)
       self%step0 = info%step0
       self%last_step = info%step0
       self%t_start = info%t0
@@ -482,14 +515,26 @@ contains
     self%row_start = self%rows - 1
   end subroutine start_append
 
-  subroutine alloc_buffers(self)
+  subroutine alloc_buffers(self, stat)
     type(vci_hdf5_writer_t), intent(inout) :: self
-    integer :: c
-    c = self%flush_every + 1
-    if (allocated(self%bt)) deallocate (self%bt, self%bq, self%bp, self%be, self%bl)
-    allocate (self%bt(c), self%bq(self%n, c), self%bp(self%n, c), self%be(c), self%bl(self%m, c))
-    if (allocated(self%it)) deallocate (self%it, self%is, self%ia, self%ig, self%iq, self%ii)
-    allocate (self%it(16), self%is(16), self%ia(16), self%ig(16), self%iq(self%n, 16), self%ii(16))
+    integer, intent(inout) :: stat
+    integer :: c, s1, s2
+    c = self%flush_every + 1      ! (flush_every <= VCI_HDF5_FLUSH_MAX: no overflow)
+    ! one at a time: an allocation that failed half-way may have left some unallocated
+    if (allocated(self%bt)) deallocate (self%bt)
+    if (allocated(self%bq)) deallocate (self%bq)
+    if (allocated(self%bp)) deallocate (self%bp)
+    if (allocated(self%be)) deallocate (self%be)
+    if (allocated(self%bl)) deallocate (self%bl)
+    allocate (self%bt(c), self%bq(self%n, c), self%bp(self%n, c), self%be(c), self%bl(self%m, c), stat=s1)
+    if (allocated(self%it)) deallocate (self%it)
+    if (allocated(self%is)) deallocate (self%is)
+    if (allocated(self%ia)) deallocate (self%ia)
+    if (allocated(self%ig)) deallocate (self%ig)
+    if (allocated(self%iq)) deallocate (self%iq)
+    if (allocated(self%ii)) deallocate (self%ii)
+    allocate (self%it(16), self%is(16), self%ia(16), self%ig(16), self%iq(self%n, 16), self%ii(16), stat=s2)
+    if (s1 /= 0 .or. s2 /= 0) call fail(self, 'no memory for a buffer of flush_every rows (lower flush_every)', stat)
   end subroutine alloc_buffers
 
   subroutine buffer_state(self, t, q, p)
@@ -664,6 +709,7 @@ contains
     type(vci_checkpoint_t), intent(in) :: cp
     integer, intent(inout) :: stat
     integer :: err
+    logical :: ex
     if (stat /= VCI_OK) return
     if (self%g_cp < 0) then
       call h5gcreate_f(self%file, 'checkpoint', self%g_cp, err)
@@ -672,6 +718,14 @@ contains
       end if
     end if
     call h5io_put_vector(self%g_cp, 'record', [real(self%rows - 1, dp), cp%to_record()], stat, self%message, self%path)
+    ! the record's layout version: a reader takes the record only in the layout it knows. Made anew
+    ! once a file (an appended file's attribute may be of another type, or absent)
+    if (.not. self%cp_version_written) then
+      call h5aexists_f(self%g_cp, 'version', ex, err)
+      if (err == 0 .and. ex) call h5adelete_f(self%g_cp, 'version', err)
+      call h5io_put_attr(self%g_cp, 'version', VCI_CHECKPOINT_VERSION, stat, self%message, self%path)
+      self%cp_version_written = stat == VCI_OK
+    end if
   end subroutine put_checkpoint
 
   !> The state a restart from PATH starts with, as a checkpoint for `integ%restore`. With a
@@ -699,6 +753,8 @@ contains
     inquire (file=path, exist=ex)
     if (.not. ex) then
       call fail(r, 'cannot read: the file does not exist', stat)
+    else if (h5io_path_kind(path) /= 1) then     ! never opened: opening a FIFO blocks
+      call fail(r, 'cannot read: not a regular file (a FIFO, a device or a directory)', stat)
     else
       call h5fopen_f(path, H5F_ACC_RDONLY_F, r%file, err)
       if (err /= 0) call fail(r, 'cannot open: not an HDF5 file or not readable', stat)
@@ -715,7 +771,7 @@ contains
     if (use_cp) then
       n = r%n
       call move_alloc(r%cp_rec, rec)
-      call cp%from_record(rec(2:), n, r%m, VCI_CHECKPOINT_VERSION, s)
+      call cp%from_record(rec(2:), n, r%m, r%cp_version, s)
       use_cp = s == VCI_OK
     end if
     if (.not. use_cp .and. stat == VCI_OK) then

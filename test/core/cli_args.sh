@@ -2,9 +2,11 @@
 # Issue 11 item 10: the examples' command lines are read strictly. Every bad line below must end
 # with a nonzero exit status, a message on stderr that names the offending flag (or path), no
 # "status: ok", and no file written; the good lines must still run.
-# Usage: cli_args.sh <bin dir> <work dir>
+# Issue 24 item 6: sizes (steps, members, caps, strides, flush intervals) are bounded before
+# anything is allocated or written; nothing wraps. ellipse_ensemble (when built) likewise.
+# Usage: cli_args.sh <bin dir> <work dir> [hdf5: ON when the examples write HDF5]
 set -uo pipefail
-bin=$1; work=$2
+bin=$1; work=$2; hdf5=${3:-OFF}
 mkdir -p "$work" && cd "$work" || exit 1
 fail=0
 # "<flags>|<text the message must contain>"
@@ -33,6 +35,7 @@ bad=(
   "--rtol nan|--rtol"
   "--flush-every 0|--flush-every"
   "--flush-every 1e3|--flush-every"
+  "--flush-every 2147483647|--flush-every"
   "--stages 0|--stages"
   "--stages 9|--stages"
   "--scheme trapezoid|--scheme"
@@ -57,6 +60,49 @@ for ex in ellipse pendulum pendulum_walls; do
   done
 done
 [ -e /dev/full.h5 ] && { echo "FAIL: /dev/full.h5 exists"; fail=1; }
+
+# ellipse_ensemble: every size bounded before the table is allocated or the file written
+if [ -x "$bin/ellipse_ensemble" ]; then
+  ens_bad=(
+    "--t-final 1e300|--t-final"
+    "--t-final 1e12 --h 1e-6|2^53 steps"
+    "--members 1000000000|--members"
+    "--members 1|--members"
+    "--impact-cap 2147483647|--impact-cap"
+    "--impact-cap 0|--impact-cap"
+    "--threads 100000|--threads"
+    "--stride -1|--stride"
+    "--chunk -1|--chunk"
+    "--h 1e300|--h"
+    "--members 1e9|--members"
+  )
+  if [ "$hdf5" = ON ]; then
+    # within the flags' ranges, but a file no disk holds (fill values are written at creation):
+    # refused before a byte is written. 1e7 members of 4.4e9 steps (no wrap: t-final / h counted in
+    # 64 bits) at stride 10 are 4.4e8 samples of 7 doubles each: >= 1e7 * 4.4e8 * 56 = 2.46e17 bytes
+    ens_bad+=("--members 10000000 --t-final 4.4e7|the file would take"
+              "--stride 1 --t-final 1e7 --members 10000000|the file would take"
+              "--impact-cap 1000000 --members 10000000|the file would take")
+  fi
+  for case in "${ens_bad[@]}"; do
+    flags=${case%%|*}; want=${case#*|}
+    rm -f ./*.h5
+    eval "timeout 60 \"$bin/ellipse_ensemble\" $flags --quiet --output ens.h5" > out.txt 2> err.txt
+    rc=$?
+    if [ $rc -eq 0 ] || [ $rc -eq 124 ] || [ $rc -ge 128 ] || ! grep -qF -- "$want" err.txt; then
+      echo "FAIL: ellipse_ensemble $flags (exit $rc): $(head -c 300 err.txt)"; fail=1
+    elif [ -e ens.h5 ]; then
+      echo "FAIL: ellipse_ensemble $flags wrote ens.h5 ($(stat -c %s ens.h5) bytes)"; fail=1
+    fi
+  done
+  if [ "$hdf5" = ON ]; then
+    # the 4.4e7 case: the size the message states is that of 4.4e9 steps, not of a wrapped count
+    eval "\"$bin/ellipse_ensemble\" --members 10000000 --t-final 4.4e7 --quiet --output ens.h5" > out.txt 2> err.txt
+    bytes=$(sed -n 's/.*the file would take *\([0-9.E+-]*\) bytes.*/\1/p' err.txt)
+    awk -v b="$bytes" 'BEGIN { exit !(b + 0 >= 2.46e17) }' \
+      || { echo "FAIL: --t-final 4.4e7: the file's size ($bytes bytes) is not that of 4.4e9 steps"; fail=1; }
+  fi
+fi
 # good lines still run (numbers in every accepted spelling)
 for flags in "--h 1e-2 --t-final 0.05" "--h 0.01 --t-final +5E-2" "--h 1.0d-2 --t-final 5e-2 --max-impacts 4" \
              "--h .01 --t-final 0.05 --rtol 1e-10 --flush-every 7"; do

@@ -81,6 +81,10 @@ program ens_driver
     if (rank == 0) print '(a,i0,a,i0,a)', 'ran ', nm, ' members, ', failed, ' failed'
     if (stat /= VCI_OK) then
       print '(a,i0,a)', 'rank ', rank, ': '//trim(msg)
+      flush (6)
+#ifdef VCI_HAVE_MPI
+      call MPI_Barrier(MPI_COMM_WORLD, ierr)   ! every rank's status printed before finish aborts
+#endif
       call finish(1)
     end if
   case ('verify')

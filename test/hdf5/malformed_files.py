@@ -4,9 +4,16 @@ checked before use. A good file from each example is damaged one way at a time (
 naming the file, or (where the damage only costs the checkpoint) accepted. Never a signal, a hang,
 a runtime error or an allocation the file dictates.
 
+Issue 24 item 7: extents are checked against the file's size before anything is cut or read (an
+extent of 2^40 rows in a small file is refused at once, not cut row by row for hours); a
+checkpoint whose time is not its row's t is not used (the run restarts from that row's state, at
+its t); a checkpoint of a future layout version refuses the file; `--from` a FIFO is refused at
+once, not opened (which would block).
+
 Usage: malformed_files.py ELLIPSE_EXE PENDULUM_EXE WORKDIR
 """
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -20,7 +27,7 @@ os.chdir(work)
 
 def run(cmd):
     try:
-        p = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
     except subprocess.TimeoutExpired:
         return None, "", "timeout"
     return p.returncode, p.stdout, p.stderr
@@ -40,6 +47,13 @@ def replace(f, name, data, dtype=None):
 def set_attr(f, name, value):
     del f.attrs[name]
     f.attrs[name] = value
+
+def record(f, i, value):
+    f["checkpoint/record"][i] = value
+
+def grow(f, name, rows):
+    d = f[name]
+    d.resize((rows,) + d.shape[1:])
 
 # (label, source file, damage, expected): "refuse" = exit status 1 naming the file; "accept" = runs
 CASES = [
@@ -74,7 +88,31 @@ CASES = [
     ("/lambda wrong width", PEN, lambda f: replace(f, "lambda", np.zeros((1500, 3))), "refuse"),
     ("/lambda missing", PEN, lambda f: f.__delitem__("lambda"), "refuse"),
     ("attribute m = 0 (the pendulum has 1)", PEN, lambda f: set_attr(f, "m", np.int32(0)), "refuse"),
+    # extents the file's bytes cannot hold (2^40 rows of /t in a file of a few kB)
+    ("/t extent 2^40 rows", ELL, lambda f: grow(f, "t", 2**40), "refuse"),
+    ("/q extent 2^40 rows", ELL, lambda f: grow(f, "q", 2**40), "refuse"),
+    ("/energy extent 2^40, steps_completed 2^62", ELL,
+     lambda f: (grow(f, "energy", 2**40), set_attr(f, "steps_completed", np.int64(2**62))), "refuse"),
+    ("/impacts/time extent 2^40", ELL, lambda f: grow(f, "impacts/time", 2**40), "refuse"),
+    # a checkpoint whose time is not its row's: the row's state serves (at the row's t)
+    ("checkpoint step index + 1e13", ELL, lambda f: record(f, 1, f["checkpoint/record"][1] + 1e13), "row"),
+    ("checkpoint step index - 1", ELL, lambda f: record(f, 1, f["checkpoint/record"][1] - 1), "row"),
+    ("checkpoint step index 0", ELL, lambda f: record(f, 1, 0.0), "row"),
+    ("checkpoint t0 = 1", ELL, lambda f: record(f, 2, 1.0), "row"),
+    ("checkpoint t0 = 1e308", ELL, lambda f: record(f, 2, 1e308), "row"),
+    ("checkpoint version 1 (older)", ELL, lambda f: f["checkpoint"].attrs.__setitem__("version", np.int32(1)), "row"),
+    ("checkpoint version 999 (newer)", ELL,
+     lambda f: f["checkpoint"].attrs.__setitem__("version", np.int32(999)), "refuse"),
+    ("checkpoint version a string", ELL,
+     lambda f: f["checkpoint"].attrs.__setitem__("version", np.bytes_(b"3")), "row"),
 ]
+
+def start_time(out):
+    for line in out.splitlines():
+        if line.startswith("start state: t ="):
+            # Fortran's es24.16 writes 1.0000000000000000+308 for a three-digit exponent
+            return float(re.sub(r"(\d)([+-]\d{3})$", r"\1E\2", line.split()[4]))
+    return None
 
 failures = 0
 for label, src, damage, expected in CASES:
@@ -92,9 +130,34 @@ for label, src, damage, expected in CASES:
         ok = rc is not None and rc in (0, 1) and "runtime error" not in text.lower() and "error allocating" not in text.lower()
         if expected == "refuse":
             ok = ok and rc == 1 and path in err
+        elif expected == "row":
+            # the run restarts from the checkpoint's row (the last on disk), at that row's t
+            with h5py.File(src, "r") as g:
+                t_row = float(g["t"][int(g["checkpoint/record"][0])])
+            t = start_time(out)
+            ok = ok and rc == 0 and t is not None and abs(t - t_row) <= 1e-15 * max(1.0, abs(t_row))
+            if not ok:
+                err = "started at t = %s, the row's t is %r; %s" % (t, t_row, err)
         else:
             ok = ok and rc == 0
         print("%-4s %-34s --%-6s exit %s: %s" % ("ok" if ok else "FAIL", label, mode, rc, err.strip()[:110]))
         failures += not ok
-print("%d of %d runs wrong" % (failures, 2 * len(CASES)))
+# --from a FIFO (or anything else that is not a regular file): refused at once, never opened
+for fifo in ("fifo.h5", "fifo.csv"):
+    if os.path.lexists(fifo):
+        os.remove(fifo)      # (a previous run's)
+    os.mkfifo(fifo)
+for path in ("fifo.h5", "fifo.csv"):
+    for mode in ("from", "append"):
+        cmd = [ellipse, "--from", path, "--t-final", "4", "--quiet"]
+        cmd += ["--append"] if mode == "append" else ["--no-output"]
+        try:
+            p = subprocess.run(cmd, capture_output=True, text=True, timeout=20)
+            rc, err = p.returncode, p.stderr
+        except subprocess.TimeoutExpired:
+            rc, err = None, "no answer within 20 s (blocked opening the FIFO)"
+        ok = rc == 1 and path in err and "regular file" in err
+        print("%-4s %-34s --%-6s exit %s: %s" % ("ok" if ok else "FAIL", "FIFO " + path, mode, rc, err.strip()[:110]))
+        failures += not ok
+print("%d runs wrong" % failures)
 sys.exit(1 if failures else 0)
