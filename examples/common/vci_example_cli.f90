@@ -122,6 +122,10 @@ contains
         if (i == nargs) call die(name//': '//arg//' needs a value')
         i = i + 1
         val = get_arg(i)
+        ! strict: `--output --quiet` must not write a file named --quiet (a negative number is a value)
+        if (len(val) == 0) call die(name//': '//arg//' needs a value (got an empty one)')
+        if (is_option(val)) &
+          call die(name//': '//arg//' needs a value (got the option '//val//'; a file name starting with - : ./'//val//')')
         select case (arg)
         case ('--h'); opts%h = to_real(val, arg, 0.0_dp, h_max, low_open=.true.); opts%h_given = .true.
         case ('--flush-every'); opts%flush_every = to_int(val, arg, 1, flush_every_max)
@@ -480,6 +484,13 @@ contains
     allocate (character(len=l) :: s)
     call get_command_argument(i, s)
   end function get_arg
+
+  !> Does an argument look like a flag (--anything, or -h) rather than a value? `-3` and `-inf` are values.
+  pure logical function is_option(s)
+    character(len=*), intent(in) :: s
+    is_option = s == '-h'
+    if (len(s) >= 2) is_option = is_option .or. s(1:2) == '--'
+  end function is_option
 
   !> Does the last component of path have an extension (a dot after its last '/')? `./run` has not.
   pure logical function has_extension(path)

@@ -228,6 +228,15 @@ contains
     if (what /= '') then
       call set_thread_message(caller//': callback '//trim(what)//' is NULL'); return
     end if
+    ! walls given but none counted: the run would never see them (was: no impacts, status 0)
+    if (ngaps == 0 .and. c_associated(fcb%gaps)) what = 'x'
+    if (present(lcb)) then
+      if (ngaps == 0 .and. c_associated(lcb%gaps)) what = 'x'
+    end if
+    if (what /= '') then
+      call set_thread_message(caller//': a gaps callback is given but ngaps = 0: its walls '// &
+        'would never be seen; pass ngaps = the number of gap functions, or leave the callback NULL'); return
+    end if
     allocate (mp, stat=st)
     if (st /= 0) then
       call set_thread_message(caller//': out of memory')

@@ -253,11 +253,16 @@ contains
   !> Choose the scheme that discretises a continuous model: VCI_SCHEME_LEFT (the paper's retraction,
   !> order 1), VCI_SCHEME_MIDPOINT (order 2, the default) or VCI_SCHEME_LOBATTO with `stages` = s in
   !> 1..VCI_LOBATTO_MAX_STAGES (order 2s; unconstrained models only). `stages` is ignored except for
-  !> lobatto. Call after create and before initialising (the state is reset).
+  !> lobatto. Call after create and before initialising: once initialised, VCI_ERR_STATE (the state stays).
   subroutine set_scheme(self, scheme, stages, stat)
     class(vci_integrator_t), intent(inout) :: self
     integer, intent(in) :: scheme, stages
     integer, intent(out) :: stat
+    if (self%initialized) then   ! was a silent reset of the state: refused, the run stays as it was
+      self%last_message = 'set_scheme: the integrator is already initialised; choose the scheme after '// &
+        'create and before init_from_pair/init_from_momentum (or create a new integrator)'
+      call finish(self, VCI_ERR_STATE, stat); return
+    end if
     if (.not. self%created) then
       self%last_message = 'set_scheme: create the integrator first'
       call finish(self, VCI_ERR_STATE, stat); return

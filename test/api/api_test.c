@@ -314,6 +314,10 @@ static void suite_arguments(void) {
   CHECK_MESSAGE(NULL, "gaps (needed as ngaps > 0)");
   CHECK_STATUS(vci_model_create(&model, 3, 0, 0, &partial, &ellipse_par), VCI_OK); /* no walls: fine */
   vci_model_destroy(&model);
+  /* issue 31: a gaps callback with ngaps = 0 ran with no impacts and status 0; now refused */
+  CHECK_STATUS(vci_model_create(&model, 3, 0, 0, &cb, &ellipse_par), VCI_ERR_ARGUMENT);
+  CHECK_MESSAGE(NULL, "ngaps = 0");
+  CHECK(model == NULL);
   CHECK_STATUS(vci_model_create(&model, 3, 1, 1, &cb, &ellipse_par), VCI_ERR_ARGUMENT);
   CHECK_MESSAGE(NULL, "constraint");
   CHECK(model == NULL);

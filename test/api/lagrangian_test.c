@@ -149,6 +149,11 @@ static void suite_bad(void) {
   cb = pendulum_callbacks(1);
   cb.size = 3; /* not initialised with VCI_LAGRANGIAN_CALLBACKS_INIT */
   CHECK(vci_model_create_lagrangian(&model, 1, 0, 2, &cb, NULL) == VCI_ERR_ARGUMENT);
+  cb = pendulum_callbacks(1); /* issue 31: walls given but ngaps = 0 (was: no impacts, status 0) */
+  CHECK(vci_model_create_lagrangian(&model, 1, 0, 0, &cb, NULL) == VCI_ERR_ARGUMENT);
+  CHECK(model == NULL);
+  vci_last_error(NULL, msg, sizeof msg);
+  CHECK(contains(msg, "ngaps = 0"));
   cb = pendulum_callbacks(1);
   cb.gaps = NULL; /* ngaps > 0 needs gaps */
   CHECK(vci_model_create_lagrangian(&model, 1, 0, 2, &cb, NULL) == VCI_ERR_ARGUMENT);
@@ -180,6 +185,17 @@ static void suite_bad(void) {
   CHECK(vci_set_scheme(it, VCI_SCHEME_MIDPOINT, 0) == VCI_OK);
   CHECK(vci_init_from_momentum(it, 0.0, &q0, &p0) == VCI_OK);
   CHECK(vci_integrate(it, 10, 1) == VCI_OK);
+  /* issue 31: set_scheme after initialisation is refused (was OK and a silent reset of the state);
+     the run goes on from where it was */
+  CHECK(vci_get_state(it, &t, &q, &p) == VCI_OK);
+  CHECK(vci_set_scheme(it, VCI_SCHEME_LEFT, 0) == VCI_ERR_STATE);
+  vci_last_error(it, msg, sizeof msg);
+  CHECK(contains(msg, "already initialised"));
+  CHECK(vci_integrate(it, 10, 1) == VCI_OK);
+  {
+    double t2, q2, p2;
+    CHECK(vci_get_state(it, &t2, &q2, &p2) == VCI_OK && fabs(t2 - (t + 10 * 0.05)) < 1e-12);
+  }
   CHECK(vci_set_scheme(NULL, VCI_SCHEME_MIDPOINT, 1) == VCI_ERR_ARGUMENT);
   vci_integrator_destroy(&it);
 

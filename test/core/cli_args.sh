@@ -45,6 +45,12 @@ bad=(
   "--bogus|--bogus"
   "--append|--append"
 )
+# Issue 31 item 6: an option that needs a value never takes the next option (or nothing) as it.
+valued=(--h --t-final --output --from --impact-energy --rtol --max-impacts --flush-every --scheme --stages)
+for opt in "${valued[@]}"; do
+  bad+=("$opt --quiet|$opt needs a value" "$opt --no-output|$opt needs a value" "$opt -h|$opt needs a value"
+        "--h 0.01 $opt|$opt needs a value" "$opt ''|$opt")
+done
 for ex in ellipse pendulum pendulum_walls; do
   [ -x "$bin/$ex" ] || { echo "missing $bin/$ex"; exit 1; }
   for case in "${bad[@]}"; do
@@ -59,6 +65,18 @@ for ex in ellipse pendulum pendulum_walls; do
     fi
   done
 done
+# the ensemble example reads its own flags: the same rule
+if [ -x "$bin/ellipse_ensemble" ]; then
+  for opt in --members --t-final --h --min-size --max-size --tol --stride --impact-cap --threads --chunk --output; do
+    for flags in "$opt --quiet" "$opt"; do
+      rm -f ./*.h5
+      "$bin/ellipse_ensemble" --members 2 --t-final 0.05 $flags > out.txt 2> err.txt; rc=$?
+      if [ $rc -eq 0 ] || ! grep -qF -- "$opt" err.txt || ls ./*.h5 > /dev/null 2>&1; then
+        echo "FAIL: ellipse_ensemble $flags (exit $rc): $(head -c 300 err.txt) $(ls)"; fail=1
+      fi
+    done
+  done
+fi
 [ -e /dev/full.h5 ] && { echo "FAIL: /dev/full.h5 exists"; fail=1; }
 
 # ellipse_ensemble: every size bounded before the table is allocated or the file written
