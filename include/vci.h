@@ -308,6 +308,18 @@ const char *vci_status_string(int status);
 /** The library's version: major*10000 + minor*100 + patch. */
 int  vci_version(void);
 
+/** The model checker: compares every derivative callback the model supplies with central
+ *  differences at one point (discrete L_d: D1/D2/D3 against each other, the mixed Hessian, the
+ *  discrete constraint's Jacobian, the constraint forms against the discrete form; continuous L:
+ *  dl_dq, dl_dv against L, the Hessian blocks, energy against the Legendre transform; both: gap
+ *  gradients). q[n], v[n]: the point (v the second configuration of L_d(q, v, h), or the velocity
+ *  for L); tol <= 0: the default 1e-6. *passed = 1 when every worst relative mismatch <= tol,
+ *  *worst = the largest; report (NULL: none) gets one line per comparison, truncated to size - 1.
+ *  Returns VCI_OK when the check ran; VCI_ERR_ARGUMENT (NULL pointers, dead handle, h <= 0);
+ *  VCI_ERR_CALLBACK: a callback failed at the point (vci_last_error(NULL, ...) names it). */
+int  vci_check_model(vci_model model, const double *q, const double *v, double h, double tol, int *passed,
+                     double *worst, char *report, int size);
+
 #ifdef __cplusplus
 }
 #endif

@@ -9,6 +9,7 @@ module vci_capi
   use vci_limits, only: vci_size_problem
   use vci_integrator, only: vci_stats_t
   use vci, only: VCI_VERSION_NUMBER
+  use vci_model_check, only: vci_check_model, vci_check_report_t
 #ifdef VCI_HAVE_HDF5
   use vci_hdf5_output, only: vci_hdf5_writer_t
 #endif
@@ -842,6 +843,65 @@ contains
     if (status >= 0 .and. status <= N_STATUS) i = int(status)
     vci_status_string = c_loc(status_text(i))
   end function vci_status_string
+
+  !> int vci_check_model(vci_model model, const double *q, const double *v, double h, double tol,
+  !>                     int *passed, double *worst, char *report, int size): the model checker
+  !> (vci_model_check) on a copy of the model; report (may be NULL) gets one line per comparison.
+  integer(c_int) function capi_check_model(model, q, v, h, tol, passed, worst, report, size) &
+      bind(C, name='vci_check_model')
+    type(c_ptr), value :: model, q, v, passed, worst, report
+    real(c_double), value :: h, tol
+    integer(c_int), value :: size
+    type(c_model_t), target :: mc
+    type(c_lagrangian_t) :: lag
+    type(vci_check_report_t) :: rep
+    real(c_double), pointer :: qf(:), vf(:)
+    integer(c_int), pointer :: passed_f
+    real(c_double), pointer :: worst_f
+    character(kind=c_char), pointer :: out(:)
+    character(len=VCI_MSG_LEN) :: msg
+    character(len=:), allocatable :: text
+    integer :: i, stat
+    capi_check_model = VCI_ERR_ARGUMENT
+    if (.not. (c_associated(q) .and. c_associated(v) .and. c_associated(passed) .and. c_associated(worst))) then
+      call set_thread_message('vci_check_model: q, v, passed and worst must not be NULL'); return
+    end if
+    if (c_associated(report) .and. size < 1) then
+      call set_thread_message('vci_check_model: report given with size < 1'); return
+    end if
+    call lock_registry()
+    i = find_live(model, KIND_MODEL)
+    if (i > 0) mc = slots(i)%model
+    call unlock_registry()
+    if (i == 0) then
+      call set_thread_message('vci_check_model: not a live model handle'); return
+    end if
+    call mc%record%clear()
+    call c_f_pointer(q, qf, [mc%n]); call c_f_pointer(v, vf, [mc%n])
+    if (mc%continuous) then
+      lag%n = mc%n; lag%m = mc%m; lag%n_gaps = mc%n_gaps
+      lag%cb = mc%lcb; lag%user = mc%user; lag%record => mc%record
+      call vci_check_model(lag, qf, vf, real(h, dp), rep, stat, msg, tol=merge(real(tol, dp), rep%tol, tol > 0))
+    else
+      call vci_check_model(mc, qf, vf, real(h, dp), rep, stat, msg, tol=merge(real(tol, dp), rep%tol, tol > 0))
+    end if
+    capi_check_model = stat
+    if (stat /= VCI_OK) then
+      call set_thread_message(msg); return
+    end if
+    call c_f_pointer(passed, passed_f); call c_f_pointer(worst, worst_f)
+    passed_f = merge(1_c_int, 0_c_int, rep%passed); worst_f = rep%worst
+    if (.not. c_associated(report)) return
+    text = ''
+    do i = 1, rep%count
+      text = text//trim(rep%line(i))//new_line('a')
+    end do
+    call c_f_pointer(report, out, [size])
+    do i = 1, min(len(text), size - 1)
+      out(i) = text(i:i)
+    end do
+    out(min(len(text), size - 1) + 1) = c_null_char
+  end function capi_check_model
 
   !> int vci_version(void): major*10000 + minor*100 + patch.
   integer(c_int) function vci_version() bind(C, name='vci_version')

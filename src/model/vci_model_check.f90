@@ -134,7 +134,7 @@ contains
       if (stat /= VCI_OK) return
       j2(:, j) = (fp - fm) / (2 * dd); d3q(j) = (d3p - d3m) / (2 * dd)
     end do
-    dh = step(h)
+    dh = fd_rel * h   ! relative to h: L_d has terms in 1/h
     call d12(1, q, v, h + dh, fp); call d12(1, q, v, h - dh, fm); d1h = (fp - fm) / (2 * dh)
     call d12(2, q, v, h + dh, fp); call d12(2, q, v, h - dh, fm); d2h = (fp - fm) / (2 * dh)
     if (stat /= VCI_OK) return

@@ -65,6 +65,17 @@ for ex in ellipse pendulum pendulum_walls; do
     fi
   done
 done
+# Issue 31 item 4: --check-model passes every shipped scene (each discretisation the examples offer),
+# prints one line per supplied derivative, stops without running and writes nothing
+for line in "ellipse" "ellipse --scheme midpoint" "ellipse --scheme lobatto --stages 3" "pendulum" \
+            "pendulum --scheme left" "particle" "particle --scheme midpoint" "pendulum_walls"; do
+  rm -f ./*.h5 ./*.csv
+  "$bin"/$line --check-model > out.txt 2> err.txt; rc=$?
+  if [ $rc -ne 0 ] || ! grep -q '^model check: passed' out.txt || ! grep -q 'gap_gradients' out.txt \
+     || grep -q '^status' out.txt || ls ./*.h5 ./*.csv > /dev/null 2>&1; then
+    echo "FAIL: $line --check-model (exit $rc): $(cat out.txt err.txt | head -c 600)"; fail=1
+  fi
+done
 # the ensemble example reads its own flags: the same rule
 if [ -x "$bin/ellipse_ensemble" ]; then
   for opt in --members --t-final --h --min-size --max-size --tol --stride --impact-cap --threads --chunk --output; do
