@@ -26,7 +26,15 @@ module vci_example_cli
     character(len=:), allocatable :: scheme   !< --scheme: left, midpoint or lobatto (unset: the scene's default)
     integer :: stages = 2                     !< --stages: s of lobatto
     logical :: check_model = .false.          !< --check-model: compare the derivatives, do not run
+    integer :: progress = -1                  !< --progress 1, --no-progress 0, else: when stderr is a terminal
   end type example_options_t
+
+  !> --progress: a line on stderr at most twice a second (rewritten in place on a terminal).
+  type, extends(vci_progress_t), public :: progress_line_t
+    logical :: tty = .false.
+  contains
+    procedure :: report => progress_report
+  end type progress_line_t
 
   !> Prints one line per impact and a progress line on stderr; forwards everything to `next`.
   type, extends(vci_observer_t), public :: summary_observer_t
@@ -118,6 +126,8 @@ contains
         write (output_unit, '(a)') '  --stages s            lobatto: s stages, order 2s, 1 <= s <= 8 (2)'
         write (output_unit, '(a)') '  --quiet               print the summary only'
         write (output_unit, '(a)') '  --check-model         compare the model''s derivatives with differences, then stop'
+        write (output_unit, '(a)') '  --progress            progress on stderr (default when stderr is a terminal)'
+        write (output_unit, '(a)') '  --no-progress         no progress line'
         stop
       case ('--h', '--t-final', '--output', '--from', '--impact-energy', '--rtol', '--max-impacts', '--flush-every', &
             '--scheme', '--stages')
@@ -153,6 +163,8 @@ contains
       case ('--no-output'); opts%no_output = .true.
       case ('--differenced-hessian'); opts%analytic_hessian = .false.
       case ('--check-model'); opts%check_model = .true.
+      case ('--progress'); opts%progress = 1
+      case ('--no-progress'); opts%progress = 0
       case default
         call die(name//': unknown flag '//arg//' (see --help)')
       end select
@@ -196,6 +208,7 @@ contains
     real(dp), allocatable :: q(:), p(:)
     logical :: has_h
     type(vci_stats_t) :: stats
+    type(progress_line_t) :: progress
 
     dir = merge(-1, 1, opts%backward)
     if (allocated(opts%from)) then
@@ -254,7 +267,7 @@ contains
     end if
     summary%quiet = opts%quiet
     summary%total_steps = nsteps
-    summary%progress = c_isatty(2_c_int) == 1
+    progress%tty = c_isatty(2_c_int) == 1
 
     has_h = model_has_energy(model, integ)
     if (has_h) call model%energy(integ%configuration(), integ%momentum(), h0, stat)
@@ -267,7 +280,11 @@ contains
       integ%time() + dir * nsteps * opts%h, '   steps: ', nsteps
     call print_state('start state', integ)
     call system_clock(c0, rate)
-    call integ%integrate(nsteps, dir, stat, summary)
+    if (opts%progress == 1 .or. (opts%progress == -1 .and. progress%tty)) then
+      call integ%integrate(nsteps, dir, stat, summary, progress)   ! a line at most twice a second
+    else
+      call integ%integrate(nsteps, dir, stat, summary)
+    end if
     call system_clock(c1)
     stats = integ%statistics()
     write (output_unit, '(a,i0)') 'impacts: ', stats%impacts
@@ -325,6 +342,28 @@ contains
     if (.not. rep%passed) stop 3, quiet=.true.
     stop
   end subroutine check_model_at_start
+
+  !> "progress  37.2%  step 3720000 of 10000000  t = 37.2  impacts 12  2.10E+05 steps/s  ETA 30 s"
+  subroutine progress_report(self, info, stop)
+    class(progress_line_t), intent(inout) :: self
+    type(vci_progress_info_t), intent(in) :: info
+    logical, intent(inout) :: stop
+    character(len=200) :: line
+    character(len=24) :: eta
+    eta = 'ETA ?'
+    if (info%eta >= 0.0_dp) write (eta, '(a,i0,a)') 'ETA ', nint(info%eta, i8), ' s'
+    write (line, '(a,f5.1,a,i0,a,i0,a,g0.6,a,i0,a,es9.2,a)') 'progress ', &
+      100.0_dp * real(info%steps_done, dp) / real(max(1_i8, info%steps_total), dp), '%  step ', info%steps_done, &
+      ' of ', info%steps_total, '  t = ', info%t, '  impacts ', info%impacts, '  ', info%steps_per_second, &
+      ' steps/s  '//trim(eta)
+    if (self%tty) then
+      write (error_unit, '(a)', advance='no') achar(13)//trim(line)//'   '
+      if (info%steps_done == info%steps_total) write (error_unit, '(a)') ''
+    else
+      write (error_unit, '(a)') trim(line)
+    end if
+    stop = .false.   ! (the examples never stop a run from here)
+  end subroutine progress_report
 
   !> Create the integrator with the command line's step length and solver settings.
   subroutine create_integrator(name, model, opts, integ)
@@ -456,11 +495,6 @@ contains
     real(dp), intent(in) :: t, q(:), p(:), lambda(:), energy
     integer, intent(inout) :: stat
     self%steps = self%steps + 1
-    if (self%progress .and. self%total_steps >= 100000 .and. mod(self%steps, self%total_steps / 100) == 0) then
-      write (error_unit, '(a,i3,a,f0.3,a)', advance='no') achar(13)//'progress ', &
-        int(100 * self%steps / self%total_steps), '%  t = ', t, '   '
-      if (self%steps == self%total_steps) write (error_unit, '(a)') ''
-    end if
     if (associated(self%next)) call self%next%on_step(step, t, q, p, lambda, energy, stat)
   end subroutine s_step
 

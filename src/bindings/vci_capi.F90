@@ -553,12 +553,38 @@ contains
       vci_integrate = stat; return
     end if
     if (.not. output_blocks_direction(ip, 'vci_integrate', int(direction), stat)) then
-      call ip%integ%integrate(int(nsteps, i8), int(direction), stat, ip%obs)
+      if (c_associated(ip%progress%fn)) then
+        call ip%integ%integrate(int(nsteps, i8), int(direction), stat, ip%obs, ip%progress)
+      else
+        call ip%integ%integrate(int(nsteps, i8), int(direction), stat, ip%obs)
+      end if
       stat = after_call(ip, stat)
     end if
     call leave(ip)
     vci_integrate = stat
   end function vci_integrate
+
+  !> int vci_set_progress(vci_integrator integ, vci_progress_fn fn, double interval, void *user)
+  integer(c_int) function vci_set_progress(integ, fn, interval, user) bind(C, name='vci_set_progress')
+    type(c_ptr), value :: integ, user
+    type(c_funptr), value :: fn
+    real(c_double), value :: interval
+    type(c_integrator_t), pointer :: ip
+    integer :: stat
+    call enter(integ, 'vci_set_progress', ip, stat)
+    if (stat /= VCI_OK) then
+      vci_set_progress = stat; return
+    end if
+    if (.not. (interval >= 0.0_c_double .and. interval <= 1.0e9_c_double)) then
+      call ip%integ%report_failure(VCI_ERR_ARGUMENT, 'vci_set_progress: interval must be a number of seconds in [0, 1e9]')
+      stat = VCI_ERR_ARGUMENT
+    else
+      ip%progress%fn = fn; ip%progress%user = user; ip%progress%interval = real(interval, dp)
+      call ip%integ%report_failure(VCI_OK, '')
+    end if
+    call leave(ip)
+    vci_set_progress = stat
+  end function vci_set_progress
 
   !> The output writer's own message, if it has one (fixed length: see vci_limits).
   function output_message(ip) result(msg)

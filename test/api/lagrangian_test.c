@@ -59,6 +59,15 @@ static int swapped_hess(int n, const double *q, const double *v, double *lqq, do
   return l_hess(n, q, v, lvv, lqv, lqq, user); /* lqq and lvv swapped */
 }
 
+static int progress_calls = 0;
+static int64_t progress_last_done = -1;
+static int stop_at_third(const vci_progress *info, void *user) {
+  (void)user;
+  progress_calls++;
+  progress_last_done = info->steps_done;
+  return progress_calls == 3;
+}
+
 static vci_lagrangian_callbacks pendulum_callbacks(int hessians) {
   vci_lagrangian_callbacks cb = VCI_LAGRANGIAN_CALLBACKS_INIT;
   cb.lagrangian = l_value; cb.dl_dq = l_dq; cb.dl_dv = l_dv;
@@ -233,6 +242,16 @@ static void suite_bad(void) {
     double t2, q2, p2;
     CHECK(vci_get_state(it, &t2, &q2, &p2) == VCI_OK && fabs(t2 - (t + 10 * 0.05)) < 1e-12);
   }
+  /* issue 31: a progress callback reports after each step (interval 0) and stops the run cleanly */
+  CHECK(vci_set_progress(it, stop_at_third, -1.0, NULL) == VCI_ERR_ARGUMENT);
+  CHECK(vci_set_progress(it, stop_at_third, 0.0, NULL) == VCI_OK);
+  CHECK(vci_integrate(it, 100, 1) == VCI_STOPPED);
+  CHECK(progress_calls == 3 && progress_last_done == 3);
+  vci_last_error(it, msg, sizeof msg);
+  CHECK(contains(msg, "stopped by the progress report after 3 of 100 steps"));
+  CHECK(strcmp(vci_status_string(VCI_STOPPED), "stopped by the caller") == 0);
+  CHECK(vci_set_progress(it, NULL, 0.0, NULL) == VCI_OK);
+  CHECK(vci_integrate(it, 10, 1) == VCI_OK && progress_calls == 3);
   CHECK(vci_set_scheme(NULL, VCI_SCHEME_MIDPOINT, 1) == VCI_ERR_ARGUMENT);
   vci_integrator_destroy(&it);
 

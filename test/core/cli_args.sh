@@ -76,6 +76,14 @@ for line in "ellipse" "ellipse --scheme midpoint" "ellipse --scheme lobatto --st
     echo "FAIL: $line --check-model (exit $rc): $(cat out.txt err.txt | head -c 600)"; fail=1
   fi
 done
+# Issue 31 item 1: --progress writes progress lines to stderr (here not a terminal: whole lines) and
+# leaves stdout as it was; without it (stderr not a terminal) nothing
+"$bin/ellipse" --h 1e-2 --t-final 2 --no-output --progress > with.txt 2> err.txt; rc=$?
+"$bin/ellipse" --h 1e-2 --t-final 2 --no-output > without.txt 2> err0.txt
+if [ $rc -ne 0 ] || ! grep -q '^progress 100.0%  step 200 of 200  t = ' err.txt || ! grep -q 'steps/s  ETA 0 s' err.txt \
+   || [ -s err0.txt ] || ! diff <(grep -v '^wall time' with.txt) <(grep -v '^wall time' without.txt) > /dev/null; then
+  echo "FAIL: --progress: $(cat err.txt err0.txt | head -c 600)"; fail=1
+fi
 # the ensemble example reads its own flags: the same rule
 if [ -x "$bin/ellipse_ensemble" ]; then
   for opt in --members --t-final --h --min-size --max-size --tol --stride --impact-cap --threads --chunk --output; do
