@@ -294,8 +294,13 @@ contains
       case ('--impact-cap'); impact_cap = int_arg(k); k = k + 1
       case ('--threads'); threads = int_arg(k); k = k + 1
       case ('--chunk'); chunk = int_arg(k); k = k + 1
-      case ('--output')
-        call get_command_argument(k + 1, arg); output = trim(arg); k = k + 1
+      case ('--output')   ! strict: `--output --quiet` is no file name
+        if (k + 1 <= n) call get_command_argument(k + 1, arg)
+        if (k + 1 > n .or. len_trim(arg) == 0 .or. arg(1:2) == '--' .or. trim(arg) == '-h') then
+          if (rank == 0) write (error_unit, '(a)') 'ellipse_ensemble: --output needs a value (a file name)'
+          call finish(2)
+        end if
+        output = trim(arg); k = k + 1
       case ('--no-output'); no_output = .true.
       case ('--quiet'); quiet = .true.
       case default

@@ -38,6 +38,7 @@ program pendulum_walls
   model = pendulum_walls_model(.true.)
   call create_integrator('pendulum_walls', model, opts, integ)
   call integ%init_from_momentum(0.0_dp, [0.0_dp], [4.0_dp], stat)
+  if (stat == VCI_OK .and. opts%check_model) call check_model_at_start('pendulum_walls', model, integ, opts%h)
   if (stat == VCI_OK .and. opts%impact_energy /= VCI_IMPACT_DISCRETE) call integ%set_impact_energy(opts%impact_energy, stat)
   if (stat /= VCI_OK) then
     write (output_unit, '(a)') 'pendulum_walls: '//integ%message()

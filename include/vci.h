@@ -65,7 +65,8 @@ enum {
   VCI_ERR_INADMISSIBLE,     /* 7: a state lies outside the admissible set (some g_j < 0) */
   VCI_ERR_IO,               /* 8: output could not be written, or HDF5 not built in */
   VCI_ERR_STATE,            /* 9: call out of order (step before init), or the integrator is busy */
-  VCI_ERR_MEMORY            /* 10: an allocation failed (sizes too large for this machine) */
+  VCI_ERR_MEMORY,           /* 10: an allocation failed (sizes too large for this machine) */
+  VCI_STOPPED               /* 11: the caller stopped the run (a progress callback returned nonzero) */
 };
 
 /** Impact energy conditions for vci_set_impact_energy. */
@@ -307,6 +308,31 @@ const char *vci_status_string(int status);
 
 /** The library's version: major*10000 + minor*100 + patch. */
 int  vci_version(void);
+
+/** The model checker: compares every derivative callback the model supplies with central
+ *  differences at one point (discrete L_d: D1/D2/D3 against each other, the mixed Hessian, the
+ *  discrete constraint's Jacobian, the constraint forms against the discrete form; continuous L:
+ *  dl_dq, dl_dv against L, the Hessian blocks, energy against the Legendre transform; both: gap
+ *  gradients). q[n], v[n]: the point (v the second configuration of L_d(q, v, h), or the velocity
+ *  for L); tol <= 0: the default 1e-6. *passed = 1 when every worst relative mismatch <= tol,
+ *  *worst = the largest; report (NULL: none) gets one line per comparison, truncated to size - 1.
+ *  Returns VCI_OK when the check ran; VCI_ERR_ARGUMENT (NULL pointers, dead handle, h <= 0);
+ *  VCI_ERR_CALLBACK: a callback failed at the point (vci_last_error(NULL, ...) names it). */
+/** Progress of a run (vci_set_progress): steps done of this vci_integrate call and its total,
+ *  impacts so far, model time, wall seconds of this call, rate, estimated seconds left (-1: unknown). */
+typedef struct vci_progress {
+  int64_t steps_done, steps_total, impacts;
+  double t, elapsed, steps_per_second, eta;
+} vci_progress;
+/** Return 0 to go on, nonzero to stop the run after this step (vci_integrate then returns VCI_STOPPED). */
+typedef int (*vci_progress_fn)(const vci_progress *info, void *user);
+/** Call fn at most once per `interval` seconds of wall time during vci_integrate, and after its last
+ *  step; fn = NULL: no more reports. The library prints nothing itself. Returns VCI_OK;
+ *  VCI_ERR_ARGUMENT: bad handle, interval < 0 or not finite; VCI_ERR_STATE: busy. */
+int  vci_set_progress(vci_integrator integ, vci_progress_fn fn, double interval, void *user);
+
+int  vci_check_model(vci_model model, const double *q, const double *v, double h, double tol, int *passed,
+                     double *worst, char *report, int size);
 
 #ifdef __cplusplus
 }

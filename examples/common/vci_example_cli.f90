@@ -25,7 +25,16 @@ module vci_example_cli
     integer :: max_impacts = 16
     character(len=:), allocatable :: scheme   !< --scheme: left, midpoint or lobatto (unset: the scene's default)
     integer :: stages = 2                     !< --stages: s of lobatto
+    logical :: check_model = .false.          !< --check-model: compare the derivatives, do not run
+    integer :: progress = -1                  !< --progress 1, --no-progress 0, else: when stderr is a terminal
   end type example_options_t
+
+  !> --progress: a line on stderr at most twice a second (rewritten in place on a terminal).
+  type, extends(vci_progress_t), public :: progress_line_t
+    logical :: tty = .false.
+  contains
+    procedure :: report => progress_report
+  end type progress_line_t
 
   !> Prints one line per impact and a progress line on stderr; forwards everything to `next`.
   type, extends(vci_observer_t), public :: summary_observer_t
@@ -59,7 +68,7 @@ module vci_example_cli
     end function c_path_kind
   end interface
 
-  public :: parse_options, run_example, read_last_state, create_integrator, scheme_id, is_decimal, steps_to
+  public :: parse_options, run_example, check_model_at_start, read_last_state, create_integrator, scheme_id, is_decimal, steps_to
 
   ! ranges of the numeric flags (--help states them)
   real(dp), parameter :: h_max = 1.0e6_dp, t_max = 1.0e12_dp, rtol_min = 1.0e-16_dp, rtol_max = 1.0e-4_dp
@@ -116,12 +125,19 @@ contains
         write (output_unit, '(a)') '                        (default: the scene''s hand-derived L_d, as in the paper)'
         write (output_unit, '(a)') '  --stages s            lobatto: s stages, order 2s, 1 <= s <= 8 (2)'
         write (output_unit, '(a)') '  --quiet               print the summary only'
+        write (output_unit, '(a)') '  --check-model         compare the model''s derivatives with differences, then stop'
+        write (output_unit, '(a)') '  --progress            progress on stderr (default when stderr is a terminal)'
+        write (output_unit, '(a)') '  --no-progress         no progress line'
         stop
       case ('--h', '--t-final', '--output', '--from', '--impact-energy', '--rtol', '--max-impacts', '--flush-every', &
             '--scheme', '--stages')
         if (i == nargs) call die(name//': '//arg//' needs a value')
         i = i + 1
         val = get_arg(i)
+        ! strict: `--output --quiet` must not write a file named --quiet (a negative number is a value)
+        if (len(val) == 0) call die(name//': '//arg//' needs a value (got an empty one)')
+        if (is_option(val)) &
+          call die(name//': '//arg//' needs a value (got the option '//val//'; a file name starting with - : ./'//val//')')
         select case (arg)
         case ('--h'); opts%h = to_real(val, arg, 0.0_dp, h_max, low_open=.true.); opts%h_given = .true.
         case ('--flush-every'); opts%flush_every = to_int(val, arg, 1, flush_every_max)
@@ -146,6 +162,9 @@ contains
       case ('--quiet'); opts%quiet = .true.
       case ('--no-output'); opts%no_output = .true.
       case ('--differenced-hessian'); opts%analytic_hessian = .false.
+      case ('--check-model'); opts%check_model = .true.
+      case ('--progress'); opts%progress = 1
+      case ('--no-progress'); opts%progress = 0
       case default
         call die(name//': unknown flag '//arg//' (see --help)')
       end select
@@ -189,6 +208,7 @@ contains
     real(dp), allocatable :: q(:), p(:)
     logical :: has_h
     type(vci_stats_t) :: stats
+    type(progress_line_t) :: progress
 
     dir = merge(-1, 1, opts%backward)
     if (allocated(opts%from)) then
@@ -207,6 +227,7 @@ contains
       call init(integ, stat)
     end if
     if (stat /= VCI_OK) call die(name//': '//integ%message())
+    if (opts%check_model) call check_model_at_start(name, model, integ, opts%h)
     if (opts%impact_energy /= VCI_IMPACT_DISCRETE) then
       call integ%set_impact_energy(opts%impact_energy, stat)
       if (stat /= VCI_OK) call die(name//': '//integ%message())
@@ -246,7 +267,7 @@ contains
     end if
     summary%quiet = opts%quiet
     summary%total_steps = nsteps
-    summary%progress = c_isatty(2_c_int) == 1
+    progress%tty = c_isatty(2_c_int) == 1
 
     has_h = model_has_energy(model, integ)
     if (has_h) call model%energy(integ%configuration(), integ%momentum(), h0, stat)
@@ -259,7 +280,11 @@ contains
       integ%time() + dir * nsteps * opts%h, '   steps: ', nsteps
     call print_state('start state', integ)
     call system_clock(c0, rate)
-    call integ%integrate(nsteps, dir, stat, summary)
+    if (opts%progress == 1 .or. (opts%progress == -1 .and. progress%tty)) then
+      call integ%integrate(nsteps, dir, stat, summary, progress)   ! a line at most twice a second
+    else
+      call integ%integrate(nsteps, dir, stat, summary)
+    end if
     call system_clock(c1)
     stats = integ%statistics()
     write (output_unit, '(a,i0)') 'impacts: ', stats%impacts
@@ -288,6 +313,57 @@ contains
     end if
     write (output_unit, '(a)') 'status: ok'
   end subroutine run_example
+
+  !> --check-model: vci_check_model at the start state (q; for L_d the second point q + h p, for L
+  !> the velocity p: any point serves, the identities checked hold everywhere); prints the report,
+  !> stops with 0 when every supplied derivative agrees with its differences, else 3.
+  subroutine check_model_at_start(name, model, integ, h)
+    character(len=*), intent(in) :: name
+    class(vci_model_base_t), intent(inout) :: model
+    type(vci_integrator_t), intent(in) :: integ
+    real(dp), intent(in) :: h
+    type(vci_check_report_t) :: rep
+    real(dp), allocatable :: q(:), v(:)
+    character(len=VCI_MSG_LEN) :: msg
+    integer :: stat, i
+    q = integ%configuration(); v = integ%momentum()
+    select type (model)
+    class is (vci_model_t)
+      v = q + h * v
+    end select
+    call vci_check_model(model, q, v, h, rep, stat, msg)
+    if (stat /= VCI_OK) call die(name//': '//trim(msg))
+    write (output_unit, '(a,es9.2,a)') 'model check of '//name//' (tolerance ', rep%tol, '):'
+    do i = 1, rep%count
+      write (output_unit, '(a)') '  '//trim(rep%line(i))
+    end do
+    write (output_unit, '(a,es9.2,a)') 'model check: '//trim(merge('passed', 'FAILED', rep%passed))// &
+      ' (worst mismatch ', rep%worst, ')'
+    if (.not. rep%passed) stop 3, quiet=.true.
+    stop
+  end subroutine check_model_at_start
+
+  !> "progress  37.2%  step 3720000 of 10000000  t = 37.2  impacts 12  2.10E+05 steps/s  ETA 30 s"
+  subroutine progress_report(self, info, stop)
+    class(progress_line_t), intent(inout) :: self
+    type(vci_progress_info_t), intent(in) :: info
+    logical, intent(inout) :: stop
+    character(len=200) :: line
+    character(len=24) :: eta
+    eta = 'ETA ?'
+    if (info%eta >= 0.0_dp) write (eta, '(a,i0,a)') 'ETA ', nint(info%eta, i8), ' s'
+    write (line, '(a,f5.1,a,i0,a,i0,a,g0.6,a,i0,a,es9.2,a)') 'progress ', &
+      100.0_dp * real(info%steps_done, dp) / real(max(1_i8, info%steps_total), dp), '%  step ', info%steps_done, &
+      ' of ', info%steps_total, '  t = ', info%t, '  impacts ', info%impacts, '  ', info%steps_per_second, &
+      ' steps/s  '//trim(eta)
+    if (self%tty) then
+      write (error_unit, '(a)', advance='no') achar(13)//trim(line)//'   '
+      if (info%steps_done == info%steps_total) write (error_unit, '(a)') ''
+    else
+      write (error_unit, '(a)') trim(line)
+    end if
+    stop = .false.   ! (the examples never stop a run from here)
+  end subroutine progress_report
 
   !> Create the integrator with the command line's step length and solver settings.
   subroutine create_integrator(name, model, opts, integ)
@@ -419,11 +495,6 @@ contains
     real(dp), intent(in) :: t, q(:), p(:), lambda(:), energy
     integer, intent(inout) :: stat
     self%steps = self%steps + 1
-    if (self%progress .and. self%total_steps >= 100000 .and. mod(self%steps, self%total_steps / 100) == 0) then
-      write (error_unit, '(a,i3,a,f0.3,a)', advance='no') achar(13)//'progress ', &
-        int(100 * self%steps / self%total_steps), '%  t = ', t, '   '
-      if (self%steps == self%total_steps) write (error_unit, '(a)') ''
-    end if
     if (associated(self%next)) call self%next%on_step(step, t, q, p, lambda, energy, stat)
   end subroutine s_step
 
@@ -480,6 +551,13 @@ contains
     allocate (character(len=l) :: s)
     call get_command_argument(i, s)
   end function get_arg
+
+  !> Does an argument look like a flag (--anything, or -h) rather than a value? `-3` and `-inf` are values.
+  pure logical function is_option(s)
+    character(len=*), intent(in) :: s
+    is_option = s == '-h'
+    if (len(s) >= 2) is_option = is_option .or. s(1:2) == '--'
+  end function is_option
 
   !> Does the last component of path have an extension (a dot after its last '/')? `./run` has not.
   pure logical function has_extension(path)

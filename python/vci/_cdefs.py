@@ -20,6 +20,7 @@ CONSTANTS = {
     "VCI_ERR_IO": 8,
     "VCI_ERR_STATE": 9,
     "VCI_ERR_MEMORY": 10,
+    "VCI_STOPPED": 11,
     "VCI_IMPACT_DISCRETE": 0,
     "VCI_IMPACT_HAMILTONIAN": 1,
     "VCI_SCHEME_DISCRETE": 0,
@@ -108,6 +109,8 @@ typedef struct vci_lagrangian_callbacks {
 #: Functions of vci.h deliberately not bound, with the reason.
 UNBOUND = {
     "vci_model_create": "a macro for vci_model_create_v2; the symbol is the 0.1 entry (struct without size)",
+    "vci_check_model": "new in issue 31 (the model checker); not bound in Python yet",
+    "vci_set_progress": "new in issue 31 (progress callback); not bound in Python yet",
 }
 
 

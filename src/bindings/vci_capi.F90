@@ -9,6 +9,7 @@ module vci_capi
   use vci_limits, only: vci_size_problem
   use vci_integrator, only: vci_stats_t
   use vci, only: VCI_VERSION_NUMBER
+  use vci_model_check, only: vci_check_model, vci_check_report_t
 #ifdef VCI_HAVE_HDF5
   use vci_hdf5_output, only: vci_hdf5_writer_t
 #endif
@@ -227,6 +228,15 @@ contains
     end if
     if (what /= '') then
       call set_thread_message(caller//': callback '//trim(what)//' is NULL'); return
+    end if
+    ! walls given but none counted: the run would never see them (was: no impacts, status 0)
+    if (ngaps == 0 .and. c_associated(fcb%gaps)) what = 'x'
+    if (present(lcb)) then
+      if (ngaps == 0 .and. c_associated(lcb%gaps)) what = 'x'
+    end if
+    if (what /= '') then
+      call set_thread_message(caller//': a gaps callback is given but ngaps = 0: its walls '// &
+        'would never be seen; pass ngaps = the number of gap functions, or leave the callback NULL'); return
     end if
     allocate (mp, stat=st)
     if (st /= 0) then
@@ -543,12 +553,38 @@ contains
       vci_integrate = stat; return
     end if
     if (.not. output_blocks_direction(ip, 'vci_integrate', int(direction), stat)) then
-      call ip%integ%integrate(int(nsteps, i8), int(direction), stat, ip%obs)
+      if (c_associated(ip%progress%fn)) then
+        call ip%integ%integrate(int(nsteps, i8), int(direction), stat, ip%obs, ip%progress)
+      else
+        call ip%integ%integrate(int(nsteps, i8), int(direction), stat, ip%obs)
+      end if
       stat = after_call(ip, stat)
     end if
     call leave(ip)
     vci_integrate = stat
   end function vci_integrate
+
+  !> int vci_set_progress(vci_integrator integ, vci_progress_fn fn, double interval, void *user)
+  integer(c_int) function vci_set_progress(integ, fn, interval, user) bind(C, name='vci_set_progress')
+    type(c_ptr), value :: integ, user
+    type(c_funptr), value :: fn
+    real(c_double), value :: interval
+    type(c_integrator_t), pointer :: ip
+    integer :: stat
+    call enter(integ, 'vci_set_progress', ip, stat)
+    if (stat /= VCI_OK) then
+      vci_set_progress = stat; return
+    end if
+    if (.not. (interval >= 0.0_c_double .and. interval <= 1.0e9_c_double)) then
+      call ip%integ%report_failure(VCI_ERR_ARGUMENT, 'vci_set_progress: interval must be a number of seconds in [0, 1e9]')
+      stat = VCI_ERR_ARGUMENT
+    else
+      ip%progress%fn = fn; ip%progress%user = user; ip%progress%interval = real(interval, dp)
+      call ip%integ%report_failure(VCI_OK, '')
+    end if
+    call leave(ip)
+    vci_set_progress = stat
+  end function vci_set_progress
 
   !> The output writer's own message, if it has one (fixed length: see vci_limits).
   function output_message(ip) result(msg)
@@ -833,6 +869,65 @@ contains
     if (status >= 0 .and. status <= N_STATUS) i = int(status)
     vci_status_string = c_loc(status_text(i))
   end function vci_status_string
+
+  !> int vci_check_model(vci_model model, const double *q, const double *v, double h, double tol,
+  !>                     int *passed, double *worst, char *report, int size): the model checker
+  !> (vci_model_check) on a copy of the model; report (may be NULL) gets one line per comparison.
+  integer(c_int) function capi_check_model(model, q, v, h, tol, passed, worst, report, size) &
+      bind(C, name='vci_check_model')
+    type(c_ptr), value :: model, q, v, passed, worst, report
+    real(c_double), value :: h, tol
+    integer(c_int), value :: size
+    type(c_model_t), target :: mc
+    type(c_lagrangian_t) :: lag
+    type(vci_check_report_t) :: rep
+    real(c_double), pointer :: qf(:), vf(:)
+    integer(c_int), pointer :: passed_f
+    real(c_double), pointer :: worst_f
+    character(kind=c_char), pointer :: out(:)
+    character(len=VCI_MSG_LEN) :: msg
+    character(len=:), allocatable :: text
+    integer :: i, stat
+    capi_check_model = VCI_ERR_ARGUMENT
+    if (.not. (c_associated(q) .and. c_associated(v) .and. c_associated(passed) .and. c_associated(worst))) then
+      call set_thread_message('vci_check_model: q, v, passed and worst must not be NULL'); return
+    end if
+    if (c_associated(report) .and. size < 1) then
+      call set_thread_message('vci_check_model: report given with size < 1'); return
+    end if
+    call lock_registry()
+    i = find_live(model, KIND_MODEL)
+    if (i > 0) mc = slots(i)%model
+    call unlock_registry()
+    if (i == 0) then
+      call set_thread_message('vci_check_model: not a live model handle'); return
+    end if
+    call mc%record%clear()
+    call c_f_pointer(q, qf, [mc%n]); call c_f_pointer(v, vf, [mc%n])
+    if (mc%continuous) then
+      lag%n = mc%n; lag%m = mc%m; lag%n_gaps = mc%n_gaps
+      lag%cb = mc%lcb; lag%user = mc%user; lag%record => mc%record
+      call vci_check_model(lag, qf, vf, real(h, dp), rep, stat, msg, tol=merge(real(tol, dp), rep%tol, tol > 0))
+    else
+      call vci_check_model(mc, qf, vf, real(h, dp), rep, stat, msg, tol=merge(real(tol, dp), rep%tol, tol > 0))
+    end if
+    capi_check_model = stat
+    if (stat /= VCI_OK) then
+      call set_thread_message(msg); return
+    end if
+    call c_f_pointer(passed, passed_f); call c_f_pointer(worst, worst_f)
+    passed_f = merge(1_c_int, 0_c_int, rep%passed); worst_f = rep%worst
+    if (.not. c_associated(report)) return
+    text = ''
+    do i = 1, rep%count
+      text = text//trim(rep%line(i))//new_line('a')
+    end do
+    call c_f_pointer(report, out, [size])
+    do i = 1, min(len(text), size - 1)
+      out(i) = text(i:i)
+    end do
+    out(min(len(text), size - 1) + 1) = c_null_char
+  end function capi_check_model
 
   !> int vci_version(void): major*10000 + minor*100 + patch.
   integer(c_int) function vci_version() bind(C, name='vci_version')

@@ -21,6 +21,7 @@ module vci_capi_registry
   use vci_status
   use vci_observer, only: vci_observer_t, vci_run_info_t, vci_impact_t
   use vci_checkpoint, only: vci_checkpoint_t
+  use vci_progress, only: vci_progress_t, vci_progress_info_t
   use vci_integrator, only: vci_integrator_t
   use vci_capi_models, only: c_model_t, c_lagrangian_t, c_impact_fn
   implicit none
@@ -66,6 +67,7 @@ module vci_capi_registry
     type(c_integrator_t), pointer :: owner => null()
     logical :: stopped_by_destroy = .false.
   contains
+
     procedure :: on_start => obs_start
     procedure :: on_step => obs_step
     procedure :: on_impact => obs_impact
@@ -76,8 +78,31 @@ module vci_capi_registry
     procedure :: failure_cause => obs_failure_cause
   end type c_observer_t
 
+  !> The C struct vci_progress.
+  type, bind(C) :: vci_progress_c
+    integer(c_int64_t) :: steps_done, steps_total, impacts
+    real(c_double) :: t, elapsed, steps_per_second, eta
+  end type vci_progress_c
+
+  !> A C progress callback (vci_set_progress) as the integrator's progress object.
+  type, extends(vci_progress_t) :: c_progress_t
+    type(c_funptr) :: fn = c_null_funptr
+    type(c_ptr) :: user = c_null_ptr
+  contains
+    procedure :: report => c_progress_report
+  end type c_progress_t
+
+  abstract interface
+    integer(c_int) function c_progress_fn(info, user) bind(C)
+      import :: vci_progress_c, c_int, c_ptr
+      type(vci_progress_c), intent(in) :: info
+      type(c_ptr), value :: user
+    end function c_progress_fn
+  end interface
+
   type :: c_integrator_t
     type(vci_integrator_t) :: integ
+    type(c_progress_t) :: progress        !< vci_set_progress's callback
     type(c_model_t) :: model              !< this integrator's own copy of the model (and its record)
     type(c_lagrangian_t) :: lag           !< the continuous model it drives, when model%continuous
     type(c_observer_t) :: obs
@@ -102,6 +127,19 @@ module vci_capi_registry
   integer(c_intptr_t), save :: last_serial = 0
 
 contains
+
+  subroutine c_progress_report(self, info, stop)
+    class(c_progress_t), intent(inout) :: self
+    type(vci_progress_info_t), intent(in) :: info
+    logical, intent(inout) :: stop
+    procedure(c_progress_fn), pointer :: f
+    type(vci_progress_c) :: ci
+    if (.not. c_associated(self%fn)) return
+    ci = vci_progress_c(info%steps_done, info%steps_total, info%impacts, info%t, info%elapsed, &
+                        info%steps_per_second, info%eta)
+    call c_f_procpointer(self%fn, f)
+    stop = f(ci, self%user) /= 0
+  end subroutine c_progress_report
 
   ! ---------------------------------------------------------------------------------------------
   ! the calling thread's message (failures without a live integrator)

@@ -19,6 +19,7 @@
 !>     VCIADV(IH, NSTEPS, IDIR, T, Q, P, NIMP, TIMP, LTIMP, ISTAT) advance; state and impacts out
 !>     VCIMSG(IH, MSG)                                           message of the last call
 !>     VCIDEL(IH)                                                free; IH becomes 0
+!>     VCICHK(IH, Q, V, H, TOL, IPASS, WORST, ISTAT)              model checker (vci_model_check)
 !>
 !> The model routine (one EXTERNAL, selecting what to compute by TASK as MINPACK's FCN does
 !> with IFLAG):
@@ -72,11 +73,12 @@ module vci_legacy
   use vci_integrator, only: vci_integrator_t
   use vci_callback_adapter, only: vci_callback_record_t
   use vci_limits, only: vci_size_problem
+  use vci_model_check, only: vci_check_model, vci_check_report_t
   implicit none
   private
 
   public :: vci_legacy_model_fn, legacy_new, legacy_get, legacy_after, legacy_delete, legacy_advance, legacy_message
-  public :: legacy_set_scheme, legacy_init
+  public :: legacy_set_scheme, legacy_init, legacy_check, legacy_size
 
   !> TASK codes of the model routine: a discrete L_d (1-4, 6), a continuous L (10-13), both (5, 7-9).
   integer, parameter, public :: TASK_D1 = 1, TASK_D2 = 2, TASK_D3 = 3, TASK_HESSIAN = 4, TASK_FORMS = 5, &
@@ -520,6 +522,16 @@ contains
   end subroutine free_slot
 
   !> The slot of handle ih (0 if none).
+  !> n of the model of handle ih (0 when none).
+  integer function legacy_size(ih)
+    integer, intent(in) :: ih
+    integer :: i
+    legacy_size = 0
+    i = slot_of(ih)
+    if (i == 0) return
+    legacy_size = slots(i)%integ%n_coordinates()
+  end function legacy_size
+
   integer function slot_of(ih)
     integer, intent(in) :: ih
     slot_of = 0
@@ -557,6 +569,46 @@ contains
     call record%clear()
     stat = VCI_OK
   end subroutine legacy_get
+
+  !> VCICHK: the model checker on the model of handle ih at (q, v, h) (v: the second point of L_d,
+  !> or the velocity of L); ipass = 1 when every supplied derivative agrees within tol (<= 0: 1e-6).
+  subroutine legacy_check(ih, q, v, h, tol, ipass, worst, stat)
+    integer, intent(in) :: ih
+    real(dp), intent(in) :: q(:), v(:), h, tol
+    integer, intent(out) :: ipass
+    real(dp), intent(out) :: worst
+    integer, intent(out) :: stat
+    type(vci_integrator_t), pointer :: integ
+    type(vci_check_report_t) :: rep
+    character(len=VCI_MSG_LEN) :: msg
+    real(dp) :: t
+    integer :: i
+    ipass = 0; worst = 0.0_dp
+    call legacy_get(ih, 'VCICHK', integ, stat)
+    if (stat /= VCI_OK) return
+    i = slot_of(ih)
+    t = rep%tol
+    if (tol > 0.0_dp) t = tol
+    if (associated(slots(i)%lag)) then
+      call vci_check_model(slots(i)%lag, q, v, h, rep, stat, msg, tol=t)
+    else
+      call vci_check_model(slots(i)%model, q, v, h, rep, stat, msg, tol=t)
+    end if
+    if (stat /= VCI_OK) then
+      call integ%report_failure(stat, msg); return
+    end if
+    ipass = merge(1, 0, rep%passed); worst = rep%worst
+    if (.not. rep%passed) then
+      do i = 1, rep%count
+        if (rep%items(i)%checked .and. rep%items(i)%mismatch > rep%tol) then
+          write (msg, '(a,es9.2,a)') 'VCICHK: '//trim(rep%items(i)%name)//' against '//trim(rep%items(i)%against)// &
+            ': mismatch ', rep%items(i)%mismatch, ' (first of the failed comparisons)'
+          exit
+        end if
+      end do
+      call integ%report_failure(VCI_OK, msg)
+    end if
+  end subroutine legacy_check
 
   !> After a call into the integrator: name the failing TASK and its IERR (the shared adapter).
   subroutine legacy_after(ih, stat)
@@ -778,6 +830,22 @@ subroutine vcimsg(ih, msg)
   character(len=*), intent(out) :: msg
   msg = legacy_message(ih)
 end subroutine vcimsg
+
+!> The model checker on the model of IH at (Q, V, H): IPASS = 1 when every derivative the routine
+!> supplies agrees with finite differences within TOL (<= 0: 1e-6), WORST the largest relative
+!> mismatch; VCIMSG names the first failed comparison. ISTAT 0, 1 (bad IH, sizes, H <= 0) or 2.
+subroutine vcichk(ih, q, v, h, tol, ipass, worst, istat)
+  use vci_kinds, only: dp
+  use vci_legacy, only: legacy_check, legacy_size
+  implicit none
+  integer, intent(in) :: ih
+  real(dp), intent(in) :: q(*), v(*), h, tol
+  integer, intent(out) :: ipass, istat
+  real(dp), intent(out) :: worst
+  integer :: n
+  n = legacy_size(ih)
+  call legacy_check(ih, q(1:max(n, 0)), v(1:max(n, 0)), h, tol, ipass, worst, istat)
+end subroutine vcichk
 
 !> Free integrator IH; IH becomes 0. Harmless on 0 or a deleted handle.
 subroutine vcidel(ih)

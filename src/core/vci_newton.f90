@@ -108,6 +108,7 @@ module vci_newton
     procedure :: reserve
     procedure :: solve
     procedure :: linear_solve
+    procedure :: worst_row
   end type vci_newton_t
 
 contains
@@ -276,6 +277,24 @@ contains
     end if
     if (self%polish .and. factored .and. phi > 0.0_dp) call polish_step(self, sys, x, n, phi, res)
   end subroutine solve
+
+  !> After a solve of n unknowns that failed on convergence (not on an evaluation): the row with
+  !> the largest scaled residual at the iterate left in x (the message names its equation).
+  pure integer function worst_row(self, n)
+    class(vci_newton_t), intent(in) :: self
+    integer, intent(in) :: n
+    integer :: i
+    real(dp) :: worst, v
+    worst_row = 0; worst = -1.0_dp
+    if (.not. allocated(self%r) .or. n > self%capacity) return
+    do i = 1, n
+      v = abs(self%r(i)) / max(self%atol + self%rtol * self%sc(i), tiny(1.0_dp))
+      if (.not. (v <= worst)) then
+        worst = v; worst_row = i
+      end if
+      if (.not. (v == v)) exit
+    end do
+  end function worst_row
 
   !> The trial point (xt, its residual rt and scales sct, merit phit) becomes the iterate.
   subroutine accept_trial(self, n, x, phit, phi, res)

@@ -14,15 +14,17 @@ module vci_status
   integer, parameter, public :: VCI_ERR_IO = 8                !< output could not be written
   integer, parameter, public :: VCI_ERR_STATE = 9             !< call out of order (e.g. step before init)
   integer, parameter, public :: VCI_ERR_MEMORY = 10           !< an allocation failed (sizes too large for this machine)
+  integer, parameter, public :: VCI_STOPPED = 11              !< the caller stopped the run (progress callback)
 
   !> Longest message kept by the library.
   integer, parameter, public :: VCI_MSG_LEN = 512
 
-  !> The descriptions of VCI_OK .. VCI_ERR_MEMORY (vci_status_name, and C's vci_status_string).
-  character(len=*), parameter, public :: VCI_STATUS_NAMES(0:10) = [character(len=36) :: &
+  !> The descriptions of VCI_OK .. VCI_STOPPED (vci_status_name, and C's vci_status_string).
+  character(len=*), parameter, public :: VCI_STATUS_NAMES(0:11) = [character(len=36) :: &
     'ok', 'invalid argument', 'user callback failed', 'non-finite value', &
     'Newton iteration did not converge', 'impact could not be resolved', 'too many impacts in one step', &
-    'state outside the admissible set', 'input/output error', 'call out of order', 'out of memory']
+    'state outside the admissible set', 'input/output error', 'call out of order', 'out of memory', &
+    'stopped by the caller']
 
   public :: vci_status_name
 

@@ -27,6 +27,7 @@ module vci_integrator
   use vci_lobatto_rule, only: VCI_LOBATTO_MAX_STAGES
   use vci_checkpoint, only: vci_checkpoint_t
   use vci_observer, only: vci_observer_t, vci_run_info_t, vci_impact_t
+  use vci_progress, only: vci_progress_t, vci_progress_info_t
   implicit none
   private
   public :: VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN
@@ -253,11 +254,16 @@ contains
   !> Choose the scheme that discretises a continuous model: VCI_SCHEME_LEFT (the paper's retraction,
   !> order 1), VCI_SCHEME_MIDPOINT (order 2, the default) or VCI_SCHEME_LOBATTO with `stages` = s in
   !> 1..VCI_LOBATTO_MAX_STAGES (order 2s; unconstrained models only). `stages` is ignored except for
-  !> lobatto. Call after create and before initialising (the state is reset).
+  !> lobatto. Call after create and before initialising: once initialised, VCI_ERR_STATE (the state stays).
   subroutine set_scheme(self, scheme, stages, stat)
     class(vci_integrator_t), intent(inout) :: self
     integer, intent(in) :: scheme, stages
     integer, intent(out) :: stat
+    if (self%initialized) then   ! was a silent reset of the state: refused, the run stays as it was
+      self%last_message = 'set_scheme: the integrator is already initialised; choose the scheme after '// &
+        'create and before init_from_pair/init_from_momentum (or create a new integrator)'
+      call finish(self, VCI_ERR_STATE, stat); return
+    end if
     if (.not. self%created) then
       self%last_message = 'set_scheme: create the integrator first'
       call finish(self, VCI_ERR_STATE, stat); return
@@ -588,12 +594,15 @@ contains
 
   !> nsteps steps in one direction, reported to the observer (on_start, on_impact, on_step,
   !> on_finish). Stops at the first failure; the state is then the last accepted step.
-  subroutine integrate(self, nsteps, direction, stat, observer)
+  subroutine integrate(self, nsteps, direction, stat, observer, progress)
     class(vci_integrator_t), intent(inout) :: self
     integer(i8), intent(in) :: nsteps
     integer, intent(in) :: direction
     integer, intent(out) :: stat
     class(vci_observer_t), intent(inout), optional :: observer
+    !> progress%report(info, stop) at most once per progress%interval seconds and after the last
+    !> step; stop = .true. ends the run after the current step with VCI_STOPPED (vci_progress)
+    class(vci_progress_t), intent(inout), optional :: progress
     integer(i8) :: i
     integer :: ostat
     if (nsteps < 0) then
@@ -608,6 +617,12 @@ contains
       write (self%last_message, '(a,i0,a)') 'integrate: direction ', direction, ' (need +1 or -1)'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
+    if (present(progress)) then
+      if (.not. (progress%interval >= 0.0_dp .and. progress%interval <= 1.0e9_dp)) then
+        self%last_message = 'integrate: progress%interval must be a number of seconds in [0, 1e9]'
+        call finish(self, VCI_ERR_ARGUMENT, stat); return
+      end if
+    end if
     if (present(observer)) then
       ostat = 0
       if (observer%wants_checkpoint()) call observer%on_checkpoint(self%checkpoint(), ostat)
@@ -619,10 +634,14 @@ contains
       end if
     end if
     stat = VCI_OK
-    do i = 1, nsteps
-      call self%step(direction, stat, observer)
-      if (stat /= VCI_OK) exit
-    end do
+    if (present(progress)) then
+      call steps_with_progress(self, nsteps, direction, stat, progress, observer)
+    else
+      do i = 1, nsteps
+        call self%step(direction, stat, observer)
+        if (stat /= VCI_OK) exit
+      end do
+    end if
     if (present(observer)) then
       ostat = 0
       ! the state is the last accepted step's: an output that flushes at the end stores it
@@ -638,6 +657,47 @@ contains
     self%last_status = stat
     if (stat == VCI_OK) self%last_message = ''   ! also after 0 steps: no message of an earlier call
   end subroutine integrate
+
+  !> integrate's loop with progress reports (the clock is read each step: ~20 ns against a step's
+  !> microseconds).
+  subroutine steps_with_progress(self, nsteps, direction, stat, progress, observer)
+    class(vci_integrator_t), intent(inout) :: self
+    integer(i8), intent(in) :: nsteps
+    integer, intent(in) :: direction
+    integer, intent(out) :: stat
+    class(vci_progress_t), intent(inout) :: progress
+    class(vci_observer_t), intent(inout), optional :: observer
+    integer(i8) :: i, c0, c, rate, next
+    type(vci_progress_info_t) :: info
+    logical :: stop
+    call system_clock(c0, rate)
+    next = c0 + int(progress%interval * real(rate, dp), i8)
+    stat = VCI_OK
+    do i = 1, nsteps
+      call self%step(direction, stat, observer)
+      if (stat /= VCI_OK) exit
+      call system_clock(c)
+      if (c < next .and. i < nsteps) cycle
+      info%steps_done = i; info%steps_total = nsteps; info%t = self%state%time()
+      info%impacts = self%impacts_found
+      info%elapsed = real(c - c0, dp) / real(rate, dp)
+      info%steps_per_second = 0.0_dp; info%eta = -1.0_dp
+      if (info%elapsed > 0.0_dp) then
+        info%steps_per_second = real(i, dp) / info%elapsed
+        info%eta = real(nsteps - i, dp) / info%steps_per_second
+      end if
+      stop = .false.
+      call progress%report(info, stop)
+      next = c + int(progress%interval * real(rate, dp), i8)
+      if (stop .and. i < nsteps) then
+        write (self%last_message, '(a,i0,a,i0,a,es15.8,a)') 'integrate: stopped by the progress report after ', i, &
+          ' of ', nsteps, ' steps (t = ', self%state%time(), ')'
+        stat = VCI_STOPPED
+        self%last_status = stat
+        exit
+      end if
+    end do
+  end subroutine steps_with_progress
 
   !> An observer stopped the run: its own reason (the file, the OS's cause) after the message.
   subroutine append_observer_cause(self, observer)

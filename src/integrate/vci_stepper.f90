@@ -392,11 +392,14 @@ contains
     case (NEWTON_MAX_ITERATIONS)
       write (self%cause, '(a,i0,a,es9.2,a)') what//': Newton did not converge in ', res%iterations, &
         ' iterations (scaled residual ', res%scaled_residual, ')'
+      call explain_newton(self, nx)
     case (NEWTON_NO_DESCENT)
       write (self%cause, '(a,es9.2,a)') what//': Newton line search found no decrease (scaled residual ', &
         res%scaled_residual, ')'
+      call explain_newton(self, nx)
     case (NEWTON_SINGULAR)
       self%cause = what//': Newton matrix singular and least-squares solve failed'
+      call explain_newton(self, nx)
     case (NEWTON_NONFINITE)
       self%cause = what//': residual or Newton matrix not finite (callback values overflow)'
     case (NEWTON_EVALUATION)
@@ -408,6 +411,19 @@ contains
       end if
     end select
   end subroutine run_newton
+
+  !> Append to a convergence failure's cause which equation stayed unsolved and what usually causes
+  !> that (a user reading "no decrease" alone cannot tell a too-large step from a wrong derivative).
+  subroutine explain_newton(self, nx)
+    type(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: nx
+    integer :: i
+    i = self%newton%worst_row(nx)
+    if (i < 1) return
+    self%cause = trim(self%cause)//'; unsolved: '//trim(self%sys%row_name(i))// &
+      '. Likely causes: a step too large for the motion (lower h), or derivatives inconsistent with '// &
+      'each other or with L (run vci_check_model / --check-model)'
+  end subroutine explain_newton
 
   !> A finished solve in the statistics (either path).
   subroutine count_solve(self, res)

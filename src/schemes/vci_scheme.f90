@@ -93,6 +93,7 @@ module vci_scheme
     procedure :: check
     procedure :: note_failure
     procedure :: check_matrix
+    procedure :: row_name
   end type vci_scheme_t
 
   abstract interface
@@ -411,6 +412,32 @@ contains
       call self%scheme_jacobian(x, r, jac, stat)
     end if
   end subroutine dispatch_jacobian
+
+  !> Which equation row i of the posed system is, in words (for the message of a failed solve), from
+  !> the layout contract above: the sub-step's rows (momentum balance; with interior stages, theirs
+  !> too), its m constraint rows last, then stage 1's gap row or stage 2's energy row; the impulse
+  !> system is [nu, mu] with the energy row last.
+  function row_name(self, i) result(name)
+    class(vci_scheme_t), intent(in) :: self
+    integer, intent(in) :: i
+    character(len=80) :: name
+    integer :: nsub
+    nsub = self%unknowns(KIND_SUBSTEP)
+    if (self%kind == KIND_IMPULSE) then
+      name = 'the energy row (H kept across the impact)'
+      if (i <= self%m) write (name, '(a,i0)') 'the constraint-impulse row ', i
+      return
+    end if
+    if (i > nsub .and. self%kind == KIND_STAGE1) then
+      write (name, '(a,i0,a)') 'the gap row (g_', self%gap, ' = 0 at the wall)'
+    else if (i > nsub) then
+      name = 'the energy row (the impact''s energy condition)'
+    else if (i > nsub - self%m) then
+      write (name, '(a,i0)') 'the constraint row ', i - (nsub - self%m)
+    else
+      name = 'the momentum rows (discrete Euler-Lagrange)'
+    end if
+  end function row_name
 
   !> Regular sub-steps of one length and direction share Newton factors (large systems, vci_newton);
   !> the systems of an impact never do.

@@ -107,11 +107,11 @@ static void suite_version(void) {
   static const char *names[] = {"ok", "invalid argument", "user callback failed", "non-finite value",
                                 "Newton iteration did not converge", "impact could not be resolved",
                                 "too many impacts in one step", "state outside the admissible set",
-                                "input/output error", "call out of order", "out of memory"};
+                                "input/output error", "call out of order", "out of memory", "stopped by the caller"};
   int s;
   CHECK(vci_version() == VCI_VERSION_NUMBER);
   CHECK(vci_version() == 200); /* 0.2.0, as project(VERSION) in CMakeLists.txt */
-  for (s = VCI_OK; s <= VCI_ERR_MEMORY; ++s) {
+  for (s = VCI_OK; s <= VCI_STOPPED; ++s) {
     CHECK(vci_status_string(s) != NULL);
     if (strcmp(vci_status_string(s), names[s]) != 0) {
       ++failures;
@@ -119,9 +119,9 @@ static void suite_version(void) {
     }
   }
   CHECK(strcmp(vci_status_string(-1), "unknown status") == 0);
-  CHECK(strcmp(vci_status_string(11), "unknown status") == 0);
+  CHECK(strcmp(vci_status_string(12), "unknown status") == 0);
   CHECK(strcmp(vci_status_string(123456), "unknown status") == 0);
-  CHECK(VCI_ERR_STATE == 9 && VCI_ERR_IO == 8 && VCI_ERR_ARGUMENT == 1 && VCI_ERR_MEMORY == 10);
+  CHECK(VCI_ERR_STATE == 9 && VCI_ERR_IO == 8 && VCI_ERR_ARGUMENT == 1 && VCI_ERR_MEMORY == 10 && VCI_STOPPED == 11);
 }
 
 /* An impact callback that calls back into its own integrator: mode 0 tries vci_step, mode 1
@@ -314,6 +314,10 @@ static void suite_arguments(void) {
   CHECK_MESSAGE(NULL, "gaps (needed as ngaps > 0)");
   CHECK_STATUS(vci_model_create(&model, 3, 0, 0, &partial, &ellipse_par), VCI_OK); /* no walls: fine */
   vci_model_destroy(&model);
+  /* issue 31: a gaps callback with ngaps = 0 ran with no impacts and status 0; now refused */
+  CHECK_STATUS(vci_model_create(&model, 3, 0, 0, &cb, &ellipse_par), VCI_ERR_ARGUMENT);
+  CHECK_MESSAGE(NULL, "ngaps = 0");
+  CHECK(model == NULL);
   CHECK_STATUS(vci_model_create(&model, 3, 1, 1, &cb, &ellipse_par), VCI_ERR_ARGUMENT);
   CHECK_MESSAGE(NULL, "constraint");
   CHECK(model == NULL);

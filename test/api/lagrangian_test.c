@@ -50,6 +50,24 @@ static int wall_grads(int n, int ng, const double *q, double *dg, void *user) {
   return 0;
 }
 
+static int wrong_wall_grads(int n, int ng, const double *q, double *dg, void *user) {
+  (void)n; (void)ng; (void)q; (void)user;
+  dg[0] = 1.0; dg[1] = 1.0; /* the first wall's gradient with the wrong sign */
+  return 0;
+}
+static int swapped_hess(int n, const double *q, const double *v, double *lqq, double *lqv, double *lvv, void *user) {
+  return l_hess(n, q, v, lvv, lqv, lqq, user); /* lqq and lvv swapped */
+}
+
+static int progress_calls = 0;
+static int64_t progress_last_done = -1;
+static int stop_at_third(const vci_progress *info, void *user) {
+  (void)user;
+  progress_calls++;
+  progress_last_done = info->steps_done;
+  return progress_calls == 3;
+}
+
 static vci_lagrangian_callbacks pendulum_callbacks(int hessians) {
   vci_lagrangian_callbacks cb = VCI_LAGRANGIAN_CALLBACKS_INIT;
   cb.lagrangian = l_value; cb.dl_dq = l_dq; cb.dl_dv = l_dv;
@@ -149,6 +167,39 @@ static void suite_bad(void) {
   cb = pendulum_callbacks(1);
   cb.size = 3; /* not initialised with VCI_LAGRANGIAN_CALLBACKS_INIT */
   CHECK(vci_model_create_lagrangian(&model, 1, 0, 2, &cb, NULL) == VCI_ERR_ARGUMENT);
+  /* issue 31: the model checker passes the right model, catches a wrong gap gradient and swapped
+     Hessian blocks, and says which */
+  {
+    double qc = 0.3, vc = 1.7, worst = -1.0;
+    int passed = -1;
+    char rep[2048];
+    cb = pendulum_callbacks(1);
+    CHECK(vci_model_create_lagrangian(&model, 1, 0, 2, &cb, NULL) == VCI_OK);
+    CHECK(vci_check_model(model, &qc, &vc, 0.05, 0.0, &passed, &worst, rep, sizeof rep) == VCI_OK);
+    printf("%s", rep);
+    CHECK(passed == 1 && worst >= 0.0 && worst < 1e-6);
+    CHECK(contains(rep, "dl_dq") && contains(rep, "hessians: lvv") && contains(rep, "gap_gradients"));
+    CHECK(vci_check_model(model, &qc, &vc, 0.0, 0.0, &passed, &worst, NULL, 0) == VCI_ERR_ARGUMENT);
+    CHECK(vci_check_model(model, NULL, &vc, 0.05, 0.0, &passed, &worst, NULL, 0) == VCI_ERR_ARGUMENT);
+    vci_model_destroy(&model);
+    cb.gap_gradients = wrong_wall_grads;
+    CHECK(vci_model_create_lagrangian(&model, 1, 0, 2, &cb, NULL) == VCI_OK);
+    CHECK(vci_check_model(model, &qc, &vc, 0.05, 0.0, &passed, &worst, rep, sizeof rep) == VCI_OK);
+    CHECK(passed == 0 && worst > 0.1 && contains(rep, "MISMATCH"));
+    vci_model_destroy(&model);
+    cb = pendulum_callbacks(1);
+    cb.hessians = swapped_hess;
+    CHECK(vci_model_create_lagrangian(&model, 1, 0, 2, &cb, NULL) == VCI_OK);
+    CHECK(vci_check_model(model, &qc, &vc, 0.05, 0.0, &passed, &worst, rep, sizeof rep) == VCI_OK);
+    printf("%s", rep);
+    CHECK(passed == 0 && worst > 0.1);
+    vci_model_destroy(&model);
+  }
+  cb = pendulum_callbacks(1); /* issue 31: walls given but ngaps = 0 (was: no impacts, status 0) */
+  CHECK(vci_model_create_lagrangian(&model, 1, 0, 0, &cb, NULL) == VCI_ERR_ARGUMENT);
+  CHECK(model == NULL);
+  vci_last_error(NULL, msg, sizeof msg);
+  CHECK(contains(msg, "ngaps = 0"));
   cb = pendulum_callbacks(1);
   cb.gaps = NULL; /* ngaps > 0 needs gaps */
   CHECK(vci_model_create_lagrangian(&model, 1, 0, 2, &cb, NULL) == VCI_ERR_ARGUMENT);
@@ -180,6 +231,27 @@ static void suite_bad(void) {
   CHECK(vci_set_scheme(it, VCI_SCHEME_MIDPOINT, 0) == VCI_OK);
   CHECK(vci_init_from_momentum(it, 0.0, &q0, &p0) == VCI_OK);
   CHECK(vci_integrate(it, 10, 1) == VCI_OK);
+  /* issue 31: set_scheme after initialisation is refused (was OK and a silent reset of the state);
+     the run goes on from where it was */
+  CHECK(vci_get_state(it, &t, &q, &p) == VCI_OK);
+  CHECK(vci_set_scheme(it, VCI_SCHEME_LEFT, 0) == VCI_ERR_STATE);
+  vci_last_error(it, msg, sizeof msg);
+  CHECK(contains(msg, "already initialised"));
+  CHECK(vci_integrate(it, 10, 1) == VCI_OK);
+  {
+    double t2, q2, p2;
+    CHECK(vci_get_state(it, &t2, &q2, &p2) == VCI_OK && fabs(t2 - (t + 10 * 0.05)) < 1e-12);
+  }
+  /* issue 31: a progress callback reports after each step (interval 0) and stops the run cleanly */
+  CHECK(vci_set_progress(it, stop_at_third, -1.0, NULL) == VCI_ERR_ARGUMENT);
+  CHECK(vci_set_progress(it, stop_at_third, 0.0, NULL) == VCI_OK);
+  CHECK(vci_integrate(it, 100, 1) == VCI_STOPPED);
+  CHECK(progress_calls == 3 && progress_last_done == 3);
+  vci_last_error(it, msg, sizeof msg);
+  CHECK(contains(msg, "stopped by the progress report after 3 of 100 steps"));
+  CHECK(strcmp(vci_status_string(VCI_STOPPED), "stopped by the caller") == 0);
+  CHECK(vci_set_progress(it, NULL, 0.0, NULL) == VCI_OK);
+  CHECK(vci_integrate(it, 10, 1) == VCI_OK && progress_calls == 3);
   CHECK(vci_set_scheme(NULL, VCI_SCHEME_MIDPOINT, 1) == VCI_ERR_ARGUMENT);
   vci_integrator_destroy(&it);
 

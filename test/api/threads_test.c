@@ -105,7 +105,7 @@ static void *messages_worker(void *arg) {
     if (vci_model_create(&model, n, 0, 0, &cb, NULL) != VCI_ERR_ARGUMENT) fail("bad size accepted", "");
     vci_last_error(NULL, msg, sizeof msg);
     if (strstr(msg, want) == NULL) fail("per-thread message", msg);
-    if (strcmp(vci_status_string(r % 12), r % 12 <= 10 ? vci_status_string(r % 12) : "unknown status") != 0)
+    if (strcmp(vci_status_string(r % 13), r % 13 <= VCI_STOPPED ? vci_status_string(r % 13) : "unknown status") != 0)
       fail("status string", "");
     if (strcmp(vci_status_string(VCI_ERR_MEMORY), "out of memory") != 0) fail("status string", "");
   }

@@ -45,6 +45,12 @@ bad=(
   "--bogus|--bogus"
   "--append|--append"
 )
+# Issue 31 item 6: an option that needs a value never takes the next option (or nothing) as it.
+valued=(--h --t-final --output --from --impact-energy --rtol --max-impacts --flush-every --scheme --stages)
+for opt in "${valued[@]}"; do
+  bad+=("$opt --quiet|$opt needs a value" "$opt --no-output|$opt needs a value" "$opt -h|$opt needs a value"
+        "--h 0.01 $opt|$opt needs a value" "$opt ''|$opt")
+done
 for ex in ellipse pendulum pendulum_walls; do
   [ -x "$bin/$ex" ] || { echo "missing $bin/$ex"; exit 1; }
   for case in "${bad[@]}"; do
@@ -59,6 +65,37 @@ for ex in ellipse pendulum pendulum_walls; do
     fi
   done
 done
+# Issue 31 item 4: --check-model passes every shipped scene (each discretisation the examples offer),
+# prints one line per supplied derivative, stops without running and writes nothing
+for line in "ellipse" "ellipse --scheme midpoint" "ellipse --scheme lobatto --stages 3" "pendulum" \
+            "pendulum --scheme left" "particle" "particle --scheme midpoint" "pendulum_walls"; do
+  rm -f ./*.h5 ./*.csv
+  "$bin"/$line --check-model > out.txt 2> err.txt; rc=$?
+  if [ $rc -ne 0 ] || ! grep -q '^model check: passed' out.txt || ! grep -q 'gap_gradients' out.txt \
+     || grep -q '^status' out.txt || ls ./*.h5 ./*.csv > /dev/null 2>&1; then
+    echo "FAIL: $line --check-model (exit $rc): $(cat out.txt err.txt | head -c 600)"; fail=1
+  fi
+done
+# Issue 31 item 1: --progress writes progress lines to stderr (here not a terminal: whole lines) and
+# leaves stdout as it was; without it (stderr not a terminal) nothing
+"$bin/ellipse" --h 1e-2 --t-final 2 --no-output --progress > with.txt 2> err.txt; rc=$?
+"$bin/ellipse" --h 1e-2 --t-final 2 --no-output > without.txt 2> err0.txt
+if [ $rc -ne 0 ] || ! grep -q '^progress 100.0%  step 200 of 200  t = ' err.txt || ! grep -q 'steps/s  ETA 0 s' err.txt \
+   || [ -s err0.txt ] || ! diff <(grep -v '^wall time' with.txt) <(grep -v '^wall time' without.txt) > /dev/null; then
+  echo "FAIL: --progress: $(cat err.txt err0.txt | head -c 600)"; fail=1
+fi
+# the ensemble example reads its own flags: the same rule
+if [ -x "$bin/ellipse_ensemble" ]; then
+  for opt in --members --t-final --h --min-size --max-size --tol --stride --impact-cap --threads --chunk --output; do
+    for flags in "$opt --quiet" "$opt"; do
+      rm -f ./*.h5
+      "$bin/ellipse_ensemble" --members 2 --t-final 0.05 $flags > out.txt 2> err.txt; rc=$?
+      if [ $rc -eq 0 ] || ! grep -qF -- "$opt" err.txt || ls ./*.h5 > /dev/null 2>&1; then
+        echo "FAIL: ellipse_ensemble $flags (exit $rc): $(head -c 300 err.txt) $(ls)"; fail=1
+      fi
+    done
+  done
+fi
 [ -e /dev/full.h5 ] && { echo "FAIL: /dev/full.h5 exists"; fail=1; }
 
 # ellipse_ensemble: every size bounded before the table is allocated or the file written

@@ -14,7 +14,8 @@ C     pendw77_ref.txt. Stops with code 1 if a number is off.
       PARAMETER (N = 1, M = 0, NG = 2, LTIMP = 40, NSTG = 4)
       DOUBLE PRECISION H, T, Q(N), P(N), TIMP(LTIMP), RPAR(2)
       DOUBLE PRECISION TREF, QREF, PREF, Q0(N), P0(N)
-      INTEGER IPAR(1), NIMP, NREF, ISTAT, IH, NBAD, K, IOPT(3)
+      INTEGER IPAR(1), NIMP, NREF, ISTAT, IH, NBAD, K, IOPT(3), IPASS
+      DOUBLE PRECISION WORST
       CHARACTER*300 MSG
       DATA RPAR /9.8D0, 1.0D0/
 C     all optional TASKs (Hessians, gap gradients, H); only L, dL/dq,
@@ -112,6 +113,25 @@ C     that no later call of this program unit receives.)
       WRITE (*, '(2A)') ' failing TASK 11: ', MSG(1:160)
       CALL CHECKS('failing TASK 11 message', MSG, 'TASK = 11', NBAD)
       CALL VCIDEL(IH)
+C     the model checker (issue 31): the model passes; with a wrong
+C     sign in dL/dq (IPAR(1) = 7) it fails and VCIMSG names dl_dq
+      DO 20 K = 1, 2
+        IPAR(1) = 0
+        IF (K .EQ. 2) IPAR(1) = 7
+        CALL VCINEW(PWMOD, N, M, NG, 15, H, RPAR, IPAR, IH, ISTAT)
+        CALL CHECKI('VCINEW', ISTAT, 0, NBAD)
+        Q(1) = 0.3D0
+        P(1) = 1.7D0
+        CALL VCICHK(IH, Q, P, H, 0.0D0, IPASS, WORST, ISTAT)
+        CALL CHECKI('VCICHK', ISTAT, 0, NBAD)
+        CALL CHECKI('VCICHK verdict', IPASS, 2 - K, NBAD)
+        IF (K .EQ. 2) THEN
+          CALL VCIMSG(IH, MSG)
+          WRITE (*, '(2A)') ' wrong dL/dq: ', MSG(1:100)
+          CALL CHECKS('VCICHK message', MSG, 'dl_dq', NBAD)
+        END IF
+        CALL VCIDEL(IH)
+   20 CONTINUE
       IPAR(1) = 0
 C     a scheme for a discrete model (IOPT without bit 8)
       CALL VCINEW(PWMOD, N, M, NG, 2, H, RPAR, IPAR, IH, ISTAT)
@@ -180,6 +200,7 @@ C     and 9 are not provided. IERR = -999 answers "not provided".
           RETURN
         END IF
         OUT(1) = -G * SIN(Q(1))
+        IF (IPAR(1) .EQ. 7) OUT(1) = -OUT(1)
       ELSE IF (TASK .EQ. 12) THEN
         IF (IPAR(1) .EQ. 3) THEN
           IERR = -999

@@ -1,0 +1,33 @@
+!> Progress of a long run (issue 31): integrate(..., progress=p) calls p%report(info, stop) at most
+!> once per p%interval seconds of wall time (and after the last step); setting `stop` ends the
+!> run cleanly after the current step with VCI_STOPPED (the state is that step's; the observer's
+!> on_finish hears VCI_STOPPED, so an output file is flushed and closed and says so). The library
+!> prints nothing itself: the examples' --progress prints the line (examples/common).
+module vci_progress
+  use vci_kinds, only: dp, i8
+  implicit none
+  private
+
+  !> What a progress report knows: steps done of this call and its total, the model time, impacts
+  !> so far (all calls), wall time of this call, rate and estimated time left (-1: unknown yet).
+  type, public :: vci_progress_info_t
+    integer(i8) :: steps_done = 0, steps_total = 0, impacts = 0
+    real(dp) :: t = 0.0_dp, elapsed = 0.0_dp, steps_per_second = 0.0_dp, eta = -1.0_dp
+  end type vci_progress_info_t
+
+  !> Extend and override report; pass it to integrate (progress=).
+  type, abstract, public :: vci_progress_t
+    real(dp) :: interval = 0.5_dp   !< seconds of wall time between reports (0: after every step)
+  contains
+    procedure(report_iface), deferred :: report
+  end type vci_progress_t
+
+  abstract interface
+    subroutine report_iface(self, info, stop)
+      import :: vci_progress_t, vci_progress_info_t
+      class(vci_progress_t), intent(inout) :: self
+      type(vci_progress_info_t), intent(in) :: info
+      logical, intent(inout) :: stop   !< .false. on entry; .true.: end the run after this step
+    end subroutine report_iface
+  end interface
+end module vci_progress
