@@ -323,15 +323,16 @@ contains
         scale(j * n + 1:(j + 1) * n) = scale(j * n + 1:(j + 1) * n) + abs(self%tmp)
       end do
       ! the constraint Omega(q)^T qdot tested against (2c - 1)^k by the rule (k = 0..s-1); the
-      ! pair (both ends given) has no momentum row: Lambda_0 = 0 and k = 0..s-2
+      ! pair (both ends given) has no momentum row: Lambda_0 = 0 in the place of k = 0, whose moment
+      ! is fixed by the ends (sum_i b_i V_i is the chord: the rule is exact on the polynomial's derivative)
       k0 = 0
       if (self%kind == KIND_PAIR) then
         r(s * n + 1:s * n + m) = self%lam(:, 0)
         scale(s * n + 1:s * n + m) = abs(self%lam(:, 0))
         k0 = 1
       end if
-      do k = 0, s - 1 - k0
-        ro = s * n + (k + k0) * m
+      do k = k0, s - 1
+        ro = s * n + k * m
         r(ro + 1:ro + m) = 0.0_dp
         scale(ro + 1:ro + m) = 0.0_dp
         do i = 0, s
@@ -477,8 +478,8 @@ contains
         c0 = (l - 1) * n
         if (l < s) jac(l * n + 1:(l + 1) * n, c0 + 1:c0 + n) = jac(l * n + 1:(l + 1) * n, c0 + 1:c0 + n) + &
                                                                (tau * self%rule%b(l)) * self%dol
-        do k = 0, s - 1 - k0
-          ro = s * n + (k + k0) * m
+        do k = k0, s - 1
+          ro = s * n + k * m
           jac(ro + 1:ro + m, c0 + 1:c0 + n) = jac(ro + 1:ro + m, c0 + 1:c0 + n) + self%wmom(k, l) * self%dctv
           do i = 0, s
             wgt = self%wmom(k, i) * (dsign / tau) * self%rule%d(i, l)
