@@ -14,7 +14,12 @@
 !> E_d = -dL_d/dtau = sum_i b_i E(y_i, V_i) (the interior points are stationary, so only the explicit
 !> tau-dependence counts; checked against a difference quotient in test/core/test_schemes.pf).
 !> Unknowns: x = [y_1, ..., y_s (n each), extra]; the interior stages are unknowns of the same Newton
-!> system as the new point. Constraints (m > 0) are not supported by this scheme.
+!> system as the new point.
+!> Constraints (m > 0; docs/SCHEMES.md): unknowns x = [y_1..y_s, Lambda_0..Lambda_(s-1), extra]; the
+!> rows of nodes j = 0..s-1 carry the forces tau b_j Omega(y_j) Lambda_j (row 0 times dir), the
+!> constraint is tested by the rule, sum_i b_i (2 c_i - 1)^k Omega(y_i)^T V_i = 0 (k = 0..s-1: s m
+!> rows), and the far node's force enters only the new momentum, fixed by the end state's constraint
+!> (project_end). Symmetric; order 2s measured through impacts (test/core/test_nonholo.pf).
 !> The Jacobian is analytic from the Hessian blocks of L at the nodes (the model's or differenced):
 !>   dF_j/dy_k = tau b_j Lqq_j d_jk + dir b_j D_jk Lqv_j + dir b_k D_kj Lqv_k^T + (1/tau) sum_i b_i D_ij D_ik Lvv_i.
 module vci_scheme_lobatto
