@@ -16,7 +16,8 @@
 !> [nu, mu] system) is scheme-independent and implemented here.
 module vci_scheme
   use vci_kinds, only: dp
-  use vci_status, only: VCI_OK, VCI_ERR_CALLBACK, VCI_ERR_NONFINITE
+  use vci_status, only: VCI_OK, VCI_ERR_CALLBACK, VCI_ERR_NONFINITE, VCI_ERR_NEWTON
+  use vci_lapack, only: dgetrf, dgetrs
   use vci_model_base, only: vci_model_base_t
   use vci_newton, only: vci_system_t, vci_newton_t, vci_newton_result_t
   implicit none
@@ -70,6 +71,7 @@ module vci_scheme
     procedure :: set_wall_normal
     procedure :: configure_impacts
     procedure :: impact_momentum
+    procedure :: project_momentum
     procedure :: use_derivatives
     procedure :: clear_failure
     procedure :: position_carry
@@ -277,6 +279,60 @@ contains
     real(dp), intent(in), optional :: pa(:)
     call self%momentum_out(x, a, tau, p, stat, pa)
   end subroutine impact_momentum
+
+  !> p := p + Omega(q) nu with Omega(q)^T dH/dp(q, p) = 0: the momentum's admissible part at q, whose
+  !> H is the energy of the motion the constraints allow (the Omega(q)-part of a momentum is no motion:
+  !> the next sub-step's multiplier absorbs it). Newton on nu with dH/dp by central differences (the
+  !> impulse system's rows at mu = 0; exact for H quadratic in p), to the solver's relative tolerance.
+  !> The posed system (a, pa, forms, kind) is left as it was. Nothing to do when m = 0.
+  subroutine project_momentum(self, q, p, stat)
+    class(vci_scheme_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(inout) :: p(:)
+    integer, intent(out) :: stat
+    real(dp) :: a0(self%n), pa0(self%n), om0(self%n, self%m), x(self%m + 1), r(self%m + 1), sc(self%m + 1)
+    real(dp) :: rp(self%m + 1), rm(self%m + 1), jac(self%m, self%m), rhs(self%m, 1), d, xj, pscale
+    integer :: m, it, j, info, ipiv(self%m), kind0
+    m = self%m
+    stat = VCI_OK
+    if (m == 0) return
+    a0 = self%a; pa0 = self%pa; om0 = self%omega; kind0 = self%kind
+    self%a = q; self%pa = p; self%kind = KIND_IMPULSE
+    call self%eval_forms(q, self%omega, stat)
+    x = 0.0_dp
+    pscale = max(maxval(abs(p)), tiny(1.0_dp))
+    do it = 1, 20
+      if (stat /= VCI_OK) exit
+      call impulse_rows(self, x, r, sc, stat)
+      if (stat /= VCI_OK) exit
+      if (all(abs(r(1:m)) <= max(self%rtol, epsilon(1.0_dp)) * sc(1:m))) exit
+      if (it == 20) then
+        stat = VCI_ERR_NEWTON; self%failed_stat = 0; self%failed_callback = 'momentum projection'; exit
+      end if
+      do j = 1, m
+        xj = x(j)
+        d = vci_fd_rel * max(abs(xj), pscale / max(maxval(abs(self%omega(:, j))), tiny(1.0_dp)))
+        x(j) = xj + d
+        call impulse_rows(self, x, rp, sc, stat)
+        if (stat /= VCI_OK) exit
+        x(j) = xj - d
+        call impulse_rows(self, x, rm, sc, stat)
+        if (stat /= VCI_OK) exit
+        x(j) = xj
+        jac(:, j) = (rp(1:m) - rm(1:m)) / (2.0_dp * d)
+      end do
+      if (stat /= VCI_OK) exit
+      rhs(:, 1) = r(1:m)
+      call dgetrf(m, m, jac, m, ipiv, info)
+      if (info == 0) call dgetrs('N', m, 1, jac, m, ipiv, rhs, m, info)
+      if (info /= 0) then
+        stat = VCI_ERR_NEWTON; self%failed_stat = 0; self%failed_callback = 'momentum projection (singular)'; exit
+      end if
+      x(1:m) = x(1:m) - rhs(:, 1)
+    end do
+    if (stat == VCI_OK) p = p + matmul(self%omega, x(1:m))
+    self%a = a0; self%pa = pa0; self%omega = om0; self%kind = kind0
+  end subroutine project_momentum
 
   !> The impact energy condition and Newton's relative tolerance (once per change of settings).
   subroutine configure_impacts(self, impact_energy, rtol)

@@ -342,12 +342,14 @@ contains
         scale(ro + 1:ro + m) = 0.0_dp
         do i = 0, s
           r(ro + 1:ro + m) = r(ro + 1:ro + m) + self%wmom(k, i) * self%ctv(:, i)
+          ! the size of the terms Omega(:, j)^T V compares: |Omega(:, j)|_1 |V|_max (a product of
+          ! components would vanish where the motion is along one axis and the form along another)
           do j = 1, m
             acc = 0.0_dp
             do a1 = 1, n
-              acc = acc + abs(self%om(a1, j, i)) * abs(self%v(a1, i))
+              acc = acc + abs(self%om(a1, j, i))
             end do
-            scale(ro + j) = scale(ro + j) + abs(self%wmom(k, i)) * acc
+            scale(ro + j) = scale(ro + j) + abs(self%wmom(k, i)) * acc * maxval(abs(self%v(:, i)))
           end do
         end do
       end do
