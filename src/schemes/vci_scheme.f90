@@ -50,6 +50,8 @@ module vci_scheme
     integer :: failed_stat = 0           !< the stat that callback set (> 0 recoverable, < 0 not)
     real(dp), allocatable :: pplus(:)
     real(dp), allocatable, private :: gp(:), gm(:), qp(:), vout(:), xsave(:), ip(:), im(:), isp(:), ism(:)
+    real(dp), allocatable, private :: pj_a(:), pj_pa(:), pj_om(:, :), pj_x(:), pj_jac(:, :), pj_rhs(:, :)
+    integer, allocatable, private :: pj_ipiv(:)
   contains
     procedure(unknowns_iface), deferred :: unknowns
     procedure(rows_iface), deferred :: scheme_residual
@@ -200,6 +202,11 @@ contains
               self%pplus(n), self%gp(ng), self%gm(ng), self%qp(n), self%vout(n), self%xsave(m + 1), &
               self%ip(m + 1), self%im(m + 1), self%isp(m + 1), self%ism(m + 1), stat=stat)
     if (stat /= 0) return
+    if (allocated(self%pj_a)) deallocate (self%pj_a, self%pj_pa, self%pj_om, self%pj_x, self%pj_jac, self%pj_rhs, &
+                                          self%pj_ipiv)
+    allocate (self%pj_a(n), self%pj_pa(n), self%pj_om(n, m), self%pj_x(m + 1), self%pj_jac(m, m), &
+              self%pj_rhs(m, 1), self%pj_ipiv(m), stat=stat)
+    if (stat /= 0) return
     self%omega = 0.0_dp
     self%a = 0.0_dp; self%pa = 0.0_dp; self%grad = 0.0_dp; self%gscale = 0.0_dp
   end subroutine setup_common
@@ -290,12 +297,14 @@ contains
     real(dp), intent(in) :: q(:)
     real(dp), intent(inout) :: p(:)
     integer, intent(out) :: stat
-    real(dp) :: a0(self%n), pa0(self%n), om0(self%n, self%m), x(self%m + 1), r(self%m + 1), sc(self%m + 1)
-    real(dp) :: rp(self%m + 1), rm(self%m + 1), jac(self%m, self%m), rhs(self%m, 1), d, xj, pscale
-    integer :: m, it, j, info, ipiv(self%m), kind0
+    real(dp) :: d, xj, pscale, acc
+    integer :: m, it, j, i, info, kind0
     m = self%m
     stat = VCI_OK
     if (m == 0) return
+    associate (a0 => self%pj_a, pa0 => self%pj_pa, om0 => self%pj_om, x => self%pj_x, r => self%ip, &
+               sc => self%isp, rp => self%im, rm => self%ism, jac => self%pj_jac, rhs => self%pj_rhs, &
+               ipiv => self%pj_ipiv)
     a0 = self%a; pa0 = self%pa; om0 = self%omega; kind0 = self%kind
     self%a = q; self%pa = p; self%kind = KIND_IMPULSE
     call self%eval_forms(q, self%omega, stat)
@@ -313,10 +322,10 @@ contains
         xj = x(j)
         d = vci_fd_rel * max(abs(xj), pscale / max(maxval(abs(self%omega(:, j))), tiny(1.0_dp)))
         x(j) = xj + d
-        call impulse_rows(self, x, rp, sc, stat)
+        call impulse_rows(self, x, rp, self%xsave, stat)
         if (stat /= VCI_OK) exit
         x(j) = xj - d
-        call impulse_rows(self, x, rm, sc, stat)
+        call impulse_rows(self, x, rm, self%xsave, stat)
         if (stat /= VCI_OK) exit
         x(j) = xj
         jac(:, j) = (rp(1:m) - rm(1:m)) / (2.0_dp * d)
@@ -330,8 +339,17 @@ contains
       end if
       x(1:m) = x(1:m) - rhs(:, 1)
     end do
-    if (stat == VCI_OK) p = p + matmul(self%omega, x(1:m))
+    if (stat == VCI_OK) then
+      do i = 1, self%n   ! + matmul(omega, nu) in matmul's order, without its heap temporary
+        acc = 0.0_dp
+        do j = 1, m
+          acc = acc + self%omega(i, j) * x(j)
+        end do
+        p(i) = p(i) + acc
+      end do
+    end if
     self%a = a0; self%pa = pa0; self%omega = om0; self%kind = kind0
+    end associate
   end subroutine project_momentum
 
   !> The impact energy condition and Newton's relative tolerance (once per change of settings).

@@ -45,7 +45,7 @@ module vci_scheme_lobatto
     ! constraints (m > 0): forms at the nodes, node multipliers, moment weights, their derivatives,
     ! and the end projection's saddle system
     real(dp), allocatable, private :: om(:, :, :), lam(:, :), wmom(:, :), ctv(:, :), dctv(:, :), dol(:, :)
-    real(dp), allocatable, private :: op(:, :), omm(:, :), qd(:), kkt(:, :), krhs(:), pbar(:), wv(:)
+    real(dp), allocatable, private :: op(:, :), omm(:, :), qd(:), kkt(:, :), krhs(:), pbar(:), wv(:), nuw(:)
     integer, allocatable, private :: kpiv(:)
   contains
     procedure :: setup
@@ -91,7 +91,8 @@ contains
     if (allocated(self%y)) deallocate (self%y, self%v, self%lq, self%lv, self%lval, self%f, self%fs, self%hqq, &
                                        self%hqv, self%hvv, self%g, self%dg, self%tmp, self%jscale)
     if (allocated(self%om)) deallocate (self%om, self%lam, self%wmom, self%ctv, self%dctv, self%dol, self%op, &
-                                        self%omm, self%qd, self%kkt, self%krhs, self%pbar, self%wv, self%kpiv)
+                                        self%omm, self%qd, self%kkt, self%krhs, self%pbar, self%wv, self%kpiv, &
+                                        self%nuw)
     allocate (self%y(n, 0:s), self%v(n, 0:s), self%lq(n, 0:s), self%lv(n, 0:s), self%lval(0:s), self%f(n, 0:s), &
               self%fs(n, 0:s), self%hqq(n, n, 0:s), self%hqv(n, n, 0:s), self%hvv(n, n, 0:s), &
               self%g(max(1, lag%n_gaps)), self%dg(n, max(1, lag%n_gaps)), self%tmp(n), self%jscale(nx), stat=stat)
@@ -103,7 +104,8 @@ contains
       m = lag%m
       allocate (self%om(n, m, 0:s), self%lam(m, 0:s - 1), self%wmom(0:s - 1, 0:s), self%ctv(m, 0:s), &
                 self%dctv(m, n), self%dol(n, n), self%op(n, m), self%omm(n, m), self%qd(n), &
-                self%kkt(n + m, n + m), self%krhs(n + m), self%pbar(n), self%wv(n), self%kpiv(n + m), stat=stat)
+                self%kkt(n + m, n + m), self%krhs(n + m), self%pbar(n), self%wv(n), self%kpiv(n + m), &
+                self%nuw(m), stat=stat)
       if (stat /= 0) then
         stat = VCI_ERR_MEMORY; return
       end if
@@ -239,21 +241,14 @@ contains
     do i = 0, s
       call self%eval_forms(self%y(:, i), self%om(:, :, i), stat)
       if (stat /= VCI_OK) return
-      self%ctv(:, i) = 0.0_dp
-      call add_mat_vec(self%ctv(:, i), 1.0_dp, transpose_of(self, self%om(:, :, i)), self%v(:, i))
+      do j = 1, self%m
+        self%ctv(j, i) = dot_product(self%om(:, j, i), self%v(:, i))
+      end do
     end do
     do j = 0, s - 1
       self%lam(:, j) = x(s * n + j * self%m + 1:s * n + (j + 1) * self%m)
     end do
   end subroutine evaluate
-
-  !> The transpose of an n x m form matrix, in the scheme's workspace (no heap temporary).
-  function transpose_of(self, a) result(at)
-    class(vci_scheme_lobatto_t), intent(in) :: self
-    real(dp), intent(in) :: a(:, :)
-    real(dp) :: at(size(a, 2), size(a, 1))
-    at = transpose(a)
-  end function transpose_of
 
   !> At node y (velocity v, multiplier lam): dol = d(Omega(y) lam)/dy (n x n) and
   !> dctv = d(Omega(y)^T v)/dy at fixed v (m x n), by central differences of the forms.
@@ -479,7 +474,8 @@ contains
         if (l < s) then
           call form_derivatives(self, self%y(:, l), self%v(:, l), self%lam(:, l), stat)
         else
-          call form_derivatives(self, self%y(:, l), self%v(:, l), self%lam(:, 0) * 0.0_dp, stat)
+          self%nuw = 0.0_dp   ! (no row carries the far node's multiplier)
+          call form_derivatives(self, self%y(:, l), self%v(:, l), self%nuw, stat)
         end if
         if (stat /= VCI_OK) return
         c0 = (l - 1) * n
@@ -490,8 +486,11 @@ contains
           jac(ro + 1:ro + m, c0 + 1:c0 + n) = jac(ro + 1:ro + m, c0 + 1:c0 + n) + self%wmom(k, l) * self%dctv
           do i = 0, s
             wgt = self%wmom(k, i) * (dsign / tau) * self%rule%d(i, l)
-            if (wgt /= 0.0_dp) jac(ro + 1:ro + m, c0 + 1:c0 + n) = jac(ro + 1:ro + m, c0 + 1:c0 + n) + &
-                                                                   wgt * transpose_of(self, self%om(:, :, i))
+            if (wgt /= 0.0_dp) then
+              do a1 = 1, m
+                jac(ro + a1, c0 + 1:c0 + n) = jac(ro + a1, c0 + 1:c0 + n) + wgt * self%om(:, a1, i)
+              end do
+            end if
           end do
         end do
       end do
@@ -567,20 +566,21 @@ contains
     real(dp), intent(inout) :: p(:)
     integer, intent(out) :: stat
     integer :: n, m, s, it, info, i
-    real(dp) :: nu(self%m), err, size_r
+    real(dp) :: err, size_r
     n = self%n; m = self%m; s = self%s
     self%pbar = p
     self%wv = self%v(:, s)
-    nu = 0.0_dp
+    self%nuw = 0.0_dp
     do it = 1, 12
       stat = 0
       call self%lag%dl_dv(self%y(:, s), self%wv, self%tmp, stat)
       call self%check(stat, self%tmp, 'dL/dqdot')
       if (stat /= VCI_OK) return
       self%krhs(1:n) = self%tmp - self%pbar
-      call add_mat_vec(self%krhs(1:n), -1.0_dp, self%om(:, :, s), nu)
-      self%krhs(n + 1:n + m) = 0.0_dp
-      call add_mat_vec(self%krhs(n + 1:n + m), 1.0_dp, transpose_of(self, self%om(:, :, s)), self%wv)
+      call add_mat_vec(self%krhs(1:n), -1.0_dp, self%om(:, :, s), self%nuw)
+      do i = 1, m
+        self%krhs(n + i) = dot_product(self%om(:, i, s), self%wv)
+      end do
       size_r = max(maxval(abs(self%tmp)), maxval(abs(self%pbar)), tiny(1.0_dp))
       err = max(maxval(abs(self%krhs(1:n))) / size_r, maxval(abs(self%krhs(n + 1:n + m))) / &
                 max(maxval(abs(self%om(:, :, s))) * maxval(abs(self%wv)), tiny(1.0_dp)))
@@ -599,7 +599,9 @@ contains
       self%kkt = 0.0_dp
       self%kkt(1:n, 1:n) = self%hvv(:, :, 0)
       self%kkt(1:n, n + 1:n + m) = -self%om(:, :, s)
-      self%kkt(n + 1:n + m, 1:n) = transpose_of(self, self%om(:, :, s))
+      do i = 1, m
+        self%kkt(n + i, 1:n) = self%om(:, i, s)
+      end do
       self%krhs = -self%krhs
       if (.not. (all(abs(self%kkt) <= huge(1.0_dp)) .and. all(abs(self%krhs) <= huge(1.0_dp)))) then
         stat = VCI_ERR_NONFINITE; self%failed_stat = 0; self%failed_callback = 'end projection'; return
@@ -610,10 +612,13 @@ contains
       end if
       call dgetrs('N', n + m, 1, self%kkt, n + m, self%kpiv, self%krhs, n + m, info)
       self%wv = self%wv + self%krhs(1:n)
-      nu = nu + self%krhs(n + 1:n + m)
+      self%nuw = self%nuw + self%krhs(n + 1:n + m)
     end do
     do i = 1, n
-      p(i) = self%pbar(i) + dot_product(self%om(i, :, s), nu)
+      p(i) = self%pbar(i)
+      do it = 1, m
+        p(i) = p(i) + self%om(i, it, s) * self%nuw(it)
+      end do
     end do
     stat = VCI_OK
   end subroutine project_end
