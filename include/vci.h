@@ -151,7 +151,7 @@ enum {
   VCI_SCHEME_DISCRETE = 0, /* the model is a discrete L_d (vci_model_create): the only scheme it has */
   VCI_SCHEME_LEFT = 1,     /* L_d = h L(q, (v - q)/h): the paper's retraction, order 1 */
   VCI_SCHEME_MIDPOINT = 2, /* L_d = h L((q + v)/2, (v - q)/h): order 2, the default for a continuous model */
-  VCI_SCHEME_LOBATTO = 3   /* Galerkin with s + 1 Lobatto points, s = 1..VCI_LOBATTO_MAX_STAGES: order 2s (m = 0 only) */
+  VCI_SCHEME_LOBATTO = 3   /* Galerkin with s + 1 Lobatto points, s = 1..VCI_LOBATTO_MAX_STAGES: order 2s, with or without constraints */
 };
 #define VCI_LOBATTO_MAX_STAGES 8
 
@@ -171,7 +171,7 @@ typedef struct vci_lagrangian_callbacks {
   vci_lagrangian_value_fn lagrangian;           /* required: L(q, v) */
   vci_lagrangian_grad_fn dl_dq, dl_dv;          /* required: dL/dq, dL/dqdot (the momentum) */
   vci_lagrangian_hessians_fn hessians;          /* optional (NULL: differenced from dl_dq, dl_dv) */
-  vci_forms_fn constraint_forms;                /* required iff m > 0 (then not with lobatto) */
+  vci_forms_fn constraint_forms;                /* required iff m > 0 */
   vci_gaps_fn gaps;                             /* required iff ngaps > 0 */
   vci_gap_grads_fn gap_gradients;               /* optional (NULL: differenced) */
   vci_energy_fn energy;                         /* optional H(q, p) (NULL: Legendre inversion of dl_dv) */
@@ -195,7 +195,7 @@ int  vci_model_create_lagrangian(vci_model *model, int n, int m, int ngaps, cons
 /** Choose the scheme of an integrator made from a continuous model: VCI_SCHEME_LEFT, _MIDPOINT,
  *  or _LOBATTO with `stages` = s in 1..VCI_LOBATTO_MAX_STAGES (ignored for the others). Call before
  *  initialising: the state is reset. Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, a discrete
- *  model, unknown scheme, s out of range, lobatto with m > 0; VCI_ERR_STATE: busy. */
+ *  model, unknown scheme, s out of range; VCI_ERR_STATE: busy. */
 int  vci_set_scheme(vci_integrator integ, int scheme, int stages);
 
 /** Release the model and set *model = NULL. NULL-safe (model or *model NULL: nothing happens).

@@ -27,6 +27,9 @@ module vci_example_cli
     integer :: stages = 2                     !< --stages: s of lobatto
     logical :: check_model = .false.          !< --check-model: compare the derivatives, do not run
     integer :: progress = -1                  !< --progress 1, --no-progress 0, else: when stderr is a terminal
+    !> --start: 'exact' (q(0), p(0) = dL/dqdot(q(0), qdot(0)), at t = 0; the default with --scheme) or
+    !> 'pair' (the paper's pair of configurations; the default of the hand-written L_d)
+    character(len=:), allocatable :: start
   end type example_options_t
 
   !> --progress: a line on stderr at most twice a second (rewritten in place on a terminal).
@@ -124,13 +127,15 @@ contains
         write (output_unit, '(a)') '  --scheme S            discretise the scene''s continuous L: left, midpoint or lobatto'
         write (output_unit, '(a)') '                        (default: the scene''s hand-derived L_d, as in the paper)'
         write (output_unit, '(a)') '  --stages s            lobatto: s stages, order 2s, 1 <= s <= 8 (2)'
+        write (output_unit, '(a)') '  --start exact|pair    exact: (q(0), p(0) = dL/dqdot(q(0), qdot(0))) at t = 0 (default with'
+        write (output_unit, '(a)') '                        --scheme); pair: the paper''s pair of configurations (default without)'
         write (output_unit, '(a)') '  --quiet               print the summary only'
         write (output_unit, '(a)') '  --check-model         compare the model''s derivatives with differences, then stop'
         write (output_unit, '(a)') '  --progress            progress on stderr (default when stderr is a terminal)'
         write (output_unit, '(a)') '  --no-progress         no progress line'
         stop
       case ('--h', '--t-final', '--output', '--from', '--impact-energy', '--rtol', '--max-impacts', '--flush-every', &
-            '--scheme', '--stages')
+            '--scheme', '--stages', '--start')
         if (i == nargs) call die(name//': '//arg//' needs a value')
         i = i + 1
         val = get_arg(i)
@@ -147,6 +152,9 @@ contains
         case ('--rtol'); opts%rtol = to_real(val, arg, rtol_min, rtol_max)
         case ('--max-impacts'); opts%max_impacts = to_int(val, arg, 1, max_impacts_max)
         case ('--stages'); opts%stages = to_int(val, arg, 1, 8)
+        case ('--start')
+          if (val /= 'exact' .and. val /= 'pair') call die(name//': --start must be exact or pair')
+          opts%start = val
         case ('--scheme')
           if (scheme_id(val) < 0) call die(name//': --scheme must be left, midpoint or lobatto')
           opts%scheme = val
@@ -171,6 +179,14 @@ contains
       i = i + 1
     end do
     if (.not. (opts%h > 0.0_dp)) call die(name//': --h must be positive')
+    if (.not. allocated(opts%start)) then
+      ! a scheme's order shows only from the exact start; the paper's L_d starts from its pair
+      if (allocated(opts%scheme)) then
+        opts%start = 'exact'
+      else
+        opts%start = 'pair'
+      end if
+    end if
     if (opts%append .and. .not. allocated(opts%from)) call die(name//': --append needs --from FILE')
     if (opts%append .and. opts%no_output) call die(name//': --append and --no-output exclude each other')
     if (opts%flush_every < 1) call die(name//': --flush-every must be >= 1')
@@ -278,6 +294,13 @@ contains
       '   stages: ', integ%stages(), ''
     write (output_unit, '(a,es10.3,a,f0.6,a,f0.6,a,i0)') 'h = ', opts%h, '   t from ', integ%time(), ' to ', &
       integ%time() + dir * nsteps * opts%h, '   steps: ', nsteps
+    if (allocated(opts%from)) then
+      write (output_unit, '(a)') 'start: the last state of '//opts%from
+    else if (opts%start == 'exact') then
+      write (output_unit, '(a)') 'start: exact (q(0), p(0) = dL/dqdot(q(0), qdot(0))) at t = 0'
+    else
+      write (output_unit, '(a)') 'start: the paper''s pair of configurations (q0, q1)'
+    end if
     call print_state('start state', integ)
     call system_clock(c0, rate)
     if (opts%progress == 1 .or. (opts%progress == -1 .and. progress%tty)) then

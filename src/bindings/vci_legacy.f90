@@ -757,7 +757,7 @@ subroutine vcieng(ih, mode, istat)
 end subroutine vcieng
 
 !> Scheme of a continuous model (IOPT bit 8): ISCH 1 left (order 1), 2 midpoint (order 2, the
-!> default), 3 lobatto with NSTG = s stages (1 <= s <= 8, order 2s, M = 0 only); NSTG is ignored
+!> default), 3 lobatto with NSTG = s stages (1 <= s <= 8, order 2s, with or without constraints); NSTG is ignored
 !> except for lobatto. Call after VCINEW and before VCIINP/VCIINM (the state is reset).
 subroutine vcisch(ih, isch, nstg, istat)
   use vci_status, only: VCI_OK

@@ -253,7 +253,7 @@ contains
 
   !> Choose the scheme that discretises a continuous model: VCI_SCHEME_LEFT (the paper's retraction,
   !> order 1), VCI_SCHEME_MIDPOINT (order 2, the default) or VCI_SCHEME_LOBATTO with `stages` = s in
-  !> 1..VCI_LOBATTO_MAX_STAGES (order 2s; unconstrained models only). `stages` is ignored except for
+  !> 1..VCI_LOBATTO_MAX_STAGES (order 2s, with or without constraints). `stages` is ignored except for
   !> lobatto. Call after create and before initialising: once initialised, VCI_ERR_STATE (the state stays).
   subroutine set_scheme(self, scheme, stages, stat)
     class(vci_integrator_t), intent(inout) :: self
@@ -279,11 +279,6 @@ contains
       if (stages < 1 .or. stages > VCI_LOBATTO_MAX_STAGES) then
         write (self%last_message, '(a,i0,a,i0,a)') 'set_scheme: lobatto with s = ', stages, ' stages (need 1 <= s <= ', &
           VCI_LOBATTO_MAX_STAGES, ')'
-        call finish(self, VCI_ERR_ARGUMENT, stat); return
-      end if
-      if (self%model%m > 0) then
-        write (self%last_message, '(a,i0,a)') 'set_scheme: lobatto does not support nonholonomic constraints (m = ', &
-          self%model%m, '); use left or midpoint'
         call finish(self, VCI_ERR_ARGUMENT, stat); return
       end if
     case default

@@ -16,7 +16,8 @@
 !> [nu, mu] system) is scheme-independent and implemented here.
 module vci_scheme
   use vci_kinds, only: dp
-  use vci_status, only: VCI_OK, VCI_ERR_CALLBACK, VCI_ERR_NONFINITE
+  use vci_status, only: VCI_OK, VCI_ERR_CALLBACK, VCI_ERR_NONFINITE, VCI_ERR_NEWTON
+  use vci_lapack, only: dgetrf, dgetrs
   use vci_model_base, only: vci_model_base_t
   use vci_newton, only: vci_system_t, vci_newton_t, vci_newton_result_t
   implicit none
@@ -49,6 +50,8 @@ module vci_scheme
     integer :: failed_stat = 0           !< the stat that callback set (> 0 recoverable, < 0 not)
     real(dp), allocatable :: pplus(:)
     real(dp), allocatable, private :: gp(:), gm(:), qp(:), vout(:), xsave(:), ip(:), im(:), isp(:), ism(:)
+    real(dp), allocatable, private :: pj_a(:), pj_pa(:), pj_om(:, :), pj_x(:), pj_jac(:, :), pj_rhs(:, :)
+    integer, allocatable, private :: pj_ipiv(:)
   contains
     procedure(unknowns_iface), deferred :: unknowns
     procedure(rows_iface), deferred :: scheme_residual
@@ -70,6 +73,7 @@ module vci_scheme
     procedure :: set_wall_normal
     procedure :: configure_impacts
     procedure :: impact_momentum
+    procedure :: project_momentum
     procedure :: use_derivatives
     procedure :: clear_failure
     procedure :: position_carry
@@ -199,6 +203,11 @@ contains
               self%pplus(n), self%gp(ng), self%gm(ng), self%qp(n), self%vout(n), self%xsave(m + 1), &
               self%ip(m + 1), self%im(m + 1), self%isp(m + 1), self%ism(m + 1), stat=stat)
     if (stat /= 0) return
+    if (allocated(self%pj_a)) deallocate (self%pj_a, self%pj_pa, self%pj_om, self%pj_x, self%pj_jac, self%pj_rhs, &
+                                          self%pj_ipiv)
+    allocate (self%pj_a(n), self%pj_pa(n), self%pj_om(n, m), self%pj_x(m + 1), self%pj_jac(m, m), &
+              self%pj_rhs(m, 1), self%pj_ipiv(m), stat=stat)
+    if (stat /= 0) return
     self%omega = 0.0_dp
     self%a = 0.0_dp; self%pa = 0.0_dp; self%grad = 0.0_dp; self%gscale = 0.0_dp
   end subroutine setup_common
@@ -278,6 +287,71 @@ contains
     real(dp), intent(in), optional :: pa(:)
     call self%momentum_out(x, a, tau, p, stat, pa)
   end subroutine impact_momentum
+
+  !> p := p + Omega(q) nu with Omega(q)^T dH/dp(q, p) = 0: the momentum's admissible part at q, whose
+  !> H is the energy of the motion the constraints allow (the Omega(q)-part of a momentum is no motion:
+  !> the next sub-step's multiplier absorbs it). Newton on nu with dH/dp by central differences (the
+  !> impulse system's rows at mu = 0; exact for H quadratic in p), to the solver's relative tolerance.
+  !> The posed system (a, pa, forms, kind) is left as it was. Nothing to do when m = 0.
+  subroutine project_momentum(self, q, p, stat)
+    class(vci_scheme_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(inout) :: p(:)
+    integer, intent(out) :: stat
+    real(dp) :: d, xj, pscale, acc
+    integer :: m, it, j, i, info, kind0
+    m = self%m
+    stat = VCI_OK
+    if (m == 0) return
+    associate (a0 => self%pj_a, pa0 => self%pj_pa, om0 => self%pj_om, x => self%pj_x, r => self%ip, &
+               sc => self%isp, rp => self%im, rm => self%ism, jac => self%pj_jac, rhs => self%pj_rhs, &
+               ipiv => self%pj_ipiv)
+    a0 = self%a; pa0 = self%pa; om0 = self%omega; kind0 = self%kind
+    self%a = q; self%pa = p; self%kind = KIND_IMPULSE
+    call self%eval_forms(q, self%omega, stat)
+    x = 0.0_dp
+    pscale = max(maxval(abs(p)), tiny(1.0_dp))
+    do it = 1, 20
+      if (stat /= VCI_OK) exit
+      call impulse_rows(self, x, r, sc, stat)
+      if (stat /= VCI_OK) exit
+      if (all(abs(r(1:m)) <= max(self%rtol, epsilon(1.0_dp)) * sc(1:m))) exit
+      if (it == 20) then
+        stat = VCI_ERR_NEWTON; self%failed_stat = 0; self%failed_callback = 'momentum projection'; exit
+      end if
+      do j = 1, m
+        xj = x(j)
+        d = vci_fd_rel * max(abs(xj), pscale / max(maxval(abs(self%omega(:, j))), tiny(1.0_dp)))
+        x(j) = xj + d
+        call impulse_rows(self, x, rp, self%xsave, stat)
+        if (stat /= VCI_OK) exit
+        x(j) = xj - d
+        call impulse_rows(self, x, rm, self%xsave, stat)
+        if (stat /= VCI_OK) exit
+        x(j) = xj
+        jac(:, j) = (rp(1:m) - rm(1:m)) / (2.0_dp * d)
+      end do
+      if (stat /= VCI_OK) exit
+      rhs(:, 1) = r(1:m)
+      call dgetrf(m, m, jac, m, ipiv, info)
+      if (info == 0) call dgetrs('N', m, 1, jac, m, ipiv, rhs, m, info)
+      if (info /= 0) then
+        stat = VCI_ERR_NEWTON; self%failed_stat = 0; self%failed_callback = 'momentum projection (singular)'; exit
+      end if
+      x(1:m) = x(1:m) - rhs(:, 1)
+    end do
+    if (stat == VCI_OK) then
+      do i = 1, self%n   ! + matmul(omega, nu) in matmul's order, without its heap temporary
+        acc = 0.0_dp
+        do j = 1, m
+          acc = acc + self%omega(i, j) * x(j)
+        end do
+        p(i) = p(i) + acc
+      end do
+    end if
+    self%a = a0; self%pa = pa0; self%omega = om0; self%kind = kind0
+    end associate
+  end subroutine project_momentum
 
   !> The impact energy condition and Newton's relative tolerance (once per change of settings).
   subroutine configure_impacts(self, impact_energy, rtol)

@@ -362,6 +362,27 @@ contains
     real(dp), intent(out) :: p(:)
     integer, intent(out) :: stat
     real(dp), intent(in), optional :: pa(:)
+    call impact_momentum_balanced(self, x, a, tau, p, stat, pa)
+    ! With constraints and the hamiltonian condition: the admissible part of the momentum (issue 25).
+    ! D2 L_d is off the constraint manifold by O(h), and its Omega-part adds kinetic energy that no
+    ! motion has: H(qt, p-) of it exceeds the energy of the motion, and H(qt, p+) = H(qt, p-) put the
+    ! excess into the motion at every impact (always upward). The Omega(b)-part is no motion: the
+    ! leaving sub-step's multiplier absorbs it, so positions are unchanged by this projection.
+    if (stat /= VCI_OK .or. self%m == 0 .or. self%impact_energy /= VCI_IMPACT_HAMILTONIAN) return
+    if (self%increments) then
+      self%bb = a + x(1:self%n)
+    else
+      self%bb = x(1:self%n)
+    end if
+    call self%project_momentum(self%bb, p, stat)
+  end subroutine impact_momentum
+
+  subroutine impact_momentum_balanced(self, x, a, tau, p, stat, pa)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:), a(:), tau
+    real(dp), intent(out) :: p(:)
+    integer, intent(out) :: stat
+    real(dp), intent(in), optional :: pa(:)
     integer :: i
     call self%momentum_out(x, a, tau, p, stat, pa)
     if (stat /= VCI_OK .or. self%increments .or. .not. present(pa)) return
@@ -373,7 +394,7 @@ contains
     end do
     call add_balance(self, x, pa, p)
     call self%check(stat, p, 'D1/D2 of L_d')
-  end subroutine impact_momentum
+  end subroutine impact_momentum_balanced
 
   !> p := pa + p - Omega(a) lambda (lambda from x): the momentum from the terms x's rows balance.
   subroutine add_balance(self, x, pa, p)

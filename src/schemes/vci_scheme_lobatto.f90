@@ -14,16 +14,22 @@
 !> E_d = -dL_d/dtau = sum_i b_i E(y_i, V_i) (the interior points are stationary, so only the explicit
 !> tau-dependence counts; checked against a difference quotient in test/core/test_schemes.pf).
 !> Unknowns: x = [y_1, ..., y_s (n each), extra]; the interior stages are unknowns of the same Newton
-!> system as the new point. Constraints (m > 0) are not supported by this scheme.
+!> system as the new point.
+!> Constraints (m > 0; docs/SCHEMES.md): unknowns x = [y_1..y_s, Lambda_0..Lambda_(s-1), extra]; the
+!> rows of nodes j = 0..s-1 carry the forces tau b_j Omega(y_j) Lambda_j (row 0 times dir), the
+!> constraint is tested by the rule, sum_i b_i (2 c_i - 1)^k Omega(y_i)^T V_i = 0 (k = 0..s-1: s m
+!> rows), and the far node's force enters only the new momentum, fixed by the end state's constraint
+!> (project_end). Symmetric; order 2s measured through impacts (test/core/test_nonholo.pf).
 !> The Jacobian is analytic from the Hessian blocks of L at the nodes (the model's or differenced):
 !>   dF_j/dy_k = tau b_j Lqq_j d_jk + dir b_j D_jk Lqv_j + dir b_k D_kj Lqv_k^T + (1/tau) sum_i b_i D_ij D_ik Lvv_i.
 module vci_scheme_lobatto
   use vci_kinds, only: dp
-  use vci_status, only: VCI_OK, VCI_ERR_CALLBACK, VCI_ERR_NONFINITE, VCI_ERR_ARGUMENT, VCI_ERR_MEMORY
+  use vci_status, only: VCI_OK, VCI_ERR_CALLBACK, VCI_ERR_NONFINITE, VCI_ERR_ARGUMENT, VCI_ERR_MEMORY, VCI_ERR_NEWTON
+  use vci_lapack, only: dgetrf, dgetrs
   use vci_lagrangian, only: vci_lagrangian_t, vci_lagrangian_work_t, lagrangian_work_setup, &
                             lagrangian_hessians, lagrangian_hamiltonian
   use vci_lobatto_rule, only: vci_lobatto_rule_t, lobatto_rule, VCI_LOBATTO_MAX_STAGES
-  use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_STAGE1, KIND_STAGE2, KIND_IMPULSE, KIND_PAIR
+  use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_STAGE1, KIND_STAGE2, KIND_IMPULSE, KIND_PAIR, vci_fd_rel
   implicit none
   private
 
@@ -36,6 +42,11 @@ module vci_scheme_lobatto
     real(dp), allocatable, private :: y(:, :), v(:, :), lq(:, :), lv(:, :), lval(:), f(:, :), fs(:, :)
     real(dp), allocatable, private :: hqq(:, :, :), hqv(:, :, :), hvv(:, :, :), g(:), dg(:, :), tmp(:)
     real(dp), allocatable, private :: jscale(:)
+    ! constraints (m > 0): forms at the nodes, node multipliers, moment weights, their derivatives,
+    ! and the end projection's saddle system
+    real(dp), allocatable, private :: om(:, :, :), lam(:, :), wmom(:, :), ctv(:, :), dctv(:, :), dol(:, :)
+    real(dp), allocatable, private :: op(:, :), omm(:, :), qd(:), kkt(:, :), krhs(:), pbar(:), wv(:), nuw(:)
+    integer, allocatable, private :: kpiv(:)
   contains
     procedure :: setup
     procedure :: unknowns
@@ -58,7 +69,7 @@ contains
     integer, intent(in) :: s
     logical, intent(in) :: has_hessians, has_energy
     integer, intent(out) :: stat
-    integer :: n, nx
+    integer :: n, nx, m, i, k
     if (s < 1 .or. s > VCI_LOBATTO_MAX_STAGES) then
       stat = VCI_ERR_ARGUMENT; return
     end if
@@ -76,9 +87,12 @@ contains
     end if
     self%work%has_hessians = has_hessians
     self%has_model_energy = has_energy
-    nx = s * n + lag%m + 1
+    nx = s * n + s * lag%m + 1
     if (allocated(self%y)) deallocate (self%y, self%v, self%lq, self%lv, self%lval, self%f, self%fs, self%hqq, &
                                        self%hqv, self%hvv, self%g, self%dg, self%tmp, self%jscale)
+    if (allocated(self%om)) deallocate (self%om, self%lam, self%wmom, self%ctv, self%dctv, self%dol, self%op, &
+                                        self%omm, self%qd, self%kkt, self%krhs, self%pbar, self%wv, self%kpiv, &
+                                        self%nuw)
     allocate (self%y(n, 0:s), self%v(n, 0:s), self%lq(n, 0:s), self%lv(n, 0:s), self%lval(0:s), self%f(n, 0:s), &
               self%fs(n, 0:s), self%hqq(n, n, 0:s), self%hqv(n, n, 0:s), self%hvv(n, n, 0:s), &
               self%g(max(1, lag%n_gaps)), self%dg(n, max(1, lag%n_gaps)), self%tmp(n), self%jscale(nx), stat=stat)
@@ -86,6 +100,22 @@ contains
       stat = VCI_ERR_MEMORY; return
     end if
     self%jscale = 0.0_dp
+    if (lag%m > 0) then
+      m = lag%m
+      allocate (self%om(n, m, 0:s), self%lam(m, 0:s - 1), self%wmom(0:s - 1, 0:s), self%ctv(m, 0:s), &
+                self%dctv(m, n), self%dol(n, n), self%op(n, m), self%omm(n, m), self%qd(n), &
+                self%kkt(n + m, n + m), self%krhs(n + m), self%pbar(n), self%wv(n), self%kpiv(n + m), &
+                self%nuw(m), stat=stat)
+      if (stat /= 0) then
+        stat = VCI_ERR_MEMORY; return
+      end if
+      ! moment weights: the constraint tested against (2c - 1)^k, k = 0..s-1, by the Lobatto rule
+      do k = 0, s - 1
+        do i = 0, s
+          self%wmom(k, i) = self%rule%b(i) * (2.0_dp * self%rule%c(i) - 1.0_dp)**k
+        end do
+      end do
+    end if
   end subroutine setup
 
   !> A new solve starts: the round-off floor of the last Jacobian (another segment length, perhaps
@@ -105,9 +135,9 @@ contains
     class(vci_scheme_lobatto_t), intent(in) :: self
     integer, intent(in) :: kind
     select case (kind)
-    case (KIND_SUBSTEP, KIND_PAIR); unknowns = self%s * self%n + self%m
+    case (KIND_SUBSTEP, KIND_PAIR); unknowns = self%s * self%n + self%s * self%m
     case (KIND_IMPULSE); unknowns = self%m + 1
-    case default; unknowns = self%s * self%n + self%m + 1
+    case default; unknowns = self%s * self%n + self%s * self%m + 1
     end select
   end function unknowns
 
@@ -134,14 +164,21 @@ contains
     class(vci_scheme_lobatto_t), intent(in) :: self
     real(dp), intent(inout) :: x(:)
     real(dp), intent(in) :: v(:)
-    if (self%m > 0) x(self%s * self%n + 1:self%s * self%n + self%m) = v
+    integer :: j, o
+    do j = 0, self%s - 1   ! every node multiplier (a force: smooth in t, independent of the step length)
+      o = self%s * self%n + j * self%m
+      if (self%m > 0) x(o + 1:o + self%m) = v
+    end do
   end subroutine put_multipliers
 
   subroutine get_multipliers(self, x, v)
     class(vci_scheme_lobatto_t), intent(in) :: self
     real(dp), intent(in) :: x(:)
     real(dp), intent(out) :: v(:)
-    if (self%m > 0) v = x(self%s * self%n + 1:self%s * self%n + self%m)
+    integer :: o
+    ! the multiplier of the last node whose row carries one (node s - 1; node 0 when s = 1)
+    o = self%s * self%n + (self%s - 1) * self%m
+    if (self%m > 0) v = x(o + 1:o + self%m)
   end subroutine get_multipliers
 
   subroutine momentum_rhs(self, v, rhs)
@@ -200,13 +237,51 @@ contains
       end do
     end do
     stat = VCI_OK
+    if (self%m == 0) return
+    do i = 0, s
+      call self%eval_forms(self%y(:, i), self%om(:, :, i), stat)
+      if (stat /= VCI_OK) return
+      do j = 1, self%m
+        self%ctv(j, i) = dot_product(self%om(:, j, i), self%v(:, i))
+      end do
+    end do
+    do j = 0, s - 1
+      self%lam(:, j) = x(s * n + j * self%m + 1:s * n + (j + 1) * self%m)
+    end do
   end subroutine evaluate
+
+  !> At node y (velocity v, multiplier lam): dol = d(Omega(y) lam)/dy (n x n) and
+  !> dctv = d(Omega(y)^T v)/dy at fixed v (m x n), by central differences of the forms.
+  subroutine form_derivatives(self, y, v, lam, stat)
+    class(vci_scheme_lobatto_t), intent(inout) :: self
+    real(dp), intent(in) :: y(:), v(:), lam(:)
+    integer, intent(out) :: stat
+    integer :: c, mu
+    real(dp) :: d
+    self%qd = y
+    do c = 1, self%n
+      d = vci_fd_rel * max(abs(y(c)), 1.0_dp)
+      self%qd(c) = y(c) + d
+      call self%eval_forms(self%qd, self%op, stat)
+      if (stat /= VCI_OK) return
+      self%qd(c) = y(c) - d
+      call self%eval_forms(self%qd, self%omm, stat)
+      if (stat /= VCI_OK) return
+      self%qd(c) = y(c)
+      self%op = (self%op - self%omm) / (2.0_dp * d)
+      self%dol(:, c) = 0.0_dp
+      do mu = 1, self%m
+        self%dol(:, c) = self%dol(:, c) + self%op(:, mu) * lam(mu)
+        self%dctv(mu, c) = dot_product(self%op(:, mu), v)
+      end do
+    end do
+  end subroutine form_derivatives
 
   pure real(dp) function step_length(self, x)
     class(vci_scheme_lobatto_t), intent(in) :: self
     real(dp), intent(in) :: x(:)
     step_length = self%tau
-    if (self%kind == KIND_STAGE1) step_length = x(self%s * self%n + self%m + 1) * self%tau
+    if (self%kind == KIND_STAGE1) step_length = x(self%s * self%n + self%s * self%m + 1) * self%tau
   end function step_length
 
   subroutine scheme_residual(self, x, r, scale, stat)
@@ -214,9 +289,9 @@ contains
     real(dp), intent(in) :: x(:)
     real(dp), intent(out) :: r(:), scale(:)
     integer, intent(out) :: stat
-    integer :: n, s, j, last
-    real(dp) :: tau, e, dsign
-    n = self%n; s = self%s; last = s * n + self%m + 1
+    integer :: n, s, j, last, m, k, ro, k0, i, a1
+    real(dp) :: tau, e, dsign, rsg, acc
+    n = self%n; s = self%s; m = self%m; last = s * n + s * m + 1
     dsign = real(self%dir, dp)
     tau = step_length(self, x)
     call evaluate(self, x, self%a, tau, self%kind == KIND_STAGE2, stat)
@@ -236,6 +311,44 @@ contains
       r(j * n + 1:(j + 1) * n) = self%f(:, j)
       scale(j * n + 1:(j + 1) * n) = self%fs(:, j)
     end do
+    if (m > 0) then
+      ! constraint forces tau b_j Omega(y_j) Lambda_j in the rows of nodes 0..s-1 (row 0 times dir)
+      do j = 0, s - 1
+        if (j == 0 .and. self%kind == KIND_PAIR) cycle
+        rsg = 1.0_dp
+        if (j == 0) rsg = dsign
+        self%tmp = 0.0_dp
+        call add_mat_vec(self%tmp, rsg * tau * self%rule%b(j), self%om(:, :, j), self%lam(:, j))
+        r(j * n + 1:(j + 1) * n) = r(j * n + 1:(j + 1) * n) + self%tmp
+        scale(j * n + 1:(j + 1) * n) = scale(j * n + 1:(j + 1) * n) + abs(self%tmp)
+      end do
+      ! the constraint Omega(q)^T qdot tested against (2c - 1)^k by the rule (k = 0..s-1); the
+      ! pair (both ends given) has no momentum row: Lambda_0 = 0 in the place of k = 0, whose moment
+      ! is fixed by the ends (sum_i b_i V_i is the chord: the rule is exact on the polynomial's derivative)
+      k0 = 0
+      if (self%kind == KIND_PAIR) then
+        r(s * n + 1:s * n + m) = self%lam(:, 0)
+        scale(s * n + 1:s * n + m) = abs(self%lam(:, 0))
+        k0 = 1
+      end if
+      do k = k0, s - 1
+        ro = s * n + k * m
+        r(ro + 1:ro + m) = 0.0_dp
+        scale(ro + 1:ro + m) = 0.0_dp
+        do i = 0, s
+          r(ro + 1:ro + m) = r(ro + 1:ro + m) + self%wmom(k, i) * self%ctv(:, i)
+          ! the size of the terms Omega(:, j)^T V compares: |Omega(:, j)|_1 |V|_max (a product of
+          ! components would vanish where the motion is along one axis and the form along another)
+          do j = 1, m
+            acc = 0.0_dp
+            do a1 = 1, n
+              acc = acc + abs(self%om(a1, j, i))
+            end do
+            scale(ro + j) = scale(ro + j) + abs(self%wmom(k, i)) * acc * maxval(abs(self%v(:, i)))
+          end do
+        end do
+      end do
+    end if
     select case (self%kind)
     case (KIND_STAGE1)
       call self%eval_gaps(self%y(:, s), self%g(1:self%n_gaps), stat)
@@ -263,9 +376,9 @@ contains
     real(dp), intent(in) :: x(:), r(:)
     real(dp), intent(inout) :: jac(:, :)
     integer, intent(out) :: stat
-    integer :: n, s, i, j, k, last, nx, r0, c0, a1
+    integer :: n, s, i, j, k, last, nx, r0, c0, a1, m, l, k0, ro
     real(dp) :: tau, dsign, rs, wgt
-    n = self%n; s = self%s; last = s * n + self%m + 1
+    n = self%n; s = self%s; m = self%m; last = s * n + s * m + 1
     nx = self%unknowns(self%kind)
     dsign = real(self%dir, dp)
     tau = step_length(self, x)
@@ -335,6 +448,62 @@ contains
         jac(last, (k - 1) * n + 1:k * n) = self%tmp
       end do
     end select
+    if (m > 0) then
+      ! force columns (Lambda_j) and the forms' dependence on the interior nodes
+      do j = 0, s - 1
+        if (j == 0 .and. self%kind == KIND_PAIR) cycle
+        rs = 1.0_dp
+        if (j == 0) rs = dsign
+        c0 = s * n + j * m
+        jac(j * n + 1:(j + 1) * n, c0 + 1:c0 + m) = jac(j * n + 1:(j + 1) * n, c0 + 1:c0 + m) + &
+                                                    (rs * tau * self%rule%b(j)) * self%om(:, :, j)
+        if (self%kind == KIND_STAGE1) then
+          self%tmp = 0.0_dp
+          call add_mat_vec(self%tmp, rs * self%tau * self%rule%b(j), self%om(:, :, j), self%lam(:, j))
+          jac(j * n + 1:(j + 1) * n, last) = jac(j * n + 1:(j + 1) * n, last) + self%tmp
+        end if
+      end do
+      k0 = 0
+      if (self%kind == KIND_PAIR) then
+        do a1 = 1, m
+          jac(s * n + a1, s * n + a1) = 1.0_dp
+        end do
+        k0 = 1
+      end if
+      do l = 1, s
+        if (l < s) then
+          call form_derivatives(self, self%y(:, l), self%v(:, l), self%lam(:, l), stat)
+        else
+          self%nuw = 0.0_dp   ! (no row carries the far node's multiplier)
+          call form_derivatives(self, self%y(:, l), self%v(:, l), self%nuw, stat)
+        end if
+        if (stat /= VCI_OK) return
+        c0 = (l - 1) * n
+        if (l < s) jac(l * n + 1:(l + 1) * n, c0 + 1:c0 + n) = jac(l * n + 1:(l + 1) * n, c0 + 1:c0 + n) + &
+                                                               (tau * self%rule%b(l)) * self%dol
+        do k = k0, s - 1
+          ro = s * n + k * m
+          jac(ro + 1:ro + m, c0 + 1:c0 + n) = jac(ro + 1:ro + m, c0 + 1:c0 + n) + self%wmom(k, l) * self%dctv
+          do i = 0, s
+            wgt = self%wmom(k, i) * (dsign / tau) * self%rule%d(i, l)
+            if (wgt /= 0.0_dp) then
+              do a1 = 1, m
+                jac(ro + a1, c0 + 1:c0 + n) = jac(ro + a1, c0 + 1:c0 + n) + wgt * self%om(:, a1, i)
+              end do
+            end if
+          end do
+        end do
+      end do
+      if (self%kind == KIND_STAGE1) then
+        ! the moments scale as 1/tau
+        do k = 0, s - 1
+          ro = s * n + k * m
+          do i = 0, s
+            jac(ro + 1:ro + m, last) = jac(ro + 1:ro + m, last) - (self%tau / tau) * self%wmom(k, i) * self%ctv(:, i)
+          end do
+        end do
+      end if
+    end if
     do j = 1, nx
       self%jscale(j) = sum(abs(jac(j, 1:nx)) * abs(x(1:nx)))
     end do
@@ -367,6 +536,11 @@ contains
       p = p + w * self%lq(:, j)
     end do
     call self%check(stat, p, 'dL/dq')
+    if (self%m == 0 .or. stat /= VCI_OK) return
+    do j = 0, self%s - 1   ! the constraint forces of nodes 0..s-1
+      call add_mat_vec(p, real(self%dir, dp) * tau * self%rule%b(j), self%om(:, :, j), self%lam(:, j))
+    end do
+    call project_end(self, p, stat)
   end subroutine impact_momentum
 
   subroutine momentum_out(self, x, a, tau, p, stat, pa)
@@ -378,7 +552,76 @@ contains
     call evaluate(self, x, a, tau, .false., stat)
     if (stat /= VCI_OK) return
     p = real(self%dir, dp) * self%f(:, self%s)
+    if (self%m > 0) call project_end(self, p, stat)
   end subroutine momentum_out
+
+  !> The constraint force of the end node, tau b_s Omega(y_s) Lambda_s, enters only the new momentum:
+  !> it is fixed by the end state's constraint, p = pbar + Omega(y_s) nu with
+  !> dL/dqdot(y_s, w) = p and Omega(y_s)^T w = 0 (Newton on (w, nu) from w = V_s with the saddle
+  !> matrix [Lvv, -Omega; Omega^T, 0], regular where Lvv is singular on directions Omega^T sees, as at
+  !> theta = pi of the paper's pendulum; one iteration when L is quadratic in qdot). evaluate() at the
+  !> segment was the last call.
+  subroutine project_end(self, p, stat)
+    class(vci_scheme_lobatto_t), intent(inout) :: self
+    real(dp), intent(inout) :: p(:)
+    integer, intent(out) :: stat
+    integer :: n, m, s, it, info, i
+    real(dp) :: err, size_r
+    n = self%n; m = self%m; s = self%s
+    self%pbar = p
+    self%wv = self%v(:, s)
+    self%nuw = 0.0_dp
+    do it = 1, 12
+      stat = 0
+      call self%lag%dl_dv(self%y(:, s), self%wv, self%tmp, stat)
+      call self%check(stat, self%tmp, 'dL/dqdot')
+      if (stat /= VCI_OK) return
+      self%krhs(1:n) = self%tmp - self%pbar
+      call add_mat_vec(self%krhs(1:n), -1.0_dp, self%om(:, :, s), self%nuw)
+      do i = 1, m
+        self%krhs(n + i) = dot_product(self%om(:, i, s), self%wv)
+      end do
+      size_r = max(maxval(abs(self%tmp)), maxval(abs(self%pbar)), tiny(1.0_dp))
+      err = max(maxval(abs(self%krhs(1:n))) / size_r, maxval(abs(self%krhs(n + 1:n + m))) / &
+                max(maxval(abs(self%om(:, :, s))) * maxval(abs(self%wv)), tiny(1.0_dp)))
+      if (it > 1 .and. err <= 64.0_dp * epsilon(1.0_dp)) exit
+      if (it == 12) then
+        stat = VCI_ERR_NEWTON
+        call lagrangian_failure(self, stat, 'end projection onto the constraints')
+        return
+      end if
+      call lagrangian_hessians(self%lag, self%work, self%y(:, s), self%wv, self%hqq(:, :, 0), self%hqv(:, :, 0), &
+                               self%hvv(:, :, 0), stat)
+      if (stat /= VCI_OK) then
+        call lagrangian_failure(self, stat, 'Hessian blocks of L')
+        return
+      end if
+      self%kkt = 0.0_dp
+      self%kkt(1:n, 1:n) = self%hvv(:, :, 0)
+      self%kkt(1:n, n + 1:n + m) = -self%om(:, :, s)
+      do i = 1, m
+        self%kkt(n + i, 1:n) = self%om(:, i, s)
+      end do
+      self%krhs = -self%krhs
+      if (.not. (all(abs(self%kkt) <= huge(1.0_dp)) .and. all(abs(self%krhs) <= huge(1.0_dp)))) then
+        stat = VCI_ERR_NONFINITE; self%failed_stat = 0; self%failed_callback = 'end projection'; return
+      end if
+      call dgetrf(n + m, n + m, self%kkt, n + m, self%kpiv, info)
+      if (info /= 0) then
+        stat = VCI_ERR_NEWTON; self%failed_stat = 0; self%failed_callback = 'end projection (singular)'; return
+      end if
+      call dgetrs('N', n + m, 1, self%kkt, n + m, self%kpiv, self%krhs, n + m, info)
+      self%wv = self%wv + self%krhs(1:n)
+      self%nuw = self%nuw + self%krhs(n + 1:n + m)
+    end do
+    do i = 1, n
+      p(i) = self%pbar(i)
+      do it = 1, m
+        p(i) = p(i) + self%om(i, it, s) * self%nuw(it)
+      end do
+    end do
+    stat = VCI_OK
+  end subroutine project_end
 
   !> E_d = sum_i b_i E(y_i, V_i).
   subroutine energy_out(self, x, a, tau, e, stat)

@@ -335,8 +335,8 @@ def main(outdir, root):
       "continuous L (docs/SCHEMES.md; `integ%set_scheme`), orders 1, 2 and 2s. The suffix is the impact "
       "condition: `discrete` the paper's E_d(αh) = E_d((1−α)h), `hamiltonian` H(q̃, p⁺) = H(q̃, p⁻). "
       "`left` runs only with `discrete` (with `hamiltonian` its first-order momenta make the energy at the "
-      "wall drift, docs/SCHEMES.md); Lobatto is refused by the library for nonholonomic constraints (m > 0), "
-      "so the pendulum in the cylinder has `left` and `midpoint` only; on the FPU chain midpoint and "
+      "wall drift, docs/SCHEMES.md); Lobatto takes nonholonomic constraints since issue 25, but these rows "
+      "predate it: the pendulum in the cylinder has `left` and `midpoint` only; on the FPU chain midpoint and "
       "Lobatto s = 2, 4 with `hamiltonian` (time budget).\n")
 
     # --- summary

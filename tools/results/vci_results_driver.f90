@@ -189,8 +189,8 @@ contains
 
   !> The method rows. Add new schemes here (EXTENSION POINT).
   !> `left` only with the paper's condition (with `hamiltonian` its first-order momenta make the
-  !> wall's energy balance drift, docs/SCHEMES.md); lobatto is refused with constraints (m > 0),
-  !> so not on the nonholonomic pendulum; on the FPU chain midpoint and lobatto s = 2, 4 with the
+  !> wall's energy balance drift, docs/SCHEMES.md); lobatto takes constraints since issue 25 but is not
+  !> yet run on the nonholonomic pendulum here (the rows predate it); on the FPU chain midpoint and lobatto s = 2, 4 with the
   !> hamiltonian condition (the time budget).
   function variants() result(v)
     type(variant_t), allocatable :: v(:)
