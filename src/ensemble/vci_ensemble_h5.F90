@@ -80,6 +80,7 @@ module vci_ensemble_h5
     procedure :: write_results => f_write_results
     !> Record how many members ran and failed, mark the file complete when all ran, and close it.
     procedure :: close => f_close
+    !> Stop writing and close, keeping every block of members written before (collective under MPI).
     procedure :: abandon => f_abandon
   end type vci_ensemble_file_t
 
