@@ -324,6 +324,24 @@ const char *vci_status_string(int status);
 /** The library's version: major*10000 + minor*100 + patch. */
 int  vci_version(void);
 
+/** Progress of a run (vci_set_progress): steps done of this vci_integrate call and its total,
+ *  impacts so far, model time, wall seconds of this call, rate, estimated seconds left (-1: unknown). */
+typedef struct vci_progress {
+  int64_t steps_done;          /**< steps done in this vci_integrate call */
+  int64_t steps_total;         /**< steps this call was asked for */
+  int64_t impacts;             /**< impacts so far */
+  double t;                    /**< model time of the current state */
+  double elapsed;              /**< wall seconds of this call */
+  double steps_per_second;     /**< rate so far */
+  double eta;                  /**< estimated wall seconds left (-1: unknown) */
+} vci_progress;
+/** Return 0 to go on, nonzero to stop the run after this step (vci_integrate then returns VCI_STOPPED). */
+typedef int (*vci_progress_fn)(const vci_progress *info, void *user);
+/** Call fn at most once per `interval` seconds of wall time during vci_integrate, and after its last
+ *  step; fn = NULL: no more reports. The library prints nothing itself. Returns VCI_OK;
+ *  VCI_ERR_ARGUMENT: bad handle, interval < 0 or not finite; VCI_ERR_STATE: busy. */
+int  vci_set_progress(vci_integrator integ, vci_progress_fn fn, double interval, void *user);
+
 /** The model checker: compares every derivative callback the model supplies with central
  *  differences at one point (discrete L_d: D1/D2/D3 against each other, the mixed Hessian, the
  *  discrete constraint's Jacobian, the constraint forms against the discrete form; continuous L:
@@ -333,19 +351,6 @@ int  vci_version(void);
  *  *worst = the largest; report (NULL: none) gets one line per comparison, truncated to size - 1.
  *  Returns VCI_OK when the check ran; VCI_ERR_ARGUMENT (NULL pointers, dead handle, h <= 0);
  *  VCI_ERR_CALLBACK: a callback failed at the point (vci_last_error(NULL, ...) names it). */
-/** Progress of a run (vci_set_progress): steps done of this vci_integrate call and its total,
- *  impacts so far, model time, wall seconds of this call, rate, estimated seconds left (-1: unknown). */
-typedef struct vci_progress {
-  int64_t steps_done, steps_total, impacts;
-  double t, elapsed, steps_per_second, eta;
-} vci_progress;
-/** Return 0 to go on, nonzero to stop the run after this step (vci_integrate then returns VCI_STOPPED). */
-typedef int (*vci_progress_fn)(const vci_progress *info, void *user);
-/** Call fn at most once per `interval` seconds of wall time during vci_integrate, and after its last
- *  step; fn = NULL: no more reports. The library prints nothing itself. Returns VCI_OK;
- *  VCI_ERR_ARGUMENT: bad handle, interval < 0 or not finite; VCI_ERR_STATE: busy. */
-int  vci_set_progress(vci_integrator integ, vci_progress_fn fn, double interval, void *user);
-
 int  vci_check_model(vci_model model, const double *q, const double *v, double h, double tol, int *passed,
                      double *worst, char *report, int size);
 

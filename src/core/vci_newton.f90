@@ -116,6 +116,7 @@ module vci_newton
     procedure :: solve
     !> Solve the small dense system a x = b in place (b becomes x), with the solver's workspace.
     procedure :: linear_solve
+    !> After a solve that failed on convergence: the row with the largest scaled residual.
     procedure :: worst_row
   end type vci_newton_t
 
