@@ -43,11 +43,15 @@ module vci_newton
   !> the line search is backed off from, unless the system sets `unrecoverable` (a callback's
   !> negative return): then the solve ends at once with that status.
   type, abstract, public :: vci_system_t
-    logical :: unrecoverable = .false.
+    logical :: unrecoverable = .false.  !< set by the residual: its failure ends the solve at once
   contains
+    !> r = R(x) and the size of each row's terms (interface residual_iface).
     procedure(residual_iface), deferred :: residual
+    !> jac = dR/dx (interface jacobian_iface).
     procedure(jacobian_iface), deferred :: jacobian
+    !> May the line search try x? (default: always)
     procedure :: admissible => always_admissible
+    !> A nonzero key names a family of systems whose Jacobians may share LU factors (default 0: none).
     procedure :: reuse_key => never_reuse
   end type vci_system_t
 
@@ -73,17 +77,18 @@ module vci_newton
   !> Outcome of one solve.
   type, public :: vci_newton_result_t
     integer :: status = VCI_OK         !< VCI_OK, VCI_ERR_NEWTON, or the evaluation's own status
-    integer :: reason = NEWTON_CONVERGED
+    integer :: reason = NEWTON_CONVERGED  !< NEWTON_CONVERGED or why not (NEWTON_*)
     integer :: iterations = 0          !< Jacobian evaluations + polishing step
     logical :: used_fallback = .false. !< the least-squares solve was needed
     real(dp) :: scaled_residual = 0.0_dp  !< max_i |r_i| / (atol + rtol scale_i) at the end
   end type vci_newton_result_t
 
+  !> Damped Newton's method on LAPACK: solves a vci_system_t; settings, workspace and counters.
   type, public :: vci_newton_t
     real(dp) :: atol = 0.0_dp          !< absolute floor of the per-row tolerance
     real(dp) :: rtol = 1.0e-12_dp      !< tolerance relative to the size of each row's terms
-    integer :: max_iterations = 30
-    integer :: max_backtracks = 12
+    integer :: max_iterations = 30     !< Jacobian evaluations per solve
+    integer :: max_backtracks = 12     !< halvings of the step in the line search
     logical :: polish = .true.         !< one extra step with the last factorisation: ~ machine precision
     !> Systems of at most this many unknowns are factorised by the in-line LU below (partial
     !> pivoting, the same elimination as LAPACK's unblocked dgetf2) instead of dgetrf/dgetrs: for a
@@ -95,19 +100,23 @@ module vci_newton
     !> those factors, and evaluates and factorises a new Jacobian only when a chord step contracts
     !> the scaled residual by less than reuse_contraction (or fails). Huge(1): never.
     integer :: reuse_min = vci_large_system
-    real(dp) :: reuse_contraction = 0.25_dp
+    real(dp) :: reuse_contraction = 0.25_dp  !< a chord step must contract the scaled residual by this
     integer(i8) :: factorisations = 0     !< LU factorisations of Newton matrices so far
     logical, private :: have_lu = .false.
     integer, private :: lu_n = 0
     real(dp), private :: lu_key = 0.0_dp
-    integer :: capacity = 0
+    integer :: capacity = 0               !< unknowns the workspace is sized for (reserve)
     real(dp), allocatable, private :: jac(:, :), lu(:, :), r(:), sc(:), dx(:), xt(:), rt(:), sct(:)
     real(dp), allocatable, private :: sv(:), work(:), rw(:)
     integer, allocatable, private :: ipiv(:), iwork(:)
   contains
+    !> Allocate workspace for systems of up to nmax unknowns (call once, outside the step loop).
     procedure :: reserve
+    !> Solve sys%residual(x) = 0 for x(1:n), starting from the given x.
     procedure :: solve
+    !> Solve the small dense system a x = b in place (b becomes x), with the solver's workspace.
     procedure :: linear_solve
+    !> After a solve that failed on convergence: the row with the largest scaled residual.
     procedure :: worst_row
   end type vci_newton_t
 

@@ -16,28 +16,36 @@ module vci_checkpoint
   !> Scalars at the head of the record: step, t0, h, step_energy, arriving_energy, arriving_direction.
   integer, parameter :: head = 6
 
+  !> The state a run continues from bit for bit: the driver's `checkpoint()` gives it, outputs store
+  !> it (`to_record`), `restore` starts from it.
   type, public :: vci_checkpoint_t
-    integer :: version = VCI_CHECKPOINT_VERSION
+    integer :: version = VCI_CHECKPOINT_VERSION  !< layout version (VCI_CHECKPOINT_VERSION when made here)
     real(dp) :: t0 = 0.0_dp                 !< time of index 0: t = t0 + step * h without drift
     real(dp) :: h = 0.0_dp                  !< step length the run used (a restore must match it)
     integer(i8) :: step = 0_i8              !< index of the state
-    real(dp), allocatable :: q(:), p(:)     !< configuration and momentum
+    real(dp), allocatable :: q(:)           !< configuration
+    real(dp), allocatable :: p(:)           !< momentum
     real(dp), allocatable :: lambda(:)      !< multipliers of the last step (size m)
     real(dp), allocatable :: velocity(:)    !< forward-time velocity of the last sub-step: Newton's first guess
     real(dp) :: step_energy = 0.0_dp        !< E_d of the last step (NaN before the first)
     real(dp) :: arriving_energy = 0.0_dp    !< E_d of the sub-step that arrived at q (a start on a wall needs it)
     integer :: arriving_direction = 0       !< direction in which arriving_energy is known (0: unknown)
-    !> The predictor's history (version 2): velocity and multipliers of the steps before the last,
-    !> from |predictor_depth| consecutive regular steps in direction sign(predictor_depth)
-    real(dp), allocatable :: velocity_before(:), lambda_before(:), lambda_before2(:)
-    integer :: predictor_depth = 0
+    ! The predictor's history (version 2): velocity and multipliers of the steps before the last,
+    ! from |predictor_depth| consecutive regular steps in direction sign(predictor_depth)
+    real(dp), allocatable :: velocity_before(:)  !< (predictor) velocity of the step before the last
+    real(dp), allocatable :: lambda_before(:)    !< (predictor) multipliers of the step before the last
+    real(dp), allocatable :: lambda_before2(:)   !< (predictor) multipliers of the step before that
+    integer :: predictor_depth = 0               !< (predictor) signed count of consecutive regular steps
     !> (version 3) what compensated summation carries beyond q's rounding (continuous models'
     !> left/midpoint; zero otherwise)
     real(dp), allocatable :: position_lo(:)
   contains
+    !> the checkpoint as one float64 vector (what outputs store)
     procedure :: to_record
+    !> rebuild from such a vector of a given layout version
     procedure :: from_record
-    procedure :: time
+    !> the time of the checkpoint's state, t0 + step h
+    procedure :: time => checkpoint_time
   end type vci_checkpoint_t
 
   public :: vci_checkpoint_record_size, vci_checkpoint_from_state
@@ -51,10 +59,10 @@ contains
   end function vci_checkpoint_record_size
 
   !> The time of the checkpoint's state.
-  pure real(dp) function time(self)
+  pure real(dp) function checkpoint_time(self)
     class(vci_checkpoint_t), intent(in) :: self
-    time = self%t0 + real(self%step, dp) * self%h
-  end function time
+    checkpoint_time = self%t0 + real(self%step, dp) * self%h
+  end function checkpoint_time
 
   !> The checkpoint as one float64 vector [step, t0, h, step_energy, arriving_energy,
   !> arriving_direction, q(n), p(n), velocity(n), lambda(m), then (version 2) velocity_before(n),
@@ -97,6 +105,9 @@ contains
     real(dp), intent(in) :: t, h, q(:), p(:), lambda(:)
     type(vci_checkpoint_t) :: cp
     cp%t0 = t; cp%h = h; cp%step = 0_i8
+    ! allocated before the copies: assigning to the unallocated components of a function result made
+    ! gfortran 12 -O2 warn that their descriptors are read uninitialised (-Wuninitialized)
+    allocate (cp%q(size(q)), cp%p(size(p)), cp%lambda(size(lambda)))
     cp%q = q; cp%p = p; cp%lambda = lambda
     allocate (cp%velocity(size(q)), cp%velocity_before(size(q)), cp%lambda_before(size(lambda)), &
               cp%lambda_before2(size(lambda)))

@@ -36,13 +36,19 @@ module vci_integrator
 
   !> Counters over the integrator's life.
   type, public :: vci_stats_t
-    integer(i8) :: steps = 0, impacts = 0, newton_solves = 0, newton_iterations = 0, fallbacks = 0
+    integer(i8) :: steps = 0              !< steps taken
+    integer(i8) :: impacts = 0            !< impacts resolved
+    integer(i8) :: newton_solves = 0      !< Newton solves
+    integer(i8) :: newton_iterations = 0  !< their iterations
+    integer(i8) :: fallbacks = 0          !< least-squares fallbacks (singular Newton matrices)
     integer(i8) :: factorisations = 0   !< LU factorisations of Newton matrices
     integer(i8) :: fused_solves = 0     !< regular sub-steps solved by the scheme's fused routine
     !> impacts where no impulse matches the discrete energy (a graze): H(q, p) kept instead
     integer(i8) :: energy_fallbacks = 0
   end type vci_stats_t
 
+  !> The driver: create it for a model and a step length, choose settings, initialise, then step or
+  !> integrate; its state is read through the procedures below (module doc).
   type, public :: vci_integrator_t
     private
     class(vci_model_base_t), pointer :: model => null()   !< the user's model (discrete or continuous)
@@ -51,11 +57,13 @@ module vci_integrator
     !> owned: the left/midpoint L_d of lag. Allocatable, not a pointer, so that it is freed with the
     !> integrator (the scheme points into it: do not copy a created integrator by assignment).
     type(vci_retraction_model_t), allocatable :: retraction
-    logical :: lag_hessians = .false., lag_energy = .false.  !< optional procedures lag supplies
+    logical :: lag_hessians = .false.  !< lag supplies its Hessians
+    logical :: lag_energy = .false.    !< lag supplies its energy H(q, p)
     integer :: scheme_id = VCI_SCHEME_DISCRETE  !< VCI_SCHEME_*; set_scheme chooses it for a continuous model
     integer :: n_stages = 0                     !< s of the lobatto scheme
     type(vci_stepper_t) :: stepper              !< holds the scheme and the one settings object
-    logical :: created = .false., initialized = .false.
+    logical :: created = .false.      !< create has succeeded
+    logical :: initialized = .false.  !< there is a state to step from
     !> the state and the history the next step needs (t = t0 + k h, q, p, lambda, E_d, the
     !> predictor's and the energy condition's memory): handed to the stepper whole
     type(vci_state_t) :: state
@@ -63,44 +71,79 @@ module vci_integrator
     ! outcome
     integer :: last_status = VCI_OK             !< status of the last call
     character(len=VCI_MSG_LEN) :: last_message = ''  !< what went wrong in the last call, naming step and time
-    integer(i8) :: steps_taken = 0_i8, impacts_found = 0_i8
+    integer(i8) :: steps_taken = 0_i8    !< steps over the integrator's life
+    integer(i8) :: impacts_found = 0_i8  !< impacts over the integrator's life
   contains
     procedure, private :: create_discrete, create_continuous
+    !> Bind a discrete model (L_d) and a step length.
     generic :: create => create_discrete, create_continuous
+    !> Choose the scheme of a continuous model (VCI_SCHEME_LEFT, _MIDPOINT, _LOBATTO with s stages); resets the state.
     procedure :: set_scheme
+    !> Newton tolerances: |r_i| <= atol + rtol * (size of row i's terms); iteration cap.
     procedure :: set_tolerances
+    !> Impact energy condition: VCI_IMPACT_DISCRETE (the paper's, default) or VCI_IMPACT_HAMILTONIAN.
     procedure :: set_impact_energy
+    !> Bound on impacts resolved inside one step (default 16).
     procedure :: set_max_impacts
+    !> Start from q0 at t0 and q1 at t0 + h (the paper's initial pair).
     procedure :: init_from_pair
+    !> Start from (q0, p0) at t0; step index 0.
     procedure :: init_from_momentum
+    !> One step in direction +1 (forward, (+) scheme) or -1 (backward, (-) scheme).
     procedure :: step
+    !> nsteps steps in one direction, reported to the observer (on_start, on_impact, on_step, on_finish).
     procedure :: integrate
+    !> What observers are told at the start of a run.
     procedure :: run_info
+    !> The current state and solver memory, for restarts that continue bit for bit.
     procedure :: checkpoint
+    !> Continue from a checkpoint taken with the same model and step length.
     procedure :: restore
     ! reading the state and the outcome
+    !> Time of the current state, t0 + k h.
     procedure :: time => current_time
+    !> Index k of the current state.
     procedure :: step_index
+    !> The step length h.
     procedure :: step_length
+    !> q of the current state (size n).
     procedure :: configuration
+    !> p of the current state (size n).
     procedure :: momentum
+    !> The multipliers lambda of the last step (size m).
     procedure :: multipliers
+    !> E_d of the last step (of its last sub-step when it had impacts); NaN before the first step from (q, p).
     procedure :: energy
+    !> Number of impacts of the last step.
     procedure :: impact_count
+    !> Impact i (1 .. impact_count()) of the last step (assign the result: `imp = integ%impact(i)`).
     procedure :: impact
+    !> Counters over the integrator's life (since create).
     procedure :: statistics
+    !> Linear-algebra paths of Newton (docs/DESIGN.md §6): in-line LU, factor reuse, the fused regular solve.
     procedure :: set_solver_paths
+    !> Status of the last call (VCI_OK or a VCI_ERR_*).
     procedure :: status
+    !> What went wrong in the last call, naming the step, the time and the cause ('' after success).
     procedure :: message
+    !> message() with trailing blanks, as a fixed-length result (for the boundary layers, thread-safe).
     procedure :: message_text
+    !> The settings in force (tolerances, impact bound, impact condition).
     procedure :: settings
+    !> The scheme (VCI_SCHEME_*) and its number of stages.
     procedure :: scheme
+    !> The lobatto scheme's number of stages s (1 for the others).
     procedure :: stages
+    !> Has the integrator a state to step from (after init_from_pair, init_from_momentum or restore)?
     procedure :: is_initialized
+    !> Sizes of the bound model: n (configuration) and m (constraints); 0 before create.
     procedure :: n_coordinates
+    !> m, the number of constraints of the bound model.
     procedure :: n_constraints
     ! for the boundary layers (C ABI, legacy entry), which detect failures of their own
+    !> Record a failure that a boundary layer detected on a call into this integrator (status and message).
     procedure :: report_failure
+    !> The state is no longer valid (an initialisation that failed before reaching this integrator).
     procedure :: forget_state
   end type vci_integrator_t
 

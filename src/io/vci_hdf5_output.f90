@@ -49,12 +49,12 @@ module vci_hdf5_output
   !> stat, w)`; the file is closed by the run's end (on_finish).
   type, extends(vci_observer_t), public :: vci_hdf5_writer_t
     character(len=VCI_MSG_LEN) :: message = ''   !< what went wrong, naming the file
-    character(len=:), allocatable :: path
+    character(len=:), allocatable :: path         !< the file
     character(len=:), allocatable :: scene        !< root attribute `scene`
     integer :: flush_every = VCI_HDF5_FLUSH_EVERY  !< steps between flushes
     logical :: flush_on_impact = .true.           !< flush after the step of every impact
     logical :: append = .false.                   !< continuing an existing file
-    logical :: is_open = .false.
+    logical :: is_open = .false.                  !< a file is open
     type(vci_checkpoint_t), private :: cp          !< the driver's latest checkpoint (on_checkpoint)
     logical, private :: have_cp = .false.
     logical, private :: discarded = .false.       !< writes failed (a full disk): nothing more reaches the file
@@ -78,15 +78,25 @@ module vci_hdf5_output
     integer, private :: cp_version = 0            !< its layout version (attribute /checkpoint version)
     logical, private :: cp_version_written = .false.   !< this session wrote /checkpoint's version
   contains
+    !> Open PATH for a run: a new file, or an existing one kept (VCI_ERR_IO) unless `overwrite` or `append`.
     procedure :: open => w_open
+    !> Close the file without a run end (when a run could not start). Safe to call twice.
     procedure :: close => w_close
+    !> The run starts: write the run's attributes and its start state.
     procedure :: on_start => w_start
+    !> Buffer an accepted step; flush every flush_every steps and after an impact.
     procedure :: on_step => w_step
+    !> Buffer an impact.
     procedure :: on_impact => w_impact
+    !> The run ended: write what is buffered, the status and its message, and close the file.
     procedure :: on_finish => w_finish
+    !> Yes: every flush stores the checkpoint of its last row, so a restart is bitwise.
     procedure :: keeps_checkpoints => w_keeps_checkpoints
+    !> Before on_start, and before an on_step that flushes (a full buffer, or an impact in the step).
     procedure :: wants_checkpoint => w_wants_checkpoint
+    !> Keep the driver's checkpoint for the next flush (stored only if it is the state of its last row).
     procedure :: on_checkpoint => w_checkpoint
+    !> The message of the last failure (naming the file and the cause).
     procedure :: failure_cause => w_failure_cause
   end type vci_hdf5_writer_t
 
