@@ -151,9 +151,9 @@ contains
       stat = VCI_ERR_MEMORY; return
     end if
     self%x = 0.0_dp; self%zero_lambda = 0.0_dp
-    if (allocated(self%tie_x)) deallocate (self%tie_x, self%tie_q)
     allocate (self%tie_x(nx, 2), self%tie_q(n, 3), stat=stat)
     if (stat /= 0) then
+      call release_workspace(self)
       stat = VCI_ERR_MEMORY; return
     end if
   end subroutine setup
@@ -170,6 +170,7 @@ contains
     call free1(self%gaps_trial); call free2(self%gap_grads); call free1(self%lambda_start)
     call free1(self%zero_lambda); call free1(self%constraint_impulse); call free1(self%x_try)
     call free1(self%q_new); call free1(self%p_new); call free1(self%lambda_new)
+    call free2(self%tie_x); call free2(self%tie_q)
   end subroutine release_workspace
 
   subroutine free1(a)
