@@ -143,8 +143,9 @@ typedef struct vci_callbacks {
 
 /** Create a model of n coordinates, m constraints, ngaps walls. The callbacks are copied; `user`
  *  is passed to every callback. On failure *model = NULL (if model is not NULL).
- *  Returns VCI_OK; VCI_ERR_ARGUMENT: model or cb NULL, cb->size not that of a vci_callbacks (not
- *  initialised with VCI_CALLBACKS_INIT), a callback set that this library does not know (a newer
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT: model or cb NULL, cb->size not that of a vci_callbacks of
+ *  some header (the size field and a whole number of members: not initialised with
+ *  VCI_CALLBACKS_INIT), a callback set that this library does not know (a newer
  *  header), n < 1, m < 0, m > n, ngaps < 0, n + m + 1 > 46340, n * ngaps >= 2^31, or a required
  *  callback NULL; VCI_ERR_MEMORY.
  *  (vci_model_create is a macro: the symbol vci_model_create keeps the 0.1 struct without `size`,
@@ -202,15 +203,18 @@ typedef struct vci_lagrangian_callbacks {
 /** Create a continuous model L(q, qdot) of n coordinates, m constraints, ngaps walls (the
  *  callbacks are copied; `user` goes to every one). An integrator made from it uses
  *  VCI_SCHEME_MIDPOINT until vci_set_scheme chooses another. On failure *model = NULL.
- *  Returns VCI_OK; VCI_ERR_ARGUMENT: as vci_model_create, with lagrangian, dl_dq, dl_dv required;
- *  VCI_ERR_MEMORY. */
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT: as vci_model_create (cb->size a whole number of members of a
+ *  vci_lagrangian_callbacks), with lagrangian, dl_dq, dl_dv required; VCI_ERR_MEMORY. */
 int  vci_model_create_lagrangian(vci_model *model, int n, int m, int ngaps, const vci_lagrangian_callbacks *cb,
                                  void *user);
 
 /** Choose the scheme of an integrator made from a continuous model: VCI_SCHEME_LEFT, _MIDPOINT,
  *  or _LOBATTO with `stages` = s in 1..VCI_LOBATTO_MAX_STAGES (ignored for the others). Call before
  *  initialising: the state is reset. Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, a discrete
- *  model, unknown scheme, s out of range; VCI_ERR_STATE: busy. */
+ *  model, unknown scheme, s out of range (the integrator keeps its scheme);
+ *  VCI_ERR_MEMORY: the scheme's workspace could not be allocated (about 3 (s n + 1)^2 doubles for
+ *  lobatto): the integrator then has no usable scheme, and initialising it returns VCI_ERR_STATE
+ *  until a vci_set_scheme succeeds; VCI_ERR_STATE: busy. */
 int  vci_set_scheme(vci_integrator integ, int scheme, int stages);
 
 /** Release the model and set *model = NULL. NULL-safe (model or *model NULL: nothing happens).
@@ -248,7 +252,9 @@ int  vci_set_max_impacts(vci_integrator integ, int max_impacts);
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, q0 or q1 NULL, NaN/Inf in t0, q0 or q1, t0 + h
  *  overflows, a required constraint callback missing; VCI_ERR_INADMISSIBLE: q0 or q1 outside the
  *  admissible set; VCI_ERR_CALLBACK or VCI_ERR_NONFINITE: a callback failed or gave NaN/Inf;
- *  VCI_ERR_STATE: busy, or an open output file already holds steps (close it first). After a
+ *  VCI_ERR_NEWTON: lobatto's interior stages of the pair could not be solved; VCI_ERR_MEMORY: the
+ *  probes of the model could not be allocated; VCI_ERR_STATE: busy, an open output file already
+ *  holds steps (close it first), or the last vci_set_scheme failed (no usable scheme). After a
  *  failure the integrator has no state (VCI_ERR_STATE from stepping) until initialised again. */
 int  vci_init_from_pair(vci_integrator integ, double t0, const double *q0, const double *q1);
 
@@ -304,7 +310,8 @@ int  vci_set_impact_callback(vci_integrator integ, vci_impact_fn fn, void *user)
  *  finished by vci_close_output, vci_integrator_destroy or the next vci_open_output. One file holds
  *  one run: steps in one direction from one initialisation (other calls give VCI_ERR_STATE).
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, path NULL or empty; VCI_ERR_IO: the file cannot
- *  be created, or this library was built without HDF5 (vci_last_error says which); VCI_ERR_STATE. */
+ *  be created, or this library was built without HDF5 (vci_last_error says which); VCI_ERR_MEMORY:
+ *  the writer could not be allocated; VCI_ERR_STATE. */
 int  vci_open_output(vci_integrator integ, const char *path);      /* HDF5; VCI_ERR_IO when unavailable */
 
 /** Finish and close the output file, if any. Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle;

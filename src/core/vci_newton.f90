@@ -112,6 +112,9 @@ module vci_newton
   contains
     !> Allocate workspace for systems of up to nmax unknowns (call once, outside the step loop).
     procedure :: reserve
+    procedure :: forget_factors
+    procedure :: kept_factors
+    procedure :: keep_factors
     !> Solve sys%residual(x) = 0 for x(1:n), starting from the given x.
     procedure :: solve
     !> Solve the small dense system a x = b in place (b becomes x), with the solver's workspace.
@@ -145,10 +148,7 @@ contains
     integer :: iq(1), rank, info, lwork, liwork, nlvl, st
     if (present(stat)) stat = VCI_OK
     if (self%capacity >= nmax) return
-    self%capacity = 0
-    if (allocated(self%jac)) deallocate (self%jac, self%lu, self%r, self%sc, self%dx, self%xt, &
-                                         self%rt, self%sct, self%sv, self%ipiv, self%rw)
-    if (allocated(self%work)) deallocate (self%work, self%iwork)
+    call release(self)
     allocate (self%jac(nmax, nmax), self%lu(nmax, nmax), self%r(nmax), self%sc(nmax), self%dx(nmax), &
               self%xt(nmax), self%rt(nmax), self%sct(nmax), self%sv(nmax), self%ipiv(nmax), self%rw(nmax), stat=st)
     if (st == 0) then
@@ -159,13 +159,80 @@ contains
       allocate (self%work(lwork), self%iwork(liwork), stat=st)
     end if
     if (st /= 0) then
-      if (allocated(self%jac)) deallocate (self%jac, self%lu, self%r, self%sc, self%dx, self%xt, &
-                                           self%rt, self%sct, self%sv, self%ipiv, self%rw)
+      call release(self)       ! a multi-object allocate may fail part-way: free what it got
       if (present(stat)) stat = VCI_ERR_MEMORY
       return
     end if
     self%capacity = nmax
   end subroutine reserve
+
+  !> Drop the factors kept for simplified Newton: the next solve of a large system starts with a
+  !> new Jacobian, as the first solve after reserve does. The driver calls it at the points a run
+  !> may be continued from (docs/DESIGN.md, "Restart bit for bit"), so that a run continued there
+  !> and one that went through it solve the same systems from the same factors.
+  subroutine forget_factors(self)
+    class(vci_newton_t), intent(inout) :: self
+    self%have_lu = .false.
+  end subroutine forget_factors
+
+  !> The factors kept for simplified Newton, for a checkpoint: nf unknowns (0: none kept), the
+  !> family's key, the row weights and the LU factors with their pivots (copies; stat /= 0 when
+  !> they cannot be allocated, then nf = 0).
+  subroutine kept_factors(self, nf, key, rw, lu, ipiv, stat)
+    class(vci_newton_t), intent(in) :: self
+    integer, intent(out) :: nf
+    real(dp), intent(out) :: key
+    real(dp), allocatable, intent(out) :: rw(:), lu(:, :)
+    integer, allocatable, intent(out) :: ipiv(:)
+    integer, intent(out) :: stat
+    nf = 0; key = 0.0_dp; stat = VCI_OK
+    if (.not. self%have_lu) return
+    allocate (rw(self%lu_n), lu(self%lu_n, self%lu_n), ipiv(self%lu_n), stat=stat)
+    if (stat /= 0) then
+      stat = VCI_ERR_MEMORY; return
+    end if
+    nf = self%lu_n; key = self%lu_key
+    rw = self%rw(1:nf); lu = self%lu(1:nf, 1:nf); ipiv = self%ipiv(1:nf)
+  end subroutine kept_factors
+
+  !> Take factors from a checkpoint (kept_factors of the same system sizes): the next solve of
+  !> the family `key` starts with chord steps on them, as the run that wrote them would have.
+  !> Ignored (no factors kept) when they do not fit the workspace.
+  subroutine keep_factors(self, nf, key, rw, lu, ipiv)
+    class(vci_newton_t), intent(inout) :: self
+    integer, intent(in) :: nf
+    real(dp), intent(in) :: key, rw(:), lu(:, :)
+    integer, intent(in) :: ipiv(:)
+    self%have_lu = .false.
+    if (nf < 1 .or. nf > self%capacity .or. key == 0.0_dp) return
+    if (size(rw) /= nf .or. size(lu, 1) /= nf .or. size(lu, 2) /= nf .or. size(ipiv) /= nf) return
+    if (any(ipiv < 1) .or. any(ipiv > nf)) return
+    if (.not. (all_finite(rw) .and. all_finite(lu))) return     ! (from a file: nothing non-finite to LAPACK)
+    self%rw(1:nf) = rw; self%lu(1:nf, 1:nf) = lu; self%ipiv(1:nf) = ipiv
+    self%lu_n = nf; self%lu_key = key
+    self%have_lu = .true.
+  end subroutine keep_factors
+
+  !> No workspace and no kept factors (each array freed on its own: after an allocate that failed
+  !> part-way some are allocated and some not).
+  subroutine release(self)
+    type(vci_newton_t), intent(inout) :: self
+    if (allocated(self%jac)) deallocate (self%jac)
+    if (allocated(self%lu)) deallocate (self%lu)
+    if (allocated(self%r)) deallocate (self%r)
+    if (allocated(self%sc)) deallocate (self%sc)
+    if (allocated(self%dx)) deallocate (self%dx)
+    if (allocated(self%xt)) deallocate (self%xt)
+    if (allocated(self%rt)) deallocate (self%rt)
+    if (allocated(self%sct)) deallocate (self%sct)
+    if (allocated(self%sv)) deallocate (self%sv)
+    if (allocated(self%ipiv)) deallocate (self%ipiv)
+    if (allocated(self%rw)) deallocate (self%rw)
+    if (allocated(self%work)) deallocate (self%work)
+    if (allocated(self%iwork)) deallocate (self%iwork)
+    self%capacity = 0
+    self%have_lu = .false.
+  end subroutine release
 
   !> Solve sys%residual(x) = 0 for x(1:n), starting from the given x. On failure x holds the best
   !> iterate found and res says why.

@@ -39,11 +39,20 @@ module vci_checkpoint
     !> (version 3) what compensated summation carries beyond q's rounding (continuous models'
     !> left/midpoint; zero otherwise)
     real(dp), allocatable :: position_lo(:)
+    !> Newton's factors kept for simplified Newton (systems of 16+ unknowns reuse them across
+    !> solves): factors_n unknowns (0: none), the key of the family of systems they serve, row
+    !> weights, LU and pivots. Not in the flat record (their size is not n's): factors_record.
+    integer :: factors_n = 0
+    real(dp) :: factors_key = 0.0_dp
+    real(dp), allocatable :: factors_rw(:), factors_lu(:, :)
+    integer, allocatable :: factors_pivots(:)
   contains
     !> the checkpoint as one float64 vector (what outputs store)
     procedure :: to_record
     !> rebuild from such a vector of a given layout version
     procedure :: from_record
+    procedure :: factors_record
+    procedure :: from_factors_record
     !> the time of the checkpoint's state, t0 + step h
     procedure :: time => checkpoint_time
   end type vci_checkpoint_t
@@ -98,6 +107,49 @@ contains
     self%position_lo = rec(head + 4 * n + 3 * m + 2:head + 5 * n + 3 * m + 1)
     stat = VCI_OK
   end subroutine from_record
+
+  !> Newton's kept factors as one float64 vector [step, factors_n, factors_key, rw(nf), pivots(nf),
+  !> lu(nf*nf)] (the step ties it to its checkpoint; integers are exact in float64).
+  pure function factors_record(self) result(rec)
+    class(vci_checkpoint_t), intent(in) :: self
+    real(dp), allocatable :: rec(:)
+    if (self%factors_n > 0) then
+      rec = [real(self%step, dp), real(self%factors_n, dp), self%factors_key, self%factors_rw, &
+             real(self%factors_pivots, dp), reshape(self%factors_lu, [self%factors_n**2])]
+    else
+      rec = [real(self%step, dp), 0.0_dp, 0.0_dp]
+    end if
+  end function factors_record
+
+  !> Take the factors from a record of factors_record, if it belongs to this checkpoint's step and
+  !> is well formed; else none (a restart is then correct, not bitwise). stat: VCI_ERR_ARGUMENT when
+  !> the record was refused.
+  subroutine from_factors_record(self, rec, stat)
+    class(vci_checkpoint_t), intent(inout) :: self
+    real(dp), intent(in) :: rec(:)
+    integer, intent(out) :: stat
+    integer :: nf, st
+    self%factors_n = 0; self%factors_key = 0.0_dp
+    stat = VCI_ERR_ARGUMENT
+    if (size(rec) < 3) return
+    if (rec(1) /= real(self%step, dp) .or. .not. (rec(2) >= 0.0_dp .and. rec(2) <= 46340.0_dp)) return
+    if (rec(2) /= aint(rec(2))) return
+    nf = int(rec(2))
+    if (size(rec, kind=i8) /= 3_i8 + 2_i8 * nf + int(nf, i8)**2) return
+    if (nf == 0) then
+      stat = VCI_OK; return
+    end if
+    if (any(rec(4 + nf:3 + 2 * nf) /= aint(rec(4 + nf:3 + 2 * nf)))) return
+    if (any(rec(4 + nf:3 + 2 * nf) < 1.0_dp) .or. any(rec(4 + nf:3 + 2 * nf) > real(nf, dp))) return
+    allocate (self%factors_rw(nf), self%factors_pivots(nf), self%factors_lu(nf, nf), stat=st)
+    if (st /= 0) return
+    self%factors_key = rec(3)
+    self%factors_rw = rec(4:3 + nf)
+    self%factors_pivots = nint(rec(4 + nf:3 + 2 * nf))
+    self%factors_lu = reshape(rec(4 + 2 * nf:), [nf, nf])
+    self%factors_n = nf
+    stat = VCI_OK
+  end subroutine from_factors_record
 
   !> A checkpoint that knows only a state (t, q, p, lambda) and the step length, as read from an
   !> output that stores no checkpoint: index 0 at t, no solver memory (like init_from_momentum).

@@ -64,6 +64,9 @@ module vci_integrator
     type(vci_stepper_t) :: stepper              !< holds the scheme and the one settings object
     logical :: created = .false.      !< create has succeeded
     logical :: initialized = .false.  !< there is a state to step from
+    !> why the last set_scheme failed (blank: the scheme is usable); until a set_scheme succeeds
+    !> the stepper has no complete workspace, and initialisation refuses with VCI_ERR_STATE
+    character(len=VCI_MSG_LEN) :: scheme_failure = ''
     !> the state and the history the next step needs (t = t0 + k h, q, p, lambda, E_d, the
     !> predictor's and the energy condition's memory): handed to the stepper whole
     type(vci_state_t) :: state
@@ -160,7 +163,7 @@ contains
     self%discrete => model
     self%lag => null()
     self%scheme_id = VCI_SCHEME_DISCRETE; self%n_stages = 0
-    call build_scheme(self, stat)
+    call build_scheme(self, 'create', stat)
   end subroutine create_discrete
 
   !> Bind a continuous model (L) and a step length; the scheme is `midpoint` until set_scheme
@@ -203,7 +206,7 @@ contains
     call model%clear_not_provided(); s = 0; call model%energy(q, v, e, s)
     self%lag_energy = .not. model%answered_not_provided()
     self%scheme_id = VCI_SCHEME_MIDPOINT; self%n_stages = 1
-    call build_scheme(self, stat)
+    call build_scheme(self, 'create', stat)
   end subroutine create_continuous
 
   !> Checks and state common to both kinds of model.
@@ -230,13 +233,14 @@ contains
     self%state%h = h
     call self%state%reserve(model%n, model%m, stat)
     if (stat /= VCI_OK) then
-      call out_of_memory(self, model, stat); return
+      call out_of_memory(self, 'create', model, stat); return
     end if
   end subroutine bind_sizes
 
   !> Build the scheme object for the current model and scheme choice and hand it to the stepper.
-  subroutine build_scheme(self, stat)
+  subroutine build_scheme(self, who, stat)
     class(vci_integrator_t), target, intent(inout) :: self
+    character(len=*), intent(in) :: who     !< the caller's name, for the message
     integer, intent(out) :: stat
     class(vci_scheme_t), allocatable :: sch
     integer :: rule
@@ -276,8 +280,8 @@ contains
         stat = VCI_ERR_MEMORY
       end if
       if (stat /= VCI_OK .and. stat /= VCI_ERR_MEMORY) then
-        write (self%last_message, '(a,i0,a)') 'create: could not set up the lobatto scheme with s = ', self%n_stages, ''
-        call finish(self, VCI_ERR_ARGUMENT, stat); return
+        write (self%last_message, '(a,i0,a)') who//': could not set up the lobatto scheme with s = ', self%n_stages, ''
+        call scheme_failed(self, VCI_ERR_ARGUMENT, stat); return
       end if
     end select
     if (stat == VCI_OK) call self%stepper%setup(sch, stat)
@@ -286,13 +290,26 @@ contains
     self%impacts%count = 0
     if (stat == VCI_OK) call self%impacts%reserve(min(settings%max_impacts_per_step, 16), self%model%n, stat)
     if (stat /= VCI_OK) then
-      call out_of_memory(self, self%model, stat); return
+      call out_of_memory(self, who, self%model, stat)
+      call scheme_failed(self, VCI_ERR_MEMORY, stat); return
     end if
     self%created = .true.
     self%initialized = .false.
+    self%scheme_failure = ''
     self%last_message = ''
     call finish(self, VCI_OK, stat)
   end subroutine build_scheme
+
+  !> The scheme could not be built (its message is set): the integrator keeps its model but cannot
+  !> be initialised or stepped until a set_scheme succeeds (the stepper may hold part of a workspace).
+  subroutine scheme_failed(self, status, stat)
+    class(vci_integrator_t), intent(inout) :: self
+    integer, intent(in) :: status
+    integer, intent(out) :: stat
+    self%initialized = .false.
+    self%scheme_failure = self%last_message
+    call finish(self, status, stat)
+  end subroutine scheme_failed
 
   !> Choose the scheme that discretises a continuous model: VCI_SCHEME_LEFT (the paper's retraction,
   !> order 1), VCI_SCHEME_MIDPOINT (order 2, the default) or VCI_SCHEME_LOBATTO with `stages` = s in
@@ -331,7 +348,7 @@ contains
     end select
     self%scheme_id = scheme
     self%n_stages = merge(stages, 1, scheme == VCI_SCHEME_LOBATTO)
-    call build_scheme(self, stat)
+    call build_scheme(self, 'set_scheme', stat)
   end subroutine set_scheme
 
   !> A short name of a scheme identifier ('left', 'midpoint', 'lobatto', 'discrete'), blank-padded
@@ -435,6 +452,7 @@ contains
       write (self%last_message, '(a,es12.4,a,es12.4,a)') 'init_from_pair: t0 + h = ', t0, ' + ', self%state%h, ' overflows'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
+    call self%stepper%forget_factors()   ! a new run solves as a fresh integrator would
     call self%stepper%pair_momentum(q0, q1, self%state%h, self%state%p, self%state%step_energy, stat)
     if (stat /= VCI_OK) then
       self%last_message = 'init_from_pair: '//trim(self%stepper%failure_cause())
@@ -464,6 +482,7 @@ contains
     call self%state%forget_history()
     self%state%step_energy = ieee_value(1.0_dp, ieee_quiet_nan)
     self%state%arriving_direction = 0
+    call self%stepper%forget_factors()
     self%initialized = .true.
     call finish(self, VCI_OK, stat)
   end subroutine init_from_momentum
@@ -480,6 +499,11 @@ contains
     self%initialized = .false.
     if (.not. self%created) then
       self%last_message = who//': create the integrator first'
+      call finish(self, VCI_ERR_STATE, stat); return
+    end if
+    if (self%scheme_failure /= '') then
+      self%last_message = who//': no usable scheme, set_scheme must succeed first (the last one failed: '// &
+                          trim(self%scheme_failure)//')'
       call finish(self, VCI_ERR_STATE, stat); return
     end if
     n = self%model%n
@@ -753,6 +777,7 @@ contains
     cp = self%state%to_checkpoint()
     allocate (cp%position_lo(size(self%state%q)))
     call self%stepper%position_carry(self%state%q, cp%position_lo)
+    call self%stepper%factors_to_checkpoint(cp)
   end function checkpoint
 
   !> Continue from a checkpoint taken with the same model and step length.
@@ -778,6 +803,7 @@ contains
     if (allocated(cp%position_lo)) then
       if (size(cp%position_lo) == self%model%n) call self%stepper%restore_position_carry(self%state%q, cp%position_lo)
     end if
+    call self%stepper%factors_from_checkpoint(cp)
     self%initialized = .true.
     call finish(self, VCI_OK, stat)
   end subroutine restore
@@ -795,12 +821,16 @@ contains
   end function run_info
 
   !> An allocation for the model's sizes failed: VCI_ERR_MEMORY naming the sizes.
-  subroutine out_of_memory(self, model, stat)
+  subroutine out_of_memory(self, who, model, stat)
     class(vci_integrator_t), intent(inout) :: self
+    character(len=*), intent(in) :: who
     class(vci_model_base_t), intent(in) :: model
     integer, intent(out) :: stat
-    write (self%last_message, '(a,3(i0,a))') 'create: cannot allocate the workspace for n = ', model%n, ', m = ', &
-      model%m, ', n_gaps = ', model%n_gaps, ' (out of memory)'
+    character(len=40) :: scheme
+    scheme = ''
+    if (self%scheme_id == VCI_SCHEME_LOBATTO) write (scheme, '(a,i0)') ', scheme lobatto with s = ', self%n_stages
+    write (self%last_message, '(a,3(i0,a))') who//': cannot allocate the workspace for n = ', model%n, ', m = ', &
+      model%m, ', n_gaps = ', model%n_gaps, trim(scheme)//' (out of memory)'
     call finish(self, VCI_ERR_MEMORY, stat)
   end subroutine out_of_memory
 

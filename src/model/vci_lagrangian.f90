@@ -80,8 +80,18 @@ contains
     type(vci_lagrangian_work_t), intent(inout) :: work
     integer, intent(in) :: n
     integer, intent(out) :: stat
-    if (allocated(work%qp)) deallocate (work%qp, work%vp, work%fp, work%fm, work%w, work%dw, work%lv, &
-                                        work%lvv, work%lqq, work%lqv, work%ipiv)
+    ! array by array: after an allocate that failed part-way some are allocated and some not
+    if (allocated(work%qp)) deallocate (work%qp)
+    if (allocated(work%vp)) deallocate (work%vp)
+    if (allocated(work%fp)) deallocate (work%fp)
+    if (allocated(work%fm)) deallocate (work%fm)
+    if (allocated(work%w)) deallocate (work%w)
+    if (allocated(work%dw)) deallocate (work%dw)
+    if (allocated(work%lv)) deallocate (work%lv)
+    if (allocated(work%lvv)) deallocate (work%lvv)
+    if (allocated(work%lqq)) deallocate (work%lqq)
+    if (allocated(work%lqv)) deallocate (work%lqv)
+    if (allocated(work%ipiv)) deallocate (work%ipiv)
     allocate (work%qp(n), work%vp(n), work%fp(n), work%fm(n), work%w(n), work%dw(n), work%lv(n), &
               work%lvv(n, n), work%lqq(n, n), work%lqv(n, n), work%ipiv(n), stat=stat)
   end subroutine lagrangian_work_setup
