@@ -112,8 +112,11 @@ module vci_newton
   contains
     !> Allocate workspace for systems of up to nmax unknowns (call once, outside the step loop).
     procedure :: reserve
+    !> Drop the kept factors: the next solve starts with a new Jacobian (a fresh run's start).
     procedure :: forget_factors
+    !> The kept factors, for a checkpoint (restart bit for bit).
     procedure :: kept_factors
+    !> Take factors from a checkpoint: the next solve of their family starts with chord steps on them.
     procedure :: keep_factors
     !> Solve sys%residual(x) = 0 for x(1:n), starting from the given x.
     procedure :: solve

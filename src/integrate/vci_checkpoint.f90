@@ -43,15 +43,18 @@ module vci_checkpoint
     !> solves): factors_n unknowns (0: none), the key of the family of systems they serve, row
     !> weights, LU and pivots. Not in the flat record (their size is not n's): factors_record.
     integer :: factors_n = 0
-    real(dp) :: factors_key = 0.0_dp
-    real(dp), allocatable :: factors_rw(:), factors_lu(:, :)
-    integer, allocatable :: factors_pivots(:)
+    real(dp) :: factors_key = 0.0_dp                 !< the family of systems the factors serve
+    real(dp), allocatable :: factors_rw(:)           !< row weights of the factored matrix
+    real(dp), allocatable :: factors_lu(:, :)        !< the LU factors (factors_n x factors_n)
+    integer, allocatable :: factors_pivots(:)        !< LAPACK's pivot indices
   contains
     !> the checkpoint as one float64 vector (what outputs store)
     procedure :: to_record
     !> rebuild from such a vector of a given layout version
     procedure :: from_record
+    !> Newton's kept factors as one float64 vector (stored beside the record)
     procedure :: factors_record
+    !> take the factors from such a vector, if it belongs to this checkpoint's step
     procedure :: from_factors_record
     !> the time of the checkpoint's state, t0 + step h
     procedure :: time => checkpoint_time
