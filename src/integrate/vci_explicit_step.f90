@@ -34,6 +34,7 @@ module vci_explicit_step
   type, public :: vci_explicit_t
     type(vci_composition_t) :: map
     integer :: n = 0, ng = 0
+    logical :: start_gaps_known = .false. !< g_start holds the gaps at a
     integer :: max_impacts = 16           !< the records grow on demand up to it
     integer :: samples = 1                !< sorted(1:samples): stage-end fractions in (0, 1), then 1
     real(dp), allocatable :: a(:), pa(:), qe(:), pe(:), qt(:), pt(:), stage_q(:, :)
@@ -104,11 +105,11 @@ contains
     real(dp) :: tau, elapsed, alpha, best, mu, e_before
     integer :: j, jbest
     self%max_impacts = max_impacts
-    self%a = q; self%pa = p
+    self%a(:) = q; self%pa(:) = p
     tau = h; elapsed = 0.0_dp
     impacts%count = 0
     do
-      self%qe = self%a; self%pe = self%pa
+      self%qe(:) = self%a; self%pe(:) = self%pa
       call self%map%flow(self%qe, self%pe, dir * tau, stat, self%stage_q)
       if (stat /= VCI_OK) then
         call fail(self, 'regular step', stat, cause); return
@@ -118,10 +119,7 @@ contains
       if (stat /= VCI_OK) then
         call fail(self, 'gaps of the step''s end', stat, cause); return
       end if
-      call gaps(self, self%a, self%g_start, stat)
-      if (stat /= VCI_OK) then
-        call fail(self, 'gaps of the step''s start', stat, cause); return
-      end if
+      self%start_gaps_known = .false.       ! (evaluated only when a wall may be crossed)
       ! stage 1: the first wall reached along the composed map
       best = 2.0_dp; jbest = 0
       do j = 1, self%ng
@@ -164,7 +162,7 @@ contains
       self%pa = self%pt + mu * self%grads(:, jbest)
       tau = h - elapsed
     end do
-    q_new = self%qe; p_new = self%pe
+    q_new(:) = self%qe; p_new(:) = self%pe
     call self%map%hamiltonian(q_new, p_new, e_new, stat)
     if (stat /= VCI_OK) call fail(self, 'energy of the new state', stat, cause)
   end subroutine explicit_advance
@@ -195,6 +193,11 @@ contains
     if (.not. any_inside) return
     ! a start on the wall (after a reflection, or a step that ended on it) departing from it:
     ! the bracket's low end is the first sample beyond which the path is admissible again
+    if (.not. self%start_gaps_known) then
+      call gaps(self, self%a, self%g_start, stat)
+      if (stat /= VCI_OK) return
+      self%start_gaps_known = .true.
+    end if
     have_lo = self%g_start(j) > 0.0_dp
     lo = 0.0_dp; glo = self%g_start(j)
     if (.not. have_lo) then

@@ -24,8 +24,9 @@ module vci_composition
     real(dp), allocatable :: gamma(:)     !< sub-step fractions γ_i (sum 1)
     real(dp), allocatable :: kick(:)      !< merged kicks: γ_1/2, (γ_1+γ_2)/2, …, γ_s/2
     real(dp), allocatable :: node(:)      !< c_i = γ_1 + … + γ_i: the time of stage i's end, as a fraction
-    real(dp), allocatable :: force(:), vel(:), q_cached(:), f_cached(:)
-    logical :: cached = .false.           !< f_cached = −∇V(q_cached)
+    real(dp), allocatable :: force(:)     !< ∇V at the current stage (the force is −∇V)
+    real(dp), allocatable :: vel(:), q_cached(:)
+    logical :: cached = .false.           !< force = ∇V(q_cached), from the end of the last flow
     integer :: gradients = 0              !< ∇V evaluations (statistics)
     integer :: failed_stat = 0            !< the callback's own code on VCI_ERR_CALLBACK
   contains
@@ -95,8 +96,8 @@ contains
     call composition_coefficients(order, self%gamma, stat)
     if (stat /= VCI_OK) return
     s = size(self%gamma); n = model%n
-    if (allocated(self%kick)) deallocate (self%kick, self%node, self%force, self%vel, self%q_cached, self%f_cached)
-    allocate (self%kick(s + 1), self%node(s), self%force(n), self%vel(n), self%q_cached(n), self%f_cached(n), stat=stat)
+    if (allocated(self%kick)) deallocate (self%kick, self%node, self%force, self%vel, self%q_cached)
+    allocate (self%kick(s + 1), self%node(s), self%force(n), self%vel(n), self%q_cached(n), stat=stat)
     if (stat /= 0) then
       stat = VCI_ERR_MEMORY; return
     end if
@@ -118,6 +119,8 @@ contains
   !> (q, p) ← Φ_h(q, p) in place (h < 0: the inverse map, the backward step). With stage_q, the
   !> position at the end of each Verlet sub-step (column i: after γ_1 … γ_i) for sampling the gaps.
   !> stat: VCI_OK, VCI_ERR_CALLBACK (code in failed_stat), VCI_ERR_NONFINITE.
+  !> The stages run as leaf kernels on plain arrays (kick_drift): on allocatable components
+  !> gfortran reloads descriptors per element, which at small n cost more than the arithmetic.
   subroutine flow(self, q, p, h, stat, stage_q)
     class(vci_composition_t), intent(inout) :: self
     real(dp), intent(inout) :: q(:), p(:)
@@ -125,45 +128,83 @@ contains
     integer, intent(out) :: stat
     real(dp), intent(inout), optional :: stage_q(:, :)
     integer :: i, n
+    logical :: diag
     n = self%n
-    if (self%cached .and. all(q(1:n) == self%q_cached)) then
-      self%force = self%f_cached
-    else
-      call force_at(self, q, stat)
+    stat = VCI_OK
+    if (.not. (self%cached .and. all(q(1:n) == self%q_cached))) then
+      call gradient_at(self, q, stat)
       if (stat /= VCI_OK) return
     end if
+    self%cached = .false.
+    diag = self%model%diagonal_mass
     do i = 1, self%stages
-      p(1:n) = p(1:n) + (self%kick(i) * h) * self%force
-      call self%model%inverse_mass_times(p(1:n), self%vel)
-      q(1:n) = q(1:n) + (self%gamma(i) * h) * self%vel
-      call force_at(self, q, stat)
+      if (diag) then
+        call kick_drift_diagonal(n, q, p, self%force, self%kick(i) * h, self%gamma(i) * h, self%model%minv_diag)
+      else
+        call kick_drift_dense(n, q, p, self%force, self%kick(i) * h, self%gamma(i) * h, self%model%minv, self%vel)
+      end if
+      call gradient_at(self, q, stat)
       if (stat /= VCI_OK) return
       if (present(stage_q)) stage_q(1:n, i) = q(1:n)
     end do
-    p(1:n) = p(1:n) + (self%kick(self%stages + 1) * h) * self%force
-    if (.not. all(ieee_is_finite(p(1:n)))) stat = VCI_ERR_NONFINITE
+    call kick(n, p, self%force, self%kick(self%stages + 1) * h)
+    if (.not. (all(ieee_is_finite(p(1:n))) .and. all(ieee_is_finite(q(1:n))))) then
+      stat = VCI_ERR_NONFINITE; return
+    end if
+    self%q_cached = q(1:n); self%cached = .true.   ! force holds ∇V(q): the next step starts here
   end subroutine flow
 
-  !> force = −∇V(q), remembered with q.
-  subroutine force_at(self, q, stat)
+  !> p ← p − a ∇V; q ← q + b M⁻¹ p (M diagonal).
+  pure subroutine kick_drift_diagonal(n, q, p, dv, a, b, minv)
+    integer, intent(in) :: n
+    real(dp), intent(inout) :: q(n), p(n)
+    real(dp), intent(in) :: dv(n), a, b, minv(n)
+    integer :: j
+    do j = 1, n
+      p(j) = p(j) - a * dv(j)
+      q(j) = q(j) + b * (minv(j) * p(j))
+    end do
+  end subroutine kick_drift_diagonal
+
+  !> The same with a dense M⁻¹ (symmetric: row j is column j).
+  pure subroutine kick_drift_dense(n, q, p, dv, a, b, minv, v)
+    integer, intent(in) :: n
+    real(dp), intent(inout) :: q(n), p(n)
+    real(dp), intent(in) :: dv(n), a, b, minv(n, n)
+    real(dp), intent(out) :: v(n)
+    integer :: j
+    do j = 1, n
+      p(j) = p(j) - a * dv(j)
+    end do
+    do j = 1, n
+      v(j) = dot_product(minv(1:n, j), p)
+    end do
+    do j = 1, n
+      q(j) = q(j) + b * v(j)
+    end do
+  end subroutine kick_drift_dense
+
+  pure subroutine kick(n, p, dv, a)
+    integer, intent(in) :: n
+    real(dp), intent(inout) :: p(n)
+    real(dp), intent(in) :: dv(n), a
+    p = p - a * dv
+  end subroutine kick
+
+  !> force = ∇V(q) (the name is kept short: it is the gradient, the force is its negative).
+  subroutine gradient_at(self, q, stat)
     class(vci_composition_t), intent(inout) :: self
     real(dp), intent(in) :: q(:)
     integer, intent(out) :: stat
     integer :: s
     s = 0
-    self%cached = .false.
-    call self%model%potential_gradient(q(1:self%n), self%force, s)
+    call self%model%potential_gradient(q, self%force, s)
     self%gradients = self%gradients + 1
     stat = VCI_OK
     if (s /= 0) then
-      self%failed_stat = s; stat = VCI_ERR_CALLBACK; return
+      self%failed_stat = s; stat = VCI_ERR_CALLBACK
     end if
-    if (.not. all(ieee_is_finite(self%force))) then
-      stat = VCI_ERR_NONFINITE; return
-    end if
-    self%force = -self%force
-    self%q_cached = q(1:self%n); self%f_cached = self%force; self%cached = .true.
-  end subroutine force_at
+  end subroutine gradient_at
 
   !> H(q, p) = ½ pᵀ M⁻¹ p + V(q).
   subroutine hamiltonian(self, q, p, e, stat)
