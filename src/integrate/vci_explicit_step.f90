@@ -35,10 +35,11 @@ module vci_explicit_step
     type(vci_composition_t) :: map
     integer :: n = 0, ng = 0
     logical :: start_gaps_known = .false. !< g_start holds the gaps at a
+    logical :: samples_known = .false.    !< g_samples holds the gaps at the internal stages
     integer :: max_impacts = 16           !< the records grow on demand up to it
     integer :: samples = 1                !< sorted(1:samples): stage-end fractions in (0, 1), then 1
     real(dp), allocatable :: a(:), pa(:), qe(:), pe(:), qt(:), pt(:), stage_q(:, :)
-    real(dp), allocatable :: g_start(:), g_end(:), g_trial(:), grads(:, :), sorted(:)
+    real(dp), allocatable :: g_start(:), g_end(:), g_trial(:), grads(:, :), sorted(:), g_samples(:, :)
     integer, allocatable :: order(:)
     integer(i8) :: root_maps = 0      !< composed maps evaluated by stage 1 (statistics)
   contains
@@ -61,10 +62,11 @@ contains
     n = model%n; ng = max(model%n_gaps, 1); s = self%map%stages
     self%n = n; self%ng = model%n_gaps
     if (allocated(self%a)) deallocate (self%a, self%pa, self%qe, self%pe, self%qt, self%pt, self%stage_q, &
-                                       self%g_start, self%g_end, self%g_trial, self%grads, self%sorted, self%order)
+                                       self%g_start, self%g_end, self%g_trial, self%grads, self%sorted, self%order, &
+                                       self%g_samples)
     allocate (self%a(n), self%pa(n), self%qe(n), self%pe(n), self%qt(n), self%pt(n), self%stage_q(n, s), &
               self%g_start(ng), self%g_end(ng), self%g_trial(ng), self%grads(n, ng), self%sorted(s), &
-              self%order(s), stat=stat)
+              self%order(s), self%g_samples(ng, s), stat=stat)
     if (stat /= 0) then
       stat = VCI_ERR_MEMORY; return
     end if
@@ -120,6 +122,7 @@ contains
         call fail(self, 'gaps of the step''s end', stat, cause); return
       end if
       self%start_gaps_known = .false.       ! (evaluated only when a wall may be crossed)
+      self%samples_known = .false.
       ! stage 1: the first wall reached along the composed map
       best = 2.0_dp; jbest = 0
       do j = 1, self%ng
@@ -178,44 +181,45 @@ contains
     integer, intent(out) :: stat
     real(dp) :: lo, hi, glo, ghi, c, g, gs
     integer :: i, k, nk, side
-    logical :: have_lo, any_inside
+    logical :: have_lo, any_inside, on_wall
     alpha = 2.0_dp; stat = VCI_OK
     nk = self%samples
-    any_inside = self%g_end(j) < 0.0_dp
-    if (.not. any_inside) then
+    if (.not. self%samples_known) then      ! every wall's gap at every internal stage, once
       do k = 1, nk - 1
-        call gaps(self, self%stage_q(:, self%order(k)), self%g_trial, stat)
+        call gaps(self, self%stage_q(:, self%order(k)), self%g_samples(:, k), stat)
         if (stat /= VCI_OK) return
-        if (self%g_trial(j) < 0.0_dp) any_inside = .true.
-        if (any_inside) exit
       end do
+      self%samples_known = .true.
     end if
+    any_inside = self%g_end(j) < 0.0_dp .or. any(self%g_samples(j, 1:nk - 1) < 0.0_dp)
     if (.not. any_inside) return
-    ! a start on the wall (after a reflection, or a step that ended on it) departing from it:
-    ! the bracket's low end is the first sample beyond which the path is admissible again
+    ! A start on the wall (after a reflection, or a step that ended on it), to within the rounding
+    ! of g there: moving into it, reflect at once; departing from it, the bracket's low end is the
+    ! first point of the true map that is admissible again, and only the end can show a return
+    ! (internal stages close to the start scatter around g = 0 by their low-order error).
     if (.not. self%start_gaps_known) then
       call gaps(self, self%a, self%g_start, stat)
       if (stat /= VCI_OK) return
       self%start_gaps_known = .true.
     end if
-    have_lo = self%g_start(j) > 0.0_dp
-    lo = 0.0_dp; glo = self%g_start(j)
-    if (.not. have_lo) then
-      call gap_gradients(self, self%a, stat)
-      if (stat /= VCI_OK) return
+    call gap_gradients(self, self%a, stat)
+    if (stat /= VCI_OK) return
+    on_wall = self%g_start(j) <= 64.0_dp * epsilon(1.0_dp) * sum(abs(self%grads(:, j)) * max(abs(self%a), 1.0_dp))
+    if (on_wall) then
       call self%map%model%inverse_mass_times(self%pa, self%qt)
       if (dir * dot_product(self%grads(:, j), self%qt) < 0.0_dp) then
-        alpha = 0.0_dp; return                 ! on the wall, moving into it: reflect at once
+        alpha = 0.0_dp; return
       end if
+      if (.not. self%g_end(j) < 0.0_dp) return
     end if
+    have_lo = .not. on_wall
+    lo = 0.0_dp; glo = self%g_start(j)
     hi = -1.0_dp
     do k = 1, nk
       c = self%sorted(k)
       if (c >= limit) return                   ! a wall already found comes first
       if (k < nk .and. have_lo) then
-        call gaps(self, self%stage_q(:, self%order(k)), self%g_trial, stat)
-        if (stat /= VCI_OK) return
-        if (self%g_trial(j) >= 0.0_dp) cycle   ! the sample is admissible: no need of the true map
+        if (on_wall .or. self%g_samples(j, k) >= 0.0_dp) cycle   ! admissible sample: no need of the true map
       end if
       call gap_on_map(self, j, dir, c * tau, g, stat)
       if (stat /= VCI_OK) return
