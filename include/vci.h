@@ -1,4 +1,5 @@
-/* vci.h -- C interface of vci, variational collision integrators for nonholonomic Lagrangian
+/** \file vci.h
+ * \brief C interface of vci, variational collision integrators for nonholonomic Lagrangian
  * systems with impacts. Hand-written; the Fortran side is src/bindings/vci_capi.F90.
  *
  * Usage: fill a vci_callbacks initialised with VCI_CALLBACKS_INIT, vci_model_create,
@@ -47,36 +48,41 @@
 extern "C" {
 #endif
 
-/** Version of this header; vci_version() gives the library's (major*10000 + minor*100 + patch). */
+/** Major version of this header (docs/VERSIONING.md: the soname is libvci.so.MAJOR). */
 #define VCI_VERSION_MAJOR 0
+/** Minor version of this header (additions to the C ABI). */
 #define VCI_VERSION_MINOR 2
+/** Patch version of this header (fixes only). */
 #define VCI_VERSION_PATCH 0
+/** Version of this header as one number; vci_version() gives the library's (major*10000 + minor*100 + patch). */
 #define VCI_VERSION_NUMBER (VCI_VERSION_MAJOR * 10000 + VCI_VERSION_MINOR * 100 + VCI_VERSION_PATCH)
 
 /** Status codes (same numbering as the Fortran module vci_status). */
 enum {
-  VCI_OK = 0,
-  VCI_ERR_ARGUMENT,         /* 1: bad input: NULL or dead handle, NULL array, bad size or value */
-  VCI_ERR_CALLBACK,         /* 2: a user callback returned nonzero */
-  VCI_ERR_NONFINITE,        /* 3: NaN or Inf from a callback or a solve, or a time that overflows */
-  VCI_ERR_NEWTON,           /* 4: Newton iteration did not converge */
-  VCI_ERR_IMPACT,           /* 5: the impact stages had no admissible solution */
-  VCI_ERR_TOO_MANY_IMPACTS, /* 6: more impacts in one step than allowed (contact, chatter) */
-  VCI_ERR_INADMISSIBLE,     /* 7: a state lies outside the admissible set (some g_j < 0) */
-  VCI_ERR_IO,               /* 8: output could not be written, or HDF5 not built in */
-  VCI_ERR_STATE,            /* 9: call out of order (step before init), or the integrator is busy */
-  VCI_ERR_MEMORY,           /* 10: an allocation failed (sizes too large for this machine) */
-  VCI_STOPPED               /* 11: the caller stopped the run (a progress callback returned nonzero) */
+  VCI_OK = 0,               /**< 0: success */
+  VCI_ERR_ARGUMENT,         /**< 1: bad input: NULL or dead handle, NULL array, bad size or value */
+  VCI_ERR_CALLBACK,         /**< 2: a user callback returned nonzero */
+  VCI_ERR_NONFINITE,        /**< 3: NaN or Inf from a callback or a solve, or a time that overflows */
+  VCI_ERR_NEWTON,           /**< 4: Newton iteration did not converge */
+  VCI_ERR_IMPACT,           /**< 5: the impact stages had no admissible solution */
+  VCI_ERR_TOO_MANY_IMPACTS, /**< 6: more impacts in one step than allowed (contact, chatter) */
+  VCI_ERR_INADMISSIBLE,     /**< 7: a state lies outside the admissible set (some g_j < 0) */
+  VCI_ERR_IO,               /**< 8: output could not be written, or HDF5 not built in */
+  VCI_ERR_STATE,            /**< 9: call out of order (step before init), or the integrator is busy */
+  VCI_ERR_MEMORY,           /**< 10: an allocation failed (sizes too large for this machine) */
+  VCI_STOPPED               /**< 11: the caller stopped the run (a progress callback returned nonzero) */
 };
 
 /** Impact energy conditions for vci_set_impact_energy. */
 enum {
-  VCI_IMPACT_DISCRETE = 0,   /* E_d(alpha h) = E_d((1 - alpha) h): the paper's condition, default */
-  VCI_IMPACT_HAMILTONIAN = 1 /* H(q~, p+) = H(q~, p-): needs the energy callback */
+  VCI_IMPACT_DISCRETE = 0,   /**< E_d(alpha h) = E_d((1 - alpha) h): the paper's condition, default */
+  VCI_IMPACT_HAMILTONIAN = 1 /**< H(q~, p+) = H(q~, p-): needs the energy callback */
 };
 
-typedef struct vci_model_s *vci_model;           /* opaque */
-typedef struct vci_integrator_s *vci_integrator; /* opaque */
+/** Opaque handle of a model (vci_model_create, vci_model_create_lagrangian; vci_model_destroy). */
+typedef struct vci_model_s *vci_model;
+/** Opaque handle of an integrator (vci_integrator_create; vci_integrator_destroy). */
+typedef struct vci_integrator_s *vci_integrator;
 
 /* Callbacks return 0, > 0 (recoverable failure) or < 0 (unrecoverable): the contract above.
  * Matrices are column-major: omega[i + n*mu] is component i of the one-form omega^mu;
@@ -112,15 +118,17 @@ typedef int (*vci_impact_fn)(double t, double alpha, int gap_index, const double
  *  Members are only ever added at the end; the library treats those beyond `size` as NULL, and
  *  refuses a struct from a newer header that sets members it does not know. */
 typedef struct vci_callbacks {
-  size_t size;                                              /* = sizeof(vci_callbacks): VCI_CALLBACKS_INIT */
-  vci_ld_grad_fn d1_ld, d2_ld; vci_ld_dh_fn d3_ld;          /* required */
-  vci_hessian_fn mixed_hessian;                             /* optional (NULL: differenced) */
-  vci_forms_fn constraint_forms;                            /* required iff m > 0 */
-  vci_dconstraint_fn discrete_constraint;                   /* required iff m > 0 */
-  vci_gaps_fn gaps;                                         /* required iff ngaps > 0 */
-  vci_gap_grads_fn gap_gradients;                           /* optional (NULL: differenced) */
-  vci_energy_fn energy;                                     /* optional; needed by VCI_IMPACT_HAMILTONIAN */
-  /* optional (NULL: differenced): jac[mu + m*i] = d omega_d^mu / d other_i at (base, other, h) */
+  size_t size;                                              /**< = sizeof(vci_callbacks): VCI_CALLBACKS_INIT */
+  vci_ld_grad_fn d1_ld;                                     /**< required: D1 L_d */
+  vci_ld_grad_fn d2_ld;                                     /**< required: D2 L_d */
+  vci_ld_dh_fn d3_ld;                                       /**< required: D3 L_d */
+  vci_hessian_fn mixed_hessian;                             /**< optional (NULL: differenced) */
+  vci_forms_fn constraint_forms;                            /**< required iff m > 0 */
+  vci_dconstraint_fn discrete_constraint;                   /**< required iff m > 0 */
+  vci_gaps_fn gaps;                                         /**< required iff ngaps > 0 */
+  vci_gap_grads_fn gap_gradients;                           /**< optional (NULL: differenced) */
+  vci_energy_fn energy;                                     /**< optional; needed by VCI_IMPACT_HAMILTONIAN */
+  /** optional (NULL: differenced): jac[mu + m*i] = d omega_d^mu / d other_i at (base, other, h) */
   vci_dconstraint_fn discrete_constraint_jacobian;
   /* new members here */
 } vci_callbacks;
@@ -135,30 +143,35 @@ typedef struct vci_callbacks {
 
 /** Create a model of n coordinates, m constraints, ngaps walls. The callbacks are copied; `user`
  *  is passed to every callback. On failure *model = NULL (if model is not NULL).
- *  Returns VCI_OK; VCI_ERR_ARGUMENT: model or cb NULL, cb->size not that of a vci_callbacks (not
- *  initialised with VCI_CALLBACKS_INIT), a callback set that this library does not know (a newer
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT: model or cb NULL, cb->size not that of a vci_callbacks of
+ *  some header (the size field and a whole number of members: not initialised with
+ *  VCI_CALLBACKS_INIT), a callback set that this library does not know (a newer
  *  header), n < 1, m < 0, m > n, ngaps < 0, n + m + 1 > 46340, n * ngaps >= 2^31, or a required
  *  callback NULL; VCI_ERR_MEMORY.
  *  (vci_model_create is a macro: the symbol vci_model_create keeps the 0.1 struct without `size`,
  *  for binaries built against vci 0.1.) */
 int  vci_model_create_v2(vci_model *model, int n, int m, int ngaps, const vci_callbacks *cb, void *user);
+/** vci_model_create(model, n, m, ngaps, cb, user): create a discrete model, vci_model_create_v2 (the
+ *  name programs use; the symbol of that name is the 0.1 entry point, kept for 0.1 binaries). */
 #define vci_model_create vci_model_create_v2
 
 /* ---- Continuous Lagrangian models (docs/SCHEMES.md): the library builds L_d from L by a scheme ---- */
 
 /** Schemes for vci_set_scheme (the Fortran VCI_SCHEME_* values). */
 enum {
-  VCI_SCHEME_DISCRETE = 0, /* the model is a discrete L_d (vci_model_create): the only scheme it has */
-  VCI_SCHEME_LEFT = 1,     /* L_d = h L(q, (v - q)/h): the paper's retraction, order 1 */
-  VCI_SCHEME_MIDPOINT = 2, /* L_d = h L((q + v)/2, (v - q)/h): order 2, the default for a continuous model */
-  VCI_SCHEME_LOBATTO = 3,  /* Galerkin with s + 1 Lobatto points, s = 1..VCI_LOBATTO_MAX_STAGES: order 2s, with or without constraints */
-  VCI_SCHEME_COMPOSITION = 4 /* explicit Verlet compositions, order 2, 4, 6, 8, 10 (the stages argument): Fortran
-                                separable models (vci_separable_t) only for now; a C model gets VCI_ERR_ARGUMENT */
+  VCI_SCHEME_DISCRETE = 0, /**< the model is a discrete L_d (vci_model_create): the only scheme it has */
+  VCI_SCHEME_LEFT = 1,     /**< L_d = h L(q, (v - q)/h): the paper's retraction, order 1 */
+  VCI_SCHEME_MIDPOINT = 2, /**< L_d = h L((q + v)/2, (v - q)/h): order 2, the default for a continuous model */
+  VCI_SCHEME_LOBATTO = 3,  /**< Galerkin with s + 1 Lobatto points, s = 1..VCI_LOBATTO_MAX_STAGES: order 2s, with or without constraints */
+  VCI_SCHEME_COMPOSITION = 4 /**< explicit Verlet compositions, order 2, 4, 6, 8, 10 (the stages argument): Fortran
+                                  separable models (vci_separable_t) only for now; a C model gets VCI_ERR_ARGUMENT */
 };
+/** The largest number of stages s of VCI_SCHEME_LOBATTO. */
 #define VCI_LOBATTO_MAX_STAGES 8
 
-/** out[n] = dL/dq or dL/dqdot at (q[n], v[n]); or out[0] = L(q, v) (vci_lagrangian_value_fn). */
+/** l[0] = L(q, v), the Lagrangian at (q[n], v[n]). */
 typedef int (*vci_lagrangian_value_fn)(int n, const double *q, const double *v, double *l /* [1] */, void *user);
+/** out[n] = dL/dq or dL/dqdot at (q[n], v[n]). */
 typedef int (*vci_lagrangian_grad_fn)(int n, const double *q, const double *v, double *out, void *user);
 /** The three Hessian blocks at (q, v), each n x n column-major: lqq[i + n*j] = d2L/dq_i dq_j,
  *  lqv[i + n*j] = d2L/dq_i dv_j, lvv[i + n*j] = d2L/dv_i dv_j. */
@@ -169,17 +182,20 @@ typedef int (*vci_lagrangian_hessians_fn)(int n, const double *q, const double *
  *  rules as vci_callbacks: initialise with VCI_LAGRANGIAN_CALLBACKS_INIT; members are only ever
  *  added at the end). Same return contract and conventions as the discrete callbacks. */
 typedef struct vci_lagrangian_callbacks {
-  size_t size;                                  /* = sizeof(vci_lagrangian_callbacks) */
-  vci_lagrangian_value_fn lagrangian;           /* required: L(q, v) */
-  vci_lagrangian_grad_fn dl_dq, dl_dv;          /* required: dL/dq, dL/dqdot (the momentum) */
-  vci_lagrangian_hessians_fn hessians;          /* optional (NULL: differenced from dl_dq, dl_dv) */
-  vci_forms_fn constraint_forms;                /* required iff m > 0 */
-  vci_gaps_fn gaps;                             /* required iff ngaps > 0 */
-  vci_gap_grads_fn gap_gradients;               /* optional (NULL: differenced) */
-  vci_energy_fn energy;                         /* optional H(q, p) (NULL: Legendre inversion of dl_dv) */
+  size_t size;                                  /**< = sizeof(vci_lagrangian_callbacks) */
+  vci_lagrangian_value_fn lagrangian;           /**< required: L(q, v) */
+  vci_lagrangian_grad_fn dl_dq;                 /**< required: dL/dq */
+  vci_lagrangian_grad_fn dl_dv;                 /**< required: dL/dqdot (the momentum) */
+  vci_lagrangian_hessians_fn hessians;          /**< optional (NULL: differenced from dl_dq, dl_dv) */
+  vci_forms_fn constraint_forms;                /**< required iff m > 0 */
+  vci_gaps_fn gaps;                             /**< required iff ngaps > 0 */
+  vci_gap_grads_fn gap_gradients;               /**< optional (NULL: differenced) */
+  vci_energy_fn energy;                         /**< optional H(q, p) (NULL: Legendre inversion of dl_dv) */
   /* new members here */
 } vci_lagrangian_callbacks;
 
+/** Initialiser: `vci_lagrangian_callbacks cb = VCI_LAGRANGIAN_CALLBACKS_INIT;` (size set, every
+ *  callback NULL), as VCI_CALLBACKS_INIT. */
 #ifdef __cplusplus
 #define VCI_LAGRANGIAN_CALLBACKS_INIT {sizeof(vci_lagrangian_callbacks), 0, 0, 0, 0, 0, 0, 0, 0}
 #else
@@ -189,15 +205,18 @@ typedef struct vci_lagrangian_callbacks {
 /** Create a continuous model L(q, qdot) of n coordinates, m constraints, ngaps walls (the
  *  callbacks are copied; `user` goes to every one). An integrator made from it uses
  *  VCI_SCHEME_MIDPOINT until vci_set_scheme chooses another. On failure *model = NULL.
- *  Returns VCI_OK; VCI_ERR_ARGUMENT: as vci_model_create, with lagrangian, dl_dq, dl_dv required;
- *  VCI_ERR_MEMORY. */
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT: as vci_model_create (cb->size a whole number of members of a
+ *  vci_lagrangian_callbacks), with lagrangian, dl_dq, dl_dv required; VCI_ERR_MEMORY. */
 int  vci_model_create_lagrangian(vci_model *model, int n, int m, int ngaps, const vci_lagrangian_callbacks *cb,
                                  void *user);
 
 /** Choose the scheme of an integrator made from a continuous model: VCI_SCHEME_LEFT, _MIDPOINT,
  *  or _LOBATTO with `stages` = s in 1..VCI_LOBATTO_MAX_STAGES (ignored for the others). Call before
  *  initialising: the state is reset. Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, a discrete
- *  model, unknown scheme, s out of range; VCI_ERR_STATE: busy. */
+ *  model, unknown scheme, s out of range (the integrator keeps its scheme);
+ *  VCI_ERR_MEMORY: the scheme's workspace could not be allocated (about 3 (s n + 1)^2 doubles for
+ *  lobatto): the integrator then has no usable scheme, and initialising it returns VCI_ERR_STATE
+ *  until a vci_set_scheme succeeds; VCI_ERR_STATE: busy. */
 int  vci_set_scheme(vci_integrator integ, int scheme, int stages);
 
 /** Release the model and set *model = NULL. NULL-safe (model or *model NULL: nothing happens).
@@ -235,7 +254,9 @@ int  vci_set_max_impacts(vci_integrator integ, int max_impacts);
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, q0 or q1 NULL, NaN/Inf in t0, q0 or q1, t0 + h
  *  overflows, a required constraint callback missing; VCI_ERR_INADMISSIBLE: q0 or q1 outside the
  *  admissible set; VCI_ERR_CALLBACK or VCI_ERR_NONFINITE: a callback failed or gave NaN/Inf;
- *  VCI_ERR_STATE: busy, or an open output file already holds steps (close it first). After a
+ *  VCI_ERR_NEWTON: lobatto's interior stages of the pair could not be solved; VCI_ERR_MEMORY: the
+ *  probes of the model could not be allocated; VCI_ERR_STATE: busy, an open output file already
+ *  holds steps (close it first), or the last vci_set_scheme failed (no usable scheme). After a
  *  failure the integrator has no state (VCI_ERR_STATE from stepping) until initialised again. */
 int  vci_init_from_pair(vci_integrator integ, double t0, const double *q0, const double *q1);
 
@@ -291,7 +312,8 @@ int  vci_set_impact_callback(vci_integrator integ, vci_impact_fn fn, void *user)
  *  finished by vci_close_output, vci_integrator_destroy or the next vci_open_output. One file holds
  *  one run: steps in one direction from one initialisation (other calls give VCI_ERR_STATE).
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, path NULL or empty; VCI_ERR_IO: the file cannot
- *  be created, or this library was built without HDF5 (vci_last_error says which); VCI_ERR_STATE. */
+ *  be created, or this library was built without HDF5 (vci_last_error says which); VCI_ERR_MEMORY:
+ *  the writer could not be allocated; VCI_ERR_STATE. */
 int  vci_open_output(vci_integrator integ, const char *path);      /* HDF5; VCI_ERR_IO when unavailable */
 
 /** Finish and close the output file, if any. Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle;
@@ -311,6 +333,24 @@ const char *vci_status_string(int status);
 /** The library's version: major*10000 + minor*100 + patch. */
 int  vci_version(void);
 
+/** Progress of a run (vci_set_progress): steps done of this vci_integrate call and its total,
+ *  impacts so far, model time, wall seconds of this call, rate, estimated seconds left (-1: unknown). */
+typedef struct vci_progress {
+  int64_t steps_done;          /**< steps done in this vci_integrate call */
+  int64_t steps_total;         /**< steps this call was asked for */
+  int64_t impacts;             /**< impacts so far */
+  double t;                    /**< model time of the current state */
+  double elapsed;              /**< wall seconds of this call */
+  double steps_per_second;     /**< rate so far */
+  double eta;                  /**< estimated wall seconds left (-1: unknown) */
+} vci_progress;
+/** Return 0 to go on, nonzero to stop the run after this step (vci_integrate then returns VCI_STOPPED). */
+typedef int (*vci_progress_fn)(const vci_progress *info, void *user);
+/** Call fn at most once per `interval` seconds of wall time during vci_integrate, and after its last
+ *  step; fn = NULL: no more reports. The library prints nothing itself. Returns VCI_OK;
+ *  VCI_ERR_ARGUMENT: bad handle, interval < 0 or not finite; VCI_ERR_STATE: busy. */
+int  vci_set_progress(vci_integrator integ, vci_progress_fn fn, double interval, void *user);
+
 /** The model checker: compares every derivative callback the model supplies with central
  *  differences at one point (discrete L_d: D1/D2/D3 against each other, the mixed Hessian, the
  *  discrete constraint's Jacobian, the constraint forms against the discrete form; continuous L:
@@ -320,19 +360,6 @@ int  vci_version(void);
  *  *worst = the largest; report (NULL: none) gets one line per comparison, truncated to size - 1.
  *  Returns VCI_OK when the check ran; VCI_ERR_ARGUMENT (NULL pointers, dead handle, h <= 0);
  *  VCI_ERR_CALLBACK: a callback failed at the point (vci_last_error(NULL, ...) names it). */
-/** Progress of a run (vci_set_progress): steps done of this vci_integrate call and its total,
- *  impacts so far, model time, wall seconds of this call, rate, estimated seconds left (-1: unknown). */
-typedef struct vci_progress {
-  int64_t steps_done, steps_total, impacts;
-  double t, elapsed, steps_per_second, eta;
-} vci_progress;
-/** Return 0 to go on, nonzero to stop the run after this step (vci_integrate then returns VCI_STOPPED). */
-typedef int (*vci_progress_fn)(const vci_progress *info, void *user);
-/** Call fn at most once per `interval` seconds of wall time during vci_integrate, and after its last
- *  step; fn = NULL: no more reports. The library prints nothing itself. Returns VCI_OK;
- *  VCI_ERR_ARGUMENT: bad handle, interval < 0 or not finite; VCI_ERR_STATE: busy. */
-int  vci_set_progress(vci_integrator integ, vci_progress_fn fn, double interval, void *user);
-
 int  vci_check_model(vci_model model, const double *q, const double *v, double h, double tol, int *passed,
                      double *worst, char *report, int size);
 

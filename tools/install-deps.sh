@@ -4,7 +4,7 @@
 set -euo pipefail
 packages=(cmake make gfortran gcc liblapack-dev libblas-dev libhdf5-dev hdf5-tools pkg-config python3
           python3-numpy python3-h5py python3-matplotlib python3-cffi python3-numba python3-sympy python3-pytest
-          valgrind
+          valgrind doxygen
           openmpi-bin libopenmpi-dev libhdf5-openmpi-dev libasan8 libubsan1 libtsan2 "$@")
 missing=()
 for p in "${packages[@]}"; do

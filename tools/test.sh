@@ -6,8 +6,12 @@ bash tools/install-deps.sh
 cmake --preset default
 cmake --build --preset default
 ctest --preset default
-# Ensembles over MPI ranks with parallel HDF5: a second, lean build (only what the tests labelled
-# `mpi` need; build-mpi/) and those tests, run with mpirun --oversubscribe -np 2 (docs/ENSEMBLES.md)
+# The API reference (docs/BUILD.md): Doxygen over vci.h and the public modules, failing on an
+# undocumented public symbol (install-deps.sh installs doxygen; ctest's api_reference checks the same)
+cmake --build --preset default --target vci_docs
+# The full configuration, -DVCI_WITH_MPI=ON -DVCI_WITH_OPENMP=ON (preset mpi, build-mpi/): every
+# target, and the whole suite in it -- the default one on parallel HDF5, and the tests labelled `mpi`
+# (ensembles over ranks, run with mpirun --oversubscribe -np 2; docs/ENSEMBLES.md)
 cmake --preset mpi
 cmake --build --preset mpi
 ctest --preset mpi

@@ -2,9 +2,7 @@
 !> g(q) = y - phi(theta), phi = sqrt(a^2 sin^2 theta + b^2 cos^2 theta). docs/DESIGN.md §8.
 !> `ellipse_lagrangian_t`: the same body as a continuous model, L = I θ̇²/2 + m(ẋ² + ẏ²)/2 − m g y.
 module vci_scene_ellipse
-  use vci_kinds, only: dp
-  use vci_model, only: vci_model_t
-  use vci_lagrangian, only: vci_lagrangian_t
+  use vci, only: dp, vci_model_t, vci_lagrangian_t
   implicit none
   private
 

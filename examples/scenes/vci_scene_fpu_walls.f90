@@ -7,9 +7,7 @@
 !> `fpu_walls_lagrangian_t`: the same chain as a continuous model, L = |v|^2/2 - V_total(q), with
 !> analytic Hessian blocks (L_qq = -Hess V tridiagonal, L_qv = 0, L_vv = I), for the library's schemes.
 module vci_scene_fpu_walls
-  use vci_kinds, only: dp
-  use vci_model, only: vci_model_t
-  use vci_lagrangian, only: vci_lagrangian_t
+  use vci, only: dp, vci_model_t, vci_lagrangian_t
   implicit none
   private
 

@@ -5,9 +5,7 @@
 !> stiff and extreme-magnitude stability cases.
 !> `particle_lagrangian_t`: the same particle as a continuous model, L = m|v|²/2 − V(q).
 module vci_scene_particle
-  use vci_kinds, only: dp
-  use vci_model, only: vci_model_t
-  use vci_lagrangian, only: vci_lagrangian_t
+  use vci, only: dp, vci_model_t, vci_lagrangian_t
   implicit none
   private
 

@@ -6,9 +6,7 @@
 !> `pendulum_lagrangian_t` is the same scene as a continuous model, L = ½ m l² (θ̇² + sin²θ φ̇²) − m g l cos θ,
 !> with Ω = f(θ) dθ − dφ: the `left` scheme turns it into the L_d above.
 module vci_scene_pendulum
-  use vci_kinds, only: dp
-  use vci_model, only: vci_model_t
-  use vci_lagrangian, only: vci_lagrangian_t
+  use vci, only: dp, vci_model_t, vci_lagrangian_t
   implicit none
   private
 

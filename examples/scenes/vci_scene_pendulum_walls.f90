@@ -4,8 +4,7 @@
 !> it is the free pendulum (a smooth nonlinear scene for order measurements). A continuous model:
 !> the library discretises it by the scheme chosen at run time.
 module vci_scene_pendulum_walls
-  use vci_kinds, only: dp
-  use vci_lagrangian, only: vci_lagrangian_t
+  use vci, only: dp, vci_lagrangian_t
   implicit none
   private
 

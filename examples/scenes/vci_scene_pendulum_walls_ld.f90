@@ -5,8 +5,7 @@
 !> Free flight is nonlinear (theta'' = -(g/l) sin theta), so no fixed-step method is exact.
 !> Exact reference: test/support/vci_ref_pendulum_walls.f90. Used by tools/results.
 module vci_scene_pendulum_walls_ld
-  use vci_kinds, only: dp
-  use vci_model, only: vci_model_t
+  use vci, only: dp, vci_model_t
   use vci_scene_pendulum_walls, only: pendulum_walls_gaps, pendulum_walls_gap_gradients, pendulum_energy
   implicit none
   private

@@ -64,10 +64,8 @@ contains
     nbytes = size_field
     ours = c_sizeof(local)
     least = c_sizeof(local%size) + 3 * c_sizeof(c_null_funptr)   ! up to d3_ld: the required ones
-    write (txt, '(i0)') nbytes
-    ! every header's struct is the size field and whole pointers: anything else is no vci_callbacks
-    if (nbytes < least .or. nbytes > 4096 .or. &
-        mod(nbytes - c_sizeof(local%size), c_sizeof(c_null_funptr)) /= 0) then
+    txt = size_text(nbytes)
+    if (.not. whole_callbacks(nbytes, least)) then
       call set_thread_message('vci_model_create: cb->size = '//trim(txt)//' is not the size of a vci_callbacks '// &
                               '(initialise it with VCI_CALLBACKS_INIT)')
       return
@@ -137,8 +135,8 @@ contains
     nbytes = size_field
     ours = c_sizeof(local)
     least = c_sizeof(local%size) + 3 * c_sizeof(c_null_funptr)   ! up to dl_dv: the required ones
-    write (txt, '(i0)') nbytes
-    if (nbytes < least .or. nbytes > 4096) then
+    txt = size_text(nbytes)
+    if (.not. whole_callbacks(nbytes, least)) then
       call set_thread_message('vci_model_create_lagrangian: cb->size = '//trim(txt)//' is not the size of a '// &
                               'vci_lagrangian_callbacks (initialise it with VCI_LAGRANGIAN_CALLBACKS_INIT)')
       return
@@ -183,6 +181,27 @@ contains
     ! sizes, allocation and registry as for a discrete model
     vci_model_create_lagrangian = create_model('vci_model_create_lagrangian', model, n, m, ngaps, vci_callbacks_c(), user, local)
   end function vci_model_create_lagrangian
+
+  !> A versioned callbacks struct (size field, then function pointers) of nbytes: at least the
+  !> required members, whole members only (a size between two members is no header's struct), and
+  !> at most 4096 bytes (a garbage size is refused before anything is read).
+  pure logical function whole_callbacks(nbytes, least) result(ok)
+    integer(c_size_t), intent(in) :: nbytes, least
+    integer(c_size_t) :: head
+    head = c_sizeof(0_c_size_t)
+    ok = nbytes >= least .and. nbytes <= 4096 .and. mod(nbytes - head, c_sizeof(c_null_funptr)) == 0
+  end function whole_callbacks
+
+  !> A size_t as C prints it (%zu): Fortran's c_size_t is signed, so SIZE_MAX would read -1.
+  pure function size_text(nbytes) result(txt)
+    integer(c_size_t), intent(in) :: nbytes
+    character(len=24) :: txt
+    integer, parameter :: wide = selected_int_kind(38)
+    integer(wide) :: u
+    u = int(nbytes, wide)
+    if (u < 0) u = u + 2_wide**(8 * c_sizeof(nbytes))
+    write (txt, '(i0)') u
+  end function size_text
 
   !> *out = NULL for the handle pointer `out` (not NULL).
   subroutine null_out(out)

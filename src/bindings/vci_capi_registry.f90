@@ -115,7 +115,8 @@ module vci_capi_registry
   integer, parameter :: KIND_MODEL = 1, KIND_INTEGRATOR = 2
   integer, parameter :: slot_bits = merge(20, 12, bit_size(0_c_intptr_t) > 32)
   integer(c_intptr_t), parameter :: slot_mask = 2_c_intptr_t**slot_bits - 1
-  integer(c_intptr_t), parameter :: max_serial = huge(0_c_intptr_t) / 2_c_intptr_t**slot_bits
+  ! huge / 2**slot_bits, as a shift (a constant integer division draws -Winteger-division)
+  integer(c_intptr_t), parameter :: max_serial = shiftr(huge(0_c_intptr_t), slot_bits)
   type :: slot_t
     integer(c_intptr_t) :: serial = 0      !< 0: free
     integer :: kind = 0

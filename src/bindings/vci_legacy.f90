@@ -109,6 +109,9 @@ module vci_legacy
     integer :: iopt = 0
     type(c_ptr) :: rpar = c_null_ptr, ipar = c_null_ptr
     type(vci_callback_record_t) :: record     !< the last failing TASK and its IERR
+    !> What the routine receives for Q and V (sized N at VCINEW): copies, so that a routine that
+    !> writes its inputs changes nothing of the library's (see call_task)
+    real(dp), allocatable :: q(:), v(:)
   end type legacy_routine_t
 
   !> A discrete model (L_d) made of the routine.
@@ -178,13 +181,19 @@ contains
     logical, intent(out) :: declined
     real(dp), pointer, contiguous :: rp(:)
     integer, pointer, contiguous :: ip(:)
-    integer :: ierr
+    integer :: ierr, task_c, n_c, m_c, ng_c
+    real(dp) :: h_c
     character(len=48) :: name
     call c_f_pointer(r%rpar, rp, [1])
     call c_f_pointer(r%ipar, ip, [1])
     ierr = 0
     out(1:nout) = 0.0_dp   ! defined even where a failing routine left it unwritten
-    call r%fn(task, n, m, ng, q, v, h, out(1), rp, ip, ierr)   ! out(1): sequence association
+    ! A Fortran 77 routine gets every argument by reference and may write any of them: it gets
+    ! copies of what it must not change (TASK, N, M, NG, Q, V, H), never the library's own
+    ! variables (the model's N, the scheme's H, a Newton iterate) or a constant
+    task_c = task; n_c = n; m_c = m; ng_c = ng; h_c = h
+    r%q(1:n) = q(1:n); r%v(1:n) = v(1:n)
+    call r%fn(task_c, n_c, m_c, ng_c, r%q, r%v, h_c, out(1), rp, ip, ierr)   ! out(1): sequence association
     declined = ierr == IERR_NOT_PROVIDED
     if (declined) then
       write (name, '(a,i0,a)') 'MODEL with TASK = ', task, ' (not provided)'
@@ -457,6 +466,13 @@ contains
     routine%fn => fn
     routine%iopt = iopt
     routine%rpar = rpar; routine%ipar = ipar
+    if (vci_size_problem(n, m, ng) == '') then
+      allocate (routine%q(n), routine%v(n), stat=stat)
+      if (stat /= 0) then
+        global_message = 'VCINEW: cannot allocate the copies of Q and V (out of memory)'
+        stat = VCI_ERR_MEMORY; return
+      end if
+    end if
     if (.not. allocated(slots)) then
       allocate (slots(4), stat=stat)
       if (stat /= 0) then

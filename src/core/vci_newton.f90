@@ -43,11 +43,15 @@ module vci_newton
   !> the line search is backed off from, unless the system sets `unrecoverable` (a callback's
   !> negative return): then the solve ends at once with that status.
   type, abstract, public :: vci_system_t
-    logical :: unrecoverable = .false.
+    logical :: unrecoverable = .false.  !< set by the residual: its failure ends the solve at once
   contains
+    !> r = R(x) and the size of each row's terms (interface residual_iface).
     procedure(residual_iface), deferred :: residual
+    !> jac = dR/dx (interface jacobian_iface).
     procedure(jacobian_iface), deferred :: jacobian
+    !> May the line search try x? (default: always)
     procedure :: admissible => always_admissible
+    !> A nonzero key names a family of systems whose Jacobians may share LU factors (default 0: none).
     procedure :: reuse_key => never_reuse
   end type vci_system_t
 
@@ -73,17 +77,18 @@ module vci_newton
   !> Outcome of one solve.
   type, public :: vci_newton_result_t
     integer :: status = VCI_OK         !< VCI_OK, VCI_ERR_NEWTON, or the evaluation's own status
-    integer :: reason = NEWTON_CONVERGED
+    integer :: reason = NEWTON_CONVERGED  !< NEWTON_CONVERGED or why not (NEWTON_*)
     integer :: iterations = 0          !< Jacobian evaluations + polishing step
     logical :: used_fallback = .false. !< the least-squares solve was needed
     real(dp) :: scaled_residual = 0.0_dp  !< max_i |r_i| / (atol + rtol scale_i) at the end
   end type vci_newton_result_t
 
+  !> Damped Newton's method on LAPACK: solves a vci_system_t; settings, workspace and counters.
   type, public :: vci_newton_t
     real(dp) :: atol = 0.0_dp          !< absolute floor of the per-row tolerance
     real(dp) :: rtol = 1.0e-12_dp      !< tolerance relative to the size of each row's terms
-    integer :: max_iterations = 30
-    integer :: max_backtracks = 12
+    integer :: max_iterations = 30     !< Jacobian evaluations per solve
+    integer :: max_backtracks = 12     !< halvings of the step in the line search
     logical :: polish = .true.         !< one extra step with the last factorisation: ~ machine precision
     !> Systems of at most this many unknowns are factorised by the in-line LU below (partial
     !> pivoting, the same elimination as LAPACK's unblocked dgetf2) instead of dgetrf/dgetrs: for a
@@ -95,19 +100,26 @@ module vci_newton
     !> those factors, and evaluates and factorises a new Jacobian only when a chord step contracts
     !> the scaled residual by less than reuse_contraction (or fails). Huge(1): never.
     integer :: reuse_min = vci_large_system
-    real(dp) :: reuse_contraction = 0.25_dp
+    real(dp) :: reuse_contraction = 0.25_dp  !< a chord step must contract the scaled residual by this
     integer(i8) :: factorisations = 0     !< LU factorisations of Newton matrices so far
     logical, private :: have_lu = .false.
     integer, private :: lu_n = 0
     real(dp), private :: lu_key = 0.0_dp
-    integer :: capacity = 0
+    integer :: capacity = 0               !< unknowns the workspace is sized for (reserve)
     real(dp), allocatable, private :: jac(:, :), lu(:, :), r(:), sc(:), dx(:), xt(:), rt(:), sct(:)
     real(dp), allocatable, private :: sv(:), work(:), rw(:)
     integer, allocatable, private :: ipiv(:), iwork(:)
   contains
+    !> Allocate workspace for systems of up to nmax unknowns (call once, outside the step loop).
     procedure :: reserve
+    procedure :: forget_factors
+    procedure :: kept_factors
+    procedure :: keep_factors
+    !> Solve sys%residual(x) = 0 for x(1:n), starting from the given x.
     procedure :: solve
+    !> Solve the small dense system a x = b in place (b becomes x), with the solver's workspace.
     procedure :: linear_solve
+    !> After a solve that failed on convergence: the row with the largest scaled residual.
     procedure :: worst_row
   end type vci_newton_t
 
@@ -136,10 +148,7 @@ contains
     integer :: iq(1), rank, info, lwork, liwork, nlvl, st
     if (present(stat)) stat = VCI_OK
     if (self%capacity >= nmax) return
-    self%capacity = 0
-    if (allocated(self%jac)) deallocate (self%jac, self%lu, self%r, self%sc, self%dx, self%xt, &
-                                         self%rt, self%sct, self%sv, self%ipiv, self%rw)
-    if (allocated(self%work)) deallocate (self%work, self%iwork)
+    call release(self)
     allocate (self%jac(nmax, nmax), self%lu(nmax, nmax), self%r(nmax), self%sc(nmax), self%dx(nmax), &
               self%xt(nmax), self%rt(nmax), self%sct(nmax), self%sv(nmax), self%ipiv(nmax), self%rw(nmax), stat=st)
     if (st == 0) then
@@ -150,13 +159,80 @@ contains
       allocate (self%work(lwork), self%iwork(liwork), stat=st)
     end if
     if (st /= 0) then
-      if (allocated(self%jac)) deallocate (self%jac, self%lu, self%r, self%sc, self%dx, self%xt, &
-                                           self%rt, self%sct, self%sv, self%ipiv, self%rw)
+      call release(self)       ! a multi-object allocate may fail part-way: free what it got
       if (present(stat)) stat = VCI_ERR_MEMORY
       return
     end if
     self%capacity = nmax
   end subroutine reserve
+
+  !> Drop the factors kept for simplified Newton: the next solve of a large system starts with a
+  !> new Jacobian, as the first solve after reserve does. The driver calls it at the points a run
+  !> may be continued from (docs/DESIGN.md, "Restart bit for bit"), so that a run continued there
+  !> and one that went through it solve the same systems from the same factors.
+  subroutine forget_factors(self)
+    class(vci_newton_t), intent(inout) :: self
+    self%have_lu = .false.
+  end subroutine forget_factors
+
+  !> The factors kept for simplified Newton, for a checkpoint: nf unknowns (0: none kept), the
+  !> family's key, the row weights and the LU factors with their pivots (copies; stat /= 0 when
+  !> they cannot be allocated, then nf = 0).
+  subroutine kept_factors(self, nf, key, rw, lu, ipiv, stat)
+    class(vci_newton_t), intent(in) :: self
+    integer, intent(out) :: nf
+    real(dp), intent(out) :: key
+    real(dp), allocatable, intent(out) :: rw(:), lu(:, :)
+    integer, allocatable, intent(out) :: ipiv(:)
+    integer, intent(out) :: stat
+    nf = 0; key = 0.0_dp; stat = VCI_OK
+    if (.not. self%have_lu) return
+    allocate (rw(self%lu_n), lu(self%lu_n, self%lu_n), ipiv(self%lu_n), stat=stat)
+    if (stat /= 0) then
+      stat = VCI_ERR_MEMORY; return
+    end if
+    nf = self%lu_n; key = self%lu_key
+    rw = self%rw(1:nf); lu = self%lu(1:nf, 1:nf); ipiv = self%ipiv(1:nf)
+  end subroutine kept_factors
+
+  !> Take factors from a checkpoint (kept_factors of the same system sizes): the next solve of
+  !> the family `key` starts with chord steps on them, as the run that wrote them would have.
+  !> Ignored (no factors kept) when they do not fit the workspace.
+  subroutine keep_factors(self, nf, key, rw, lu, ipiv)
+    class(vci_newton_t), intent(inout) :: self
+    integer, intent(in) :: nf
+    real(dp), intent(in) :: key, rw(:), lu(:, :)
+    integer, intent(in) :: ipiv(:)
+    self%have_lu = .false.
+    if (nf < 1 .or. nf > self%capacity .or. key == 0.0_dp) return
+    if (size(rw) /= nf .or. size(lu, 1) /= nf .or. size(lu, 2) /= nf .or. size(ipiv) /= nf) return
+    if (any(ipiv < 1) .or. any(ipiv > nf)) return
+    if (.not. (all_finite(rw) .and. all_finite(lu))) return     ! (from a file: nothing non-finite to LAPACK)
+    self%rw(1:nf) = rw; self%lu(1:nf, 1:nf) = lu; self%ipiv(1:nf) = ipiv
+    self%lu_n = nf; self%lu_key = key
+    self%have_lu = .true.
+  end subroutine keep_factors
+
+  !> No workspace and no kept factors (each array freed on its own: after an allocate that failed
+  !> part-way some are allocated and some not).
+  subroutine release(self)
+    type(vci_newton_t), intent(inout) :: self
+    if (allocated(self%jac)) deallocate (self%jac)
+    if (allocated(self%lu)) deallocate (self%lu)
+    if (allocated(self%r)) deallocate (self%r)
+    if (allocated(self%sc)) deallocate (self%sc)
+    if (allocated(self%dx)) deallocate (self%dx)
+    if (allocated(self%xt)) deallocate (self%xt)
+    if (allocated(self%rt)) deallocate (self%rt)
+    if (allocated(self%sct)) deallocate (self%sct)
+    if (allocated(self%sv)) deallocate (self%sv)
+    if (allocated(self%ipiv)) deallocate (self%ipiv)
+    if (allocated(self%rw)) deallocate (self%rw)
+    if (allocated(self%work)) deallocate (self%work)
+    if (allocated(self%iwork)) deallocate (self%iwork)
+    self%capacity = 0
+    self%have_lu = .false.
+  end subroutine release
 
   !> Solve sys%residual(x) = 0 for x(1:n), starting from the given x. On failure x holds the best
   !> iterate found and res says why.

@@ -3,7 +3,7 @@ module vci_status
   implicit none
   private
 
-  integer, parameter, public :: VCI_OK = 0
+  integer, parameter, public :: VCI_OK = 0                    !< success
   integer, parameter, public :: VCI_ERR_ARGUMENT = 1          !< bad input from the caller
   integer, parameter, public :: VCI_ERR_CALLBACK = 2          !< a user callback reported failure
   integer, parameter, public :: VCI_ERR_NONFINITE = 3         !< NaN or Inf produced by a callback or a solve

@@ -25,11 +25,13 @@ module vci_ensemble
 
   !> How the table's second array is read: the second configuration of the paper's initial pair
   !> (q0 at t0, q1 at t0 + h) or the momentum p0 at t0.
-  integer, parameter, public :: VCI_START_PAIR = 0, VCI_START_MOMENTUM = 1
+  integer, parameter, public :: VCI_START_PAIR = 0      !< v0 is q1, at t0 + h (the paper's initial pair)
+  integer, parameter, public :: VCI_START_MOMENTUM = 1  !< v0 is p0, at t0
   !> Status of a member that has not (yet) been run: the fill value of the file's status.
   integer, parameter, public :: VCI_MEMBER_NOT_RUN = -1
   !> Which energy a member's energy_start/energy_end are.
-  integer, parameter, public :: VCI_ENERGY_DISCRETE = 0, VCI_ENERGY_HAMILTONIAN = 1
+  integer, parameter, public :: VCI_ENERGY_DISCRETE = 0     !< E_d of the first and last steps
+  integer, parameter, public :: VCI_ENERGY_HAMILTONIAN = 1  !< H(q, p) (the model has energy)
 
   !> Builds the model of one member. `build` must allocate a new, independent model (no pointer to
   !> mutable state shared with other members): it is called concurrently from several threads, so
@@ -37,10 +39,12 @@ module vci_ensemble
   !> without parameters). Set `stat` nonzero (or leave `model` unallocated) to report a failure.
   type, abstract, public :: vci_model_factory_t
   contains
+    !> Allocate the model of member `member` from its parameters `params` (interface factory_build).
     procedure(factory_build), deferred :: build
   end type vci_model_factory_t
 
   abstract interface
+    !> Allocate in `model` a new model for member `member` with parameters `params`; stat /= 0 on failure.
     subroutine factory_build(self, member, params, model, stat)
       import :: vci_model_factory_t, vci_model_t, dp
       class(vci_model_factory_t), intent(in) :: self
@@ -55,8 +59,9 @@ module vci_ensemble
   !> vary parameters, extend vci_model_factory_t). The copy is `allocate(source=)`, so the prototype
   !> must not hold pointers to mutable state.
   type, extends(vci_model_factory_t), public :: vci_prototype_factory_t
-    class(vci_model_t), allocatable :: prototype
+    class(vci_model_t), allocatable :: prototype  !< the model every member gets a deep copy of
   contains
+    !> A deep copy of the prototype (`allocate(source=)`), whatever the member's parameters.
     procedure :: build => prototype_build
   end type vci_prototype_factory_t
 
@@ -65,8 +70,9 @@ module vci_ensemble
     real(dp) :: h = 0.0_dp                 !< step length
     integer(i8) :: nsteps = 0_i8           !< steps per member
     integer :: direction = 1               !< +1 forward, -1 backward
-    integer :: start_kind = VCI_START_PAIR
-    real(dp) :: atol = -1.0_dp, rtol = -1.0_dp  !< Newton tolerances (set_tolerances) when >= 0
+    integer :: start_kind = VCI_START_PAIR  !< VCI_START_PAIR or VCI_START_MOMENTUM: what the table's v0 is
+    real(dp) :: atol = -1.0_dp             !< Newton's absolute tolerance (set_tolerances) when >= 0
+    real(dp) :: rtol = -1.0_dp             !< Newton's relative tolerance (set_tolerances) when >= 0
     integer :: max_iterations = 0               !< Newton iteration cap when > 0
     integer :: impact_energy = -1          !< VCI_IMPACT_DISCRETE or VCI_IMPACT_HAMILTONIAN when >= 0
     integer :: max_impacts_per_step = 0    !< set_max_impacts when > 0
@@ -89,19 +95,29 @@ module vci_ensemble
   !> Results of members first .. first + count - 1, one column (last index) per member.
   !> Values that do not exist are NaN (times, states, energies) or 0 (walls).
   type, public :: vci_ensemble_results_t
-    integer :: first = 1, count = 0         !< global index of the first member held; members held
-    integer :: n = 0, impact_cap = 0, samples = 0
+    integer :: first = 1                    !< global index of the first member held
+    integer :: count = 0                    !< members held
+    integer :: n = 0                        !< configuration size
+    integer :: impact_cap = 0               !< impact times kept per member
+    integer :: samples = 0                  !< states kept per member (trajectories)
     integer, allocatable :: status(:)                       !< VCI_OK, VCI_ERR_*, or VCI_MEMBER_NOT_RUN
     character(len=VCI_MSG_LEN), allocatable :: message(:)   !< why a member failed ('' when it did not)
-    real(dp), allocatable :: t(:), q(:, :), p(:, :)         !< last accepted state
-    integer(i8), allocatable :: steps(:), impacts(:), newton_iterations(:)
+    real(dp), allocatable :: t(:)                           !< time of the last accepted state
+    real(dp), allocatable :: q(:, :)                        !< (n, count) configuration of the last accepted state
+    real(dp), allocatable :: p(:, :)                        !< (n, count) momentum of the last accepted state
+    integer(i8), allocatable :: steps(:)                    !< steps taken
+    integer(i8), allocatable :: impacts(:)                  !< impacts found (all of them, beyond impact_cap)
+    integer(i8), allocatable :: newton_iterations(:)        !< Newton iterations
     real(dp), allocatable :: impact_t(:, :)                 !< (impact_cap, count)
     integer, allocatable :: impact_gap(:, :)                !< (impact_cap, count)
     integer, allocatable :: energy_kind(:)                  !< VCI_ENERGY_DISCRETE or VCI_ENERGY_HAMILTONIAN
-    real(dp), allocatable :: energy_start(:), energy_end(:), energy_change(:)
+    real(dp), allocatable :: energy_start(:)                !< the energy (energy_kind) at the start
+    real(dp), allocatable :: energy_end(:)                  !< the energy at the end
+    real(dp), allocatable :: energy_change(:)               !< energy_end - energy_start
     integer, allocatable :: traj_count(:)                   !< samples kept (<= samples)
     real(dp), allocatable :: traj_t(:, :)                   !< (samples, count)
-    real(dp), allocatable :: traj_q(:, :, :), traj_p(:, :, :)  !< (n, samples, count)
+    real(dp), allocatable :: traj_q(:, :, :)                !< (n, samples, count) configurations kept
+    real(dp), allocatable :: traj_p(:, :, :)                !< (n, samples, count) momenta kept
     integer, allocatable :: thread(:)                       !< OpenMP thread that ran the member (not reproducible)
     real(dp), allocatable :: seconds(:)                     !< wall time of the member (not reproducible)
   end type vci_ensemble_results_t

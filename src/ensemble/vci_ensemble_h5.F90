@@ -58,9 +58,13 @@ module vci_ensemble_h5
   !> An ensemble file being written.
   type, public :: vci_ensemble_file_t
     character(len=VCI_MSG_LEN) :: message = ''   !< what went wrong, naming the file
-    character(len=:), allocatable :: path
-    logical :: is_open = .false.
-    integer :: n_members = 0, n = 0, n_params = 0, impact_cap = 0, samples = 0
+    character(len=:), allocatable :: path         !< the file
+    logical :: is_open = .false.                  !< a file is open
+    integer :: n_members = 0                      !< members of the ensemble
+    integer :: n = 0                              !< configuration size
+    integer :: n_params = 0                       !< parameters per member
+    integer :: impact_cap = 0                     !< impact times kept per member
+    integer :: samples = 0                        !< states kept per member
     integer(hid_t), private :: file = -1
     integer(hid_t), private :: d(N_DSETS) = -1
     logical, private :: discarded = .false.   !< a write failed: nothing more reaches the file
@@ -68,10 +72,15 @@ module vci_ensemble_h5
     type(MPI_Comm), private :: comm
 #endif
   contains
+    !> Create PATH for the ensemble (every dataset allocated, "not run"); under MPI collectively over comm.
     procedure :: create => f_create
+    !> Write the starts and parameters of a range of members.
     procedure :: write_table => f_write_table
+    !> Write a block of results (members results%first onwards).
     procedure :: write_results => f_write_results
+    !> Record how many members ran and failed, mark the file complete when all ran, and close it.
     procedure :: close => f_close
+    !> Stop writing and close, keeping every block of members written before (collective under MPI).
     procedure :: abandon => f_abandon
   end type vci_ensemble_file_t
 

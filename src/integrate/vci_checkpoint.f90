@@ -16,28 +16,45 @@ module vci_checkpoint
   !> Scalars at the head of the record: step, t0, h, step_energy, arriving_energy, arriving_direction.
   integer, parameter :: head = 6
 
+  !> The state a run continues from bit for bit: the driver's `checkpoint()` gives it, outputs store
+  !> it (`to_record`), `restore` starts from it.
   type, public :: vci_checkpoint_t
-    integer :: version = VCI_CHECKPOINT_VERSION
+    integer :: version = VCI_CHECKPOINT_VERSION  !< layout version (VCI_CHECKPOINT_VERSION when made here)
     real(dp) :: t0 = 0.0_dp                 !< time of index 0: t = t0 + step * h without drift
     real(dp) :: h = 0.0_dp                  !< step length the run used (a restore must match it)
     integer(i8) :: step = 0_i8              !< index of the state
-    real(dp), allocatable :: q(:), p(:)     !< configuration and momentum
+    real(dp), allocatable :: q(:)           !< configuration
+    real(dp), allocatable :: p(:)           !< momentum
     real(dp), allocatable :: lambda(:)      !< multipliers of the last step (size m)
     real(dp), allocatable :: velocity(:)    !< forward-time velocity of the last sub-step: Newton's first guess
     real(dp) :: step_energy = 0.0_dp        !< E_d of the last step (NaN before the first)
     real(dp) :: arriving_energy = 0.0_dp    !< E_d of the sub-step that arrived at q (a start on a wall needs it)
     integer :: arriving_direction = 0       !< direction in which arriving_energy is known (0: unknown)
-    !> The predictor's history (version 2): velocity and multipliers of the steps before the last,
-    !> from |predictor_depth| consecutive regular steps in direction sign(predictor_depth)
-    real(dp), allocatable :: velocity_before(:), lambda_before(:), lambda_before2(:)
-    integer :: predictor_depth = 0
+    ! The predictor's history (version 2): velocity and multipliers of the steps before the last,
+    ! from |predictor_depth| consecutive regular steps in direction sign(predictor_depth)
+    real(dp), allocatable :: velocity_before(:)  !< (predictor) velocity of the step before the last
+    real(dp), allocatable :: lambda_before(:)    !< (predictor) multipliers of the step before the last
+    real(dp), allocatable :: lambda_before2(:)   !< (predictor) multipliers of the step before that
+    integer :: predictor_depth = 0               !< (predictor) signed count of consecutive regular steps
     !> (version 3) what compensated summation carries beyond q's rounding (continuous models'
     !> left/midpoint; zero otherwise)
     real(dp), allocatable :: position_lo(:)
+    !> Newton's factors kept for simplified Newton (systems of 16+ unknowns reuse them across
+    !> solves): factors_n unknowns (0: none), the key of the family of systems they serve, row
+    !> weights, LU and pivots. Not in the flat record (their size is not n's): factors_record.
+    integer :: factors_n = 0
+    real(dp) :: factors_key = 0.0_dp
+    real(dp), allocatable :: factors_rw(:), factors_lu(:, :)
+    integer, allocatable :: factors_pivots(:)
   contains
+    !> the checkpoint as one float64 vector (what outputs store)
     procedure :: to_record
+    !> rebuild from such a vector of a given layout version
     procedure :: from_record
-    procedure :: time
+    procedure :: factors_record
+    procedure :: from_factors_record
+    !> the time of the checkpoint's state, t0 + step h
+    procedure :: time => checkpoint_time
   end type vci_checkpoint_t
 
   public :: vci_checkpoint_record_size, vci_checkpoint_from_state
@@ -51,10 +68,10 @@ contains
   end function vci_checkpoint_record_size
 
   !> The time of the checkpoint's state.
-  pure real(dp) function time(self)
+  pure real(dp) function checkpoint_time(self)
     class(vci_checkpoint_t), intent(in) :: self
-    time = self%t0 + real(self%step, dp) * self%h
-  end function time
+    checkpoint_time = self%t0 + real(self%step, dp) * self%h
+  end function checkpoint_time
 
   !> The checkpoint as one float64 vector [step, t0, h, step_energy, arriving_energy,
   !> arriving_direction, q(n), p(n), velocity(n), lambda(m), then (version 2) velocity_before(n),
@@ -91,12 +108,58 @@ contains
     stat = VCI_OK
   end subroutine from_record
 
+  !> Newton's kept factors as one float64 vector [step, factors_n, factors_key, rw(nf), pivots(nf),
+  !> lu(nf*nf)] (the step ties it to its checkpoint; integers are exact in float64).
+  pure function factors_record(self) result(rec)
+    class(vci_checkpoint_t), intent(in) :: self
+    real(dp), allocatable :: rec(:)
+    if (self%factors_n > 0) then
+      rec = [real(self%step, dp), real(self%factors_n, dp), self%factors_key, self%factors_rw, &
+             real(self%factors_pivots, dp), reshape(self%factors_lu, [self%factors_n**2])]
+    else
+      rec = [real(self%step, dp), 0.0_dp, 0.0_dp]
+    end if
+  end function factors_record
+
+  !> Take the factors from a record of factors_record, if it belongs to this checkpoint's step and
+  !> is well formed; else none (a restart is then correct, not bitwise). stat: VCI_ERR_ARGUMENT when
+  !> the record was refused.
+  subroutine from_factors_record(self, rec, stat)
+    class(vci_checkpoint_t), intent(inout) :: self
+    real(dp), intent(in) :: rec(:)
+    integer, intent(out) :: stat
+    integer :: nf, st
+    self%factors_n = 0; self%factors_key = 0.0_dp
+    stat = VCI_ERR_ARGUMENT
+    if (size(rec) < 3) return
+    if (rec(1) /= real(self%step, dp) .or. .not. (rec(2) >= 0.0_dp .and. rec(2) <= 46340.0_dp)) return
+    if (rec(2) /= aint(rec(2))) return
+    nf = int(rec(2))
+    if (size(rec, kind=i8) /= 3_i8 + 2_i8 * nf + int(nf, i8)**2) return
+    if (nf == 0) then
+      stat = VCI_OK; return
+    end if
+    if (any(rec(4 + nf:3 + 2 * nf) /= aint(rec(4 + nf:3 + 2 * nf)))) return
+    if (any(rec(4 + nf:3 + 2 * nf) < 1.0_dp) .or. any(rec(4 + nf:3 + 2 * nf) > real(nf, dp))) return
+    allocate (self%factors_rw(nf), self%factors_pivots(nf), self%factors_lu(nf, nf), stat=st)
+    if (st /= 0) return
+    self%factors_key = rec(3)
+    self%factors_rw = rec(4:3 + nf)
+    self%factors_pivots = nint(rec(4 + nf:3 + 2 * nf))
+    self%factors_lu = reshape(rec(4 + 2 * nf:), [nf, nf])
+    self%factors_n = nf
+    stat = VCI_OK
+  end subroutine from_factors_record
+
   !> A checkpoint that knows only a state (t, q, p, lambda) and the step length, as read from an
   !> output that stores no checkpoint: index 0 at t, no solver memory (like init_from_momentum).
   function vci_checkpoint_from_state(t, h, q, p, lambda) result(cp)
     real(dp), intent(in) :: t, h, q(:), p(:), lambda(:)
     type(vci_checkpoint_t) :: cp
     cp%t0 = t; cp%h = h; cp%step = 0_i8
+    ! allocated before the copies: assigning to the unallocated components of a function result made
+    ! gfortran 12 -O2 warn that their descriptors are read uninitialised (-Wuninitialized)
+    allocate (cp%q(size(q)), cp%p(size(p)), cp%lambda(size(lambda)))
     cp%q = q; cp%p = p; cp%lambda = lambda
     allocate (cp%velocity(size(q)), cp%velocity_before(size(q)), cp%lambda_before(size(lambda)), &
               cp%lambda_before2(size(lambda)))

@@ -40,13 +40,19 @@ module vci_integrator
 
   !> Counters over the integrator's life.
   type, public :: vci_stats_t
-    integer(i8) :: steps = 0, impacts = 0, newton_solves = 0, newton_iterations = 0, fallbacks = 0
+    integer(i8) :: steps = 0              !< steps taken
+    integer(i8) :: impacts = 0            !< impacts resolved
+    integer(i8) :: newton_solves = 0      !< Newton solves
+    integer(i8) :: newton_iterations = 0  !< their iterations
+    integer(i8) :: fallbacks = 0          !< least-squares fallbacks (singular Newton matrices)
     integer(i8) :: factorisations = 0   !< LU factorisations of Newton matrices
     integer(i8) :: fused_solves = 0     !< regular sub-steps solved by the scheme's fused routine
     !> impacts where no impulse matches the discrete energy (a graze): H(q, p) kept instead
     integer(i8) :: energy_fallbacks = 0
   end type vci_stats_t
 
+  !> The driver: create it for a model and a step length, choose settings, initialise, then step or
+  !> integrate; its state is read through the procedures below (module doc).
   type, public :: vci_integrator_t
     private
     class(vci_model_base_t), pointer :: model => null()   !< the user's model (discrete or continuous)
@@ -55,11 +61,16 @@ module vci_integrator
     !> owned: the left/midpoint L_d of lag. Allocatable, not a pointer, so that it is freed with the
     !> integrator (the scheme points into it: do not copy a created integrator by assignment).
     type(vci_retraction_model_t), allocatable :: retraction
-    logical :: lag_hessians = .false., lag_energy = .false.  !< optional procedures lag supplies
+    logical :: lag_hessians = .false.  !< lag supplies its Hessians
+    logical :: lag_energy = .false.    !< lag supplies its energy H(q, p)
     integer :: scheme_id = VCI_SCHEME_DISCRETE  !< VCI_SCHEME_*; set_scheme chooses it for a continuous model
     integer :: n_stages = 0                     !< s of the lobatto scheme
     type(vci_stepper_t) :: stepper              !< holds the scheme and the one settings object
-    logical :: created = .false., initialized = .false.
+    logical :: created = .false.      !< create has succeeded
+    logical :: initialized = .false.  !< there is a state to step from
+    !> why the last set_scheme failed (blank: the scheme is usable); until a set_scheme succeeds
+    !> the stepper has no complete workspace, and initialisation refuses with VCI_ERR_STATE
+    character(len=VCI_MSG_LEN) :: scheme_failure = ''
     !> the state and the history the next step needs (t = t0 + k h, q, p, lambda, E_d, the
     !> predictor's and the energy condition's memory): handed to the stepper whole
     type(vci_state_t) :: state
@@ -67,44 +78,79 @@ module vci_integrator
     ! outcome
     integer :: last_status = VCI_OK             !< status of the last call
     character(len=VCI_MSG_LEN) :: last_message = ''  !< what went wrong in the last call, naming step and time
-    integer(i8) :: steps_taken = 0_i8, impacts_found = 0_i8
+    integer(i8) :: steps_taken = 0_i8    !< steps over the integrator's life
+    integer(i8) :: impacts_found = 0_i8  !< impacts over the integrator's life
   contains
     procedure, private :: create_discrete, create_continuous
+    !> Bind a discrete model (L_d) and a step length.
     generic :: create => create_discrete, create_continuous
+    !> Choose the scheme of a continuous model (VCI_SCHEME_LEFT, _MIDPOINT, _LOBATTO with s stages); resets the state.
     procedure :: set_scheme
+    !> Newton tolerances: |r_i| <= atol + rtol * (size of row i's terms); iteration cap.
     procedure :: set_tolerances
+    !> Impact energy condition: VCI_IMPACT_DISCRETE (the paper's, default) or VCI_IMPACT_HAMILTONIAN.
     procedure :: set_impact_energy
+    !> Bound on impacts resolved inside one step (default 16).
     procedure :: set_max_impacts
+    !> Start from q0 at t0 and q1 at t0 + h (the paper's initial pair).
     procedure :: init_from_pair
+    !> Start from (q0, p0) at t0; step index 0.
     procedure :: init_from_momentum
+    !> One step in direction +1 (forward, (+) scheme) or -1 (backward, (-) scheme).
     procedure :: step
+    !> nsteps steps in one direction, reported to the observer (on_start, on_impact, on_step, on_finish).
     procedure :: integrate
+    !> What observers are told at the start of a run.
     procedure :: run_info
+    !> The current state and solver memory, for restarts that continue bit for bit.
     procedure :: checkpoint
+    !> Continue from a checkpoint taken with the same model and step length.
     procedure :: restore
     ! reading the state and the outcome
+    !> Time of the current state, t0 + k h.
     procedure :: time => current_time
+    !> Index k of the current state.
     procedure :: step_index
+    !> The step length h.
     procedure :: step_length
+    !> q of the current state (size n).
     procedure :: configuration
+    !> p of the current state (size n).
     procedure :: momentum
+    !> The multipliers lambda of the last step (size m).
     procedure :: multipliers
+    !> E_d of the last step (of its last sub-step when it had impacts); NaN before the first step from (q, p).
     procedure :: energy
+    !> Number of impacts of the last step.
     procedure :: impact_count
+    !> Impact i (1 .. impact_count()) of the last step (assign the result: `imp = integ%impact(i)`).
     procedure :: impact
+    !> Counters over the integrator's life (since create).
     procedure :: statistics
+    !> Linear-algebra paths of Newton (docs/DESIGN.md §6): in-line LU, factor reuse, the fused regular solve.
     procedure :: set_solver_paths
+    !> Status of the last call (VCI_OK or a VCI_ERR_*).
     procedure :: status
+    !> What went wrong in the last call, naming the step, the time and the cause ('' after success).
     procedure :: message
+    !> message() with trailing blanks, as a fixed-length result (for the boundary layers, thread-safe).
     procedure :: message_text
+    !> The settings in force (tolerances, impact bound, impact condition).
     procedure :: settings
+    !> The scheme (VCI_SCHEME_*) and its number of stages.
     procedure :: scheme
+    !> The lobatto scheme's number of stages s (1 for the others).
     procedure :: stages
+    !> Has the integrator a state to step from (after init_from_pair, init_from_momentum or restore)?
     procedure :: is_initialized
+    !> Sizes of the bound model: n (configuration) and m (constraints); 0 before create.
     procedure :: n_coordinates
+    !> m, the number of constraints of the bound model.
     procedure :: n_constraints
     ! for the boundary layers (C ABI, legacy entry), which detect failures of their own
+    !> Record a failure that a boundary layer detected on a call into this integrator (status and message).
     procedure :: report_failure
+    !> The state is no longer valid (an initialisation that failed before reaching this integrator).
     procedure :: forget_state
   end type vci_integrator_t
 
@@ -121,7 +167,7 @@ contains
     self%discrete => model
     self%lag => null()
     self%scheme_id = VCI_SCHEME_DISCRETE; self%n_stages = 0
-    call build_scheme(self, stat)
+    call build_scheme(self, 'create', stat)
   end subroutine create_discrete
 
   !> Bind a continuous model (L) and a step length; the scheme is `midpoint` until set_scheme
@@ -164,7 +210,7 @@ contains
     call model%clear_not_provided(); s = 0; call model%energy(q, v, e, s)
     self%lag_energy = .not. model%answered_not_provided()
     self%scheme_id = VCI_SCHEME_MIDPOINT; self%n_stages = 1
-    call build_scheme(self, stat)
+    call build_scheme(self, 'create', stat)
   end subroutine create_continuous
 
   !> Checks and state common to both kinds of model.
@@ -191,13 +237,14 @@ contains
     self%state%h = h
     call self%state%reserve(model%n, model%m, stat)
     if (stat /= VCI_OK) then
-      call out_of_memory(self, model, stat); return
+      call out_of_memory(self, 'create', model, stat); return
     end if
   end subroutine bind_sizes
 
   !> Build the scheme object for the current model and scheme choice and hand it to the stepper.
-  subroutine build_scheme(self, stat)
+  subroutine build_scheme(self, who, stat)
     class(vci_integrator_t), target, intent(inout) :: self
+    character(len=*), intent(in) :: who     !< the caller's name, for the message
     integer, intent(out) :: stat
     class(vci_scheme_t), allocatable :: sch
     integer :: rule
@@ -238,8 +285,8 @@ contains
         stat = VCI_ERR_MEMORY
       end if
       if (stat /= VCI_OK .and. stat /= VCI_ERR_MEMORY) then
-        write (self%last_message, '(a,i0,a)') 'create: could not set up the lobatto scheme with s = ', self%n_stages, ''
-        call finish(self, VCI_ERR_ARGUMENT, stat); return
+        write (self%last_message, '(a,i0,a)') who//': could not set up the lobatto scheme with s = ', self%n_stages, ''
+        call scheme_failed(self, VCI_ERR_ARGUMENT, stat); return
       end if
     end select
     if (stat == VCI_OK) call self%stepper%setup(sch, stat)
@@ -249,10 +296,12 @@ contains
     self%impacts%count = 0
     if (stat == VCI_OK) call self%impacts%reserve(min(settings%max_impacts_per_step, 16), self%model%n, stat)
     if (stat /= VCI_OK) then
-      call out_of_memory(self, self%model, stat); return
+      call out_of_memory(self, who, self%model, stat)
+      call scheme_failed(self, VCI_ERR_MEMORY, stat); return
     end if
     self%created = .true.
     self%initialized = .false.
+    self%scheme_failure = ''
     self%last_message = ''
     call finish(self, VCI_OK, stat)
   end subroutine build_scheme
@@ -275,6 +324,17 @@ contains
     end select
     if (stat == VCI_OK) call self%stepper%use_explicit(ex)
   end subroutine attach_composition
+
+  !> The scheme could not be built (its message is set): the integrator keeps its model but cannot
+  !> be initialised or stepped until a set_scheme succeeds (the stepper may hold part of a workspace).
+  subroutine scheme_failed(self, status, stat)
+    class(vci_integrator_t), intent(inout) :: self
+    integer, intent(in) :: status
+    integer, intent(out) :: stat
+    self%initialized = .false.
+    self%scheme_failure = self%last_message
+    call finish(self, status, stat)
+  end subroutine scheme_failed
 
   !> Choose the scheme that discretises a continuous model: VCI_SCHEME_LEFT (the paper's retraction,
   !> order 1), VCI_SCHEME_MIDPOINT (order 2, the default) or VCI_SCHEME_LOBATTO with `stages` = s in
@@ -333,7 +393,7 @@ contains
     end select
     self%scheme_id = scheme
     self%n_stages = merge(stages, 1, scheme == VCI_SCHEME_LOBATTO .or. scheme == VCI_SCHEME_COMPOSITION)
-    call build_scheme(self, stat)
+    call build_scheme(self, 'set_scheme', stat)
   end subroutine set_scheme
 
   !> A short name of a scheme identifier ('left', 'midpoint', 'lobatto', 'discrete'), blank-padded
@@ -443,6 +503,7 @@ contains
       self%last_message = 'init_from_pair: the composition scheme starts from (q0, p0): use init_from_momentum'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
+    call self%stepper%forget_factors()   ! a new run solves as a fresh integrator would
     call self%stepper%pair_momentum(q0, q1, self%state%h, self%state%p, self%state%step_energy, stat)
     if (stat /= VCI_OK) then
       self%last_message = 'init_from_pair: '//trim(self%stepper%failure_cause())
@@ -472,6 +533,7 @@ contains
     call self%state%forget_history()
     self%state%step_energy = ieee_value(1.0_dp, ieee_quiet_nan)
     self%state%arriving_direction = 0
+    call self%stepper%forget_factors()
     self%initialized = .true.
     call finish(self, VCI_OK, stat)
   end subroutine init_from_momentum
@@ -488,6 +550,11 @@ contains
     self%initialized = .false.
     if (.not. self%created) then
       self%last_message = who//': create the integrator first'
+      call finish(self, VCI_ERR_STATE, stat); return
+    end if
+    if (self%scheme_failure /= '') then
+      self%last_message = who//': no usable scheme, set_scheme must succeed first (the last one failed: '// &
+                          trim(self%scheme_failure)//')'
       call finish(self, VCI_ERR_STATE, stat); return
     end if
     n = self%model%n
@@ -761,6 +828,7 @@ contains
     cp = self%state%to_checkpoint()
     allocate (cp%position_lo(size(self%state%q)))
     call self%stepper%position_carry(self%state%q, cp%position_lo)
+    call self%stepper%factors_to_checkpoint(cp)
   end function checkpoint
 
   !> Continue from a checkpoint taken with the same model and step length.
@@ -786,6 +854,7 @@ contains
     if (allocated(cp%position_lo)) then
       if (size(cp%position_lo) == self%model%n) call self%stepper%restore_position_carry(self%state%q, cp%position_lo)
     end if
+    call self%stepper%factors_from_checkpoint(cp)
     self%initialized = .true.
     call finish(self, VCI_OK, stat)
   end subroutine restore
@@ -803,12 +872,16 @@ contains
   end function run_info
 
   !> An allocation for the model's sizes failed: VCI_ERR_MEMORY naming the sizes.
-  subroutine out_of_memory(self, model, stat)
+  subroutine out_of_memory(self, who, model, stat)
     class(vci_integrator_t), intent(inout) :: self
+    character(len=*), intent(in) :: who
     class(vci_model_base_t), intent(in) :: model
     integer, intent(out) :: stat
-    write (self%last_message, '(a,3(i0,a))') 'create: cannot allocate the workspace for n = ', model%n, ', m = ', &
-      model%m, ', n_gaps = ', model%n_gaps, ' (out of memory)'
+    character(len=40) :: scheme
+    scheme = ''
+    if (self%scheme_id == VCI_SCHEME_LOBATTO) write (scheme, '(a,i0)') ', scheme lobatto with s = ', self%n_stages
+    write (self%last_message, '(a,3(i0,a))') who//': cannot allocate the workspace for n = ', model%n, ', m = ', &
+      model%m, ', n_gaps = ', model%n_gaps, trim(scheme)//' (out of memory)'
     call finish(self, VCI_ERR_MEMORY, stat)
   end subroutine out_of_memory
 

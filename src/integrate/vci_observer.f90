@@ -14,10 +14,12 @@ module vci_observer
 
   !> What an observer learns when a run starts.
   type, public :: vci_run_info_t
-    integer :: n = 0, m = 0, n_gaps = 0
+    integer :: n = 0                    !< configuration dimension
+    integer :: m = 0                    !< number of constraints
+    integer :: n_gaps = 0               !< number of walls
     integer :: direction = 1            !< +1 forward, -1 backward
-    real(dp) :: h = 0.0_dp
-    real(dp) :: t0 = 0.0_dp
+    real(dp) :: h = 0.0_dp              !< step length
+    real(dp) :: t0 = 0.0_dp             !< time of index 0 (t = t0 + k h)
     integer(i8) :: step0 = 0_i8         !< index of the starting state
     integer :: impact_energy = 0        !< VCI_IMPACT_DISCRETE or VCI_IMPACT_HAMILTONIAN
   end type vci_run_info_t
@@ -30,7 +32,8 @@ module vci_observer
     integer :: gap = 0                  !< index j of the wall reached
     real(dp) :: impulse = 0.0_dp        !< normal impulse: p_after - p_before = impulse * grad g_j (forward time)
     real(dp), allocatable :: q(:)       !< the configuration on the wall
-    real(dp), allocatable :: p_before(:), p_after(:)  !< momenta at the wall before/after, in direction of motion
+    real(dp), allocatable :: p_before(:)  !< momentum at the wall before the impact, in the direction of motion
+    real(dp), allocatable :: p_after(:)   !< momentum at the wall after the impact, in the direction of motion
     real(dp), allocatable :: grad_g(:)  !< gradient of the gap at q
     !> The impact condition that fixed the impulse: the integrator's setting, or VCI_IMPACT_HAMILTONIAN
     !> (1) where the discrete energy condition (0) has no solution, near a graze (docs/DESIGN.md §6)
@@ -38,19 +41,28 @@ module vci_observer
     real(dp) :: energy_before = 0.0_dp  !< E_d of the arriving sub-step, or H(q, p_before) (condition 1)
     real(dp) :: energy_after = 0.0_dp   !< E_d of the leaving sub-step, or H(q, p_after) (condition 1)
     real(dp) :: leave_rate = 0.0_dp     !< grad g . (q_next - q) / sub-step: > 0, the motion leaves the wall
-    real(dp) :: stage1_residual = 0.0_dp  !< scaled residuals (<= 1 means within tolerance)
-    real(dp) :: stage2_residual = 0.0_dp
+    real(dp) :: stage1_residual = 0.0_dp  !< stage 1's scaled residual (<= 1 means within tolerance)
+    real(dp) :: stage2_residual = 0.0_dp  !< stage 2's scaled residual (<= 1 means within tolerance)
   end type vci_impact_t
 
+  !> Receives every step and impact of a run: extend it and override what you need (module doc).
   type, public :: vci_observer_t
   contains
+    !> The run starts from (t0, q, p).
     procedure :: on_start => default_on_start
+    !> An accepted step: state index `step`, time t, (q, p), multipliers lambda and the discrete energy E_d.
     procedure :: on_step => default_on_step
+    !> An impact inside the step that is about to be reported by on_step.
     procedure :: on_impact => default_on_impact
+    !> The run ended with `status` (VCI_OK or an error) and its message.
     procedure :: on_finish => default_on_finish
+    !> Does this observer store checkpoints, so that a run continues from its output bit for bit? (default: no)
     procedure :: keeps_checkpoints => default_keeps_checkpoints
+    !> Does the next report store a checkpoint? Then the driver calls on_checkpoint first (default: no).
     procedure :: wants_checkpoint => default_wants_checkpoint
+    !> The driver's checkpoint of the state the next report (on_start, on_step, on_finish) is about.
     procedure :: on_checkpoint => default_on_checkpoint
+    !> Why the last report set `stat` nonzero (a message naming the file and the cause; default: blank).
     procedure :: failure_cause => default_failure_cause
   end type vci_observer_t
 

@@ -11,18 +11,25 @@ module vci_progress
   !> What a progress report knows: steps done of this call and its total, the model time, impacts
   !> so far (all calls), wall time of this call, rate and estimated time left (-1: unknown yet).
   type, public :: vci_progress_info_t
-    integer(i8) :: steps_done = 0, steps_total = 0, impacts = 0
-    real(dp) :: t = 0.0_dp, elapsed = 0.0_dp, steps_per_second = 0.0_dp, eta = -1.0_dp
+    integer(i8) :: steps_done = 0          !< steps done in this integrate call
+    integer(i8) :: steps_total = 0         !< steps this call was asked for
+    integer(i8) :: impacts = 0             !< impacts so far (all calls)
+    real(dp) :: t = 0.0_dp                 !< model time of the current state
+    real(dp) :: elapsed = 0.0_dp           !< wall seconds of this call
+    real(dp) :: steps_per_second = 0.0_dp  !< rate so far
+    real(dp) :: eta = -1.0_dp              !< estimated wall seconds left (-1: unknown yet)
   end type vci_progress_info_t
 
   !> Extend and override report; pass it to integrate (progress=).
   type, abstract, public :: vci_progress_t
     real(dp) :: interval = 0.5_dp   !< seconds of wall time between reports (0: after every step)
   contains
+    !> Called at most once per interval and after the last step (interface report_iface).
     procedure(report_iface), deferred :: report
   end type vci_progress_t
 
   abstract interface
+    !> A progress report: `info` says where the run is; set `stop` to end the run after this step.
     subroutine report_iface(self, info, stop)
       import :: vci_progress_t, vci_progress_info_t
       class(vci_progress_t), intent(inout) :: self

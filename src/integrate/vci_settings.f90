@@ -13,12 +13,14 @@ module vci_settings
     real(dp) :: rtol = 1.0e-12_dp        !< Newton tolerance relative to the size of each row's terms
     integer :: max_iterations = 30       !< Newton iteration cap per solve
     integer :: max_impacts_per_step = 16 !< beyond this: VCI_ERR_TOO_MANY_IMPACTS (contact, chatter)
-    integer :: impact_energy = VCI_IMPACT_DISCRETE
+    integer :: impact_energy = VCI_IMPACT_DISCRETE  !< VCI_IMPACT_DISCRETE or VCI_IMPACT_HAMILTONIAN
   end type vci_settings_t
 
   !> Cumulative solver statistics.
   type, public :: vci_solver_stats_t
-    integer(i8) :: newton_solves = 0, newton_iterations = 0, fallbacks = 0
+    integer(i8) :: newton_solves = 0      !< Newton solves
+    integer(i8) :: newton_iterations = 0  !< their iterations
+    integer(i8) :: fallbacks = 0          !< least-squares fallbacks (singular Newton matrices)
     integer(i8) :: fused_solves = 0   !< of newton_solves, those the scheme's fused routine did
     integer(i8) :: energy_fallbacks = 0  !< impacts where E_d could not be matched: H kept instead
   end type vci_solver_stats_t

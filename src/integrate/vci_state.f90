@@ -49,8 +49,14 @@ contains
     class(vci_state_t), intent(inout) :: self
     integer, intent(in) :: n, m
     integer, intent(out) :: stat
-    if (allocated(self%q)) deallocate (self%q, self%p, self%lambda, self%velocity, self%velocity_before, &
-                                       self%lambda_before, self%lambda_before2)
+    ! array by array: after an allocate that failed part-way some are allocated and some not
+    if (allocated(self%q)) deallocate (self%q)
+    if (allocated(self%p)) deallocate (self%p)
+    if (allocated(self%lambda)) deallocate (self%lambda)
+    if (allocated(self%velocity)) deallocate (self%velocity)
+    if (allocated(self%velocity_before)) deallocate (self%velocity_before)
+    if (allocated(self%lambda_before)) deallocate (self%lambda_before)
+    if (allocated(self%lambda_before2)) deallocate (self%lambda_before2)
     allocate (self%q(n), self%p(n), self%lambda(m), self%velocity(n), self%velocity_before(n), &
               self%lambda_before(m), self%lambda_before2(m), stat=stat)
     if (stat /= 0) then

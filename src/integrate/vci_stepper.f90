@@ -22,6 +22,7 @@ module vci_stepper
   use vci_state, only: vci_state_t, vci_impact_buffer_t
   use vci_predictor, only: vci_predict_start
   use vci_explicit_step, only: vci_explicit_t
+  use vci_checkpoint, only: vci_checkpoint_t
   implicit none
   private
 
@@ -91,6 +92,9 @@ module vci_stepper
     procedure :: use_model_derivatives
     procedure :: position_carry
     procedure :: restore_position_carry
+    procedure :: factors_to_checkpoint
+    procedure :: factors_from_checkpoint
+    procedure :: forget_factors
     procedure :: advance
     procedure :: use_explicit
     procedure :: pair_momentum
@@ -137,15 +141,11 @@ contains
     call move_alloc(scheme, self%sys)
     self%nsub = self%sys%unknowns(KIND_SUBSTEP)
     nx = max(self%sys%unknowns(KIND_STAGE1), self%sys%unknowns(KIND_STAGE2), self%sys%unknowns(KIND_IMPULSE))
+    call release_workspace(self)
     call self%newton%reserve(nx, stat)
     if (stat /= VCI_OK) return
+    call self%newton%forget_factors()      ! another scheme's Jacobian is no chord matrix for this one
     call self%configure(self%settings)
-    if (allocated(self%x)) deallocate (self%x, self%x_stage1, self%x_saved, self%x_low, self%x_high, self%jac, &
-                                       self%rhs, self%res, self%res_scale, self%q_start, self%p_start, self%q_end, &
-                                       self%q_wall, self%p_arrive, self%p_leave, self%chord_velocity, self%q_guess, &
-                                       self%q_trial, self%gaps_start, self%gaps_end, self%gaps_trial, self%gap_grads, &
-                                       self%lambda_start, self%zero_lambda, self%constraint_impulse, self%x_try, &
-                                       self%q_new, self%p_new, self%lambda_new)
     allocate (self%x(nx), self%x_stage1(nx), self%x_saved(nx), self%x_low(nx), self%x_high(nx), self%jac(nx, nx), &
               self%rhs(nx), self%res(nx), self%res_scale(nx), self%q_start(n), self%p_start(n), self%q_end(n), &
               self%q_wall(n), self%p_arrive(n), self%p_leave(n), self%chord_velocity(n), self%q_guess(n), &
@@ -153,15 +153,41 @@ contains
               self%lambda_start(m), self%zero_lambda(m), self%constraint_impulse(m), &
               self%x_try(nx), self%q_new(n), self%p_new(n), self%lambda_new(m), stat=stat)
     if (stat /= 0) then
+      call release_workspace(self)
       stat = VCI_ERR_MEMORY; return
     end if
     self%x = 0.0_dp; self%zero_lambda = 0.0_dp
-    if (allocated(self%tie_x)) deallocate (self%tie_x, self%tie_q)
     allocate (self%tie_x(nx, 2), self%tie_q(n, 3), stat=stat)
     if (stat /= 0) then
+      call release_workspace(self)
       stat = VCI_ERR_MEMORY; return
     end if
   end subroutine setup
+
+  !> Free the step's workspace, array by array: after an allocate that failed part-way some are
+  !> allocated and some not.
+  subroutine release_workspace(self)
+    type(vci_stepper_t), intent(inout) :: self
+    call free1(self%x); call free1(self%x_stage1); call free1(self%x_saved); call free1(self%x_low)
+    call free1(self%x_high); call free2(self%jac); call free1(self%rhs); call free1(self%res)
+    call free1(self%res_scale); call free1(self%q_start); call free1(self%p_start); call free1(self%q_end)
+    call free1(self%q_wall); call free1(self%p_arrive); call free1(self%p_leave); call free1(self%chord_velocity)
+    call free1(self%q_guess); call free1(self%q_trial); call free1(self%gaps_start); call free1(self%gaps_end)
+    call free1(self%gaps_trial); call free2(self%gap_grads); call free1(self%lambda_start)
+    call free1(self%zero_lambda); call free1(self%constraint_impulse); call free1(self%x_try)
+    call free1(self%q_new); call free1(self%p_new); call free1(self%lambda_new)
+    call free2(self%tie_x); call free2(self%tie_q)
+  end subroutine release_workspace
+
+  subroutine free1(a)
+    real(dp), allocatable, intent(inout) :: a(:)
+    if (allocated(a)) deallocate (a)
+  end subroutine free1
+
+  subroutine free2(a)
+    real(dp), allocatable, intent(inout) :: a(:, :)
+    if (allocated(a)) deallocate (a)
+  end subroutine free2
 
   !> Replace the settings (validated by the driver) and hand Newton and the scheme their part.
   subroutine configure(self, settings)
@@ -229,6 +255,32 @@ contains
     real(dp), intent(in) :: q(:), lo(:)
     if (allocated(self%sys)) call self%sys%restore_position_carry(q, lo)
   end subroutine restore_position_carry
+
+  !> Newton's kept factors into a checkpoint (none when they cannot be copied: the restored run is
+  !> then correct but not bitwise the same), so that the next steps of a restored run solve from the
+  !> same factors as the uninterrupted one (docs/DESIGN.md, "Restart bit for bit").
+  subroutine factors_to_checkpoint(self, cp)
+    class(vci_stepper_t), intent(in) :: self
+    type(vci_checkpoint_t), intent(inout) :: cp
+    integer :: st
+    call self%newton%kept_factors(cp%factors_n, cp%factors_key, cp%factors_rw, cp%factors_lu, cp%factors_pivots, st)
+  end subroutine factors_to_checkpoint
+
+  !> The checkpoint's factors (or none) become Newton's kept ones.
+  subroutine factors_from_checkpoint(self, cp)
+    class(vci_stepper_t), intent(inout) :: self
+    type(vci_checkpoint_t), intent(in) :: cp
+    call self%newton%forget_factors()
+    if (cp%factors_n > 0 .and. allocated(cp%factors_rw) .and. allocated(cp%factors_lu) .and. &
+        allocated(cp%factors_pivots)) &
+      call self%newton%keep_factors(cp%factors_n, cp%factors_key, cp%factors_rw, cp%factors_lu, cp%factors_pivots)
+  end subroutine factors_from_checkpoint
+
+  !> A new run: no factors of an earlier one (a re-initialised integrator runs as a fresh one).
+  subroutine forget_factors(self)
+    class(vci_stepper_t), intent(inout) :: self
+    call self%newton%forget_factors()
+  end subroutine forget_factors
 
   subroutine use_model_derivatives(self, mixed_hessian, gap_gradients, constraint_jacobian, energy)
     class(vci_stepper_t), intent(inout) :: self

@@ -10,18 +10,28 @@ module vci_csv_output
   implicit none
   private
 
+  !> The CSV observer: `call w%open(path, stat)`, then pass it to `integrate`; rows of t, q, p (and
+  !> lambda, E_d) in PATH, the impacts in PATH.impacts.csv.
   type, extends(vci_observer_t), public :: vci_csv_writer_t
-    character(len=:), allocatable :: path
-    integer :: unit = 0, impact_unit = 0
-    logical :: opened = .false.
-    integer :: n = 0, m = 0
-    character(len=VCI_MSG_LEN) :: message = ''
+    character(len=:), allocatable :: path       !< the trajectory file
+    integer :: unit = 0                         !< its unit
+    integer :: impact_unit = 0                  !< the unit of PATH.impacts.csv
+    logical :: opened = .false.                 !< both files are open
+    integer :: n = 0                            !< configuration size of the run
+    integer :: m = 0                            !< constraints of the run
+    character(len=VCI_MSG_LEN) :: message = ''  !< what went wrong, naming the file
   contains
+    !> Open FILE (and FILE.impacts.csv) for writing; stat = VCI_ERR_IO with a message if impossible.
     procedure :: open => csv_open
+    !> Write the header and the start state.
     procedure :: on_start => csv_start
+    !> Write an accepted step's state.
     procedure :: on_step => csv_step
+    !> Write an impact to the impact file.
     procedure :: on_impact => csv_impact
+    !> Close both files.
     procedure :: on_finish => csv_finish
+    !> No: CSV holds the state, not the solver memory a bitwise restart needs (vci_checkpoint).
     procedure :: keeps_checkpoints => csv_keeps_checkpoints
   end type vci_csv_writer_t
 

@@ -49,12 +49,12 @@ module vci_hdf5_output
   !> stat, w)`; the file is closed by the run's end (on_finish).
   type, extends(vci_observer_t), public :: vci_hdf5_writer_t
     character(len=VCI_MSG_LEN) :: message = ''   !< what went wrong, naming the file
-    character(len=:), allocatable :: path
+    character(len=:), allocatable :: path         !< the file
     character(len=:), allocatable :: scene        !< root attribute `scene`
     integer :: flush_every = VCI_HDF5_FLUSH_EVERY  !< steps between flushes
     logical :: flush_on_impact = .true.           !< flush after the step of every impact
     logical :: append = .false.                   !< continuing an existing file
-    logical :: is_open = .false.
+    logical :: is_open = .false.                  !< a file is open
     type(vci_checkpoint_t), private :: cp          !< the driver's latest checkpoint (on_checkpoint)
     logical, private :: have_cp = .false.
     logical, private :: discarded = .false.       !< writes failed (a full disk): nothing more reaches the file
@@ -78,15 +78,25 @@ module vci_hdf5_output
     integer, private :: cp_version = 0            !< its layout version (attribute /checkpoint version)
     logical, private :: cp_version_written = .false.   !< this session wrote /checkpoint's version
   contains
+    !> Open PATH for a run: a new file, or an existing one kept (VCI_ERR_IO) unless `overwrite` or `append`.
     procedure :: open => w_open
+    !> Close the file without a run end (when a run could not start). Safe to call twice.
     procedure :: close => w_close
+    !> The run starts: write the run's attributes and its start state.
     procedure :: on_start => w_start
+    !> Buffer an accepted step; flush every flush_every steps and after an impact.
     procedure :: on_step => w_step
+    !> Buffer an impact.
     procedure :: on_impact => w_impact
+    !> The run ended: write what is buffered, the status and its message, and close the file.
     procedure :: on_finish => w_finish
+    !> Yes: every flush stores the checkpoint of its last row, so a restart is bitwise.
     procedure :: keeps_checkpoints => w_keeps_checkpoints
+    !> Before on_start, and before an on_step that flushes (a full buffer, or an impact in the step).
     procedure :: wants_checkpoint => w_wants_checkpoint
+    !> Keep the driver's checkpoint for the next flush (stored only if it is the state of its last row).
     procedure :: on_checkpoint => w_checkpoint
+    !> The message of the last failure (naming the file and the cause).
     procedure :: failure_cause => w_failure_cause
   end type vci_hdf5_writer_t
 
@@ -726,7 +736,37 @@ contains
       call h5io_put_attr(self%g_cp, 'version', VCI_CHECKPOINT_VERSION, stat, self%message, self%path)
       self%cp_version_written = stat == VCI_OK
     end if
+    ! Newton's kept factors beside it (tied to it by the step: a kill between the two writes leaves
+    ! factors of another step, which the reader ignores)
+    call h5io_put_vector(self%g_cp, 'factors', cp%factors_record(), stat, self%message, self%path)
   end subroutine put_checkpoint
+
+  !> /checkpoint/factors into cp (Newton's kept factors, vci_checkpoint: factors_record), when it is
+  !> there, of cp's step and of a size the model's can have (a Lobatto system has at most
+  !> 8 n + m + 2 unknowns); else cp keeps none and the restart is correct but not bitwise.
+  subroutine get_factors(r, cp)
+    type(vci_hdf5_writer_t), intent(inout) :: r
+    type(vci_checkpoint_t), intent(inout) :: cp
+    integer(hid_t) :: dset
+    integer(i8) :: length, nf_max
+    integer :: err, e2, s, st
+    logical :: ex
+    real(dp), allocatable :: rec(:)
+    character(len=VCI_MSG_LEN) :: scratch
+    call h5lexists_f(r%g_cp, 'factors', ex, err)
+    if (err /= 0 .or. .not. ex) return
+    call h5dopen_f(r%g_cp, 'factors', dset, err)
+    if (err /= 0) return
+    s = VCI_OK
+    length = h5io_rows(dset, 'factors', 0, s, scratch, r%path)
+    call h5dclose_f(dset, e2)
+    nf_max = 8_i8 * r%n + r%m + 2_i8
+    if (s /= VCI_OK .or. length < 3_i8 .or. length > 3_i8 + 2_i8 * nf_max + nf_max**2) return
+    allocate (rec(length), stat=st)
+    if (st /= 0) return
+    call h5io_get_vector(r%g_cp, 'factors', rec, s, scratch, r%path)
+    if (s == VCI_OK) call cp%from_factors_record(rec, s)
+  end subroutine get_factors
 
   !> The state a restart from PATH starts with, as a checkpoint for `integ%restore`. With a
   !> /checkpoint group (written when the driver handed checkpoints over) the restart is bitwise; without one
@@ -773,6 +813,7 @@ contains
       call move_alloc(r%cp_rec, rec)
       call cp%from_record(rec(2:), n, r%m, r%cp_version, s)
       use_cp = s == VCI_OK
+      if (use_cp) call get_factors(r, cp)
     end if
     if (.not. use_cp .and. stat == VCI_OK) then
       allocate (row(max(r%n, r%m, 1), 3), stat=st)

@@ -18,15 +18,22 @@ module vci_lagrangian
   implicit none
   private
 
+  !> A model given by its continuous Lagrangian L(q, qdot): extend it and write lagrangian, dl_dq,
+  !> dl_dv; the integrator discretises it by the scheme set_scheme chooses.
   type, abstract, extends(vci_model_base_t), public :: vci_lagrangian_t
   contains
-    procedure(l_value), deferred :: lagrangian   !< L(q, v)
-    procedure(l_partial), deferred :: dl_dq      !< dL/dq(q, v) in R^n
-    procedure(l_partial), deferred :: dl_dv      !< dL/dqdot(q, v) in R^n (the momentum)
+    !> L(q, v)
+    procedure(l_value), deferred :: lagrangian
+    !> dL/dq(q, v) in R^n
+    procedure(l_partial), deferred :: dl_dq
+    !> dL/dqdot(q, v) in R^n (the momentum)
+    procedure(l_partial), deferred :: dl_dv
+    !> lqq(i, j) = d2L/dq_i dq_j, lqv(i, j) = d2L/dq_i dv_j, lvv(i, j) = d2L/dv_i dv_j (each n x n).
     procedure :: hessians => not_provided_hessians
   end type vci_lagrangian_t
 
   abstract interface
+    !> l = L(q, v).
     subroutine l_value(self, q, v, l, stat)
       import :: vci_lagrangian_t, dp
       class(vci_lagrangian_t), intent(inout) :: self
@@ -34,6 +41,7 @@ module vci_lagrangian
       real(dp), intent(out) :: l
       integer, intent(inout) :: stat
     end subroutine l_value
+    !> out = a partial of L at (q, v) in R^n (dL/dq or dL/dqdot).
     subroutine l_partial(self, q, v, out, stat)
       import :: vci_lagrangian_t, dp
       class(vci_lagrangian_t), intent(inout) :: self
@@ -72,8 +80,18 @@ contains
     type(vci_lagrangian_work_t), intent(inout) :: work
     integer, intent(in) :: n
     integer, intent(out) :: stat
-    if (allocated(work%qp)) deallocate (work%qp, work%vp, work%fp, work%fm, work%w, work%dw, work%lv, &
-                                        work%lvv, work%lqq, work%lqv, work%ipiv)
+    ! array by array: after an allocate that failed part-way some are allocated and some not
+    if (allocated(work%qp)) deallocate (work%qp)
+    if (allocated(work%vp)) deallocate (work%vp)
+    if (allocated(work%fp)) deallocate (work%fp)
+    if (allocated(work%fm)) deallocate (work%fm)
+    if (allocated(work%w)) deallocate (work%w)
+    if (allocated(work%dw)) deallocate (work%dw)
+    if (allocated(work%lv)) deallocate (work%lv)
+    if (allocated(work%lvv)) deallocate (work%lvv)
+    if (allocated(work%lqq)) deallocate (work%lqq)
+    if (allocated(work%lqv)) deallocate (work%lqv)
+    if (allocated(work%ipiv)) deallocate (work%ipiv)
     allocate (work%qp(n), work%vp(n), work%fp(n), work%fm(n), work%w(n), work%dw(n), work%lv(n), &
               work%lvv(n, n), work%lqq(n, n), work%lqv(n, n), work%ipiv(n), stat=stat)
   end subroutine lagrangian_work_setup

@@ -20,17 +20,25 @@ module vci_model
   implicit none
   private
 
+  !> A model given by its discrete Lagrangian L_d(q, v, h): extend it and write d1, d2, d3.
   type, abstract, extends(vci_model_base_t), public :: vci_model_t
   contains
-    procedure(ld_partial), deferred :: d1   !< D1 L_d(q, v, h) in R^n
-    procedure(ld_partial), deferred :: d2   !< D2 L_d(q, v, h) in R^n
-    procedure(ld_dh), deferred :: d3        !< D3 L_d(q, v, h) = dL_d/dh; E_d = -D3 L_d
+    !> D1 L_d(q, v, h) in R^n
+    procedure(ld_partial), deferred :: d1
+    !> D2 L_d(q, v, h) in R^n
+    procedure(ld_partial), deferred :: d2
+    !> D3 L_d(q, v, h) = dL_d/dh; E_d = -D3 L_d
+    procedure(ld_dh), deferred :: d3
+    !> d2 L_d/dq dv (n x n); optional, else differenced
     procedure :: mixed_hessian => not_provided_hessian
+    !> omega_d(base, other, h) in R^m, the discrete constraint; required when m > 0
     procedure :: discrete_constraint => not_provided_dconstraint
+    !> d omega_d / d other (m x n); optional, else differenced
     procedure :: discrete_constraint_jacobian => not_provided_dconstraint_jacobian
   end type vci_model_t
 
   abstract interface
+    !> out = a partial of L_d at (q, v, h) in R^n (d1: D1 L_d, d2: D2 L_d).
     subroutine ld_partial(self, q, v, h, out, stat)
       import :: vci_model_t, dp
       class(vci_model_t), intent(inout) :: self
@@ -38,6 +46,7 @@ module vci_model
       real(dp), intent(out) :: out(:)
       integer, intent(inout) :: stat
     end subroutine ld_partial
+    !> out = D3 L_d(q, v, h) = dL_d/dh.
     subroutine ld_dh(self, q, v, h, out, stat)
       import :: vci_model_t, dp
       class(vci_model_t), intent(inout) :: self

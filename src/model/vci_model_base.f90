@@ -15,18 +15,26 @@ module vci_model_base
   implicit none
   private
 
+  !> Sizes, constraint one-forms, walls and energy: what vci_model_t and vci_lagrangian_t share.
   type, abstract, public :: vci_model_base_t
     integer :: n = 0        !< configuration dimension
     integer :: m = 0        !< number of constraint one-forms (0: unconstrained)
     integer :: n_gaps = 0   !< number of gap functions g_j(q) >= 0 bounding the admissible set
     logical, private :: declined = .false.   !< an optional procedure answered "not provided"
   contains
+    !> Called by an optional procedure the model does not supply, instead of computing: marks "not provided".
     procedure, non_overridable :: not_provided
+    !> Start a probe: forget any earlier "not provided".
     procedure, non_overridable :: clear_not_provided
+    !> Did a procedure called since clear_not_provided answer "not provided"?
     procedure, non_overridable :: answered_not_provided
+    !> omega(:, mu) = components of the one-form omega^mu at q (n x m).
     procedure :: constraint_forms => not_provided_forms
+    !> Gap functions g(j) = g_j(q); the admissible set is {q : g_j(q) >= 0 for all j}.
     procedure :: gaps => not_provided_gaps
+    !> dg(:, j) = gradient of g_j at q (n x n_gaps).
     procedure :: gap_gradients => not_provided_gap_grads
+    !> A step-independent energy H(q, p), normally the Hamiltonian (for the 'hamiltonian' impact condition).
     procedure :: energy => not_provided_energy
   end type vci_model_base_t
 

@@ -23,26 +23,28 @@ module vci_model_check
   implicit none
   private
 
-  integer, parameter, public :: VCI_CHECK_MAX_ITEMS = 16
+  integer, parameter, public :: VCI_CHECK_MAX_ITEMS = 16  !< the most comparisons a report holds
   !> Default verdict threshold: central differences of smooth callbacks agree to ~1e-9.
   real(dp), parameter, public :: VCI_CHECK_DEFAULT_TOL = 1.0e-6_dp
 
   !> One comparison: which callback, against what, its worst relative mismatch; `checked` false when
   !> the model does not supply that callback (the library then differences it itself).
   type, public :: vci_check_item_t
-    character(len=32) :: name = ''
-    character(len=64) :: against = ''
-    real(dp) :: mismatch = 0.0_dp
-    logical :: checked = .false.
+    character(len=32) :: name = ''      !< the callback checked
+    character(len=64) :: against = ''   !< what it is compared with
+    real(dp) :: mismatch = 0.0_dp       !< worst relative mismatch
+    logical :: checked = .false.        !< false: the model does not supply this callback
   end type vci_check_item_t
 
+  !> What vci_check_model found: one item per comparison, and the verdict against tol.
   type, public :: vci_check_report_t
-    integer :: count = 0
-    type(vci_check_item_t) :: items(VCI_CHECK_MAX_ITEMS)
-    real(dp) :: tol = VCI_CHECK_DEFAULT_TOL
+    integer :: count = 0                            !< items filled
+    type(vci_check_item_t) :: items(VCI_CHECK_MAX_ITEMS)  !< the comparisons, items(1:count)
+    real(dp) :: tol = VCI_CHECK_DEFAULT_TOL         !< the verdict's threshold
     logical :: passed = .true.        !< every checked item within tol
     real(dp) :: worst = 0.0_dp        !< the largest mismatch of the checked items
   contains
+    !> Item i as one line of text (name, against, mismatch, verdict).
     procedure :: line => report_line
   end type vci_check_report_t
 

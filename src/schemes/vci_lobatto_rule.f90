@@ -9,7 +9,7 @@ module vci_lobatto_rule
   implicit none
   private
 
-  integer, parameter, public :: VCI_LOBATTO_MAX_STAGES = 8
+  integer, parameter, public :: VCI_LOBATTO_MAX_STAGES = 8  !< the most stages s of the lobatto scheme (order 2s)
 
   type, public :: vci_lobatto_rule_t
     integer :: s = 0

@@ -56,7 +56,15 @@ contains
     if (stat /= 0) return
     self%work%has_hessians = has_hessians
     self%has_model_energy = has_energy
-    if (allocated(self%pt)) deallocate (self%pt, self%w, self%lq, self%lv, self%lqq, self%lqv, self%lvv, self%om)
+    ! array by array: after an allocate that failed part-way some are allocated and some not
+    if (allocated(self%pt)) deallocate (self%pt)
+    if (allocated(self%w)) deallocate (self%w)
+    if (allocated(self%lq)) deallocate (self%lq)
+    if (allocated(self%lv)) deallocate (self%lv)
+    if (allocated(self%lqq)) deallocate (self%lqq)
+    if (allocated(self%lqv)) deallocate (self%lqv)
+    if (allocated(self%lvv)) deallocate (self%lvv)
+    if (allocated(self%om)) deallocate (self%om)
     allocate (self%pt(n), self%w(n), self%lq(n), self%lv(n), self%lqq(n, n), self%lqv(n, n), self%lvv(n, n), &
               self%om(n, max(1, lag%m)), stat=stat)
   end subroutine bind

@@ -25,7 +25,9 @@ module vci_scheme
 
   integer, parameter, public :: KIND_SUBSTEP = 1, KIND_STAGE1 = 2, KIND_STAGE2 = 3, KIND_IMPULSE = 4, &
                                 KIND_PAIR = 5
-  integer, parameter, public :: VCI_IMPACT_DISCRETE = 0, VCI_IMPACT_HAMILTONIAN = 1
+  !> Impact energy conditions (set_impact_energy; the C ABI uses the same numbers).
+  integer, parameter, public :: VCI_IMPACT_DISCRETE = 0     !< the paper's E_d(alpha h) = E_d((1 - alpha) h), the default
+  integer, parameter, public :: VCI_IMPACT_HAMILTONIAN = 1  !< H(q~, p+) = H(q~, p-), with the model's energy
 
   !> Scheme identifiers (the C ABI uses the same numbers).
   integer, parameter, public :: VCI_SCHEME_DISCRETE = 0  !< the model is a discrete L_d (vci_model_t)

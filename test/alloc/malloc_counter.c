@@ -3,7 +3,10 @@
  * its malloc family replaces glibc's for the program, libgfortran and libvci.so alike (the suite
  * checks this with allocations it makes on purpose). Each call is counted and forwarded to
  * glibc's own allocator; free is left to glibc, which owns every block. Test use only: not for
- * sanitizer builds, whose runtimes replace malloc themselves. */
+ * sanitizer builds, whose runtimes replace malloc themselves.
+ * It also injects one allocation failure on request (vci_test_malloc_fail, for
+ * test_alloc_failure.pf): the k-th allocation of at least min_bytes from then on returns NULL
+ * (errno ENOMEM), as an allocator out of address space would. */
 #include <errno.h>
 #include <stddef.h>
 
@@ -16,28 +19,44 @@ static long long allocations = 0;
 
 static void count_one(void) { __atomic_fetch_add(&allocations, 1, __ATOMIC_RELAXED); }
 
+/* > 0: allocations of at least fail_min bytes still to come before the one that fails */
+static long long fail_countdown = 0;
+static size_t fail_min = 0;
+
+static int injected_failure(size_t size) {
+  if (__atomic_load_n(&fail_countdown, __ATOMIC_RELAXED) <= 0 || size < fail_min) return 0;
+  if (__atomic_sub_fetch(&fail_countdown, 1, __ATOMIC_RELAXED) != 0) return 0;
+  errno = ENOMEM;
+  return 1;
+}
+
 void *malloc(size_t size) {
   count_one();
+  if (injected_failure(size)) return NULL;
   return __libc_malloc(size);
 }
 
 void *calloc(size_t count, size_t size) {
   count_one();
+  if (count != 0 && size <= (size_t)-1 / count && injected_failure(count * size)) return NULL;
   return __libc_calloc(count, size);
 }
 
 void *realloc(void *ptr, size_t size) {
   count_one();
+  if (injected_failure(size)) return NULL; /* ptr stays valid, as after a real failure */
   return __libc_realloc(ptr, size);
 }
 
 void *memalign(size_t alignment, size_t size) {
   count_one();
+  if (injected_failure(size)) return NULL;
   return __libc_memalign(alignment, size);
 }
 
 void *aligned_alloc(size_t alignment, size_t size) {
   count_one();
+  if (injected_failure(size)) return NULL;
   return __libc_memalign(alignment, size);
 }
 
@@ -46,6 +65,7 @@ int posix_memalign(void **out, size_t alignment, size_t size) {
   /* a power of two and a multiple of sizeof(void *), as POSIX requires */
   if (alignment == 0 || (alignment & (alignment - 1)) != 0 || alignment % sizeof(void *) != 0) return EINVAL;
   count_one();
+  if (injected_failure(size)) return ENOMEM;
   p = __libc_memalign(alignment, size);
   if (!p) return ENOMEM;
   *out = p;
@@ -54,3 +74,12 @@ int posix_memalign(void **out, size_t alignment, size_t size) {
 
 /* Allocations so far (malloc, calloc, realloc and the aligned ones), for Fortran through bind(C). */
 long long vci_test_malloc_count(void) { return __atomic_load_n(&allocations, __ATOMIC_RELAXED); }
+
+/* From now on the k-th allocation of at least min_bytes fails (once); k <= 0: no failure. */
+void vci_test_malloc_fail(long long k, long long min_bytes) {
+  fail_min = min_bytes > 0 ? (size_t)min_bytes : 0;
+  __atomic_store_n(&fail_countdown, k > 0 ? k : 0, __ATOMIC_RELAXED);
+}
+
+/* Allocations still to come before the injected failure (0: it happened, or none was asked). */
+long long vci_test_malloc_fail_pending(void) { return __atomic_load_n(&fail_countdown, __ATOMIC_RELAXED); }

@@ -1215,6 +1215,14 @@ static void suite_abi(void) {
   CHECK_STATUS(vci_model_create(&model, 3, 0, 1, &cb, &ellipse_par), VCI_ERR_ARGUMENT);
   cb.size = offsetof(vci_callbacks, energy) + 3; /* part of a pointer: no header has that size */
   CHECK_STATUS(vci_model_create(&model, 3, 0, 1, &cb, &ellipse_par), VCI_ERR_ARGUMENT);
+  cb.size = SIZE_MAX; /* printed as C prints a size_t, not as -1 */
+  CHECK_STATUS(vci_model_create(&model, 3, 0, 1, &cb, &ellipse_par), VCI_ERR_ARGUMENT);
+  {
+    char expect[64];
+    snprintf(expect, sizeof expect, "cb->size = %zu ", (size_t)SIZE_MAX);
+    CHECK_MESSAGE(NULL, expect);
+  }
+  cb.size = sizeof(vci_callbacks);
 
   /* a newer header with one more member: NULL is fine, set is refused */
   memset(&newer, 0, sizeof newer);

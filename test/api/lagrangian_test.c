@@ -6,6 +6,8 @@
  *  bad: missing required callbacks, unknown scheme, s out of range, a scheme for a discrete model,
  *       and the return contract (a negative code from dl_dq fails the step and is named). */
 #include <math.h>
+#include <stddef.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <string.h>
 #include "vci.h"
@@ -200,6 +202,38 @@ static void suite_bad(void) {
   CHECK(model == NULL);
   vci_last_error(NULL, msg, sizeof msg);
   CHECK(contains(msg, "ngaps = 0"));
+  /* a size between two members is no header's struct: every such size is refused (as by
+   * vci_model_create), not rounded down to the members it covers */
+  {
+    size_t sz, whole = 0;
+    for (sz = offsetof(vci_lagrangian_callbacks, gaps) + 1; sz < sizeof(vci_lagrangian_callbacks); ++sz) {
+      cb = pendulum_callbacks(1);
+      cb.size = sz;
+      if ((sz - sizeof(size_t)) % sizeof(void (*)(void)) == 0) {
+        ++whole; /* an older header's size: accepted */
+        CHECK(vci_model_create_lagrangian(&model, 1, 0, 2, &cb, NULL) == VCI_OK);
+        vci_model_destroy(&model);
+        continue;
+      }
+      CHECK(vci_model_create_lagrangian(&model, 1, 0, 2, &cb, NULL) == VCI_ERR_ARGUMENT);
+      CHECK(model == NULL);
+      vci_last_error(NULL, msg, sizeof msg);
+      CHECK(contains(msg, "VCI_LAGRANGIAN_CALLBACKS_INIT"));
+    }
+    CHECK(whole == 2); /* gap_gradients, energy: the two whole sizes after gaps */
+  }
+  /* SIZE_MAX is printed as C prints a size_t, not as -1 */
+  cb = pendulum_callbacks(1);
+  cb.size = SIZE_MAX;
+  CHECK(vci_model_create_lagrangian(&model, 1, 0, 2, &cb, NULL) == VCI_ERR_ARGUMENT);
+  vci_last_error(NULL, msg, sizeof msg);
+  printf("  %s\n", msg);
+  {
+    char expect[64];
+    snprintf(expect, sizeof expect, "cb->size = %zu ", (size_t)SIZE_MAX);
+    CHECK(contains(msg, expect));
+    CHECK(!contains(msg, "= -1"));
+  }
   cb = pendulum_callbacks(1);
   cb.gaps = NULL; /* ngaps > 0 needs gaps */
   CHECK(vci_model_create_lagrangian(&model, 1, 0, 2, &cb, NULL) == VCI_ERR_ARGUMENT);

@@ -1,5 +1,6 @@
-/* The C ensemble loop of docs/ENSEMBLES.md ("From C"), included from the page itself: blocks of
- * members whose handles are created and destroyed on one thread and integrated on OpenMP threads. Members are the
+/* The C ensemble loop of docs/ENSEMBLES.md ("From C"), included from the page itself: every member
+ * created, integrated and destroyed on an OpenMP thread, handles of many members created and
+ * destroyed on several threads at once (vci.h, "Threads"). Members are the
  * paper's ellipse with its start moved by 1e-12 ... 1e-2; prints every member's status and final
  * state in hexadecimal, so that runs on 1 and 2 threads can be compared bit for bit.
  * Usage: ens_c_loop [n_members] */

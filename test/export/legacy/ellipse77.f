@@ -9,7 +9,8 @@ C     docs/C_API.md). Stops with code 1 if a number is off.
       PARAMETER (N = 3, M = 0, NG = 1, LTIMP = 10)
       DOUBLE PRECISION H, T0, Q0(N), Q1(N), T, Q(N), P(N), TIMP(LTIMP)
       DOUBLE PRECISION RPAR(4), QC(N), QD(N), T1REF, T2REF
-      INTEGER IPAR(1), NIMP, ISTAT, IH, I, NBAD
+      DOUBLE PRECISION TR, QR(N), PR(N)
+      INTEGER IPAR(2), NIMP, ISTAT, IH, I, NBAD
       CHARACTER*300 MSG
 C     First impacts at h = 1e-2 from the Fortran API (vci_integrator_t)
       PARAMETER (T1REF = 7.50564104356950312D-01)
@@ -18,6 +19,7 @@ C     First impacts at h = 1e-2 from the Fortran API (vci_integrator_t)
       DATA QD /-3.0D0, 2.0D0, 0.0D0/
       NBAD = 0
       IPAR(1) = 0
+      IPAR(2) = 0
       H = 1.0D-2
       QC(1) = ACOS(-1.0D0) / 2.0D0
       QC(2) = 0.0D0
@@ -39,6 +41,29 @@ C     1. One call: 200 steps with the analytic Hessian and gradients
       CALL CHECKR('VCIRUN second impact', TIMP(2), T2REF, 1.0D-12,
      &            NBAD)
       CALL CHECKR('VCIRUN final time', T, 2.005D0, 1.0D-13, NBAD)
+      TR = T
+      DO 5 I = 1, N
+        QR(I) = Q(I)
+        PR(I) = P(I)
+    5 CONTINUE
+C
+C     1b. The same run with a hostile routine (IPAR(2) = 1: after its
+C         answer it overwrites TASK, N, M, NG, Q, V and H): the library
+C         passes copies, so the run is the one above, bit for bit
+      IPAR(2) = 1
+      CALL VCIRUN(ELLMOD, N, M, NG, 3, H, T0, Q0, Q1, 200, T, Q, P,
+     &            NIMP, TIMP, LTIMP, RPAR, IPAR, ISTAT, MSG)
+      IPAR(2) = 0
+      CALL CHECKI('hostile routine: status', ISTAT, 0, NBAD)
+      CALL CHECKR('hostile routine: H unchanged', H, 1.0D-2, 0.0D0,
+     &            NBAD)
+      CALL CHECKR('hostile routine: final time', T, TR, 0.0D0, NBAD)
+      DO 6 I = 1, N
+        CALL CHECKR('hostile routine: same Q', Q(I), QR(I), 0.0D0,
+     &              NBAD)
+        CALL CHECKR('hostile routine: same P', P(I), PR(I), 0.0D0,
+     &              NBAD)
+    6 CONTINUE
 C
 C     2. The handle interface, differenced Jacobians (IOPT = 0):
 C        forward 200 steps, then backward to the pair
@@ -112,7 +137,8 @@ C
 C
 C     The ellipse: q = (theta, x, y), midpoint L_d with gravity, floor
 C     g = y - phi(theta). RPAR = (mass, gravity, a, b). IPAR(1) = 1
-C     makes TASK 1 fail (to test the error path).
+C     makes TASK 1 fail (to test the error path); IPAR(2) = 1 makes it
+C     overwrite every input argument after answering (ELLBAD).
       SUBROUTINE ELLMOD(TASK, N, M, NG, Q, V, H, OUT, RPAR, IPAR, IERR)
       IMPLICIT NONE
       INTEGER TASK, N, M, NG, IPAR(*), IERR, I
@@ -160,4 +186,23 @@ C     makes TASK 1 fail (to test the error path).
       ELSE
         IERR = 99
       END IF
+      IF (IPAR(2) .EQ. 1) CALL ELLBAD(TASK, N, M, NG, Q, V, H)
+      END
+C
+C     What a careless routine might do to its inputs: N and H doubled,
+C     M and NG made huge, TASK, Q and V overwritten (N last, since Q
+C     and V are dimensioned by it).
+      SUBROUTINE ELLBAD(TASK, N, M, NG, Q, V, H)
+      IMPLICIT NONE
+      INTEGER TASK, N, M, NG, I
+      DOUBLE PRECISION Q(N), V(N), H
+      DO 10 I = 1, N
+        Q(I) = -1.0D300
+        V(I) = 7.0D0
+   10 CONTINUE
+      H = 2.0D0 * H
+      TASK = 99
+      M = 100000
+      NG = 100000
+      N = 2 * N + 1000
       END

@@ -13,15 +13,16 @@ C     pendw77_ref.txt. Stops with code 1 if a number is off.
       INTEGER N, M, NG, LTIMP, NSTG
       PARAMETER (N = 1, M = 0, NG = 2, LTIMP = 40, NSTG = 4)
       DOUBLE PRECISION H, T, Q(N), P(N), TIMP(LTIMP), RPAR(2)
-      DOUBLE PRECISION TREF, QREF, PREF, Q0(N), P0(N)
-      INTEGER IPAR(1), NIMP, NREF, ISTAT, IH, NBAD, K, IOPT(3), IPASS
+      DOUBLE PRECISION TREF, QREF, PREF, Q0(N), P0(N), T1, Q1(N), P1(N)
+      INTEGER IPAR(1), NIMP, NREF, ISTAT, IH, NBAD, K, IOPT(4), IPASS
       DOUBLE PRECISION WORST
       CHARACTER*300 MSG
       DATA RPAR /9.8D0, 1.0D0/
 C     all optional TASKs (Hessians, gap gradients, H); only L, dL/dq,
 C     dL/dv and gaps; all declared but TASKs 13 and 9 answered "not
-C     provided" (IPAR(1) = 5)
-      DATA IOPT /15, 8, 15/
+C     provided" (IPAR(1) = 5); all, from a routine that overwrites its
+C     inputs after answering (IPAR(1) = 9): the run must be the first
+      DATA IOPT /15, 8, 15, 15/
       NBAD = 0
       H = 5.0D-2
       Q0(1) = 0.0D0
@@ -32,9 +33,10 @@ C     provided" (IPAR(1) = 5)
       CLOSE (10)
 C
 C     1. The run, three ways of supplying the optional TASKs
-      DO 10 K = 1, 3
+      DO 10 K = 1, 4
         IPAR(1) = 0
         IF (K .EQ. 3) IPAR(1) = 5
+        IF (K .EQ. 4) IPAR(1) = 9
         CALL VCINEW(PWMOD, N, M, NG, IOPT(K), H, RPAR, IPAR, IH,
      &              ISTAT)
         CALL CHECKI('VCINEW', ISTAT, 0, NBAD)
@@ -63,6 +65,18 @@ C       (docs/SCHEMES.md); 1e-9 leaves room for round-off, not for
 C       a lower order (s = 3 is ~3e-8 off)
         CALL CHECKR('theta = exact', Q(1), QREF, 1.0D-9, NBAD)
         CALL CHECKR('p = exact', P(1), PREF, 1.0D-9, NBAD)
+        IF (K .EQ. 1) THEN
+          T1 = T
+          Q1(1) = Q(1)
+          P1(1) = P(1)
+        END IF
+        IF (K .EQ. 4) THEN
+          CALL CHECKR('hostile routine: same t', T, T1, 0.0D0, NBAD)
+          CALL CHECKR('hostile routine: same q', Q(1), Q1(1), 0.0D0,
+     &                NBAD)
+          CALL CHECKR('hostile routine: same p', P(1), P1(1), 0.0D0,
+     &                NBAD)
+        END IF
         CALL VCIDEL(IH)
    10 CONTINUE
 C
@@ -184,7 +198,9 @@ C
 C     The walled pendulum as a continuous L(Q, V), V = dQ/dt. RPAR =
 C     (gravity, wall angle). IPAR(1) = 2: TASK 11 fails (IERR = -5)
 C     once Q has passed 0.5; 3: TASK 12 is not provided; 5: TASKs 13
-C     and 9 are not provided. IERR = -999 answers "not provided".
+C     and 9 are not provided; 7: dL/dq has the wrong sign; 9: it
+C     overwrites its inputs after answering. IERR = -999 answers "not
+C     provided".
       SUBROUTINE PWMOD(TASK, N, M, NG, Q, V, H, OUT, RPAR, IPAR, IERR)
       IMPLICIT NONE
       INTEGER TASK, N, M, NG, IPAR(*), IERR
@@ -232,4 +248,23 @@ C       H(Q, P) with P passed in V
       ELSE
         IERR = -999
       END IF
+      IF (IPAR(1) .EQ. 9) CALL PWBAD(TASK, N, M, NG, Q, V, H)
+      END
+C
+C     What a careless routine might do to its inputs (IPAR(1) = 9):
+C     H (passed as 0 for a continuous L) and N doubled, M, NG, TASK,
+C     Q and V overwritten (N last: Q and V are dimensioned by it).
+      SUBROUTINE PWBAD(TASK, N, M, NG, Q, V, H)
+      IMPLICIT NONE
+      INTEGER TASK, N, M, NG, I
+      DOUBLE PRECISION Q(N), V(N), H
+      DO 10 I = 1, N
+        Q(I) = 1.0D300
+        V(I) = -3.0D0
+   10 CONTINUE
+      H = 2.0D0 * H + 1.0D0
+      TASK = 12
+      M = -1
+      NG = 100000
+      N = 2 * N + 1000
       END
