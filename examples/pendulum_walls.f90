@@ -1,16 +1,19 @@
 !> A pendulum swinging between two walls at +-1 rad (an impact oscillator with nonlinear free
 !> flight): theta'' = -(g/l) sin theta, g/l = 9.8, theta(0) = 0, theta'(0) = 4 (p0 = 4), elastic
-!> walls; 18 impacts in 10 s. A continuous model discretised by --scheme (default lobatto, --stages 4);
+!> walls; 18 impacts in 10 s. A continuous model discretised by --scheme (default lobatto, --stages 4;
+!> --scheme composition --order p runs the explicit compositions on its separable form);
 !> prints the errors of the final state and of the impact times against an exact reference
 !> (quadrature of t(theta), vci_ref_pendulum_quad).
 program pendulum_walls
   use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
   use vci
   use vci_scene_pendulum_walls, only: pendulum_walls_t, pendulum_walls_model
+  use vci_scene_pendulum_walls_sep, only: pendulum_walls_sep_t, pendulum_walls_sep_model
   use vci_ref_pendulum_quad, only: pendulum_quad_t, pendulum_quad_state, pendulum_quad_impacts
   use vci_example_cli
   implicit none
   type(pendulum_walls_t), target :: model
+  type(pendulum_walls_sep_t), target :: separable   ! the same scene for --scheme composition
   type(vci_integrator_t) :: integ
   type(example_options_t) :: opts
   type(pendulum_quad_t) :: ref
@@ -35,8 +38,13 @@ program pendulum_walls
     write (error_unit, '(a)') 'pendulum_walls: --t-final must be >= 0'
     stop 1, quiet=.true.
   end if
-  model = pendulum_walls_model(.true.)
-  call create_integrator('pendulum_walls', model, opts, integ)
+  if (opts%scheme == 'composition') then
+    separable = pendulum_walls_sep_model(.true.)
+    call create_integrator('pendulum_walls', separable, opts, integ)
+  else
+    model = pendulum_walls_model(.true.)
+    call create_integrator('pendulum_walls', model, opts, integ)
+  end if
   call integ%init_from_momentum(0.0_dp, [0.0_dp], [4.0_dp], stat)
   if (stat == VCI_OK .and. opts%check_model) call check_model_at_start('pendulum_walls', model, integ, opts%h)
   if (stat == VCI_OK .and. opts%impact_energy /= VCI_IMPACT_DISCRETE) call integ%set_impact_energy(opts%impact_energy, stat)

@@ -162,7 +162,9 @@ enum {
   VCI_SCHEME_DISCRETE = 0, /**< the model is a discrete L_d (vci_model_create): the only scheme it has */
   VCI_SCHEME_LEFT = 1,     /**< L_d = h L(q, (v - q)/h): the paper's retraction, order 1 */
   VCI_SCHEME_MIDPOINT = 2, /**< L_d = h L((q + v)/2, (v - q)/h): order 2, the default for a continuous model */
-  VCI_SCHEME_LOBATTO = 3   /**< Galerkin with s + 1 Lobatto points, s = 1..VCI_LOBATTO_MAX_STAGES: order 2s, with or without constraints */
+  VCI_SCHEME_LOBATTO = 3,  /**< Galerkin with s + 1 Lobatto points, s = 1..VCI_LOBATTO_MAX_STAGES: order 2s, with or without constraints */
+  VCI_SCHEME_COMPOSITION = 4 /**< explicit Verlet compositions, order 2, 4, 6, 8, 10 (the stages argument): Fortran
+                                  separable models (vci_separable_t) only for now; a C model gets VCI_ERR_ARGUMENT */
 };
 /** The largest number of stages s of VCI_SCHEME_LOBATTO. */
 #define VCI_LOBATTO_MAX_STAGES 8

@@ -30,6 +30,7 @@ module vci_example_cli
     !> --start: 'exact' (q(0), p(0) = dL/dqdot(q(0), qdot(0)), at t = 0; the default with --scheme) or
     !> 'pair' (the paper's pair of configurations; the default of the hand-written L_d)
     character(len=:), allocatable :: start
+    integer :: order = 4                      !< --order: of the composition (2, 4, 6, 8, 10)
   end type example_options_t
 
   !> --progress: a line on stderr at most twice a second (rewritten in place on a terminal).
@@ -124,18 +125,20 @@ contains
         write (output_unit, '(a)') '  --rtol R              Newton tolerance relative to term sizes, 1e-16 <= R <= 1e-4 (1e-12)'
         write (output_unit, '(a)') '  --max-impacts K       impacts allowed in one step, 1 <= K <= 1000000 (16)'
         write (output_unit, '(a)') '  --differenced-hessian let the library difference the mixed Hessian'
-        write (output_unit, '(a)') '  --scheme S            discretise the scene''s continuous L: left, midpoint or lobatto'
+        write (output_unit, '(a)') '  --scheme S            discretise the scene''s continuous L: left, midpoint, lobatto'
+        write (output_unit, '(a)') '                        or composition (explicit; separable scenes: pendulum_walls)'
         write (output_unit, '(a)') '                        (default: the scene''s hand-derived L_d, as in the paper)'
         write (output_unit, '(a)') '  --stages s            lobatto: s stages, order 2s, 1 <= s <= 8 (2)'
         write (output_unit, '(a)') '  --start exact|pair    exact: (q(0), p(0) = dL/dqdot(q(0), qdot(0))) at t = 0 (default with'
         write (output_unit, '(a)') '                        --scheme); pair: the paper''s pair of configurations (default without)'
+        write (output_unit, '(a)') '  --order p             composition: Verlet composed to order p = 2, 4, 6, 8, 10 (4)'
         write (output_unit, '(a)') '  --quiet               print the summary only'
         write (output_unit, '(a)') '  --check-model         compare the model''s derivatives with differences, then stop'
         write (output_unit, '(a)') '  --progress            progress on stderr (default when stderr is a terminal)'
         write (output_unit, '(a)') '  --no-progress         no progress line'
         stop
       case ('--h', '--t-final', '--output', '--from', '--impact-energy', '--rtol', '--max-impacts', '--flush-every', &
-            '--scheme', '--stages', '--start')
+            '--scheme', '--stages', '--start', '--order')
         if (i == nargs) call die(name//': '//arg//' needs a value')
         i = i + 1
         val = get_arg(i)
@@ -155,8 +158,11 @@ contains
         case ('--start')
           if (val /= 'exact' .and. val /= 'pair') call die(name//': --start must be exact or pair')
           opts%start = val
+        case ('--order')
+          opts%order = to_int(val, arg, 2, 10)
+          if (.not. any(VCI_COMPOSITION_ORDERS == opts%order)) call die(name//': --order must be 2, 4, 6, 8 or 10')
         case ('--scheme')
-          if (scheme_id(val) < 0) call die(name//': --scheme must be left, midpoint or lobatto')
+          if (scheme_id(val) < 0) call die(name//': --scheme must be left, midpoint, lobatto or composition')
           opts%scheme = val
         case ('--impact-energy')
           select case (val)
@@ -400,7 +406,8 @@ contains
       call integ%create(model, opts%h, stat)
     class is (vci_lagrangian_t)
       call integ%create(model, opts%h, stat)
-      if (stat == VCI_OK .and. allocated(opts%scheme)) call integ%set_scheme(scheme_id(opts%scheme), opts%stages, stat)
+      if (stat == VCI_OK .and. allocated(opts%scheme)) call integ%set_scheme(scheme_id(opts%scheme), &
+        merge(opts%order, opts%stages, scheme_id(opts%scheme) == VCI_SCHEME_COMPOSITION), stat)
     class default
       stat = VCI_ERR_ARGUMENT
     end select
@@ -444,6 +451,7 @@ contains
     case ('left'); scheme_id = VCI_SCHEME_LEFT
     case ('midpoint'); scheme_id = VCI_SCHEME_MIDPOINT
     case ('lobatto'); scheme_id = VCI_SCHEME_LOBATTO
+    case ('composition'); scheme_id = VCI_SCHEME_COMPOSITION
     case default; scheme_id = -1
     end select
   end function scheme_id

@@ -20,7 +20,10 @@ module vci_integrator
   use vci_state, only: vci_state_t, vci_impact_buffer_t
   use vci_stepper, only: vci_stepper_t
   use vci_scheme, only: vci_scheme_t, VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN, VCI_SCHEME_DISCRETE, &
-                        VCI_SCHEME_LEFT, VCI_SCHEME_MIDPOINT, VCI_SCHEME_LOBATTO
+                        VCI_SCHEME_LEFT, VCI_SCHEME_MIDPOINT, VCI_SCHEME_LOBATTO, VCI_SCHEME_COMPOSITION
+  use vci_separable, only: vci_separable_t
+  use vci_composition, only: VCI_COMPOSITION_ORDERS
+  use vci_explicit_step, only: vci_explicit_t
   use vci_scheme_discrete, only: vci_scheme_discrete_t
   use vci_scheme_lobatto, only: vci_scheme_lobatto_t
   use vci_retraction, only: vci_retraction_model_t, RETRACTION_LEFT, RETRACTION_MIDPOINT
@@ -32,6 +35,7 @@ module vci_integrator
   private
   public :: VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN
   public :: VCI_SCHEME_DISCRETE, VCI_SCHEME_LEFT, VCI_SCHEME_MIDPOINT, VCI_SCHEME_LOBATTO, VCI_LOBATTO_MAX_STAGES
+  public :: VCI_SCHEME_COMPOSITION, VCI_COMPOSITION_ORDERS
   public :: vci_scheme_name, vci_settings_t
 
   !> Counters over the integrator's life.
@@ -256,7 +260,8 @@ contains
         end select
       end if
       if (stat /= 0) stat = VCI_ERR_MEMORY
-    case (VCI_SCHEME_LEFT, VCI_SCHEME_MIDPOINT)
+    case (VCI_SCHEME_LEFT, VCI_SCHEME_MIDPOINT, VCI_SCHEME_COMPOSITION)
+      ! (the composition steps explicitly; its midpoint scheme serves the stepper's other queries)
       rule = merge(RETRACTION_LEFT, RETRACTION_MIDPOINT, self%scheme_id == VCI_SCHEME_LEFT)
       if (.not. allocated(self%retraction)) allocate (self%retraction, stat=stat)
       if (stat == 0) call self%retraction%bind(self%lag, rule, self%lag_hessians, self%lag_energy, stat)
@@ -285,6 +290,7 @@ contains
       end if
     end select
     if (stat == VCI_OK) call self%stepper%setup(sch, stat)
+    if (stat == VCI_OK .and. self%scheme_id == VCI_SCHEME_COMPOSITION) call attach_composition(self, stat)
     ! records for the impacts of one step, grown on demand up to the bound (which may be huge)
     settings = self%stepper%current_settings()
     self%impacts%count = 0
@@ -299,6 +305,25 @@ contains
     self%last_message = ''
     call finish(self, VCI_OK, stat)
   end subroutine build_scheme
+
+  !> The explicit composition of order n_stages on the separable model, handed to the stepper
+  !> (set_scheme checked the model's kind, its mass matrix and m = 0).
+  subroutine attach_composition(self, stat)
+    class(vci_integrator_t), target, intent(inout) :: self
+    integer, intent(out) :: stat
+    type(vci_explicit_t), allocatable :: ex
+    allocate (ex, stat=stat)
+    if (stat /= 0) then
+      stat = VCI_ERR_MEMORY; return
+    end if
+    select type (lag => self%lag)
+    class is (vci_separable_t)
+      call ex%setup(lag, self%n_stages, stat)
+    class default
+      stat = VCI_ERR_ARGUMENT
+    end select
+    if (stat == VCI_OK) call self%stepper%use_explicit(ex)
+  end subroutine attach_composition
 
   !> The scheme could not be built (its message is set): the integrator keeps its model but cannot
   !> be initialised or stepped until a set_scheme succeeds (the stepper may hold part of a workspace).
@@ -341,13 +366,33 @@ contains
           VCI_LOBATTO_MAX_STAGES, ')'
         call finish(self, VCI_ERR_ARGUMENT, stat); return
       end if
+    case (VCI_SCHEME_COMPOSITION)
+      if (.not. any(VCI_COMPOSITION_ORDERS == stages)) then
+        write (self%last_message, '(a,i0,a)') 'set_scheme: composition of order ', stages, ' (need 2, 4, 6, 8 or 10)'
+        call finish(self, VCI_ERR_ARGUMENT, stat); return
+      end if
+      select type (lag => self%lag)
+      class is (vci_separable_t)
+        if (.not. lag%has_mass()) then
+          self%last_message = 'set_scheme: the separable model has no mass matrix (set_mass_diagonal or set_mass_matrix)'
+          call finish(self, VCI_ERR_ARGUMENT, stat); return
+        end if
+      class default
+        self%last_message = 'set_scheme: composition needs a separable model (vci_separable_t: L = 1/2 qdot^T M qdot - V(q))'
+        call finish(self, VCI_ERR_ARGUMENT, stat); return
+      end select
+      if (self%model%m > 0) then
+        write (self%last_message, '(a,i0,a)') 'set_scheme: composition does not support nonholonomic constraints (m = ', &
+          self%model%m, '); use left or midpoint'
+        call finish(self, VCI_ERR_ARGUMENT, stat); return
+      end if
     case default
       write (self%last_message, '(a,i0,a)') 'set_scheme: unknown scheme ', scheme, &
-        ' (1 = left, 2 = midpoint, 3 = lobatto)'
+        ' (1 = left, 2 = midpoint, 3 = lobatto, 4 = composition)'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end select
     self%scheme_id = scheme
-    self%n_stages = merge(stages, 1, scheme == VCI_SCHEME_LOBATTO)
+    self%n_stages = merge(stages, 1, scheme == VCI_SCHEME_LOBATTO .or. scheme == VCI_SCHEME_COMPOSITION)
     call build_scheme(self, 'set_scheme', stat)
   end subroutine set_scheme
 
@@ -356,12 +401,13 @@ contains
   !> a static per call site, which races across threads.
   pure function vci_scheme_name(scheme) result(name)
     integer, intent(in) :: scheme
-    character(len=8) :: name
+    character(len=11) :: name
     select case (scheme)
     case (VCI_SCHEME_DISCRETE); name = 'discrete'
     case (VCI_SCHEME_LEFT); name = 'left'
     case (VCI_SCHEME_MIDPOINT); name = 'midpoint'
     case (VCI_SCHEME_LOBATTO); name = 'lobatto'
+    case (VCI_SCHEME_COMPOSITION); name = 'composition'
     case default; name = 'unknown'
     end select
   end function vci_scheme_name
@@ -450,6 +496,11 @@ contains
     if (.not. ieee_is_finite(t0 + self%state%h)) then
       self%initialized = .false.
       write (self%last_message, '(a,es12.4,a,es12.4,a)') 'init_from_pair: t0 + h = ', t0, ' + ', self%state%h, ' overflows'
+      call finish(self, VCI_ERR_ARGUMENT, stat); return
+    end if
+    if (self%scheme_id == VCI_SCHEME_COMPOSITION) then
+      ! (the pair's momentum is D2 of the composed L_d, which has no closed form)
+      self%last_message = 'init_from_pair: the composition scheme starts from (q0, p0): use init_from_momentum'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
     call self%stepper%forget_factors()   ! a new run solves as a fresh integrator would

@@ -21,6 +21,7 @@ module vci_stepper
   use vci_settings, only: vci_settings_t, vci_solver_stats_t
   use vci_state, only: vci_state_t, vci_impact_buffer_t
   use vci_predictor, only: vci_predict_start
+  use vci_explicit_step, only: vci_explicit_t
   use vci_checkpoint, only: vci_checkpoint_t
   implicit none
   private
@@ -77,6 +78,9 @@ module vci_stepper
     ! The step's outcome, committed to the state when the step succeeds:
     real(dp), allocatable :: q_new(:), p_new(:), lambda_new(:)
     real(dp) :: e_new = 0.0_dp
+    !> An explicit composition's step (VCI_SCHEME_COMPOSITION): when allocated it takes the steps
+    !> (vci_explicit_step) and `sys` serves only the queries that do not step.
+    type(vci_explicit_t), allocatable :: explicit
   contains
     procedure :: setup
     procedure :: configure
@@ -92,6 +96,7 @@ module vci_stepper
     procedure :: factors_from_checkpoint
     procedure :: forget_factors
     procedure :: advance
+    procedure :: use_explicit
     procedure :: pair_momentum
   end type vci_stepper_t
 
@@ -132,6 +137,7 @@ contains
     self%n = n; self%m = m; self%ng = ng
     self%stats = vci_solver_stats_t()
     if (allocated(self%sys)) deallocate (self%sys)
+    if (allocated(self%explicit)) deallocate (self%explicit)
     call move_alloc(scheme, self%sys)
     self%nsub = self%sys%unknowns(KIND_SUBSTEP)
     nx = max(self%sys%unknowns(KIND_STAGE1), self%sys%unknowns(KIND_STAGE2), self%sys%unknowns(KIND_IMPULSE))
@@ -324,6 +330,9 @@ contains
     real(dp) :: tau
     logical :: landed
 
+    if (allocated(self%explicit)) then
+      call explicit_take_step(self, state, dir, impacts, stat); return
+    end if
     call self%sys%set_direction(dir)
     impacts%count = 0
     if (self%cause(1:1) /= ' ') self%cause = ''   ! (causes start with a word; blanking all of it costs per step)
@@ -366,6 +375,29 @@ contains
     state%velocity = real(dir, dp) * (self%q_new - self%q_start) / tau
     state%arriving_energy = self%e_new
   end subroutine take_step
+
+  !> Take the steps with an explicit composition (after setup, which drops any earlier one).
+  subroutine use_explicit(self, explicit)
+    class(vci_stepper_t), intent(inout) :: self
+    type(vci_explicit_t), allocatable, intent(inout) :: explicit
+    call move_alloc(explicit, self%explicit)
+  end subroutine use_explicit
+
+  !> The explicit composition's step (vci_explicit_step): no Newton, no predictor history.
+  subroutine explicit_take_step(self, state, dir, impacts, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    type(vci_state_t), intent(inout) :: state
+    integer, intent(in) :: dir
+    type(vci_impact_buffer_t), intent(inout) :: impacts
+    integer, intent(out) :: stat
+    if (self%cause(1:1) /= ' ') self%cause = ''
+    call self%explicit%advance(state%q, state%p, state%h, dir, state%time(), self%settings%max_impacts_per_step, &
+                               impacts, self%q_new, self%p_new, self%e_new, self%cause, stat)
+    if (stat /= VCI_OK) return
+    state%predictor_depth = 0
+    state%velocity = real(dir, dp) * (self%q_new - state%q) / state%h
+    state%arriving_energy = self%e_new
+  end subroutine explicit_take_step
 
   !> Regular sub-step of length tau from (a, pa); x holds the initial guess and returns the solution.
   subroutine substep(self, a, pa, tau, stat)

@@ -34,6 +34,9 @@ module vci_scheme
   integer, parameter, public :: VCI_SCHEME_LEFT = 1      !< L_d = h L(q, (v - q)/h), omega_d at q
   integer, parameter, public :: VCI_SCHEME_MIDPOINT = 2  !< L_d = h L((q + v)/2, (v - q)/h), omega_d at the midpoint
   integer, parameter, public :: VCI_SCHEME_LOBATTO = 3   !< Galerkin, s + 1 Lobatto points, order 2s
+  !> Störmer–Verlet (order 2) and its symmetric compositions of order 4 .. 10: explicit, for a
+  !> separable model (vci_separable_t); `stages` of set_scheme is the order (vci_composition)
+  integer, parameter, public :: VCI_SCHEME_COMPOSITION = 4
 
   type, abstract, extends(vci_system_t), public :: vci_scheme_t
     class(vci_model_base_t), pointer :: base => null()   !< sizes, walls, forms, H

@@ -255,6 +255,10 @@ static void suite_bad(void) {
   printf("  %s\n", msg);
   CHECK(contains(msg, "unknown scheme"));
   CHECK(vci_set_scheme(it, VCI_SCHEME_DISCRETE, 1) == VCI_ERR_ARGUMENT);
+  /* the explicit compositions need a separable Fortran model (issue 32): refused with the reason */
+  CHECK(vci_set_scheme(it, VCI_SCHEME_COMPOSITION, 4) == VCI_ERR_ARGUMENT);
+  vci_last_error(it, msg, sizeof msg);
+  CHECK(contains(msg, "separable"));
   CHECK(vci_set_scheme(it, VCI_SCHEME_LOBATTO, 0) == VCI_ERR_ARGUMENT);
   CHECK(vci_set_scheme(it, VCI_SCHEME_LOBATTO, VCI_LOBATTO_MAX_STAGES + 1) == VCI_ERR_ARGUMENT);
   vci_last_error(it, msg, sizeof msg);

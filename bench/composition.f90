@@ -1,0 +1,174 @@
+!> Cost of the explicit compositions (issue 32, item 6): the library's regular step against a
+!> hand-written loop of the same composition (the same kick–drift–kick arithmetic, so the same
+!> bits: checked), and an impact step against a regular step. Scene: the pendulum (m = 1, g = 9.8,
+!> l = 1) from θ = 0, θ' = 4; free for the regular steps, between walls at ±1 rad for the impacts.
+!>
+!>   vci_bench_composition [order]                    timed runs (best of 5), ratios
+!>   vci_bench_composition --profile lib|hand|walls order   one run of the *run_timed* routine, for
+!>                                                          callgrind --toggle-collect='*run_timed*'
+!>   vci_bench_composition --sweep                    the walled pendulum over 10 s (18 impacts) from
+!>                                                    the exact start: final error against the exact
+!>                                                    solution and CPU time per run, orders 4 … 10
+!> tools/bench/run_composition.sh writes docs/bench/composition.md from all three.
+program vci_bench_composition
+  use, intrinsic :: iso_fortran_env, only: int64, output_unit
+  use vci
+  use vci_composition, only: composition_coefficients
+  use vci_scene_pendulum_walls_sep, only: pendulum_walls_sep_t, pendulum_walls_sep_model
+  use vci_ref_pendulum_quad, only: pendulum_quad_t, pendulum_quad_state
+  implicit none
+  integer, parameter :: nsteps = 200000
+  real(dp), parameter :: h = 0.01_dp
+  character(len=16) :: arg, what
+  integer :: order, stat, rep, nimp_steps
+  real(dp) :: q_lib, p_lib, q_hand, p_hand, t_lib, t_hand, t_walls, t
+  order = 6
+  if (command_argument_count() >= 1) then
+    call get_command_argument(1, arg)
+    if (arg == '--sweep') then
+      call sweep(); stop
+    end if
+    if (arg == '--profile') then
+      call get_command_argument(2, what); call get_command_argument(3, arg); read (arg, *) order
+      select case (what)
+      case ('lib'); call run_timed_lib(order, q_lib, p_lib, stat)
+      case ('hand'); call run_timed_hand(order, q_hand, p_hand)
+      case ('walls'); call run_timed_walls(order, nimp_steps, stat)
+      end select
+      stop
+    end if
+    read (arg, *) order
+  end if
+  t_lib = huge(1.0_dp); t_hand = huge(1.0_dp); t_walls = huge(1.0_dp)
+  do rep = 1, 5
+    t = clock(); call run_timed_lib(order, q_lib, p_lib, stat); t_lib = min(t_lib, clock() - t)
+    if (stat /= VCI_OK) error stop 'library run failed'
+    t = clock(); call run_timed_hand(order, q_hand, p_hand); t_hand = min(t_hand, clock() - t)
+    t = clock(); call run_timed_walls(order, nimp_steps, stat); t_walls = min(t_walls, clock() - t)
+    if (stat /= VCI_OK) error stop 'walled run failed'
+  end do
+  write (output_unit, '(a,i0,a,i0,a,es9.2)') 'order ', order, '  steps ', nsteps, '  h ', h
+  write (output_unit, '(a,l1)') 'library and hand loop end in the same bits: ', q_lib == q_hand .and. p_lib == p_hand
+  write (output_unit, '(a,f8.1,a,f8.1,a,f6.2)') 'regular step: library ', 1.0e9_dp * t_lib / nsteps, &
+    ' ns, hand loop ', 1.0e9_dp * t_hand / nsteps, ' ns, ratio ', t_lib / t_hand
+  ! impact steps: the extra time of the walled run over the free one, per impact step
+  write (output_unit, '(a,i0,a,f6.2)') 'impact steps: ', nimp_steps, '; impact step / regular step ', &
+    (t_walls - t_lib * real(nsteps - nimp_steps, dp) / nsteps) / nimp_steps / (t_lib / nsteps)
+
+contains
+
+  real(dp) function clock()
+    integer(int64) :: c, r
+    call system_clock(c, r)
+    clock = real(c, dp) / real(r, dp)
+  end function clock
+
+  subroutine run_timed_lib(order, q_end, p_end, stat)
+    integer, intent(in) :: order
+    real(dp), intent(out) :: q_end, p_end
+    integer, intent(out) :: stat
+    type(pendulum_walls_sep_t), target :: model
+    type(vci_integrator_t) :: integ
+    real(dp) :: q(1), p(1)
+    model = pendulum_walls_sep_model(.false.)
+    call integ%create(model, h, stat)
+    if (stat == VCI_OK) call integ%set_scheme(VCI_SCHEME_COMPOSITION, order, stat)
+    if (stat == VCI_OK) call integ%init_from_momentum(0.0_dp, [0.0_dp], [4.0_dp], stat)
+    if (stat == VCI_OK) call integ%integrate(int(nsteps, i8), 1, stat)
+    q = integ%configuration(); p = integ%momentum()
+    q_end = q(1); p_end = p(1)
+  end subroutine run_timed_lib
+
+  !> The same composition written out: merged half kicks, M⁻¹ = 1/(m l²) = 1, force −m g l sin θ.
+  subroutine run_timed_hand(order, q, p)
+    integer, intent(in) :: order
+    real(dp), intent(out) :: q, p
+    real(dp), allocatable :: gam(:), kick(:)
+    real(dp) :: f, v
+    integer :: s, i, k, stat
+    real(dp), parameter :: mass = 1.0_dp, grav = 9.8_dp, length = 1.0_dp, minv = 1.0_dp / (mass * length**2)
+    call composition_coefficients(order, gam, stat)
+    s = size(gam)
+    allocate (kick(s + 1))
+    kick(1) = 0.5_dp * gam(1); kick(s + 1) = 0.5_dp * gam(s)
+    do i = 2, s
+      kick(i) = 0.5_dp * (gam(i - 1) + gam(i))
+    end do
+    q = 0.0_dp; p = 4.0_dp
+    f = -(mass * grav * length * sin(q))
+    do k = 1, nsteps
+      do i = 1, s
+        p = p + (kick(i) * h) * f
+        v = minv * p
+        q = q + (gam(i) * h) * v
+        f = -(mass * grav * length * sin(q))
+      end do
+      p = p + (kick(s + 1) * h) * f
+    end do
+  end subroutine run_timed_hand
+
+  !> Error against CPU time on the walled pendulum (T = 10 s): for each order and h, the final
+  !> error max(|θ − θ_exact|, |θ' − θ'_exact|) and the best of 7 timings of the whole run
+  !> (create, set_scheme, init, integrate); then the cheapest run reaching each error level.
+  subroutine sweep()
+    integer, parameter :: orders(4) = [4, 6, 8, 10], nh = 12
+    real(dp), parameter :: levels(7) = [1.0e-4_dp, 1.0e-5_dp, 1.0e-6_dp, 1.0e-7_dp, 1.0e-8_dp, 1.0e-9_dp, 1.0e-10_dp]
+    type(pendulum_walls_sep_t), target :: model
+    type(vci_integrator_t) :: integ
+    type(pendulum_quad_t) :: ref
+    real(dp) :: hh, th, om, err(4, nh), cpu(4, nh), hs(4, nh), t0, t1, best, q(1), p(1)
+    integer :: j, i, r, nst, stat, bi, bj, l
+    ref%k = 9.8_dp; ref%theta_wall = 1.0_dp; ref%theta0 = 0.0_dp; ref%omega0 = 4.0_dp
+    call pendulum_quad_state(ref, 10.0_dp, th, om)
+    write (output_unit, '(a)') 'order  h          final error  CPU [ms]'
+    do j = 1, 4
+      do i = 1, nh
+        hh = 0.5_dp * 0.75_dp**(i - 1)
+        nst = nint(10.0_dp / hh); hh = 10.0_dp / nst
+        best = huge(1.0_dp)
+        do r = 1, 7
+          call cpu_time(t0)
+          model = pendulum_walls_sep_model(.true.)
+          call integ%create(model, hh, stat)
+          if (stat == VCI_OK) call integ%set_scheme(VCI_SCHEME_COMPOSITION, orders(j), stat)
+          if (stat == VCI_OK) call integ%init_from_momentum(0.0_dp, [0.0_dp], [4.0_dp], stat)
+          if (stat == VCI_OK) call integ%integrate(int(nst, i8), 1, stat)
+          call cpu_time(t1)
+          best = min(best, t1 - t0)
+        end do
+        q = integ%configuration(); p = integ%momentum()
+        err(j, i) = huge(1.0_dp)
+        if (stat == VCI_OK) err(j, i) = max(abs(q(1) - th), abs(p(1) - om))
+        cpu(j, i) = 1.0e3_dp * best; hs(j, i) = hh
+        write (output_unit, '(i5,es11.3,es13.3,f10.3)') orders(j), hh, err(j, i), cpu(j, i)
+      end do
+    end do
+    write (output_unit, '(a)') 'error <=   cheapest run (order, h, CPU [ms])'
+    do l = 1, size(levels)
+      best = huge(1.0_dp); bi = 0; bj = 0
+      do j = 1, 4
+        do i = 1, nh
+          if (err(j, i) <= levels(l) .and. cpu(j, i) < best) then
+            best = cpu(j, i); bi = i; bj = j
+          end if
+        end do
+      end do
+      if (bj > 0) write (output_unit, '(es9.1,i6,es11.3,f10.3)') levels(l), orders(bj), hs(bj, bi), best
+    end do
+  end subroutine sweep
+
+  subroutine run_timed_walls(order, impact_steps, stat)
+    integer, intent(in) :: order
+    integer, intent(out) :: impact_steps, stat
+    type(pendulum_walls_sep_t), target :: model
+    type(vci_integrator_t) :: integ
+    type(vci_stats_t) :: st
+    model = pendulum_walls_sep_model(.true.)
+    call integ%create(model, h, stat)
+    if (stat == VCI_OK) call integ%set_scheme(VCI_SCHEME_COMPOSITION, order, stat)
+    if (stat == VCI_OK) call integ%init_from_momentum(0.0_dp, [0.0_dp], [4.0_dp], stat)
+    if (stat == VCI_OK) call integ%integrate(int(nsteps, i8), 1, stat)
+    st = integ%statistics()
+    impact_steps = int(st%impacts)   ! (h = 0.01: one impact per impact step)
+  end subroutine run_timed_walls
+end program vci_bench_composition
