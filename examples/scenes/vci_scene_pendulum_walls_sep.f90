@@ -2,8 +2,7 @@
 !> M = m l², V(θ) = −m g l cos θ, walls at ±θ_w. The explicit compositions (VCI_SCHEME_COMPOSITION)
 !> need this kind; the implicit schemes run it as well (L, ∂L/∂q, ∂L/∂qdot, H are derived from M, V).
 module vci_scene_pendulum_walls_sep
-  use vci_kinds, only: dp
-  use vci_separable, only: vci_separable_t
+  use vci, only: dp, vci_separable_t
   use vci_scene_pendulum_walls, only: pendulum_walls_gaps, pendulum_walls_gap_gradients
   implicit none
   private
