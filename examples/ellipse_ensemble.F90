@@ -400,6 +400,9 @@ contains
     integer, intent(in) :: code
 #ifdef VCI_HAVE_MPI
     integer :: e
+    ! MPI_Abort kills the process without flushing Fortran's buffers: the message written just
+    ! before it was lost when stderr is not a terminal
+    flush (error_unit); flush (output_unit)
     if (code /= 0 .and. code /= 2) call MPI_Abort(MPI_COMM_WORLD, code, e)
     call MPI_Finalize(e)
 #endif
