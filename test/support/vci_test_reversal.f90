@@ -108,11 +108,14 @@ contains
   !> Uniform in [0, 1) (xorshift64*; the state is never 0).
   real(dp) function draw(state)
     integer(i8), intent(inout) :: state
-    integer(i8), parameter :: mult = 2685821657736338717_i8
+    integer, parameter :: i16 = selected_int_kind(38)
+    integer(i16), parameter :: mult = 2685821657736338717_i16, two64 = 2_i16**64
     state = ieor(state, shiftr(state, 12))
     state = ieor(state, shiftl(state, 25))
     state = ieor(state, shiftr(state, 27))
-    draw = real(shiftr(state * mult, 11), dp) / 9007199254740992.0_dp
+    ! the product modulo 2^64 in 128-bit integers: a wrapping 64-bit multiply is signed overflow,
+    ! undefined in Fortran (UBSan stops on it); the top 53 of the low 64 bits, as before
+    draw = real(modulo(int(state, i16) * mult, two64) / 2048_i16, dp) / 9007199254740992.0_dp
   end function draw
 
   function scene_label(s) result(label)
