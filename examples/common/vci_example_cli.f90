@@ -373,10 +373,10 @@ contains
   end subroutine check_model_at_start
 
   !> "progress  37.2%  step 3720000 of 10000000  t = 37.2  impacts 12  2.10E+05 steps/s  ETA 30 s"
-  subroutine progress_report(self, info, stop)
+  subroutine progress_report(self, info, stop_requested)
     class(progress_line_t), intent(inout) :: self
     type(vci_progress_info_t), intent(in) :: info
-    logical, intent(inout) :: stop
+    logical, intent(inout) :: stop_requested
     character(len=200) :: line
     character(len=24) :: eta
     eta = 'ETA ?'
@@ -391,7 +391,7 @@ contains
     else
       write (error_unit, '(a)') trim(line)
     end if
-    stop = .false.   ! (the examples never stop a run from here)
+    stop_requested = .false.   ! (the examples never stop a run from here)
   end subroutine progress_report
 
   !> Create the integrator with the command line's step length and solver settings.

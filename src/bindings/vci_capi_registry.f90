@@ -129,17 +129,17 @@ module vci_capi_registry
 
 contains
 
-  subroutine c_progress_report(self, info, stop)
+  subroutine c_progress_report(self, info, stop_requested)
     class(c_progress_t), intent(inout) :: self
     type(vci_progress_info_t), intent(in) :: info
-    logical, intent(inout) :: stop
+    logical, intent(inout) :: stop_requested
     procedure(c_progress_fn), pointer :: f
     type(vci_progress_c) :: ci
     if (.not. c_associated(self%fn)) return
     ci = vci_progress_c(info%steps_done, info%steps_total, info%impacts, info%t, info%elapsed, &
                         info%steps_per_second, info%eta)
     call c_f_procpointer(self%fn, f)
-    stop = f(ci, self%user) /= 0
+    stop_requested = f(ci, self%user) /= 0
   end subroutine c_progress_report
 
   ! ---------------------------------------------------------------------------------------------

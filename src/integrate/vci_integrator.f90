@@ -713,8 +713,8 @@ contains
     integer, intent(in) :: direction
     integer, intent(out) :: stat
     class(vci_observer_t), intent(inout), optional :: observer
-    !> progress%report(info, stop) at most once per progress%interval seconds and after the last
-    !> step; stop = .true. ends the run after the current step with VCI_STOPPED (vci_progress)
+    !> progress%report(info, stop_requested) at most once per progress%interval seconds and after the last
+    !> step; stop_requested = .true. ends the run after the current step with VCI_STOPPED (vci_progress)
     class(vci_progress_t), intent(inout), optional :: progress
     integer(i8) :: i
     integer :: ostat
@@ -782,7 +782,7 @@ contains
     class(vci_observer_t), intent(inout), optional :: observer
     integer(i8) :: i, c0, c, rate, next
     type(vci_progress_info_t) :: info
-    logical :: stop
+    logical :: stop_requested
     call system_clock(c0, rate)
     next = c0 + int(progress%interval * real(rate, dp), i8)
     stat = VCI_OK
@@ -799,10 +799,10 @@ contains
         info%steps_per_second = real(i, dp) / info%elapsed
         info%eta = real(nsteps - i, dp) / info%steps_per_second
       end if
-      stop = .false.
-      call progress%report(info, stop)
+      stop_requested = .false.
+      call progress%report(info, stop_requested)
       next = c + int(progress%interval * real(rate, dp), i8)
-      if (stop .and. i < nsteps) then
+      if (stop_requested .and. i < nsteps) then
         write (self%last_message, '(a,i0,a,i0,a,es15.8,a)') 'integrate: stopped by the progress report after ', i, &
           ' of ', nsteps, ' steps (t = ', self%state%time(), ')'
         stat = VCI_STOPPED

@@ -1,5 +1,5 @@
-!> Progress of a long run (issue 31): integrate(..., progress=p) calls p%report(info, stop) at most
-!> once per p%interval seconds of wall time (and after the last step); setting `stop` ends the
+!> Progress of a long run (issue 31): integrate(..., progress=p) calls p%report(info, stop_requested) at most
+!> once per p%interval seconds of wall time (and after the last step); setting `stop_requested` ends the
 !> run cleanly after the current step with VCI_STOPPED (the state is that step's; the observer's
 !> on_finish hears VCI_STOPPED, so an output file is flushed and closed and says so). The library
 !> prints nothing itself: the examples' --progress prints the line (examples/common).
@@ -29,12 +29,12 @@ module vci_progress
   end type vci_progress_t
 
   abstract interface
-    !> A progress report: `info` says where the run is; set `stop` to end the run after this step.
-    subroutine report_iface(self, info, stop)
+    !> A progress report: `info` says where the run is; set `stop_requested` to end the run after this step.
+    subroutine report_iface(self, info, stop_requested)
       import :: vci_progress_t, vci_progress_info_t
       class(vci_progress_t), intent(inout) :: self
       type(vci_progress_info_t), intent(in) :: info
-      logical, intent(inout) :: stop   !< .false. on entry; .true.: end the run after this step
+      logical, intent(inout) :: stop_requested   !< .false. on entry; .true.: end the run after this step
     end subroutine report_iface
   end interface
 end module vci_progress
