@@ -337,7 +337,7 @@ contains
     real(dp), intent(in) :: hqq(n, n, 0:s), hqv(n, n, 0:s), hvv(n, n, 0:s)
     real(dp), intent(inout) :: jac(:, :)
     integer :: i, j, k, r, c, r0, c0
-    real(dp) :: rs, wq, wa, wb, t, wv(0:s)
+    real(dp) :: rs, wq, wa, wb, t, rst
     do k = 1, s
       c0 = (k - 1) * n
       do j = j0, s - 1
@@ -348,14 +348,12 @@ contains
         if (j == k) wq = rs * tau * b(j)
         wa = rs * dsign * b(j) * d(j, k)
         wb = rs * dsign * b(k) * d(k, j)
-        do i = 0, s
-          wv(i) = (rs / tau) * w(i, j, k)
-        end do
+        rst = rs / tau   ! (no array of weights here: an automatic array is a malloc in gfortran)
         do c = 1, n
           do r = 1, n
             t = wq * hqq(r, c, j) + wa * hqv(r, c, j) + wb * hqv(c, r, k)
             do i = 0, s
-              t = t + wv(i) * hvv(r, c, i)
+              t = t + (rst * w(i, j, k)) * hvv(r, c, i)
             end do
             jac(r0 + r, c0 + c) = jac(r0 + r, c0 + c) + t
           end do

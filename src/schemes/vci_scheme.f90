@@ -421,9 +421,8 @@ contains
     class(vci_scheme_t), intent(inout) :: self
     real(dp), intent(inout) :: x(:)
     real(dp), intent(in) :: a(:), dh, v(:), v_before(:)
-    real(dp) :: b(size(a))
-    b = a + dh * (2.0_dp * v - v_before)
-    call self%put_endpoint(x, a, b)
+    self%qp(:) = a + dh * (2.0_dp * v - v_before)   ! (workspace of n: an automatic array is a malloc)
+    call self%put_endpoint(x, a, self%qp)
   end subroutine put_quadratic_start
 
   !> A new solve starts (schemes that size rows from the last Jacobian reset that memory here).

@@ -313,7 +313,7 @@ contains
         self%lam(:, j) = x(s * n + j * self%m + 1:s * n + (j + 1) * self%m)
       end do
     end if
-    self%x_eval(1:nv) = x(1:nv); self%a_eval = a
+    self%x_eval(1:nv) = x(1:nv); self%a_eval(:) = a   ! ((:): no reallocation check)
     self%tau_eval = tau; self%dir_eval = self%dir
     self%have_eval = .true.; self%eval_values = values
   end subroutine evaluate
@@ -380,7 +380,7 @@ contains
     if (stat /= VCI_OK) return
     if (self%kind == KIND_PAIR) then
       ! the given end as an increment, computed as put_endpoint does
-      self%tmp = self%b_target - self%a
+      self%tmp(:) = self%b_target - self%a
       r(1:n) = x((s - 1) * n + 1:s * n) - self%tmp
       scale(1:n) = abs(x((s - 1) * n + 1:s * n)) + abs(self%tmp)
     else
