@@ -17,12 +17,13 @@
 !> Regular steps only (the walls are far enough for the run not to reach them).
 module vci_bench_hand_lobatto
   use, intrinsic :: iso_fortran_env, only: real64, int64
+  use vci_bench_same, only: lu_small, lu_small_solve, merit   ! (the same LU and merit as the other hand loops)
   implicit none
   private
 
   integer, parameter :: dp = real64
   integer, parameter :: smax = 6
-  real(dp), parameter :: rtol = 1.0e-12_dp
+  real(dp), parameter :: rtol = 1.0e-12_dp   ! (merit's, in bench/same_loops.f90)
 
   public :: hand_lobatto_steps, lobatto_nodes_weights
 
@@ -97,7 +98,7 @@ contains
       jscale(1:s) = 0.0_dp
       factored = .false.
       call resid(x, r, sc)
-      phi = merit(r, sc)
+      phi = merit(r(1:s), sc(1:s))
       do it = 1, 30
         if (phi <= 1.0_dp .and. (it > 1 .or. phi <= 1.0e-3_dp)) exit
         iterations = iterations + 1
@@ -127,7 +128,7 @@ contains
         do ib = 0, 12
           xt(1:s) = x(1:s) - step * dx(1:s)
           call resid(xt, rt, sct)
-          phit = merit(rt, sct)
+          phit = merit(rt(1:s), sct(1:s))
           if (phit < (1.0_dp - 1.0e-4_dp * step) * phi) exit
           step = 0.5_dp * step
         end do
@@ -145,7 +146,7 @@ contains
         xt(1:s) = x(1:s) - dx(1:s)
         call resid(xt, rt, sct)
         iterations = iterations + 1
-        if (merit(rt, sct) <= phi) x(1:s) = xt(1:s)
+        if (merit(rt(1:s), sct(1:s)) <= phi) x(1:s) = xt(1:s)
       end if
       call nodes(x)                                 ! (the library evaluates the solution once more)
       if (abs(y(s)) > wall) then
@@ -208,71 +209,4 @@ contains
       end do
     end subroutine resid
   end subroutine hand_lobatto_steps
-
-  !> LU with partial pivoting of a(1:n, 1:n) in place; false when a pivot is below 1e-14 of the largest.
-  logical function lu_small(n, a, piv) result(ok)
-    integer, intent(in) :: n
-    real(dp), intent(inout) :: a(:, :)
-    integer, intent(out) :: piv(:)
-    integer :: i, j, kk, pp
-    real(dp) :: t, dmin, dmax
-    do j = 1, n
-      pp = j
-      do i = j + 1, n
-        if (abs(a(i, j)) > abs(a(pp, j))) pp = i
-      end do
-      piv(j) = pp
-      if (pp /= j) then
-        do kk = 1, n
-          t = a(j, kk); a(j, kk) = a(pp, kk); a(pp, kk) = t
-        end do
-      end if
-      if (a(j, j) == 0.0_dp) cycle
-      do i = j + 1, n
-        a(i, j) = a(i, j) / a(j, j)
-        do kk = j + 1, n
-          a(i, kk) = a(i, kk) - a(i, j) * a(j, kk)
-        end do
-      end do
-    end do
-    dmin = huge(1.0_dp); dmax = 0.0_dp
-    do i = 1, n
-      dmin = min(dmin, abs(a(i, i))); dmax = max(dmax, abs(a(i, i)))
-    end do
-    ok = dmin > 1.0e-14_dp * dmax
-  end function lu_small
-
-  pure subroutine lu_small_solve(n, a, piv, b)
-    integer, intent(in) :: n
-    real(dp), intent(in) :: a(:, :)
-    integer, intent(in) :: piv(:)
-    real(dp), intent(inout) :: b(:)
-    integer :: i, kk
-    real(dp) :: t
-    do i = 1, n
-      if (piv(i) /= i) then
-        t = b(i); b(i) = b(piv(i)); b(piv(i)) = t
-      end if
-    end do
-    do i = 2, n
-      do kk = 1, i - 1
-        b(i) = b(i) - a(i, kk) * b(kk)
-      end do
-    end do
-    do i = n, 1, -1
-      do kk = i + 1, n
-        b(i) = b(i) - a(i, kk) * b(kk)
-      end do
-      b(i) = b(i) / a(i, i)
-    end do
-  end subroutine lu_small_solve
-
-  pure real(dp) function merit(r, sc)
-    real(dp), intent(in) :: r(:), sc(:)
-    integer :: i
-    merit = 0.0_dp
-    do i = 1, size(r)
-      merit = max(merit, abs(r(i)) / max(rtol * sc(i), tiny(1.0_dp)))
-    end do
-  end function merit
 end module vci_bench_hand_lobatto
