@@ -111,11 +111,13 @@ contains
   !> (VCI_SCHEME_MIDPOINT or VCI_SCHEME_LOBATTO with `stages`), step h and the safety net's bound
   !> `splits` (1: off); the other settings are the library's defaults. walls = .false.: the same
   !> scene and start without walls (the free flight, whose own stability limits the step).
-  subroutine long_run(scene, scheme, stages, h, splits, r, walls)
+  !> max_iterations: Newton's cap (default 30; a low cap forces failures for the net to catch).
+  subroutine long_run(scene, scheme, stages, h, splits, r, walls, max_iterations)
     integer, intent(in) :: scene, scheme, stages, splits
     real(dp), intent(in) :: h
     type(long_run_t), intent(out) :: r
     logical, intent(in), optional :: walls
+    integer, intent(in), optional :: max_iterations
     class(vci_lagrangian_t), allocatable, target :: model
     type(vci_integrator_t) :: integ
     type(vci_stats_t) :: stats
@@ -155,6 +157,7 @@ contains
     call integ%create(model, h, stat)
     if (stat == VCI_OK) call integ%set_scheme(scheme, stages, stat)
     if (stat == VCI_OK) call integ%set_step_splits(splits, stat)
+    if (stat == VCI_OK .and. present(max_iterations)) call integ%set_tolerances(0.0_dp, 1.0e-12_dp, max_iterations, stat)
     if (stat == VCI_OK) call integ%init_from_momentum(0.0_dp, q0, p0, stat)
     nsteps = nint(long_t_final(scene) / h, i8)
     if (stat == VCI_OK) then
@@ -174,7 +177,8 @@ contains
     allocate (qr(size(q)), pr(size(q)))
     select case (scene)
     case (LONG_PENDULUM)
-      pq%k = 9.8_dp; pq%theta_wall = merge(1.0_dp, 0.0_dp, with_walls); pq%theta0 = 0.0_dp; pq%omega0 = 4.0_dp
+      ! without walls: a wall at 3 rad, beyond the swing (1.39 rad), is never met
+      pq%k = 9.8_dp; pq%theta_wall = merge(1.0_dp, 3.0_dp, with_walls); pq%theta0 = 0.0_dp; pq%omega0 = 4.0_dp
       call pendulum_quad_state(pq, r%t_end, th, om)
       qr = [th]; pr = [om]
     case (LONG_KEPLER_CIRCLE)
