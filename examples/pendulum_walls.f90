@@ -87,6 +87,7 @@ program pendulum_walls
   stats = integ%statistics()
   write (output_unit, '(a,i0,a,i0)') 'newton: solves ', stats%newton_solves, '  iterations ', &
     stats%newton_iterations
+  call print_split_steps(integ)
   write (output_unit, '(a)') 'status: ok'
   deallocate (times, found, q, p)   ! a main program's allocatables are not freed at its end (valgrind)
 end program pendulum_walls

@@ -249,6 +249,13 @@ int  vci_set_impact_energy(vci_integrator integ, int mode);
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, max_impacts < 1; VCI_ERR_STATE: busy. */
 int  vci_set_max_impacts(vci_integrator integ, int max_impacts);
 
+/** The safety net: a step whose Newton solve or impact stages fail (VCI_ERR_NEWTON, VCI_ERR_IMPACT)
+ *  or that exceeds the impacts-per-step bound is retried as 2, 4, ... equal sub-steps of the same
+ *  scheme, up to max_splits of them (default 16); 1 turns it off (the step then fails with its own
+ *  status). Counted by vci_get_split_steps (docs/DESIGN.md §2, "Steps that cannot be solved").
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, max_splits outside 1..1024; VCI_ERR_STATE: busy. */
+int  vci_set_step_splits(vci_integrator integ, int max_splits);
+
 /** Start from the pair q0[n] at t0 and q1[n] at t0 + h. The current state becomes
  *  (t0 + h, q1, p1) with p1 = D2 L_d(q0, q1, h), step index 1; the discrete energy is E_d(q0, q1, h).
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, q0 or q1 NULL, NaN/Inf in t0, q0 or q1, t0 + h
@@ -303,6 +310,11 @@ int  vci_get_stats(vci_integrator integ, int64_t *steps, int64_t *impacts, int64
  *  supplies energy (else such an impact fails the step). count may be NULL.
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle; VCI_ERR_STATE: busy. */
 int  vci_get_energy_fallbacks(vci_integrator integ, int64_t *count);
+
+/** Steps the safety net (vci_set_step_splits) took as equal sub-steps, and the most sub-steps one
+ *  of them needed (0 when none); either pointer may be NULL.
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle; VCI_ERR_STATE: busy. */
+int  vci_get_split_steps(vci_integrator integ, int64_t *steps, int64_t *largest);
 
 /** Call fn(..., user) at every impact of later steps; fn = NULL removes it.
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle; VCI_ERR_STATE: busy. */

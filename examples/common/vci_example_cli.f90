@@ -23,6 +23,7 @@ module vci_example_cli
     integer :: impact_energy = VCI_IMPACT_DISCRETE
     real(dp) :: rtol = 1.0e-12_dp
     integer :: max_impacts = 16
+    integer :: step_splits = 16               !< --step-splits: the safety net's bound (1: off)
     character(len=:), allocatable :: scheme   !< --scheme: left, midpoint or lobatto (unset: the scene's default)
     integer :: stages = 2                     !< --stages: s of lobatto
     logical :: check_model = .false.          !< --check-model: compare the derivatives, do not run
@@ -73,6 +74,7 @@ module vci_example_cli
   end interface
 
   public :: parse_options, run_example, check_model_at_start, read_last_state, create_integrator, scheme_id, is_decimal, steps_to
+  public :: print_split_steps
 
   ! ranges of the numeric flags (--help states them)
   real(dp), parameter :: h_max = 1.0e6_dp, t_max = 1.0e12_dp, rtol_min = 1.0e-16_dp, rtol_max = 1.0e-4_dp
@@ -124,6 +126,8 @@ contains
         write (output_unit, '(a)') '  --impact-energy MODE  discrete (paper, default) or hamiltonian'
         write (output_unit, '(a)') '  --rtol R              Newton tolerance relative to term sizes, 1e-16 <= R <= 1e-4 (1e-12)'
         write (output_unit, '(a)') '  --max-impacts K       impacts allowed in one step, 1 <= K <= 1000000 (16)'
+        write (output_unit, '(a)') '  --step-splits K       retry a step that cannot be solved as 2, 4, ... <= K equal sub-steps,'
+        write (output_unit, '(a)') '                        1 <= K <= 1024 (16); 1: off, such a step ends the run'
         write (output_unit, '(a)') '  --differenced-hessian let the library difference the mixed Hessian'
         write (output_unit, '(a)') '  --scheme S            discretise the scene''s continuous L: left, midpoint, lobatto'
         write (output_unit, '(a)') '                        or composition (explicit; separable scenes: pendulum_walls)'
@@ -138,6 +142,7 @@ contains
         write (output_unit, '(a)') '  --no-progress         no progress line'
         stop
       case ('--h', '--t-final', '--output', '--from', '--impact-energy', '--rtol', '--max-impacts', '--flush-every', &
+            '--step-splits', &
             '--scheme', '--stages', '--start', '--order')
         if (i == nargs) call die(name//': '//arg//' needs a value')
         i = i + 1
@@ -154,6 +159,7 @@ contains
         case ('--from'); opts%from = val
         case ('--rtol'); opts%rtol = to_real(val, arg, rtol_min, rtol_max)
         case ('--max-impacts'); opts%max_impacts = to_int(val, arg, 1, max_impacts_max)
+        case ('--step-splits'); opts%step_splits = to_int(val, arg, 1, 1024)
         case ('--stages'); opts%stages = to_int(val, arg, 1, 8)
         case ('--start')
           if (val /= 'exact' .and. val /= 'pair') call die(name//': --start must be exact or pair')
@@ -333,6 +339,7 @@ contains
       stats%newton_iterations, '  least-squares fallbacks ', stats%fallbacks
     if (stats%energy_fallbacks > 0) write (output_unit, '(a,i0,a)') 'impacts that kept H (no impulse matches E_d): ', &
       stats%energy_fallbacks, ' (docs/DESIGN.md §2)'
+    call print_split_steps(integ)
     write (output_unit, '(a,f0.4,a)') 'wall time: ', real(c1 - c0, dp) / real(rate, dp), ' s'
     call print_state('end state', integ)
     if (.not. opts%no_output) write (output_unit, '(a)') 'output: '//opts%output
@@ -342,6 +349,15 @@ contains
     end if
     write (output_unit, '(a)') 'status: ok'
   end subroutine run_example
+
+  !> The safety net's line of a summary (always printed: a run that needed it says so).
+  subroutine print_split_steps(integ)
+    type(vci_integrator_t), intent(in) :: integ
+    type(vci_stats_t) :: stats
+    stats = integ%statistics()
+    write (output_unit, '(a,i0,a,i0,a)') 'steps retried as equal sub-steps (safety net): ', stats%split_steps, &
+      '   most sub-steps: ', stats%largest_split, '   (docs/DESIGN.md §2)'
+  end subroutine print_split_steps
 
   !> --check-model: vci_check_model at the start state (q; for L_d the second point q + h p, for L
   !> the velocity p: any point serves, the identities checked hold everywhere); prints the report,
@@ -413,6 +429,7 @@ contains
     end select
     if (stat == VCI_OK) call integ%set_tolerances(0.0_dp, opts%rtol, 30, stat)
     if (stat == VCI_OK) call integ%set_max_impacts(opts%max_impacts, stat)
+    if (stat == VCI_OK) call integ%set_step_splits(opts%step_splits, stat)
     if (stat /= VCI_OK) call die(name//': '//integ%message())
   end subroutine create_integrator
 

@@ -329,6 +329,17 @@ class Integrator:
         return int(c[0])
 
     @property
+    def split_steps(self):
+        """(steps the safety net took as equal sub-steps, the most sub-steps one needed)."""
+        c, m = ffi.new("int64_t *"), ffi.new("int64_t *")
+        self._check(lib.vci_get_split_steps(self._h[0], c, m))
+        return int(c[0]), int(m[0])
+
+    def set_step_splits(self, max_splits):
+        """The safety net's bound: retry a failed step as up to max_splits equal sub-steps (1: off)."""
+        self._check(lib.vci_set_step_splits(self._h[0], int(max_splits)))
+
+    @property
     def impacts(self):
         """Every impact since the last init_*, a structured array of impact_dtype(n)."""
         return self._impact_array(self._impacts)

@@ -25,6 +25,7 @@ module vci_capi
   public :: vci_init_from_pair, vci_init_from_momentum, vci_step, vci_integrate
   public :: vci_get_state, vci_get_multipliers, vci_get_energy, vci_get_index, vci_get_stats
   public :: vci_get_energy_fallbacks
+  public :: vci_set_step_splits, vci_get_split_steps
   public :: vci_set_impact_callback, vci_open_output, vci_close_output
   public :: vci_last_error, vci_status_string, vci_version
 
@@ -446,6 +447,20 @@ contains
     vci_set_max_impacts = stat
   end function vci_set_max_impacts
 
+  !> int vci_set_step_splits(vci_integrator integ, int max_splits): the safety net's bound (1: off).
+  integer(c_int) function vci_set_step_splits(integ, max_splits) bind(C, name='vci_set_step_splits')
+    type(c_ptr), value :: integ
+    integer(c_int), value :: max_splits
+    type(c_integrator_t), pointer :: ip
+    integer :: stat
+    call enter(integ, 'vci_set_step_splits', ip, stat)
+    if (stat == VCI_OK) then
+      call ip%integ%set_step_splits(int(max_splits), stat)
+      call leave(ip)
+    end if
+    vci_set_step_splits = stat
+  end function vci_set_step_splits
+
   !> int vci_set_scheme(vci_integrator integ, int scheme, int stages): the scheme of a continuous model.
   integer(c_int) function vci_set_scheme(integ, scheme, stages) bind(C, name='vci_set_scheme')
     type(c_ptr), value :: integ
@@ -753,6 +768,30 @@ contains
     end if
     vci_get_energy_fallbacks = stat
   end function vci_get_energy_fallbacks
+
+  !> int vci_get_split_steps(vci_integrator integ, int64_t *steps, int64_t *largest): steps the
+  !> safety net took as equal sub-steps, and the most sub-steps one of them needed.
+  integer(c_int) function vci_get_split_steps(integ, steps, largest) bind(C, name='vci_get_split_steps')
+    type(c_ptr), value :: integ, steps, largest
+    type(c_integrator_t), pointer :: ip
+    type(vci_stats_t) :: stats
+    integer :: stat
+    integer(c_int64_t), pointer :: l
+    call enter(integ, 'vci_get_split_steps', ip, stat)
+    if (stat == VCI_OK) then
+      stats = ip%integ%statistics()
+      if (c_associated(steps)) then
+        call c_f_pointer(steps, l)
+        l = int(stats%split_steps, c_int64_t)
+      end if
+      if (c_associated(largest)) then
+        call c_f_pointer(largest, l)
+        l = int(stats%largest_split, c_int64_t)
+      end if
+      call leave(ip)
+    end if
+    vci_get_split_steps = stat
+  end function vci_get_split_steps
 
   !> int vci_set_impact_callback(vci_integrator integ, vci_impact_fn fn, void *user): NULL fn removes it.
   integer(c_int) function vci_set_impact_callback(integ, fn, user) bind(C, name='vci_set_impact_callback')

@@ -772,6 +772,40 @@ subroutine vcieng(ih, mode, istat)
   if (istat == VCI_OK) call integ%set_impact_energy(mode, istat)
 end subroutine vcieng
 
+!> The safety net (docs/DESIGN.md §2): a step that cannot be solved is retried as 2, 4, ... equal
+!> sub-steps up to MAXSPL of them (default 16); MAXSPL = 1 turns it off. ISTAT = 1 outside 1..1024.
+subroutine vcispl(ih, maxspl, istat)
+  use vci_status, only: VCI_OK
+  use vci_integrator, only: vci_integrator_t
+  use vci_legacy, only: legacy_get
+  implicit none
+  integer, intent(in) :: ih, maxspl
+  integer, intent(out) :: istat
+  type(vci_integrator_t), pointer :: integ
+  call legacy_get(ih, 'VCISPL', integ, istat)
+  if (istat == VCI_OK) call integ%set_step_splits(maxspl, istat)
+end subroutine vcispl
+
+!> The safety net's counts: NSPLIT steps taken as equal sub-steps, MOSTSP the most sub-steps one of
+!> them needed (0 when none), over the handle's life.
+subroutine vcinet(ih, nsplit, mostsp, istat)
+  use vci_kinds, only: i8
+  use vci_status, only: VCI_OK
+  use vci_integrator, only: vci_integrator_t, vci_stats_t
+  use vci_legacy, only: legacy_get
+  implicit none
+  integer, intent(in) :: ih
+  integer, intent(out) :: nsplit, mostsp, istat
+  type(vci_integrator_t), pointer :: integ
+  type(vci_stats_t) :: stats
+  nsplit = 0; mostsp = 0
+  call legacy_get(ih, 'VCINET', integ, istat)
+  if (istat /= VCI_OK) return
+  stats = integ%statistics()
+  nsplit = int(min(stats%split_steps, int(huge(1), i8)))
+  mostsp = int(stats%largest_split)
+end subroutine vcinet
+
 !> Scheme of a continuous model (IOPT bit 8): ISCH 1 left (order 1), 2 midpoint (order 2, the
 !> default), 3 lobatto with NSTG = s stages (1 <= s <= 8, order 2s, with or without constraints); NSTG is ignored
 !> except for lobatto. Call after VCINEW and before VCIINP/VCIINM (the state is reset).

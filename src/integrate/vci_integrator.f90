@@ -49,6 +49,10 @@ module vci_integrator
     integer(i8) :: fused_solves = 0     !< regular sub-steps solved by the scheme's fused routine
     !> impacts where no impulse matches the discrete energy (a graze): H(q, p) kept instead
     integer(i8) :: energy_fallbacks = 0
+    !> steps that failed and were then taken as 2, 4, ... equal sub-steps (the safety net,
+    !> set_step_splits; docs/DESIGN.md §2), and the most sub-steps one of them needed
+    integer(i8) :: split_steps = 0
+    integer(i8) :: largest_split = 0   !< the most equal sub-steps one split step needed (0: none)
   end type vci_stats_t
 
   !> The driver: create it for a model and a step length, choose settings, initialise, then step or
@@ -92,6 +96,8 @@ module vci_integrator
     procedure :: set_impact_energy
     !> Bound on impacts resolved inside one step (default 16).
     procedure :: set_max_impacts
+    !> The safety net: retry a failed step as up to max_splits equal sub-steps (1: off).
+    procedure :: set_step_splits
     !> Start from q0 at t0 and q1 at t0 + h (the paper's initial pair).
     procedure :: init_from_pair
     !> Start from (q0, p0) at t0; step index 0.
@@ -484,6 +490,26 @@ contains
     call self%stepper%configure(settings)   ! the impact records grow on demand up to it
     call finish(self, VCI_OK, stat)
   end subroutine set_max_impacts
+
+  !> The safety net (docs/DESIGN.md §2, "Steps that cannot be solved"): a step whose Newton solve or
+  !> impact stages fail, or that exceeds the impacts-per-step bound, is retried as 2, 4, ... equal
+  !> sub-steps of the same scheme up to max_splits of them (default 16; a power of two is reached
+  !> at most); max_splits = 1 turns it off, and such a step fails with its own status. Counted in
+  !> statistics() (split_steps, largest_split).
+  subroutine set_step_splits(self, max_splits, stat)
+    class(vci_integrator_t), intent(inout) :: self
+    integer, intent(in) :: max_splits
+    integer, intent(out) :: stat
+    type(vci_settings_t) :: settings
+    if (max_splits < 1 .or. max_splits > 1024) then
+      write (self%last_message, '(a,i0,a)') 'set_step_splits: ', max_splits, ' (need 1 (off) to 1024)'
+      call finish(self, VCI_ERR_ARGUMENT, stat); return
+    end if
+    settings = self%stepper%current_settings()
+    settings%max_step_splits = max_splits
+    call self%stepper%configure(settings)
+    call finish(self, VCI_OK, stat)
+  end subroutine set_step_splits
 
   !> Start from q0 at t0 and q1 at t0 + h (the paper's initial pair). The current state becomes
   !> (t0 + h, q1, p1) with p1 = D2 L_d(q0, q1, h); the step index is 1.
@@ -989,6 +1015,8 @@ contains
     stats%fallbacks = solver%fallbacks
     stats%fused_solves = solver%fused_solves
     stats%energy_fallbacks = solver%energy_fallbacks
+    stats%split_steps = solver%split_steps
+    stats%largest_split = solver%largest_split
   end function statistics
 
   !> Linear-algebra paths of Newton (docs/DESIGN.md §6): the in-line LU for systems of at most

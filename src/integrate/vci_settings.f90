@@ -14,6 +14,10 @@ module vci_settings
     integer :: max_iterations = 30       !< Newton iteration cap per solve
     integer :: max_impacts_per_step = 16 !< beyond this: VCI_ERR_TOO_MANY_IMPACTS (contact, chatter)
     integer :: impact_energy = VCI_IMPACT_DISCRETE  !< VCI_IMPACT_DISCRETE or VCI_IMPACT_HAMILTONIAN
+    !> The safety net (docs/DESIGN.md §2, "Steps that cannot be solved"): a step whose impacts or
+    !> Newton fail is retried as 2, 4, ... equal sub-steps of the same scheme, up to this many;
+    !> 1 turns the net off (the step then fails with its own status).
+    integer :: max_step_splits = 16
   end type vci_settings_t
 
   !> Cumulative solver statistics.
@@ -23,5 +27,7 @@ module vci_settings
     integer(i8) :: fallbacks = 0          !< least-squares fallbacks (singular Newton matrices)
     integer(i8) :: fused_solves = 0   !< of newton_solves, those the scheme's fused routine did
     integer(i8) :: energy_fallbacks = 0  !< impacts where E_d could not be matched: H kept instead
+    integer(i8) :: split_steps = 0       !< steps the safety net took as equal sub-steps
+    integer(i8) :: largest_split = 0     !< the most sub-steps one of them needed
   end type vci_solver_stats_t
 end module vci_settings

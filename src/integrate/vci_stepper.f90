@@ -81,6 +81,9 @@ module vci_stepper
     !> An explicit composition's step (VCI_SCHEME_COMPOSITION): when allocated it takes the steps
     !> (vci_explicit_step) and `sys` serves only the queries that do not step.
     type(vci_explicit_t), allocatable :: explicit
+    !> The safety net's run through equal sub-steps (split_step): its state and each part's impacts
+    type(vci_state_t) :: part
+    type(vci_impact_buffer_t) :: part_impacts
   contains
     procedure :: setup
     procedure :: configure
@@ -302,8 +305,14 @@ contains
     type(vci_impact_buffer_t), intent(inout) :: impacts
     integer, intent(out) :: stat
     integer :: i
+    real(dp) :: arriving
     if (state%arriving_direction /= dir) state%arriving_energy = ieee_value(1.0_dp, ieee_quiet_nan)
+    arriving = state%arriving_energy     ! a failed attempt may have changed it
     call take_step(self, state, dir, impacts, stat)
+    if (stat /= VCI_OK .and. self%settings%max_step_splits >= 2) then
+      if (stat == VCI_ERR_NEWTON .or. stat == VCI_ERR_IMPACT .or. stat == VCI_ERR_TOO_MANY_IMPACTS) &
+        call split_step(self, state, dir, arriving, impacts, stat)
+    end if
     if (stat /= VCI_OK) then
       state%arriving_direction = 0
       return
@@ -317,6 +326,86 @@ contains
     state%step_energy = self%e_new
     state%k = state%k + dir
   end subroutine advance
+
+  !> The safety net (docs/DESIGN.md §2, "Steps that cannot be solved"): the step that just failed
+  !> (its status in stat, its cause in self%cause) once more as 2, 4, ... equal sub-steps of length
+  !> h / parts, each a step of the same scheme from the end of the one before (so the map stays
+  !> symplectic and momentum-preserving), up to settings%max_step_splits of them; the last part ends
+  !> exactly at the grid time. Each part may have up to max_impacts_per_step impacts. On success the
+  !> outcome is in q_new, p_new, lambda_new, e_new (E_d of the last part), impacts holds the parts'
+  !> impacts (alpha as a fraction of the whole step), the statistics count the step. When every
+  !> split fails: the first attempt's status, its cause and what the finest split met.
+  subroutine split_step(self, state, dir, arriving, impacts, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    type(vci_state_t), intent(inout) :: state
+    integer, intent(in) :: dir
+    real(dp), intent(in) :: arriving
+    type(vci_impact_buffer_t), intent(inout) :: impacts
+    integer, intent(inout) :: stat
+    integer :: first_stat, parts, i, k, st, tried
+    character(len=VCI_MSG_LEN) :: first_cause
+    character(len=2 * VCI_MSG_LEN) :: combined
+    character(len=16) :: last_parts
+    first_stat = stat; first_cause = self%cause
+    st = VCI_OK
+    if (.not. allocated(self%part_impacts%records)) then
+      call self%part_impacts%reserve(min(self%settings%max_impacts_per_step, 16), self%n, st)
+      if (st /= VCI_OK) return
+    end if
+    parts = 2; tried = 0
+    do while (parts <= self%settings%max_step_splits)
+      tried = parts
+      self%part = state
+      self%part%arriving_energy = arriving
+      self%part%h = state%h / real(parts, dp)
+      self%part%t0 = state%time(); self%part%k = 0_i8      ! part i ends at t0 + i (h / parts)
+      call self%part%forget_history()                   ! the history is of steps of another length
+      impacts%count = 0
+      do i = 1, parts
+        if (self%part%arriving_direction /= dir) self%part%arriving_energy = ieee_value(1.0_dp, ieee_quiet_nan)
+        call take_step(self, self%part, dir, self%part_impacts, st)
+        if (st /= VCI_OK) exit
+        if (self%part_impacts%count > 0) then
+          call impacts%reserve(impacts%count + self%part_impacts%count, self%n, st)
+          if (st /= VCI_OK) then
+            self%cause = 'cannot allocate the records of the impacts of a split step'; exit
+          end if
+          do k = 1, self%part_impacts%count
+            impacts%count = impacts%count + 1
+            impacts%records(impacts%count) = self%part_impacts%records(k)
+            impacts%records(impacts%count)%alpha = (real(i - 1, dp) + self%part_impacts%records(k)%alpha) / real(parts, dp)
+          end do
+        end if
+        self%part%q(:) = self%q_new; self%part%p(:) = self%p_new
+        if (self%m > 0) self%part%lambda(:) = self%lambda_new
+        self%part%step_energy = self%e_new
+        self%part%k = self%part%k + dir
+        self%part%arriving_direction = dir
+      end do
+      if (st == VCI_OK) then
+        ! the step as a whole: its velocity starts the next step's predictor afresh
+        state%velocity = real(dir, dp) * (self%q_new - state%q) / state%h
+        state%predictor_depth = 0
+        state%arriving_energy = self%part%arriving_energy
+        self%stats%split_steps = self%stats%split_steps + 1
+        self%stats%largest_split = max(self%stats%largest_split, int(parts, i8))
+        stat = VCI_OK
+        return
+      end if
+      if (st == VCI_ERR_MEMORY .or. st == VCI_ERR_CALLBACK .or. st == VCI_ERR_NONFINITE) exit
+      parts = 2 * parts
+    end do
+    impacts%count = 0
+    stat = first_stat
+    if (tried == 0) then
+      self%cause = first_cause; return
+    end if
+    write (last_parts, '(i0)') tried
+    ! the driver puts the step and time before the cause in a message of VCI_MSG_LEN characters
+    combined = trim(first_cause)//'; retried as 2 to '//trim(last_parts)//' equal sub-steps (safety net): '// &
+               trim(self%cause)
+    self%cause = combined(1:VCI_MSG_LEN - 120)
+  end subroutine split_step
 
   !> The step itself: the regular sub-step from the predictor's start, the impacts, the momentum
   !> and E_d of the last sub-step. The outcome goes to q_new, p_new, lambda_new, e_new; the

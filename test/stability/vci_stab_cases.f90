@@ -46,12 +46,14 @@ contains
   !> Drop from (0, 1) with horizontal speed sqrt(g) (mass m, gravity g) and step h = h1/sqrt(g):
   !> in units of length 1 and time 1/sqrt(g) every run is the same. nsteps steps. Returns the run
   !> and the final state in those units (x, y, vx, vy).
-  subroutine magnitude_case(mass, grav, h1, nsteps, mode, s, state)
+  !> splits: the safety net's bound (set_step_splits; absent: the default).
+  subroutine magnitude_case(mass, grav, h1, nsteps, mode, s, state, splits)
     real(dp), intent(in) :: mass, grav, h1
     integer(i8), intent(in) :: nsteps
     integer, intent(in) :: mode
     type(run_summary_t), intent(out) :: s
     real(dp), intent(out) :: state(4)
+    integer, intent(in), optional :: splits
     type(particle_t), target :: model
     type(vci_integrator_t) :: integ
     real(dp) :: h, v
@@ -60,6 +62,7 @@ contains
     model = particle_on_floor(mass, grav)
     call integ%create(model, h, stat)
     call integ%set_impact_energy(mode, stat)
+    if (present(splits)) call integ%set_step_splits(splits, stat)
     call integ%init_from_momentum(0.0_dp, [0.0_dp, 1.0_dp], [mass * v, 0.0_dp], stat)
     call run_steps(integ, model, nsteps, s)
     associate (q_ => integ%configuration(), p_ => integ%momentum())
@@ -165,11 +168,13 @@ contains
   !> No gravity; walls y >= 0 and y <= d, the particle starting at (0, d/2) with velocity (1, v):
   !> about v h / d impacts per step of h = 1e-2. 10 steps. Returns the error of the final y against
   !> the exact folded motion.
-  subroutine close_walls_case(d, v, mode, max_impacts, s, err)
+  !> splits: the safety net's bound (set_step_splits; absent: the default).
+  subroutine close_walls_case(d, v, mode, max_impacts, s, err, splits)
     real(dp), intent(in) :: d, v
     integer, intent(in) :: mode, max_impacts
     type(run_summary_t), intent(out) :: s
     real(dp), intent(out) :: err
+    integer, intent(in), optional :: splits
     type(particle_t), target :: model
     type(vci_integrator_t) :: integ
     real(dp) :: u
@@ -183,6 +188,7 @@ contains
     call integ%create(model, 1.0e-2_dp, stat)
     call integ%set_impact_energy(mode, stat)
     call integ%set_max_impacts(max_impacts, stat)
+    if (present(splits)) call integ%set_step_splits(splits, stat)
     call integ%init_from_momentum(0.0_dp, [0.0_dp, 0.5_dp * d], [1.0_dp, v], stat)
     call run_steps(integ, model, 10_i8, s)
     u = modulo(0.5_dp * d + v * integ%time(), 2.0_dp * d)   ! unfolded coordinate, folded into [0, d]
@@ -208,12 +214,14 @@ contains
   end subroutine rest_case
 
   !> Bounces of period P = ratio * h (h = 1e-2, gravity 9.8): dropped from y0 = g P^2 / 8 at the
-  !> apex. ratio < 1 puts several bounces into one step. nsteps steps.
-  subroutine short_bounce_case(ratio, mode, nsteps, s)
+  !> apex. ratio < 1 puts several bounces into one step. nsteps steps. splits: the safety net's
+  !> bound (set_step_splits; absent: the default).
+  subroutine short_bounce_case(ratio, mode, nsteps, s, splits)
     real(dp), intent(in) :: ratio
     integer, intent(in) :: mode
     integer(i8), intent(in) :: nsteps
     type(run_summary_t), intent(out) :: s
+    integer, intent(in), optional :: splits
     type(particle_t), target :: model
     type(vci_integrator_t) :: integ
     real(dp), parameter :: g = 9.8_dp, h = 1.0e-2_dp
@@ -221,6 +229,7 @@ contains
     model = particle_on_floor(1.0_dp, g)
     call integ%create(model, h, stat)
     call integ%set_impact_energy(mode, stat)
+    if (present(splits)) call integ%set_step_splits(splits, stat)
     call integ%init_from_momentum(0.0_dp, [0.0_dp, g * (ratio * h)**2 / 8.0_dp], [1.0_dp, 0.0_dp], stat)
     call run_steps(integ, model, nsteps, s)
   end subroutine short_bounce_case

@@ -14,6 +14,7 @@ module vci_stab_run
     integer :: status = VCI_OK
     character(len=VCI_MSG_LEN) :: message = ''
     integer(i8) :: steps = 0, impacts = 0, solves = 0, iterations = 0, fallbacks = 0
+    integer(i8) :: split_steps = 0, largest_split = 0   !< the safety net's counts (set_step_splits)
     integer :: max_impacts_step = 0        !< most impacts resolved inside one step
     integer :: max_iterations_step = 0     !< most Newton iterations spent on one step
     real(dp) :: h0 = 0.0_dp                !< H(q, p) at the start (or of the first state where H exists)
@@ -119,5 +120,6 @@ contains
     s%solves = stats%newton_solves
     s%iterations = stats%newton_iterations
     s%fallbacks = stats%fallbacks
+    s%split_steps = stats%split_steps; s%largest_split = stats%largest_split
   end subroutine run_steps
 end module vci_stab_run
