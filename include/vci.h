@@ -305,9 +305,10 @@ int  vci_get_index(vci_integrator integ, int64_t *k);
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle; VCI_ERR_STATE: busy. */
 int  vci_get_stats(vci_integrator integ, int64_t *steps, int64_t *impacts, int64_t *newton_iterations);
 
-/** Impacts at which the discrete energy condition had no solution (a soft impact: the normal kinetic
- *  energy below E_d's O(h^2) mismatch with H) and H(q, p) was kept instead; only with a model that
- *  supplies energy (else such an impact fails the step). count may be NULL.
+/** Soft impacts (the normal kinetic energy comparable to E_d's O(h^2) mismatch with H) at which the
+ *  discrete energy condition was blended with H (a reversible condition, docs/BACKWARD.md) or, as a
+ *  last resort or with constraints, H(q, p) was kept instead; only with a model that supplies energy
+ *  (else an impact without a discrete root fails the step). count may be NULL.
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle; VCI_ERR_STATE: busy. */
 int  vci_get_energy_fallbacks(vci_integrator integ, int64_t *count);
 

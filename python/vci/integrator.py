@@ -323,7 +323,7 @@ class Integrator:
 
     @property
     def energy_fallbacks(self):
-        """Impacts at which the discrete energy condition had no solution and H was kept."""
+        """Soft impacts at which the discrete energy condition was blended with H, or H was kept."""
         c = ffi.new("int64_t *")
         self._check(lib.vci_get_energy_fallbacks(self._h[0], c))
         return int(c[0])

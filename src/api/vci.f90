@@ -11,6 +11,7 @@ module vci
   use vci_progress, only: vci_progress_t, vci_progress_info_t
   use vci_checkpoint, only: vci_checkpoint_t, VCI_CHECKPOINT_VERSION
   use vci_integrator, only: vci_integrator_t, vci_stats_t, vci_settings_t, VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN, &
+                            VCI_IMPACT_BLENDED, &
                             VCI_SCHEME_DISCRETE, VCI_SCHEME_LEFT, VCI_SCHEME_MIDPOINT, VCI_SCHEME_LOBATTO, &
                             VCI_LOBATTO_MAX_STAGES, vci_scheme_name, VCI_SCHEME_COMPOSITION, VCI_COMPOSITION_ORDERS
   use vci_newton, only: vci_newton_t, vci_newton_result_t, vci_system_t, NEWTON_CONVERGED, &

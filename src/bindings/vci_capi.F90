@@ -749,8 +749,8 @@ contains
     end subroutine put_count
   end function vci_get_stats
 
-  !> int vci_get_energy_fallbacks(vci_integrator integ, int64_t *count): impacts where the discrete
-  !> energy condition had no solution and H(q, p) was kept instead (docs/DESIGN.md §2).
+  !> int vci_get_energy_fallbacks(vci_integrator integ, int64_t *count): soft impacts where the
+  !> discrete energy condition was blended with H or H(q, p) was kept instead (docs/DESIGN.md §2).
   integer(c_int) function vci_get_energy_fallbacks(integ, count) bind(C, name='vci_get_energy_fallbacks')
     type(c_ptr), value :: integ, count
     type(c_integrator_t), pointer :: ip

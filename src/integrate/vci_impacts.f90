@@ -63,7 +63,10 @@ contains
         alpha = 0.0_dp
         self%q_wall = self%q_start; self%p_arrive = self%p_start
         if (self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN) then
-          call self%sys%hamiltonian(self%q_wall, self%p_arrive, e_minus, stat)
+          ! with constraints, the momentum's admissible part, as impact_momentum gives an impact
+          ! inside a step (p_start's Omega-part is no motion; H of it would go into the motion)
+          if (self%m > 0) call self%sys%project_momentum(self%q_wall, self%p_arrive, stat)
+          if (stat == VCI_OK) call self%sys%hamiltonian(self%q_wall, self%p_arrive, e_minus, stat)
         else
           if (.not. ieee_is_finite(state%arriving_energy)) call arriving_energy(self, dir, h, state%arriving_energy, stat)
           e_minus = state%arriving_energy
@@ -108,7 +111,8 @@ contains
         ! The previous impact of this step met its energy condition on a sub-step over the whole rest
         ! of the step, but its motion ends here: hold the condition on the sub-step it really leaves on
         if (last_gap > 0) then
-          if (impacts%records(impacts%count)%condition == VCI_IMPACT_DISCRETE) then
+          if (impacts%records(impacts%count)%condition == VCI_IMPACT_DISCRETE .or. &
+              impacts%records(impacts%count)%condition == VCI_IMPACT_BLENDED) then
             call tie_to_wall(self, impacts%records(impacts%count), dir, tau, jstar, alpha, e_minus, s1res, stat)
             if (stat /= VCI_OK) return
           end if
@@ -143,6 +147,7 @@ contains
       consumed = consumed + alpha * tau
       tau = (1.0_dp - alpha) * tau
       last_gap = jstar
+      self%e_arrive_last = e_minus
       self%q_start = self%q_wall
       self%p_start = impacts%records(impacts%count)%p_after
       state%arriving_energy = e_minus
@@ -171,12 +176,14 @@ contains
     integer, parameter :: max_secants = 12
     integer :: k, nx
     real(dp) :: mu_a, mu_b, mu_c, f_a, f_b, f_c, mu_best, f_best, tol, mu_state, alpha0, e0, s10
-    logical :: consistent
+    logical :: consistent, blend
     stat = VCI_OK
     nx = self%nsub
     mu_a = real(dir, dp) * imp%impulse
-    f_a = e_minus - imp%energy_before
-    tol = self%settings%atol + self%settings%rtol * (abs(e_minus) + abs(imp%energy_before))
+    ! with H at hand (m = 0) the row is the blended one, as stage 2 posed it (vci_scheme: blended_row)
+    blend = self%has_energy .and. self%m == 0
+    call tie_row(e_minus, mu_a, f_a, tol)
+    if (stat /= VCI_OK) return
     if (abs(f_a) <= 0.01_dp * tol) return      ! free flight: E_d does not depend on the length
     self%tie_x(1:nx + 1, 1) = self%x(1:nx + 1); self%tie_x(1:nx + 1, 2) = self%x_stage1(1:nx + 1)
     self%tie_q(:, 1) = self%q_end; self%tie_q(:, 2) = self%q_wall; self%tie_q(:, 3) = self%p_arrive
@@ -215,12 +222,47 @@ contains
     imp%energy_after = e_minus
     imp%leave_rate = dot_product(imp%grad_g, self%q_wall - imp%q) / (alpha * tau)
     imp%stage2_residual = abs(f_best) / tol
+    if (blend) then
+      ! the condition and energies at the tied impulse: blended where the weight is below 1
+      call tie_row(e_minus, mu_best, f_c, tol)
+      if (stat /= VCI_OK) return
+      if (imp%condition == VCI_IMPACT_BLENDED) self%stats%energy_fallbacks = self%stats%energy_fallbacks - 1
+      imp%condition = VCI_IMPACT_DISCRETE
+      imp%energy_before = self%e_arrive_last
+      if (self%sys%blend_w < 1.0_dp) then
+        imp%condition = VCI_IMPACT_BLENDED
+        imp%energy_before = self%sys%blend_e_before
+        imp%energy_after = self%sys%blend_e_after
+        self%stats%energy_fallbacks = self%stats%energy_fallbacks + 1
+      end if
+    end if
   contains
+    !> The energy row of imp with e_out = E_d of the sub-step leaving it at impulse mu, and its
+    !> tolerance: E_d - E- (the discrete condition), or the blended row.
+    subroutine tie_row(e_out, mu, f, tol)
+      real(dp), intent(in) :: e_out, mu
+      real(dp), intent(out) :: f, tol
+      real(dp) :: sc
+      if (.not. blend) then
+        f = e_out - imp%energy_before
+        tol = self%settings%atol + self%settings%rtol * (abs(e_out) + abs(imp%energy_before))
+        return
+      end if
+      call self%sys%set_wall_normal(imp%grad_g)
+      call self%sys%pose_stage2(imp%q, imp%p_before, tau, imp%gap, self%e_arrive_last)
+      call self%sys%pose_blend(stat)
+      f = huge(1.0_dp); sc = 0.0_dp
+      if (stat == VCI_OK) call self%sys%blended_row(e_out, mu, f, sc, stat)
+      if (stat /= VCI_OK) call set_cause(self, 'stage 2: the blended energy condition of the previous impact')
+      tol = self%settings%atol + self%settings%rtol * sc
+    end subroutine tie_row
+
     !> Regular sub-step and stage 1 to wall j from (q_start, p- + mu grad g); f = E_d - E-. False when
     !> the motion misses wall j or a solve fails (stat then says whether that is fatal).
     logical function evaluate(mu, f)
       real(dp), intent(in) :: mu
       real(dp), intent(out) :: f
+      real(dp) :: tol_unused
       evaluate = .false.
       consistent = .false.
       f = huge(1.0_dp)
@@ -248,7 +290,8 @@ contains
       if (stat /= VCI_OK) then
         call set_cause(self, 'momentum at the wall'); return
       end if
-      f = e_minus - imp%energy_before
+      call tie_row(e_minus, mu, f, tol_unused)
+      if (stat /= VCI_OK) return
       evaluate = ieee_is_finite(f)
       consistent = .true.; mu_state = mu
       if (evaluate .and. abs(f) < abs(f_best)) then
@@ -455,7 +498,7 @@ contains
     integer, intent(in) :: j
     real(dp), intent(in) :: tau2, e_minus
     integer, intent(out) :: stat
-    integer :: n, m, nx0, info
+    integer :: n, m, nx0, info, stat_b
     real(dp) :: num, den, mu0, mirror
     logical :: done, passed_through
     character(len=40) :: what
@@ -546,6 +589,37 @@ contains
         end if
         self%x_saved(1:nx0) = self%x_low(1:nx0)
       end if
+      if (self%has_energy .and. m == 0 .and. (stat == VCI_OK .or. stat == VCI_ERR_NEWTON)) then
+        ! Near a graze the discrete condition blends with H (docs/BACKWARD.md, "A reversible energy
+        ! condition"): the discrete root stands where the weight is 1 there; else, or where the
+        ! discrete row has no root, the blended row's root is sought. Both directions then solve the
+        ! same equation.
+        if (stat == VCI_OK) then
+          ! from mu0, the start the discrete solve took (the mirror moved by energy_along): both
+          ! directions take it the same way (from the discrete root itself, or from H's root, the
+          ! search reached another crossing of the row in soft ellipse runs: docs/BACKWARD.md)
+          call blend_weight(self, j, tau2, e_minus, stat)
+          if (stat /= VCI_OK) return
+          if (self%sys%blend_w < 1.0_dp) call reflect_blended(stat)
+        else
+          ! no discrete root: from H's root
+          self%x(1:nx0) = self%x_low(1:nx0)
+          mu0 = mirror
+          call self%sys%hamiltonian(self%q_wall, self%p_arrive, self%e_fallback, stat)
+          if (stat /= VCI_OK) then
+            call set_cause(self, trim(what)//' energy H of the arriving momentum'); return
+          end if
+          call reflect_hamiltonian(self%e_fallback, stat)
+          if (stat == VCI_OK) then
+            call reflect_blended(stat)
+          else if (stat == VCI_ERR_IMPACT) then
+            stat = VCI_ERR_NEWTON
+          end if
+        end if
+        if (stat /= VCI_OK .and. stat /= VCI_ERR_NEWTON) return
+        self%x_saved(1:nx0) = self%x_low(1:nx0)
+        passed_through = .false.
+      end if
       if (stat == VCI_ERR_NEWTON .and. self%has_energy) then
         ! No impulse makes E_d of the leaving sub-step equal E-: E_d differs from H by O(h^2)
         ! terms that depend on the sub-step's length (for uniform gravity H changes by
@@ -569,6 +643,122 @@ contains
       self%last_residual = 0.0_dp
     end if
   contains
+    !> Stage 2 with the blended energy row, from the impulse mu0 (the discrete solve's start, or H's
+    !> root with its leaving sub-step in x). Posed on the impulse alone: each value of mu is a regular sub-step from
+    !> p- + mu grad g, and the row f(mu) is then evaluated (vci_scheme: blended_row). Full Newton on
+    !> the blended system stalled (30 iterations at a scaled residual ~1, or no decrease): the row
+    !> has kinks where the weight reaches 1 and where min(K-, K+) switches sides. The reflection's
+    !> root is where f rises through 0 (f < 0 between it and the pass-through root near mu = 0):
+    !> steps of 5 % of mu0 towards it from mu0 bracket it without reaching that other root, and
+    !> Illinois steps close the bracket to the row's tolerance. On success the impact's condition is
+    !> the discrete one where the weight is 1 at the root (both directions find the same root), else
+    !> VCI_IMPACT_BLENDED, counted with the fallbacks. stat VCI_ERR_NEWTON: no root found.
+    subroutine reflect_blended(stat)
+      integer, intent(out) :: stat
+      integer, parameter :: max_probes = 40, max_refine = 60
+      integer :: k, kept
+      real(dp) :: mu_lo, mu_hi, f_lo, f_hi, mu, f, tol, step, wlo, whi
+      mu = mu0
+      stat = VCI_OK
+      if (.not. blended_at(mu, f, tol)) then
+        stat = stat_b; return
+      end if
+      ! to well below the row's tolerance (1e-4 of it, or the bracket at round-off): the state
+      ! leaving a soft impact moves by the energy's error over the normal velocity, which is small
+      if (abs(f) > 1.0e-4_dp * tol .and. f /= 0.0_dp) then
+        ! bracket: f(mu_lo) < 0 < f(mu_hi), stepping from mu0 against the sign of f
+        step = -sign(0.05_dp * abs(mu0), f) * sign(1.0_dp, mu0)
+        mu_lo = mu; f_lo = f; mu_hi = mu; f_hi = f
+        do k = 1, max_probes
+          mu = mu + step
+          if (.not. (mu / mu0 > 0.0_dp)) exit          ! never through mu = 0
+          if (.not. blended_at(mu, f, tol)) then
+            stat = stat_b; return
+          end if
+          if (f == 0.0_dp) exit
+          if ((f > 0.0_dp) .neqv. (f_lo > 0.0_dp)) exit
+          f_lo = f; mu_lo = mu
+          if (step * sign(1.0_dp, mu0) > 0.0_dp) step = 2.0_dp * step   ! outwards the function only rises
+        end do
+        if (f /= 0.0_dp) then
+          if (.not. ((f > 0.0_dp) .neqv. (f_lo > 0.0_dp))) then
+            stat = VCI_ERR_NEWTON
+            self%cause = trim(what)//': the blended energy condition has no root near the reflection'
+            return
+          end if
+          mu_hi = mu; f_hi = f
+          wlo = f_lo; whi = f_hi; kept = 0
+          do k = 1, max_refine
+            mu = mu_lo - wlo * (mu_hi - mu_lo) / (whi - wlo)
+            if (.not. blended_at(mu, f, tol)) then
+              stat = stat_b; return
+            end if
+            if (abs(f) <= 1.0e-4_dp * tol .or. abs(mu_hi - mu_lo) <= 8.0_dp * epsilon(1.0_dp) * abs(mu)) exit
+            if ((f > 0.0_dp) .eqv. (f_hi > 0.0_dp)) then
+              mu_hi = mu; f_hi = f; whi = f
+              if (kept < 0) wlo = 0.5_dp * wlo
+              kept = -1
+            else
+              mu_lo = mu; f_lo = f; wlo = f
+              if (kept > 0) whi = 0.5_dp * whi
+              kept = 1
+            end if
+          end do
+          if (abs(f) > tol) then
+            stat = VCI_ERR_NEWTON
+            self%cause = trim(what)//': the blended energy condition did not converge'
+            return
+          end if
+        end if
+      end if
+      self%last_residual = abs(f) / tol
+      if (.not. reflected(self, mu, tau2, stat)) then
+        if (stat == VCI_OK) stat = VCI_ERR_NEWTON
+        self%cause = trim(what)//': the motion of the blended energy condition does not leave the wall'
+        return
+      end if
+      ! the weight and energies at the root (reflected() may have posed another system)
+      call blend_weight(self, j, tau2, e_minus, stat)
+      if (stat /= VCI_OK) return
+      if (self%sys%blend_w < 1.0_dp) then
+        self%impact_condition = VCI_IMPACT_BLENDED
+        self%e_fallback = self%sys%blend_e_before
+        self%e_blend_after = self%sys%blend_e_after
+        self%stats%energy_fallbacks = self%stats%energy_fallbacks + 1
+      else
+        self%impact_condition = VCI_IMPACT_DISCRETE
+      end if
+    end subroutine reflect_blended
+
+    !> The blended row at impulse mu: the leaving sub-step from p- + mu grad g (Newton from x), its
+    !> E_d, the row f and its tolerance. False when a solve or a callback failed (stat says which;
+    !> a solve that did not converge is VCI_ERR_NEWTON).
+    logical function blended_at(mu, f, tol)
+      real(dp), intent(in) :: mu
+      real(dp), intent(out) :: f, tol
+      real(dp) :: e_out, sc
+      blended_at = .false.
+      f = huge(1.0_dp); tol = 0.0_dp
+      self%p_leave = self%p_arrive + mu * self%sys%grad
+      call substep(self, self%q_wall, self%p_leave, tau2, stat_b)
+      if (stat_b == VCI_OK) then
+        call self%sys%put_extra(self%x, KIND_STAGE2, mu)
+        call self%sys%energy_out(self%x, self%q_wall, tau2, e_out, stat_b)
+      end if
+      if (stat_b == VCI_OK) then
+        call self%sys%pose_stage2(self%q_wall, self%p_arrive, tau2, j, e_minus)
+        call self%sys%pose_blend(stat_b)
+      end if
+      if (stat_b == VCI_OK) call self%sys%blended_row(e_out, mu, f, sc, stat_b)
+      if (stat_b /= VCI_OK) then
+        if (.not. self%sys%unrecoverable .and. stat_b /= VCI_ERR_CALLBACK) stat_b = VCI_ERR_NEWTON
+        return
+      end if
+      tol = self%settings%atol + self%settings%rtol * sc
+      blended_at = ieee_is_finite(f)
+      if (.not. blended_at) stat_b = VCI_ERR_NEWTON
+    end function blended_at
+
     !> H(qt, p+) = e_ref fixes the impulse from the momenta alone (with constraints, together with
     !> the constraint impulse nu that makes the outgoing velocity admissible); the leaving sub-step
     !> is then a regular one from p- + mu grad g (Omega nu is absorbed by its multiplier). x holds
@@ -609,6 +799,21 @@ contains
       end if
     end subroutine reflect_hamiltonian
   end subroutine stage_reflect
+
+  !> The blended row's weight at stage 2's solution in x (vci_scheme: blended_row): sys%blend_w and
+  !> the two sides' blended energies.
+  subroutine blend_weight(self, j, tau2, e_minus, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: j
+    real(dp), intent(in) :: tau2, e_minus
+    integer, intent(out) :: stat
+    real(dp) :: e_out, r, sc
+    call self%sys%pose_stage2(self%q_wall, self%p_arrive, tau2, j, e_minus)
+    call self%sys%pose_blend(stat)
+    if (stat == VCI_OK) call self%sys%energy_out(self%x, self%q_wall, tau2, e_out, stat)
+    if (stat == VCI_OK) call self%sys%blended_row(e_out, self%sys%get_extra(self%x, KIND_STAGE2), r, sc, stat)
+    if (stat /= VCI_OK) call set_cause(self, 'stage 2: the weight of the blended energy condition')
+  end subroutine blend_weight
 
   !> Stage 2's second start, when Newton from the mirror failed or found the pass-through root. The
   !> mirror mirrors the end of the free sub-step: where a force bends that sub-step back towards the
@@ -779,6 +984,8 @@ contains
     if (self%impact_condition /= self%settings%impact_energy) imp%energy_before = self%e_fallback
     if (self%impact_condition == VCI_IMPACT_HAMILTONIAN) then
       call self%sys%hamiltonian(self%q_wall, imp%p_after, e_after, stat)
+    else if (self%impact_condition == VCI_IMPACT_BLENDED) then
+      e_after = self%e_blend_after
     else
       call self%sys%energy_out(self%x, self%q_wall, tau2, e_after, stat)
     end if

@@ -19,7 +19,7 @@ module vci_integrator
   use vci_settings, only: vci_settings_t, vci_solver_stats_t
   use vci_state, only: vci_state_t, vci_impact_buffer_t
   use vci_stepper, only: vci_stepper_t
-  use vci_scheme, only: vci_scheme_t, VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN, VCI_SCHEME_DISCRETE, &
+  use vci_scheme, only: vci_scheme_t, VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN, VCI_IMPACT_BLENDED, VCI_SCHEME_DISCRETE, &
                         VCI_SCHEME_LEFT, VCI_SCHEME_MIDPOINT, VCI_SCHEME_LOBATTO, VCI_SCHEME_COMPOSITION
   use vci_separable, only: vci_separable_t
   use vci_composition, only: VCI_COMPOSITION_ORDERS
@@ -33,7 +33,7 @@ module vci_integrator
   use vci_progress, only: vci_progress_t, vci_progress_info_t
   implicit none
   private
-  public :: VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN
+  public :: VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN, VCI_IMPACT_BLENDED
   public :: VCI_SCHEME_DISCRETE, VCI_SCHEME_LEFT, VCI_SCHEME_MIDPOINT, VCI_SCHEME_LOBATTO, VCI_LOBATTO_MAX_STAGES
   public :: VCI_SCHEME_COMPOSITION, VCI_COMPOSITION_ORDERS
   public :: vci_scheme_name, vci_settings_t

@@ -35,11 +35,14 @@ module vci_observer
     real(dp), allocatable :: p_before(:)  !< momentum at the wall before the impact, in the direction of motion
     real(dp), allocatable :: p_after(:)   !< momentum at the wall after the impact, in the direction of motion
     real(dp), allocatable :: grad_g(:)  !< gradient of the gap at q
-    !> The impact condition that fixed the impulse: the integrator's setting, or VCI_IMPACT_HAMILTONIAN
-    !> (1) where the discrete energy condition (0) has no solution, near a graze (docs/DESIGN.md §6)
+    !> The impact condition that fixed the impulse: the integrator's setting; near a graze under the
+    !> discrete condition (0), VCI_IMPACT_BLENDED (2, E_d blended with H) or, as a last resort,
+    !> VCI_IMPACT_HAMILTONIAN (1) (docs/DESIGN.md §2)
     integer :: condition = 0
-    real(dp) :: energy_before = 0.0_dp  !< E_d of the arriving sub-step, or H(q, p_before) (condition 1)
-    real(dp) :: energy_after = 0.0_dp   !< E_d of the leaving sub-step, or H(q, p_after) (condition 1)
+    !> E_d of the arriving sub-step, H(q, p_before) (condition 1) or w E_d + (1 - w) H (condition 2)
+    real(dp) :: energy_before = 0.0_dp
+    !> E_d of the leaving sub-step, H(q, p_after) (condition 1) or w E_d + (1 - w) H (condition 2)
+    real(dp) :: energy_after = 0.0_dp
     real(dp) :: leave_rate = 0.0_dp     !< grad g . (q_next - q) / sub-step: > 0, the motion leaves the wall
     real(dp) :: stage1_residual = 0.0_dp  !< stage 1's scaled residual (<= 1 means within tolerance)
     real(dp) :: stage2_residual = 0.0_dp  !< stage 2's scaled residual (<= 1 means within tolerance)

@@ -16,7 +16,7 @@ module vci_stepper
   use vci_newton, only: vci_newton_t, vci_newton_result_t, NEWTON_MAX_ITERATIONS, NEWTON_NO_DESCENT, &
                         NEWTON_SINGULAR, NEWTON_EVALUATION, NEWTON_NONFINITE
   use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_STAGE1, KIND_STAGE2, KIND_IMPULSE, &
-                        VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN
+                        VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN, VCI_IMPACT_BLENDED
   use vci_observer, only: vci_impact_t
   use vci_settings, only: vci_settings_t, vci_solver_stats_t
   use vci_state, only: vci_state_t, vci_impact_buffer_t
@@ -73,6 +73,8 @@ module vci_stepper
     !> energy condition has no solution) and, then, H(qt, p-).
     integer :: impact_condition = 0
     real(dp) :: e_fallback = 0.0_dp
+    real(dp) :: e_blend_after = 0.0_dp        !< a blended impact's energy after it (e_fallback: before)
+    real(dp) :: e_arrive_last = 0.0_dp        !< E_d arriving at the last impact of this step (tie_to_wall)
     logical :: has_energy = .false.           !< the model supplies H(q, p) (probed at initialisation)
     real(dp), allocatable :: constraint_impulse(:)  !< nu of the Hamiltonian impact (m > 0)
     ! The step's outcome, committed to the state when the step succeeds:

@@ -28,6 +28,9 @@ module vci_scheme
   !> Impact energy conditions (set_impact_energy; the C ABI uses the same numbers).
   integer, parameter, public :: VCI_IMPACT_DISCRETE = 0     !< the paper's E_d(alpha h) = E_d((1 - alpha) h), the default
   integer, parameter, public :: VCI_IMPACT_HAMILTONIAN = 1  !< H(q~, p+) = H(q~, p-), with the model's energy
+  !> In impact records only: near a graze the discrete condition blended with H,
+  !> w (E_d+ - E_d-) + (1 - w) (H+ - H-) = 0 with a weight symmetric under reversal (docs/BACKWARD.md)
+  integer, parameter, public :: VCI_IMPACT_BLENDED = 2
 
   !> Scheme identifiers (the C ABI uses the same numbers).
   integer, parameter, public :: VCI_SCHEME_DISCRETE = 0  !< the model is a discrete L_d (vci_model_t)
@@ -54,6 +57,10 @@ module vci_scheme
     character(len=32) :: failed_callback = ''   !< which callback failed in the last evaluation
     integer :: failed_stat = 0           !< the stat that callback set (> 0 recoverable, < 0 not)
     real(dp), allocatable :: pplus(:)
+    !> Stage 2's blended energy row (pose_blend, blended_row; docs/BACKWARD.md, "A reversible energy
+    !> condition"): H and the normal kinetic energy of p_minus, and the last row's weight and energies
+    real(dp) :: h_minus = 0.0_dp, ke_minus = 0.0_dp
+    real(dp) :: blend_w = 1.0_dp, blend_e_before = 0.0_dp, blend_e_after = 0.0_dp
     real(dp), allocatable, private :: gp(:), gm(:), qp(:), vout(:), xsave(:), ip(:), im(:), isp(:), ism(:)
     real(dp), allocatable, private :: pj_a(:), pj_pa(:), pj_om(:, :), pj_x(:), pj_jac(:, :), pj_rhs(:, :)
     integer, allocatable, private :: pj_ipiv(:)
@@ -73,6 +80,8 @@ module vci_scheme
     procedure :: pose_stage1
     procedure :: pose_stage2
     procedure :: pose_impulse
+    procedure :: pose_blend
+    procedure :: blended_row
     procedure :: pose_pair
     procedure :: set_direction
     procedure :: set_wall_normal
@@ -252,6 +261,70 @@ contains
     self%a = q_wall; self%pa = p_minus; self%tau = tau; self%gap = gap
     self%e_minus = e_minus
   end subroutine pose_stage2
+
+  !> The blended energy row's side of the arriving motion (after pose_stage2, whose e_minus is E_d
+  !> of the arriving sub-step): H(qt, p-) and the normal kinetic energy of p-.
+  subroutine pose_blend(self, stat)
+    class(vci_scheme_t), intent(inout) :: self
+    integer, intent(out) :: stat
+    call self%hamiltonian(self%a, self%pa, self%h_minus, stat)
+    if (stat == VCI_OK) call normal_kinetic(self, self%pa, self%h_minus, self%ke_minus, stat)
+  end subroutine pose_blend
+
+  !> The blended energy row at impulse mu, with e_out = E_d of the leaving sub-step:
+  !>   r = w (E_d+ - E_d-) + (1 - w) (H+ - H-),  delta = (E_d+ - H+) - (E_d- - H-),
+  !>   w = min(1, min(K-, K+) / (C |delta|))
+  !> with K the normal kinetic energy on either side. Reversed, the two sides swap and delta changes
+  !> sign: w is the same and the row only changes sign, so both directions solve one equation; it
+  !> is the discrete condition where w = 1 and has a root for every K- (H quadratic in p; C = 0.5
+  !> keeps soft impacts near the discrete condition: docs/BACKWARD.md). pose_stage2 and pose_blend
+  !> first. sc: the size of its terms; the weight and the two sides' blended energies are kept.
+  subroutine blended_row(self, e_out, mu, r, sc, stat)
+    class(vci_scheme_t), intent(inout) :: self
+    real(dp), intent(in) :: e_out, mu
+    real(dp), intent(out) :: r, sc
+    integer, intent(out) :: stat
+    real(dp), parameter :: c_blend = 0.5_dp
+    real(dp) :: hp, kp, delta, kmin, w
+    r = 0.0_dp; sc = 1.0_dp
+    self%pplus = self%pa + mu * self%grad
+    call self%hamiltonian(self%a, self%pplus, hp, stat)
+    if (stat == VCI_OK) call normal_kinetic(self, self%pplus, hp, kp, stat)
+    if (stat /= VCI_OK) return
+    delta = (e_out - hp) - (self%e_minus - self%h_minus)
+    kmin = max(min(self%ke_minus, kp), 0.0_dp)
+    w = 1.0_dp
+    if (kmin < c_blend * abs(delta)) w = kmin / (c_blend * abs(delta))
+    r = (hp - self%h_minus) + w * delta
+    sc = abs(hp) + abs(self%h_minus) + abs(e_out) + abs(self%e_minus)
+    self%blend_w = w
+    self%blend_e_before = w * self%e_minus + (1.0_dp - w) * self%h_minus
+    self%blend_e_after = w * e_out + (1.0_dp - w) * hp
+  end subroutine blended_row
+
+  !> The normal kinetic energy of p at a: v_n^2 / (2 k) along the wall normal g, with v_n and k the
+  !> first and second derivatives of H(a, p + t g) at t = 0 (central differences over t = eps |p| / |g|,
+  !> a function of p alone so that both directions compute the same value; exact for H quadratic in
+  !> p, where it is H(p) minus the minimum of H on the line). hp = H(a, p). Where H is not convex
+  !> along g the kinetic energy counts as large (w = 1: the discrete condition).
+  subroutine normal_kinetic(self, p, hp, ke, stat)
+    class(vci_scheme_t), intent(inout) :: self
+    real(dp), intent(in) :: p(:), hp
+    real(dp), intent(out) :: ke
+    integer, intent(out) :: stat
+    real(dp) :: t, hplus, hminus, vn, k
+    ke = huge(1.0_dp)
+    t = 0.1_dp * max(sqrt(sum(p**2)), tiny(1.0_dp)) / max(sqrt(sum(self%grad**2)), tiny(1.0_dp))
+    self%qp = p + t * self%grad
+    call self%hamiltonian(self%a, self%qp, hplus, stat)
+    if (stat /= VCI_OK) return
+    self%qp = p - t * self%grad
+    call self%hamiltonian(self%a, self%qp, hminus, stat)
+    if (stat /= VCI_OK) return
+    vn = (hplus - hminus) / (2.0_dp * t)
+    k = (hplus - 2.0_dp * hp + hminus) / t**2
+    if (k > 0.0_dp) ke = vn**2 / (2.0_dp * k)
+  end subroutine normal_kinetic
 
   !> The Hamiltonian impact's [nu, mu] system at (q_wall, p_minus) with H(q_wall, p_minus) = e_minus.
   subroutine pose_impulse(self, q_wall, p_minus, e_minus)

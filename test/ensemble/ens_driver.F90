@@ -78,7 +78,10 @@ program ens_driver
     cfg%name = 'ens_driver test ensemble'
     call vci_ensemble_run_file(factory, cfg, table, trim(path), stat, msg, overwrite=.true., &
                                members_failed=failed)
-    if (rank == 0) print '(a,i0,a,i0,a)', 'ran ', nm, ' members, ', failed, ' failed'
+    ! a run that stopped (a full disk, a rank's failure) says so: its member count is not a result
+    if (rank == 0 .and. stat == VCI_OK) print '(a,i0,a,i0,a)', 'ran ', nm, ' members, ', failed, ' failed'
+    if (rank == 0 .and. stat /= VCI_OK) print '(a,i0,a,i0,a)', 'run of ', nm, ' members stopped with status ', stat, &
+      ' (the members that failed before it are not counted)'
     if (stat /= VCI_OK) then
       print '(a,i0,a)', 'rank ', rank, ': '//trim(msg)
       flush (6)
