@@ -21,7 +21,7 @@ module vci_example_cli
     logical :: append = .false.          !< continue the --from file (HDF5) instead of a new file
     integer :: flush_every = 4096        !< HDF5: steps between flushes
     integer :: every = 0                 !< HDF5: store every k-th state (0: not given; the file's when appending, else 1)
-    integer :: compress = 0              !< HDF5: gzip level of the datasets (--compress: 4), 0: none
+    integer :: compress = 0              !< HDF5: gzip level of the datasets (--compress: 1), 0: none
     integer :: impact_energy = VCI_IMPACT_DISCRETE
     real(dp) :: rtol = 1.0e-12_dp
     integer :: max_impacts = 16
@@ -137,7 +137,7 @@ contains
         write (output_unit, '(a)') '                        and after every impact'
         write (output_unit, '(a)') '  --every K             HDF5: store every K-th state, 1 <= K <= 2^30 (1), and the last;'
         write (output_unit, '(a)') '                        impacts all (appending: the file''s K)'
-        write (output_unit, '(a)') '  --compress            HDF5: gzip (level 4) with shuffle on the datasets of a new file'
+        write (output_unit, '(a)') '  --compress            HDF5: gzip (level 1) with shuffle on the datasets of a new file'
         write (output_unit, '(a)') '  --impact-energy MODE  discrete (paper, default) or hamiltonian'
         write (output_unit, '(a)') '  --rtol R              Newton tolerance relative to term sizes, 1e-16 <= R <= 1e-4 (1e-12)'
         write (output_unit, '(a)') '  --max-impacts K       impacts allowed in one step, 1 <= K <= 1000000 (16)'
@@ -191,7 +191,7 @@ contains
         end select
       case ('--backward'); opts%backward = .true.
       case ('--append'); opts%append = .true.
-      case ('--compress'); opts%compress = 4
+      case ('--compress'); opts%compress = 1
       case ('--quiet'); opts%quiet = .true.
       case ('--no-output'); opts%no_output = .true.
       case ('--differenced-hessian'); opts%analytic_hessian = .false.
