@@ -37,9 +37,15 @@ run_case() {
   [ -n "$n" ] && [ "$n" -gt 1000 ] || { cat "$out.log"; fail "$sig: steps before the signal: '$n'"; }
   echo "$sig after $n steps: exit status $rc"
   # the file says it was interrupted
-  "$py" - "$out" "$sig" "$n" <<'PY' || fail "$sig: the interrupted file"
+  "$py" - "$out" "$sig" "$n" "$*" <<'PY' || fail "$sig: the interrupted file"
 import sys, h5py
 f = h5py.File(sys.argv[1], 'r')
+if '--compress' in sys.argv[4]:                       # the filters reached the datasets
+    assert int(f.attrs['compression']) == 1
+    for k in ('t', 'q', 'p', 'energy', 'step', 'impacts/time'):
+        assert f[k].compression == 'gzip' and f[k].compression_opts == 1 and f[k].shuffle, k
+else:
+    assert int(f.attrs['compression']) == 0 and f['q'].compression is None
 st, msg = int(f.attrs['status']), f.attrs['status_message'].decode()
 print('  file status', st, repr(msg[:70]))
 assert st == 11, st                                    # VCI_STOPPED
