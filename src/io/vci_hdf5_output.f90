@@ -27,6 +27,7 @@ module vci_hdf5_output
   use vci_h5_io
   use vci_checkpoint, only: vci_checkpoint_t, vci_checkpoint_from_state, VCI_CHECKPOINT_VERSION
   use vci_checkpoint, only: vci_checkpoint_record_size
+  use vci_integrator, only: vci_scheme_name
   implicit none
   private
 
@@ -537,6 +538,15 @@ contains
     call h5io_put_attr(self%file, 'steps_completed', 0_i8, stat, self%message, self%path)
     call h5io_put_attr(self%file, 'every', self%every, stat, self%message, self%path)
     call h5io_put_attr(self%file, 'compression', self%deflate, stat, self%message, self%path)
+    ! how the run was made (provenance)
+    call h5io_put_attr(self%file, 'scheme', trim(vci_scheme_name(info%scheme)), stat, self%message, self%path)
+    call h5io_put_attr(self%file, 'stages', info%stages, stat, self%message, self%path)
+    call h5io_put_attr(self%file, 'impact_condition', trim(merge('hamiltonian', 'discrete   ', info%impact_energy == 1)), &
+        stat, self%message, self%path)
+    call h5io_put_attr(self%file, 'rtol', info%rtol, stat, self%message, self%path)
+    call h5io_put_attr(self%file, 'atol', info%atol, stat, self%message, self%path)
+    call h5io_put_attr(self%file, 'max_impacts', info%max_impacts, stat, self%message, self%path)
+    call h5io_put_attr(self%file, 'resumes', '', stat, self%message, self%path)
     call h5io_make_rows(self%file, 't', 0, chunk_rows, H5T_IEEE_F64LE, self%d_t, stat, self%message, self%path, &
         self%deflate)
     call h5io_make_rows(self%file, 'q', info%n, chunk_rows, H5T_IEEE_F64LE, self%d_q, stat, self%message, self%path, &
@@ -549,6 +559,13 @@ contains
         stat, self%message, self%path, self%deflate)
     if (self%every > 1) call h5io_make_rows(self%file, 'step', 0, chunk_rows, H5T_STD_I64LE, self%d_k, &
         stat, self%message, self%path, self%deflate)
+    call describe(self, self%d_t, 'the model''s time unit', 'time of each stored state')
+    call describe(self, self%d_q, 'the model''s coordinates', 'configuration of each stored state')
+    call describe(self, self%d_p, 'the model''s momentum (dL/dqdot)', 'momentum of each stored state')
+    call describe(self, self%d_e, 'the model''s energy', 'E_d of the step arriving at row i+1')
+    if (info%m > 0) call describe(self, self%d_l, 'the constraints'' multipliers', &
+        'multipliers of the step arriving at row i+1')
+    if (self%every > 1) call describe(self, self%d_k, 'steps of h', 'index of each stored state from t[0]')
     if (stat /= VCI_OK) return
     if (info%n_gaps > 0) then
       call h5gcreate_f(self%file, 'impacts', self%g_imp, err)
@@ -567,6 +584,15 @@ contains
           self%message, self%path, self%deflate)
       call h5io_make_rows(self%g_imp, 'impulse', 0, impact_chunk_rows, H5T_IEEE_F64LE, self%d_ii, stat, &
           self%message, self%path, self%deflate)
+      call describe(self, self%d_it, 'the model''s time unit', 'impact time')
+      call describe(self, self%d_is, 'steps of h', 'index of the state the impact''s step started from')
+      call describe(self, self%d_ia, 'fraction of h', 'fraction of that step, from its start in the direction of motion')
+      call describe(self, self%d_ig, 'wall number, 1-based', 'the wall reached: 1-based as the Fortran model numbers '// &
+          'its gaps (the C impact callback passes it 0-based, as an index into g[])')
+      call describe(self, self%d_iq, 'the model''s coordinates', 'configuration on the wall')
+      call describe(self, self%d_ii, 'the model''s momentum per unit gap gradient', &
+          'normal impulse: p after - p before = impulse * grad g')
+      call h5io_put_attr(self%d_ig, 'base', 1, stat, self%message, self%path)
     end if
   end subroutine start_new
 
@@ -592,7 +618,46 @@ contains
     end if
     self%row_start = self%rows - 1
     self%base = self%last_index
+    call note_resume(self, info, stat)
   end subroutine start_append
+
+  !> Appending: one more line in the root attribute `resumes`, "<when> from index <k> (t = <t>)".
+  subroutine note_resume(self, info, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    type(vci_run_info_t), intent(in) :: info
+    integer, intent(inout) :: stat
+    character(len=:), allocatable :: old
+    character(len=120) :: line
+    logical :: ex
+    integer :: err
+    character(len=VCI_MSG_LEN) :: scratch
+    integer :: s
+    old = ''
+    s = VCI_OK
+    call h5aexists_f(self%file, 'resumes', ex, err)
+    ! an older file has none; an unreadable one is started afresh (it is a record, not data)
+    if (err == 0 .and. ex) call h5io_get_attr(self%file, 'resumes', old, s, scratch, self%path)
+    if (s /= VCI_OK) old = ''
+    write (line, '(a,i0,a,es24.17,a)') iso_now()//' from index ', self%last_index, ' (t = ', info%t0, ')'
+    if (len_trim(old) > 0) then
+      old = trim(old)//new_line('a')//trim(line)
+    else
+      old = trim(line)
+    end if
+    if (len(old) > 4000) old = old(len(old) - 3999:)   ! the reader takes strings of up to 4096 bytes: the latest
+    call h5io_put_attr(self%file, 'resumes', old, stat, self%message, self%path)
+  end subroutine note_resume
+
+  !> The attributes `units` and `description` of a dataset.
+  subroutine describe(self, dset, units, description)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer(hid_t), intent(in) :: dset
+    character(len=*), intent(in) :: units, description
+    integer :: s
+    s = VCI_OK
+    call h5io_put_attr(dset, 'units', units, s, self%message, self%path)
+    call h5io_put_attr(dset, 'description', description, s, self%message, self%path)
+  end subroutine describe
 
   subroutine alloc_buffers(self, stat)
     type(vci_hdf5_writer_t), intent(inout) :: self

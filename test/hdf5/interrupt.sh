@@ -3,7 +3,7 @@
 # status 128 + the signal (143, 130), its file is closed with status VCI_STOPPED (11) and a message
 # saying it was interrupted; `--from FILE --append` then continues it to a later time, and the
 # result equals an uninterrupted run to that time bit for bit (every dataset and attribute but
-# `created`). The signal is sent once the file exists and has streamed for half a second, to a run
+# `created` and `resumes`, which records the continuation). The signal is sent once the file exists and has streamed for half a second, to a run
 # over a horizon it cannot reach (10^6 s), so the test does not depend on the machine's speed.
 # The second case (SIGINT) writes every 7th state, compressed: the continued file equals the
 # uninterrupted one plus the row of the state where the signal ended the first part.
@@ -86,9 +86,11 @@ for k in names:
 for k in b.attrs:
     if k in ('created', 'steps_completed') and 'step' in b:
         continue
-    if k != 'created':
+    if k not in ('created', 'resumes'):
         assert a.attrs[k] == b.attrs[k], (k, a.attrs[k], b.attrs[k])
 assert set(a.attrs) == set(b.attrs)
+resumes = a.attrs['resumes'].decode()                 # the continuation is recorded, the other file has none
+assert b.attrs['resumes'].decode() == '' and resumes.count(' from index %d (t = ' % n) == 1, resumes
 print('  continued file == uninterrupted run:', len(names), 'datasets,', len(b['t']), 'rows of b,',
       len(b['impacts/time']), 'impacts')
 PY
