@@ -29,8 +29,8 @@ program pendulum_walls
   call parse_options(opts, 'pendulum_walls', 'pendulum_walls: a pendulum between walls at +-1 rad, against its '// &
     'exact solution (defaults h = 5e-2, t-final = 10, --scheme lobatto --stages 4, --rtol 1e-15)')
   ! this example compares with its exact solution only: it has no trajectory file and runs forward
-  if (allocated(opts%output) .or. allocated(opts%from) .or. opts%backward) then
-    write (error_unit, '(a)') 'pendulum_walls: --output, --from and --backward are not supported here '// &
+  if (allocated(opts%output) .or. allocated(opts%from) .or. opts%backward .or. opts%every > 0 .or. opts%compress > 0) then
+    write (error_unit, '(a)') 'pendulum_walls: --output, --from, --backward, --every and --compress are not supported here '// &
       '(this example writes no trajectory and runs forward)'
     stop 1, quiet=.true.
   end if

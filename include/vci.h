@@ -329,6 +329,13 @@ int  vci_set_impact_callback(vci_integrator integ, vci_impact_fn fn, void *user)
  *  the writer could not be allocated; VCI_ERR_STATE. */
 int  vci_open_output(vci_integrator integ, const char *path);      /* HDF5; VCI_ERR_IO when unavailable */
 
+/** vci_open_output keeping every `every`-th state (those whose index from the file's first state is
+ *  a multiple of it, and the run's last; impacts all: docs/OUTPUT.md) and, with compress = 1..9,
+ *  gzip of that level with shuffle on the datasets (0: none). vci_open_output is every = 1,
+ *  compress = 0. Returns as vci_open_output; VCI_ERR_ARGUMENT also when every is not in [1, 2^30]
+ *  or compress not in [0, 9]. */
+int  vci_open_output_every(vci_integrator integ, const char *path, int every, int compress);
+
 /** Finish and close the output file, if any. Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle;
  *  VCI_ERR_IO: the file could not be finished (the message says why); VCI_ERR_STATE: busy. */
 int  vci_close_output(vci_integrator integ);

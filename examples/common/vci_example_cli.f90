@@ -20,6 +20,8 @@ module vci_example_cli
     logical :: t_final_given = .false., h_given = .false.
     logical :: append = .false.          !< continue the --from file (HDF5) instead of a new file
     integer :: flush_every = 4096        !< HDF5: steps between flushes
+    integer :: every = 0                 !< HDF5: store every k-th state (0: not given; the file's when appending, else 1)
+    integer :: compress = 0              !< HDF5: gzip level of the datasets (--compress: 1), 0: none
     integer :: impact_energy = VCI_IMPACT_DISCRETE
     real(dp) :: rtol = 1.0e-12_dp
     integer :: max_impacts = 16
@@ -34,9 +36,13 @@ module vci_example_cli
     integer :: order = 4                      !< --order: of the composition (2, 4, 6, 8, 10)
   end type example_options_t
 
-  !> --progress: a line on stderr at most twice a second (rewritten in place on a terminal).
+  !> Reported after every step (interval 0): ends the run after the step in which SIGINT or SIGTERM
+  !> arrived; with --progress, prints a line on stderr at most twice a second (rewritten in place on
+  !> a terminal).
   type, extends(vci_progress_t), public :: progress_line_t
     logical :: tty = .false.
+    logical :: print = .false.           !< print the progress line
+    real(dp) :: next_print = 0.5_dp      !< wall seconds of this run at which the next line is due
   contains
     procedure :: report => progress_report
   end type progress_line_t
@@ -71,6 +77,14 @@ module vci_example_cli
       character(kind=c_char), intent(in) :: path(*)
       integer(c_int) :: r
     end function c_path_kind
+    function c_catch_signals() bind(C, name='vci_example_catch_signals') result(r)   ! vci_example_signal.c
+      import :: c_int
+      integer(c_int) :: r
+    end function c_catch_signals
+    function c_signal_caught() bind(C, name='vci_example_signal_caught') result(r)
+      import :: c_int
+      integer(c_int) :: r
+    end function c_signal_caught
   end interface
 
   public :: parse_options, run_example, check_model_at_start, read_last_state, create_integrator, scheme_id, is_decimal, steps_to
@@ -123,6 +137,9 @@ contains
         write (output_unit, '(a)') '  --append              continue the --from file (.h5, same direction) instead of a new one'
         write (output_unit, '(a)') '  --flush-every K       HDF5: write and flush every K steps, 1 <= K <= 1048576 (4096),'
         write (output_unit, '(a)') '                        and after every impact'
+        write (output_unit, '(a)') '  --every K             HDF5: store every K-th state, 1 <= K <= 2^30 (1), and the last;'
+        write (output_unit, '(a)') '                        impacts all (appending: the file''s K)'
+        write (output_unit, '(a)') '  --compress            HDF5: gzip (level 1) with shuffle on the datasets of a new file'
         write (output_unit, '(a)') '  --impact-energy MODE  discrete (paper, default) or hamiltonian'
         write (output_unit, '(a)') '  --rtol R              Newton tolerance relative to term sizes, 1e-16 <= R <= 1e-4 (1e-12)'
         write (output_unit, '(a)') '  --max-impacts K       impacts allowed in one step, 1 <= K <= 1000000 (16)'
@@ -142,7 +159,7 @@ contains
         write (output_unit, '(a)') '  --no-progress         no progress line'
         stop
       case ('--h', '--t-final', '--output', '--from', '--impact-energy', '--rtol', '--max-impacts', '--flush-every', &
-            '--step-splits', &
+            '--step-splits', '--every', &
             '--scheme', '--stages', '--start', '--order')
         if (i == nargs) call die(name//': '//arg//' needs a value')
         i = i + 1
@@ -154,6 +171,7 @@ contains
         select case (arg)
         case ('--h'); opts%h = to_real(val, arg, 0.0_dp, h_max, low_open=.true.); opts%h_given = .true.
         case ('--flush-every'); opts%flush_every = to_int(val, arg, 1, flush_every_max)
+        case ('--every'); opts%every = to_int(val, arg, 1, 2**30)
         case ('--t-final'); opts%t_final = to_real(val, arg, -t_max, t_max); opts%t_final_given = .true.
         case ('--output'); opts%output = val
         case ('--from'); opts%from = val
@@ -179,6 +197,7 @@ contains
         end select
       case ('--backward'); opts%backward = .true.
       case ('--append'); opts%append = .true.
+      case ('--compress'); opts%compress = 1
       case ('--quiet'); opts%quiet = .true.
       case ('--no-output'); opts%no_output = .true.
       case ('--differenced-hessian'); opts%analytic_hessian = .false.
@@ -278,14 +297,21 @@ contains
         call die(name//': --output '//opts%output//' is not a regular file (a device or a directory)')
       if (is_csv(opts%output)) then
         if (opts%append) call die(name//': --append writes HDF5 only (not '//opts%output//')')
+        if (opts%every > 0 .or. opts%compress > 0) &
+          call die(name//': --every and --compress write HDF5 only (not '//opts%output//')')
         call csv%open(opts%output, stat)
         if (stat /= VCI_OK) call die(name//': '//trim(csv%message))
         summary%next => csv
       else
 #ifdef VCI_HAVE_HDF5
         ! examples replace their output unless appending; the library's default is to keep files
-        call h5%open(opts%output, stat, overwrite=.not. opts%append, append=opts%append, scene=name, &
-                     flush_every=opts%flush_every)
+        if (opts%every > 0) then
+          call h5%open(opts%output, stat, overwrite=.not. opts%append, append=opts%append, scene=name, &
+                       flush_every=opts%flush_every, every=opts%every, compress=opts%compress)
+        else
+          call h5%open(opts%output, stat, overwrite=.not. opts%append, append=opts%append, scene=name, &
+                       flush_every=opts%flush_every, compress=opts%compress)
+        end if
         if (stat /= VCI_OK) call die(name//': '//trim(h5%message))
         summary%next => h5
 #else
@@ -314,12 +340,11 @@ contains
       write (output_unit, '(a)') 'start: the paper''s pair of configurations (q0, q1)'
     end if
     call print_state('start state', integ)
+    progress%print = opts%progress == 1 .or. (opts%progress == -1 .and. progress%tty)
+    progress%interval = 0.0_dp   ! a report after every step: a signal ends the run after the current one
+    if (c_catch_signals() /= 0) call die(name//': cannot install the SIGINT/SIGTERM handler')
     call system_clock(c0, rate)
-    if (opts%progress == 1 .or. (opts%progress == -1 .and. progress%tty)) then
-      call integ%integrate(nsteps, dir, stat, summary, progress)   ! a line at most twice a second
-    else
-      call integ%integrate(nsteps, dir, stat, summary)
-    end if
+    call integ%integrate(nsteps, dir, stat, summary, progress)
     call system_clock(c1)
     stats = integ%statistics()
     write (output_unit, '(a,i0)') 'impacts: ', stats%impacts
@@ -343,6 +368,11 @@ contains
     write (output_unit, '(a,f0.4,a)') 'wall time: ', real(c1 - c0, dp) / real(rate, dp), ' s'
     call print_state('end state', integ)
     if (.not. opts%no_output) write (output_unit, '(a)') 'output: '//opts%output
+    if (integ%status() == VCI_STOPPED .and. c_signal_caught() /= 0) then
+      write (output_unit, '(a)') 'status: '//interrupted_by()//'; '//integ%message()
+      ! as a shell reports a program a signal ended: 128 + the signal's number (130 SIGINT, 143 SIGTERM)
+      call exit_with(128 + c_signal_caught())
+    end if
     if (integ%status() /= VCI_OK) then
       write (output_unit, '(a)') 'status: '//vci_status_name(integ%status())//': '//integ%message()
       stop 2
@@ -371,6 +401,9 @@ contains
     real(dp), allocatable :: q(:), v(:)
     character(len=VCI_MSG_LEN) :: msg
     integer :: stat, i
+    ! allocated before the assignments: gfortran 12 warns (-Wuninitialized) about the descriptor
+    ! of an unallocated array assigned from a function result
+    allocate (q(model%n), v(model%n))
     q = integ%configuration(); v = integ%momentum()
     select type (model)
     class is (vci_model_t)
@@ -395,6 +428,10 @@ contains
     logical, intent(inout) :: stop_requested
     character(len=200) :: line
     character(len=24) :: eta
+    stop_requested = c_signal_caught() /= 0
+    if (.not. self%print) return
+    if (info%elapsed < self%next_print .and. info%steps_done < info%steps_total .and. .not. stop_requested) return
+    self%next_print = info%elapsed + 0.5_dp
     eta = 'ETA ?'
     if (info%eta >= 0.0_dp) write (eta, '(a,i0,a)') 'ETA ', nint(info%eta, i8), ' s'
     write (line, '(a,f5.1,a,i0,a,i0,a,g0.6,a,i0,a,es9.2,a)') 'progress ', &
@@ -403,12 +440,31 @@ contains
       ' steps/s  '//trim(eta)
     if (self%tty) then
       write (error_unit, '(a)', advance='no') achar(13)//trim(line)//'   '
-      if (info%steps_done == info%steps_total) write (error_unit, '(a)') ''
+      if (info%steps_done == info%steps_total .or. stop_requested) write (error_unit, '(a)') ''
     else
       write (error_unit, '(a)') trim(line)
     end if
-    stop_requested = .false.   ! (the examples never stop a run from here)
   end subroutine progress_report
+
+  !> "interrupted by SIGTERM" (or SIGINT, or the signal's number)
+  function interrupted_by() result(s)
+    character(len=:), allocatable :: s
+    character(len=12) :: num
+    select case (c_signal_caught())
+    case (2); s = 'interrupted by SIGINT'
+    case (15); s = 'interrupted by SIGTERM'
+    case default
+      write (num, '(i0)') c_signal_caught()
+      s = 'interrupted by signal '//trim(num)
+    end select
+  end function interrupted_by
+
+  !> End the program with `code` (no backtrace, output flushed).
+  subroutine exit_with(code)
+    integer, intent(in) :: code
+    flush (output_unit); flush (error_unit)
+    stop code, quiet=.true.
+  end subroutine exit_with
 
   !> Create the integrator with the command line's step length and solver settings.
   subroutine create_integrator(name, model, opts, integ)
@@ -561,7 +617,12 @@ contains
     integer, intent(in) :: status
     character(len=*), intent(in) :: message
     integer, intent(inout) :: stat
-    if (associated(self%next)) call self%next%on_finish(status, message, stat)
+    if (.not. associated(self%next)) return
+    if (status == VCI_STOPPED .and. c_signal_caught() /= 0) then   ! the file's status_message says so
+      call self%next%on_finish(status, interrupted_by()//'; '//message, stat)
+    else
+      call self%next%on_finish(status, message, stat)
+    end if
   end subroutine s_finish
 
   ! checkpoints pass through to `next` (the HDF5 file stores them: --from continues bit for bit)

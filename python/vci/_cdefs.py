@@ -113,6 +113,7 @@ UNBOUND = {
     "vci_model_create": "a macro for vci_model_create_v2; the symbol is the 0.1 entry (struct without size)",
     "vci_check_model": "new in issue 31 (the model checker); not bound in Python yet",
     "vci_set_progress": "new in issue 31 (progress callback); not bound in Python yet",
+    "vci_open_output_every": "new in issue 31 (every k-th state, compression); not bound in Python yet",
 }
 
 

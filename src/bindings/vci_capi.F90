@@ -26,7 +26,7 @@ module vci_capi
   public :: vci_get_state, vci_get_multipliers, vci_get_energy, vci_get_index, vci_get_stats
   public :: vci_get_energy_fallbacks
   public :: vci_set_step_splits, vci_get_split_steps
-  public :: vci_set_impact_callback, vci_open_output, vci_close_output
+  public :: vci_set_impact_callback, vci_open_output, vci_open_output_every, vci_close_output
   public :: vci_last_error, vci_status_string, vci_version
 
   ! NUL-terminated status strings handed out by vci_status_string: initialised at load time, read-only
@@ -812,20 +812,41 @@ contains
   !> it exists); VCI_ERR_IO when the library was built without HDF5.
   integer(c_int) function vci_open_output(integ, path) bind(C, name='vci_open_output')
     type(c_ptr), value :: integ, path
+    vci_open_output = open_output_file(integ, path, 1, 0, 'vci_open_output')
+  end function vci_open_output
+
+  !> int vci_open_output_every(vci_integrator integ, const char *path, int every, int compress):
+  !> vci_open_output storing every `every`-th state (and the run's last), gzip level `compress`
+  !> (0: none) with shuffle (docs/OUTPUT.md).
+  integer(c_int) function vci_open_output_every(integ, path, every, compress) bind(C, name='vci_open_output_every')
+    type(c_ptr), value :: integ, path
+    integer(c_int), value :: every, compress
+    vci_open_output_every = open_output_file(integ, path, int(every), int(compress), 'vci_open_output_every')
+  end function vci_open_output_every
+
+  !> vci_open_output and vci_open_output_every (`caller` names the entry in messages).
+  integer function open_output_file(integ, path, every, compress, caller) result(res)
+    type(c_ptr), value :: integ, path
+    integer, intent(in) :: every, compress
+    character(len=*), intent(in) :: caller
     type(c_integrator_t), pointer :: ip
     character(kind=c_char), pointer :: chars(:)
     character(len=:), allocatable :: fpath
     integer :: stat, i, nc
-    call enter(integ, 'vci_open_output', ip, stat)
+    call enter(integ, caller, ip, stat)
     if (stat /= VCI_OK) then
-      vci_open_output = stat; return
+      res = stat; return
     end if
     nc = 0
-    if (.not. c_associated(path)) then
-      stat = fail(ip, VCI_ERR_ARGUMENT, 'vci_open_output: path is NULL')
+    if (every < 1 .or. every > 2**30) then   ! the HDF5 writer's VCI_HDF5_EVERY_MAX (also without HDF5)
+      stat = fail(ip, VCI_ERR_ARGUMENT, caller//': every must be in [1, 2^30]')
+    else if (compress < 0 .or. compress > 9) then
+      stat = fail(ip, VCI_ERR_ARGUMENT, caller//': compress must be a gzip level in [0, 9] (0: none)')
+    else if (.not. c_associated(path)) then
+      stat = fail(ip, VCI_ERR_ARGUMENT, caller//': path is NULL')
     else
       nc = int(min(c_strlen(path), int(huge(1), c_size_t)))
-      if (nc == 0) stat = fail(ip, VCI_ERR_ARGUMENT, 'vci_open_output: path is empty')
+      if (nc == 0) stat = fail(ip, VCI_ERR_ARGUMENT, caller//': path is empty')
     end if
     if (stat == VCI_OK) then
       call c_f_pointer(path, chars, [nc])
@@ -834,7 +855,7 @@ contains
         fpath(i:i) = chars(i)
       end do
       stat = close_output(ip)
-      if (stat /= VCI_OK) stat = fail(ip, stat, 'vci_open_output: the previous output file could not be finished')
+      if (stat /= VCI_OK) stat = fail(ip, stat, caller//': the previous output file could not be finished')
     end if
     if (stat == VCI_OK) then
 #ifdef VCI_HAVE_HDF5
@@ -842,13 +863,13 @@ contains
         type(vci_hdf5_writer_t), allocatable :: w
         allocate (w, stat=stat)
         if (stat /= 0) then
-          stat = fail(ip, VCI_ERR_MEMORY, 'vci_open_output: out of memory')
+          stat = fail(ip, VCI_ERR_MEMORY, caller//': out of memory')
         else
           call lock_io()
-          call w%open(fpath, stat, overwrite=.true.)
+          call w%open(fpath, stat, overwrite=.true., every=every, compress=compress)
           call unlock_io()
           if (stat /= VCI_OK) then
-            stat = fail(ip, VCI_ERR_IO, 'vci_open_output: '//trim(w%message))
+            stat = fail(ip, VCI_ERR_IO, caller//': '//trim(w%message))
           else
             call move_alloc(w, ip%obs%output)
             ip%obs%started = .false.
@@ -857,13 +878,13 @@ contains
         end if
       end block
 #else
-      stat = fail(ip, VCI_ERR_IO, 'vci_open_output: cannot write '//fpath// &
+      stat = fail(ip, VCI_ERR_IO, caller//': cannot write '//fpath// &
                   ': this vci library was built without HDF5 (configure with -DVCI_WITH_HDF5=ON)')
 #endif
     end if
     call leave(ip)
-    vci_open_output = stat
-  end function vci_open_output
+    res = stat
+  end function open_output_file
 
   !> int vci_close_output(vci_integrator integ): finish and close the output file (no-op without one).
   integer(c_int) function vci_close_output(integ) bind(C, name='vci_close_output')

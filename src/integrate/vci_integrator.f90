@@ -895,6 +895,8 @@ contains
     info%n = self%model%n; info%m = self%model%m; info%n_gaps = self%model%n_gaps
     info%direction = direction; info%h = self%state%h; info%t0 = self%time(); info%step0 = self%state%k
     info%impact_energy = settings%impact_energy
+    info%scheme = self%scheme_id; info%stages = self%n_stages
+    info%rtol = settings%rtol; info%atol = settings%atol; info%max_impacts = settings%max_impacts_per_step
   end function run_info
 
   !> An allocation for the model's sizes failed: VCI_ERR_MEMORY naming the sizes.

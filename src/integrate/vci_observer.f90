@@ -22,6 +22,11 @@ module vci_observer
     real(dp) :: t0 = 0.0_dp             !< time of index 0 (t = t0 + k h)
     integer(i8) :: step0 = 0_i8         !< index of the starting state
     integer :: impact_energy = 0        !< VCI_IMPACT_DISCRETE or VCI_IMPACT_HAMILTONIAN
+    integer :: scheme = 0               !< VCI_SCHEME_* of the run (0: not known)
+    integer :: stages = 0               !< set_scheme's stages: s of lobatto, the order of composition, 1 for left/midpoint, 0: L_d
+    real(dp) :: rtol = 0.0_dp           !< Newton tolerance relative to the size of each row's terms
+    real(dp) :: atol = 0.0_dp           !< absolute floor of Newton's per-row tolerance
+    integer :: max_impacts = 0          !< impacts allowed in one step
   end type vci_run_info_t
 
   !> One impact, as resolved by stages 1 and 2.

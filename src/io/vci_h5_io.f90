@@ -19,7 +19,7 @@ module vci_h5_io
 
   public :: h5io_fail, h5io_os_cause, h5io_discard_writes, h5io_free_bytes, h5io_path_kind
   public :: h5io_put_attr, h5io_get_attr
-  public :: h5io_make_rows, h5io_open_dset, h5io_rows, h5io_append_rows, h5io_read_row, h5io_check_dims
+  public :: h5io_make_rows, h5io_open_dset, h5io_rows, h5io_append_rows, h5io_read_row, h5io_read_i8, h5io_check_dims
   public :: h5io_put_vector, h5io_get_vector, h5io_close_dset, h5io_string_type
 
   !> A scalar attribute: real(dp), integer, integer(i8) or a string (fixed length, null-padded).
@@ -398,13 +398,16 @@ contains
   end subroutine uncached_access
 
   !> An extendible dataset of 0 rows, each row `width` values (width 0: a 1-D dataset).
-  subroutine h5io_make_rows(loc, name, width, rows_per_chunk, ftype, dset, stat, message, who)
+  subroutine h5io_make_rows(loc, name, width, rows_per_chunk, ftype, dset, stat, message, who, deflate)
     integer(hid_t), intent(in) :: loc, ftype
     character(len=*), intent(in) :: name, who
     integer, intent(in) :: width, rows_per_chunk
     integer(hid_t), intent(out) :: dset
     integer, intent(inout) :: stat
     character(len=*), intent(inout) :: message
+    !> gzip level 1..9 with the shuffle filter before it (bytes of equal significance together: the
+    !> exponents of a smooth trajectory compress); 0 or absent: no filter
+    integer, intent(in), optional :: deflate
     integer(hid_t) :: space, plist, dapl
     integer(hsize_t) :: dims(2), maxdims(2), chunk(2)
     integer :: rank, err, e2
@@ -420,6 +423,10 @@ contains
     call h5screate_simple_f(rank, dims(1:rank), space, err, maxdims(1:rank))
     if (err == 0) call h5pcreate_f(H5P_DATASET_CREATE_F, plist, err)
     if (err == 0) call h5pset_chunk_f(plist, rank, chunk(1:rank), err)
+    if (present(deflate)) then
+      if (deflate > 0 .and. err == 0) call h5pset_shuffle_f(plist, err)
+      if (deflate > 0 .and. err == 0) call h5pset_deflate_f(plist, deflate, err)
+    end if
     if (err == 0) call uncached_access(dapl, err)
     if (err == 0) call h5dcreate_f(loc, name, ftype, space, dset, err, plist, dapl_id=dapl)
     call h5pclose_f(plist, e2); call h5sclose_f(space, e2)
@@ -647,6 +654,27 @@ contains
     if (fspace >= 0) call h5sclose_f(fspace, e2)
     if (err /= 0) call h5io_fail('cannot read the last row', stat, message, who)
   end subroutine h5io_read_row
+
+  !> Value `row` (0-based) of a 1-D int64 dataset.
+  subroutine h5io_read_i8(dset, row, v, stat, message, who)
+    integer(hid_t), intent(in) :: dset
+    integer(i8), intent(in) :: row
+    integer(i8), intent(out), target :: v
+    integer, intent(inout) :: stat
+    character(len=*), intent(in) :: who
+    character(len=*), intent(inout) :: message
+    integer(hid_t) :: fspace, mspace
+    integer :: err, e2
+    type(c_ptr) :: pv
+    v = 0
+    if (stat /= VCI_OK) return
+    pv = c_loc(v)
+    call select_rows(dset, 0, row, 1, .false., fspace, mspace, err)
+    if (err == 0) call h5dread_f(dset, h5kind_to_type(i8, H5_INTEGER_KIND), pv, err, mspace, fspace)
+    if (mspace >= 0) call h5sclose_f(mspace, e2)
+    if (fspace >= 0) call h5sclose_f(fspace, e2)
+    if (err /= 0) call h5io_fail('cannot read a row', stat, message, who)
+  end subroutine h5io_read_i8
 
   ! --- small fixed vectors -----------------------------------------------------------------------
 

@@ -27,6 +27,7 @@ module vci_hdf5_output
   use vci_h5_io
   use vci_checkpoint, only: vci_checkpoint_t, vci_checkpoint_from_state, VCI_CHECKPOINT_VERSION
   use vci_checkpoint, only: vci_checkpoint_record_size
+  use vci_integrator, only: vci_scheme_name
   implicit none
   private
 
@@ -41,6 +42,8 @@ module vci_hdf5_output
   integer, parameter, public :: VCI_HDF5_FLUSH_EVERY = 4096
   !> Most steps between flushes (the buffer holds that many rows of t, q, p, energy, lambda).
   integer, parameter, public :: VCI_HDF5_FLUSH_MAX = 1048576
+  !> Largest `every` (store every k-th state): 2^30, far beyond any useful thinning.
+  integer, parameter, public :: VCI_HDF5_EVERY_MAX = 2**30
 
   ! rows per chunk: states and steps, impacts (few, so small chunks)
   integer, parameter :: chunk_rows = 1024, impact_chunk_rows = 64
@@ -55,25 +58,35 @@ module vci_hdf5_output
     logical :: flush_on_impact = .true.           !< flush after the step of every impact
     logical :: append = .false.                   !< continuing an existing file
     logical :: is_open = .false.                  !< a file is open
+    integer, private :: every = 1                 !< store the states whose index is a multiple of it (open)
+    integer, private :: deflate = 0               !< gzip level of new datasets, 0: none (open)
     type(vci_checkpoint_t), private :: cp          !< the driver's latest checkpoint (on_checkpoint)
     logical, private :: have_cp = .false.
     logical, private :: discarded = .false.       !< writes failed (a full disk): nothing more reaches the file
     integer(i8), private :: last_step = 0          !< index of the last state reported (on_start, on_step)
     real(dp), private :: t_start = 0.0_dp          !< time of the run's start state (index step0)
     integer(hid_t), private :: file = -1, g_imp = -1, g_cp = -1
-    integer(hid_t), private :: d_t = -1, d_q = -1, d_p = -1, d_e = -1, d_l = -1
+    integer(hid_t), private :: d_t = -1, d_q = -1, d_p = -1, d_e = -1, d_l = -1, d_k = -1
     integer(hid_t), private :: d_it = -1, d_is = -1, d_ia = -1, d_ig = -1, d_iq = -1, d_ii = -1
     integer, private :: n = 0, m = 0, n_gaps = 0, direction = 1
     logical, private :: started = .false., flush_pending = .false.
     real(dp), private :: h = 0.0_dp
     integer(i8), private :: rows = 0, steps = 0, impacts = 0   ! already in the file
     integer(i8), private :: row_start = 0, step0 = 0           ! row and integrator index of the start state
+    ! file index (steps of h from row 0) of the start state, and of the last row on disk
+    integer(i8), private :: base = 0, last_index = 0
+    ! the last state reported, when it is not stored (every > 1): stored as the file's last row if
+    ! the run ends there
+    logical, private :: last_stored = .true.
+    real(dp), private :: lt = 0.0_dp, le = 0.0_dp
+    real(dp), allocatable, private :: lq(:), lp(:), ll(:)
     ! buffered states (ns of them), steps (ne) and impacts (ni), not yet in the file
     integer, private :: ns = 0, ne = 0, ni = 0
     real(dp), allocatable, private :: bt(:), bq(:, :), bp(:, :), be(:), bl(:, :)
     real(dp), allocatable, private :: it(:), ia(:), iq(:, :), ii(:)
     integer(i8), allocatable, private :: is(:)
     integer, allocatable, private :: ig(:)
+    integer(i8), allocatable, private :: bk(:)    ! file index of each buffered state (/step, every > 1)
     real(dp), allocatable, private :: cp_rec(:)   !< the file's checkpoint, when it is valid (reading)
     integer, private :: cp_version = 0            !< its layout version (attribute /checkpoint version)
     logical, private :: cp_version_written = .false.   !< this session wrote /checkpoint's version
@@ -107,15 +120,18 @@ contains
   !> Open PATH for a run. A new file is created; an existing one is kept (VCI_ERR_IO) unless
   !> `overwrite`. With `append`, PATH must exist and the run must continue its last state in the same
   !> direction. `scene` names the model (root attribute), `flush_every` sets the flush interval.
-  subroutine w_open(self, path, stat, overwrite, append, scene, flush_every)
+  !> `every` = k stores every k-th state (those whose index from row 0 is a multiple of k, and the
+  !> run's last state); impacts are all stored. Appending keeps the file's k (a different `every`
+  !> is refused). `compress` = 1..9: gzip level (with shuffle) of a new file's row datasets.
+  subroutine w_open(self, path, stat, overwrite, append, scene, flush_every, every, compress)
     class(vci_hdf5_writer_t), intent(inout) :: self
     character(len=*), intent(in) :: path
     integer, intent(out) :: stat
     logical, intent(in), optional :: overwrite, append
     character(len=*), intent(in), optional :: scene
-    integer, intent(in), optional :: flush_every
+    integer, intent(in), optional :: flush_every, every, compress
     logical :: exists, replace
-    integer :: err
+    integer :: err, every_asked
     character(len=256) :: cause
 
     stat = VCI_OK
@@ -136,6 +152,21 @@ contains
         call fail(self, 'flush_every must be in [1, 1048576]', stat); return
       end if
       self%flush_every = flush_every
+    end if
+    every_asked = 0
+    if (present(every)) then
+      if (every < 1 .or. every > VCI_HDF5_EVERY_MAX) then
+        call fail(self, 'every must be in [1, 2^30]', stat); return
+      end if
+      every_asked = every
+    end if
+    self%every = max(1, every_asked)
+    self%deflate = 0
+    if (present(compress)) then
+      if (compress < 0 .or. compress > 9) then
+        call fail(self, 'compress must be a gzip level in [0, 9] (0: none)', stat); return
+      end if
+      self%deflate = compress
     end if
     self%started = .false.; self%flush_pending = .false.
     self%ns = 0; self%ne = 0; self%ni = 0
@@ -161,6 +192,11 @@ contains
       end if
       self%is_open = .true.
       call open_existing(self, stat)
+      if (stat == VCI_OK .and. every_asked > 0 .and. every_asked /= self%every) then
+        write (self%message, '(a,i0,a,i0,a)') self%path//': cannot append: the file stores every ', self%every, &
+          '-th state, not every ', every_asked, '-th'
+        stat = VCI_ERR_IO
+      end if
       if (stat /= VCI_OK) call w_close(self)
       return
     end if
@@ -198,8 +234,8 @@ contains
   !> Before on_start, and before an on_step that flushes (a full buffer, or an impact in the step).
   pure logical function w_wants_checkpoint(self)
     class(vci_hdf5_writer_t), intent(in) :: self
-    w_wants_checkpoint = self%is_open .and. (.not. self%started .or. self%ne + 1 >= self%flush_every &
-                                             .or. self%flush_pending)
+    w_wants_checkpoint = self%is_open .and. (.not. self%started .or. &
+      (stored_index(self, self%last_step + self%direction) .and. (self%ne + 1 >= self%flush_every .or. self%flush_pending)))
   end function w_wants_checkpoint
 
   !> Keep the driver's checkpoint for the next flush (stored only if it is the state of its last row).
@@ -223,7 +259,7 @@ contains
     class(vci_hdf5_writer_t), intent(inout) :: self
     integer :: err
     call h5io_close_dset(self%d_t); call h5io_close_dset(self%d_q); call h5io_close_dset(self%d_p)
-    call h5io_close_dset(self%d_e); call h5io_close_dset(self%d_l)
+    call h5io_close_dset(self%d_e); call h5io_close_dset(self%d_l); call h5io_close_dset(self%d_k)
     call h5io_close_dset(self%d_it); call h5io_close_dset(self%d_is); call h5io_close_dset(self%d_ia)
     call h5io_close_dset(self%d_ig); call h5io_close_dset(self%d_iq); call h5io_close_dset(self%d_ii)
     if (self%g_imp >= 0) call h5gclose_f(self%g_imp, err)
@@ -241,7 +277,7 @@ contains
     character(len=:), allocatable :: dirname
     integer :: err
     logical :: ex
-    integer(i8) :: rows_t, rows_q, rows_p, rows_e, rows_l, row_cp
+    integer(i8) :: rows_t, rows_q, rows_p, rows_e, rows_l, rows_k, row_cp
     call h5io_get_attr(self%file, 'n', self%n, stat, self%message, self%path)
     call h5io_get_attr(self%file, 'm', self%m, stat, self%message, self%path)
     call h5io_get_attr(self%file, 'n_gaps', self%n_gaps, stat, self%message, self%path)
@@ -259,6 +295,14 @@ contains
     if (.not. (ieee_is_finite(self%h) .and. self%h > 0.0_dp)) then
       call fail(self, 'attribute h is not a positive finite step length', stat); return
     end if
+    ! every: absent in files written before it existed (every state stored)
+    self%every = 1
+    call h5aexists_f(self%file, 'every', ex, err)
+    if (err == 0 .and. ex) call h5io_get_attr(self%file, 'every', self%every, stat, self%message, self%path)
+    if (stat /= VCI_OK) return
+    if (self%every < 1 .or. self%every > VCI_HDF5_EVERY_MAX) then
+      call fail(self, 'attribute every is not in [1, 2^30]', stat); return
+    end if
     call h5io_open_dset(self%file, 't', self%d_t, stat, self%message, self%path)
     call h5io_open_dset(self%file, 'q', self%d_q, stat, self%message, self%path)
     call h5io_open_dset(self%file, 'p', self%d_p, stat, self%message, self%path)
@@ -271,6 +315,12 @@ contains
     rows_e = h5io_rows(self%d_e, 'energy', 0, stat, self%message, self%path)
     rows_l = huge(1_i8)
     if (self%m > 0) rows_l = h5io_rows(self%d_l, 'lambda', self%m, stat, self%message, self%path)
+    rows_k = huge(1_i8)
+    if (self%every > 1) then
+      call h5io_open_dset(self%file, 'step', self%d_k, stat, self%message, self%path)
+      rows_k = h5io_rows(self%d_k, 'step', 0, stat, self%message, self%path)
+      rows_t = min(rows_t, rows_k)
+    end if
     if (stat /= VCI_OK) return
     ! Trust the steps that steps_completed (written last at every flush) vouches for: a file whose
     ! run was killed during a flush may hold a few more rows, which are dropped here.
@@ -293,6 +343,15 @@ contains
       if (row_cp >= 0) self%steps = row_cp
     end if
     self%rows = self%steps + 1
+    ! the index of the last row: its row number unless states were thinned (every > 1: /step)
+    self%last_index = self%rows - 1
+    if (self%every > 1) then
+      call h5io_read_i8(self%d_k, self%rows - 1, self%last_index, stat, self%message, self%path)
+      if (stat /= VCI_OK) return
+      if (self%last_index < self%rows - 1 .or. self%last_index > 2_i8**53) then
+        call fail(self, 'dataset step holds no state index in its last row', stat); return
+      end if
+    end if
     if (self%n_gaps > 0) then
       call h5gopen_f(self%file, 'impacts', self%g_imp, err)
       if (err /= 0) then
@@ -397,15 +456,16 @@ contains
       k = 0
       call fail(self, 'cannot read /impacts/step', stat); return
     end if
-    k = count(steps(1:k) < self%rows - 1)
+    k = count(steps(1:k) < self%last_index)
   end function trusted_impacts
 
   !> Appending: cut every dataset to the trusted lengths before new rows follow.
   subroutine truncate_to_trusted(self, stat)
     type(vci_hdf5_writer_t), intent(inout) :: self
     integer, intent(inout) :: stat
-    integer :: err, e(11)
+    integer :: err, e(12)
     e = 0
+    if (self%every > 1) call h5dset_extent_f(self%d_k, [int(self%rows, hsize_t)], e(12))
     call h5dset_extent_f(self%d_t, [int(self%rows, hsize_t)], e(1))
     call h5dset_extent_f(self%d_q, [int(self%n, hsize_t), int(self%rows, hsize_t)], e(2))
     call h5dset_extent_f(self%d_p, [int(self%n, hsize_t), int(self%rows, hsize_t)], e(3))
@@ -447,7 +507,8 @@ contains
       self%last_step = info%step0
       self%t_start = info%t0
       self%started = .true.
-      if (.not. self%append) call buffer_state(self, info%t0, q, p)
+      self%last_stored = .true.
+      if (.not. self%append) call buffer_state(self, info%t0, q, p, 0_i8)
       call h5io_put_attr(self%file, 'status', VCI_HDF5_RUNNING, s, self%message, self%path)
       call h5io_put_attr(self%file, 'status_message', 'running (not closed yet)', s, self%message, self%path)
       if (s == VCI_OK) call flush_file(self, s)
@@ -466,7 +527,7 @@ contains
     integer :: err
     self%n = info%n; self%m = info%m; self%n_gaps = info%n_gaps
     self%direction = info%direction; self%h = info%h
-    self%rows = 0; self%steps = 0; self%impacts = 0; self%row_start = 0
+    self%rows = 0; self%steps = 0; self%impacts = 0; self%row_start = 0; self%base = 0; self%last_index = 0
     call h5io_put_attr(self%file, 'direction', trim(merge('forward ', 'backward', info%direction > 0)), stat, &
         self%message, self%path)
     call h5io_put_attr(self%file, 'h', info%h, stat, self%message, self%path)
@@ -475,12 +536,36 @@ contains
     call h5io_put_attr(self%file, 'm', info%m, stat, self%message, self%path)
     call h5io_put_attr(self%file, 'n_gaps', info%n_gaps, stat, self%message, self%path)
     call h5io_put_attr(self%file, 'steps_completed', 0_i8, stat, self%message, self%path)
-    call h5io_make_rows(self%file, 't', 0, chunk_rows, H5T_IEEE_F64LE, self%d_t, stat, self%message, self%path)
-    call h5io_make_rows(self%file, 'q', info%n, chunk_rows, H5T_IEEE_F64LE, self%d_q, stat, self%message, self%path)
-    call h5io_make_rows(self%file, 'p', info%n, chunk_rows, H5T_IEEE_F64LE, self%d_p, stat, self%message, self%path)
-    call h5io_make_rows(self%file, 'energy', 0, chunk_rows, H5T_IEEE_F64LE, self%d_e, stat, self%message, self%path)
-    if (info%m > 0) call h5io_make_rows(self%file, 'lambda', info%m, chunk_rows, H5T_IEEE_F64LE, self%d_l, &
+    call h5io_put_attr(self%file, 'every', self%every, stat, self%message, self%path)
+    call h5io_put_attr(self%file, 'compression', self%deflate, stat, self%message, self%path)
+    ! how the run was made (provenance)
+    call h5io_put_attr(self%file, 'scheme', trim(vci_scheme_name(info%scheme)), stat, self%message, self%path)
+    call h5io_put_attr(self%file, 'stages', info%stages, stat, self%message, self%path)
+    call h5io_put_attr(self%file, 'impact_condition', trim(merge('hamiltonian', 'discrete   ', info%impact_energy == 1)), &
         stat, self%message, self%path)
+    call h5io_put_attr(self%file, 'rtol', info%rtol, stat, self%message, self%path)
+    call h5io_put_attr(self%file, 'atol', info%atol, stat, self%message, self%path)
+    call h5io_put_attr(self%file, 'max_impacts', info%max_impacts, stat, self%message, self%path)
+    call h5io_put_attr(self%file, 'resumes', '', stat, self%message, self%path)
+    call h5io_make_rows(self%file, 't', 0, chunk_rows, H5T_IEEE_F64LE, self%d_t, stat, self%message, self%path, &
+        self%deflate)
+    call h5io_make_rows(self%file, 'q', info%n, chunk_rows, H5T_IEEE_F64LE, self%d_q, stat, self%message, self%path, &
+        self%deflate)
+    call h5io_make_rows(self%file, 'p', info%n, chunk_rows, H5T_IEEE_F64LE, self%d_p, stat, self%message, self%path, &
+        self%deflate)
+    call h5io_make_rows(self%file, 'energy', 0, chunk_rows, H5T_IEEE_F64LE, self%d_e, stat, self%message, self%path, &
+        self%deflate)
+    if (info%m > 0) call h5io_make_rows(self%file, 'lambda', info%m, chunk_rows, H5T_IEEE_F64LE, self%d_l, &
+        stat, self%message, self%path, self%deflate)
+    if (self%every > 1) call h5io_make_rows(self%file, 'step', 0, chunk_rows, H5T_STD_I64LE, self%d_k, &
+        stat, self%message, self%path, self%deflate)
+    call describe(self, self%d_t, 'the model''s time unit', 'time of each stored state')
+    call describe(self, self%d_q, 'the model''s coordinates', 'configuration of each stored state')
+    call describe(self, self%d_p, 'the model''s momentum (dL/dqdot)', 'momentum of each stored state')
+    call describe(self, self%d_e, 'the model''s energy', 'E_d of the step arriving at row i+1')
+    if (info%m > 0) call describe(self, self%d_l, 'the constraints'' multipliers', &
+        'multipliers of the step arriving at row i+1')
+    if (self%every > 1) call describe(self, self%d_k, 'steps of h', 'index of each stored state from t[0]')
     if (stat /= VCI_OK) return
     if (info%n_gaps > 0) then
       call h5gcreate_f(self%file, 'impacts', self%g_imp, err)
@@ -488,17 +573,26 @@ contains
         call fail(self, 'cannot create group /impacts', stat); return
       end if
       call h5io_make_rows(self%g_imp, 'time', 0, impact_chunk_rows, H5T_IEEE_F64LE, self%d_it, stat, &
-          self%message, self%path)
+          self%message, self%path, self%deflate)
       call h5io_make_rows(self%g_imp, 'step', 0, impact_chunk_rows, H5T_STD_I64LE, self%d_is, stat, &
-          self%message, self%path)
+          self%message, self%path, self%deflate)
       call h5io_make_rows(self%g_imp, 'alpha', 0, impact_chunk_rows, H5T_IEEE_F64LE, self%d_ia, stat, &
-          self%message, self%path)
+          self%message, self%path, self%deflate)
       call h5io_make_rows(self%g_imp, 'gap_index', 0, impact_chunk_rows, H5T_STD_I32LE, self%d_ig, stat, &
-          self%message, self%path)
+          self%message, self%path, self%deflate)
       call h5io_make_rows(self%g_imp, 'q', info%n, impact_chunk_rows, H5T_IEEE_F64LE, self%d_iq, stat, &
-          self%message, self%path)
+          self%message, self%path, self%deflate)
       call h5io_make_rows(self%g_imp, 'impulse', 0, impact_chunk_rows, H5T_IEEE_F64LE, self%d_ii, stat, &
-          self%message, self%path)
+          self%message, self%path, self%deflate)
+      call describe(self, self%d_it, 'the model''s time unit', 'impact time')
+      call describe(self, self%d_is, 'steps of h', 'index of the state the impact''s step started from')
+      call describe(self, self%d_ia, 'fraction of h', 'fraction of that step, from its start in the direction of motion')
+      call describe(self, self%d_ig, 'wall number, 1-based', 'the wall reached: 1-based as the Fortran model numbers '// &
+          'its gaps (the C impact callback passes it 0-based, as an index into g[])')
+      call describe(self, self%d_iq, 'the model''s coordinates', 'configuration on the wall')
+      call describe(self, self%d_ii, 'the model''s momentum per unit gap gradient', &
+          'normal impulse: p after - p before = impulse * grad g')
+      call h5io_put_attr(self%d_ig, 'base', 1, stat, self%message, self%path)
     end if
   end subroutine start_new
 
@@ -523,7 +617,47 @@ contains
       call fail(self, 'cannot append: the run does not start from the file''s last state', stat); return
     end if
     self%row_start = self%rows - 1
+    self%base = self%last_index
+    call note_resume(self, info, stat)
   end subroutine start_append
+
+  !> Appending: one more line in the root attribute `resumes`, "<when> from index <k> (t = <t>)".
+  subroutine note_resume(self, info, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    type(vci_run_info_t), intent(in) :: info
+    integer, intent(inout) :: stat
+    character(len=:), allocatable :: old
+    character(len=120) :: line
+    logical :: ex
+    integer :: err
+    character(len=VCI_MSG_LEN) :: scratch
+    integer :: s
+    old = ''
+    s = VCI_OK
+    call h5aexists_f(self%file, 'resumes', ex, err)
+    ! an older file has none; an unreadable one is started afresh (it is a record, not data)
+    if (err == 0 .and. ex) call h5io_get_attr(self%file, 'resumes', old, s, scratch, self%path)
+    if (s /= VCI_OK) old = ''
+    write (line, '(a,i0,a,es24.17,a)') iso_now()//' from index ', self%last_index, ' (t = ', info%t0, ')'
+    if (len_trim(old) > 0) then
+      old = trim(old)//new_line('a')//trim(line)
+    else
+      old = trim(line)
+    end if
+    if (len(old) > 4000) old = old(len(old) - 3999:)   ! the reader takes strings of up to 4096 bytes: the latest
+    call h5io_put_attr(self%file, 'resumes', old, stat, self%message, self%path)
+  end subroutine note_resume
+
+  !> The attributes `units` and `description` of a dataset.
+  subroutine describe(self, dset, units, description)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer(hid_t), intent(in) :: dset
+    character(len=*), intent(in) :: units, description
+    integer :: s
+    s = VCI_OK
+    call h5io_put_attr(dset, 'units', units, s, self%message, self%path)
+    call h5io_put_attr(dset, 'description', description, s, self%message, self%path)
+  end subroutine describe
 
   subroutine alloc_buffers(self, stat)
     type(vci_hdf5_writer_t), intent(inout) :: self
@@ -536,7 +670,12 @@ contains
     if (allocated(self%bp)) deallocate (self%bp)
     if (allocated(self%be)) deallocate (self%be)
     if (allocated(self%bl)) deallocate (self%bl)
-    allocate (self%bt(c), self%bq(self%n, c), self%bp(self%n, c), self%be(c), self%bl(self%m, c), stat=s1)
+    if (allocated(self%bk)) deallocate (self%bk)
+    if (allocated(self%lq)) deallocate (self%lq)
+    if (allocated(self%lp)) deallocate (self%lp)
+    if (allocated(self%ll)) deallocate (self%ll)
+    allocate (self%bt(c), self%bq(self%n, c), self%bp(self%n, c), self%be(c), self%bl(self%m, c), self%bk(c), &
+              self%lq(self%n), self%lp(self%n), self%ll(self%m), stat=s1)
     if (allocated(self%it)) deallocate (self%it)
     if (allocated(self%is)) deallocate (self%is)
     if (allocated(self%ia)) deallocate (self%ia)
@@ -547,12 +686,27 @@ contains
     if (s1 /= 0 .or. s2 /= 0) call fail(self, 'no memory for a buffer of flush_every rows (lower flush_every)', stat)
   end subroutine alloc_buffers
 
-  subroutine buffer_state(self, t, q, p)
+  subroutine buffer_state(self, t, q, p, index)
     type(vci_hdf5_writer_t), intent(inout) :: self
     real(dp), intent(in) :: t, q(:), p(:)
+    integer(i8), intent(in) :: index     ! file index: steps of h from row 0
     self%ns = self%ns + 1
-    self%bt(self%ns) = t; self%bq(:, self%ns) = q; self%bp(:, self%ns) = p
+    self%bt(self%ns) = t; self%bq(:, self%ns) = q; self%bp(:, self%ns) = p; self%bk(self%ns) = index
   end subroutine buffer_state
+
+  !> The file index (steps of h from row 0) of the integrator's state `step`.
+  pure integer(i8) function file_index(self, step)
+    type(vci_hdf5_writer_t), intent(in) :: self
+    integer(i8), intent(in) :: step
+    file_index = self%base + (step - self%step0) * self%direction
+  end function file_index
+
+  !> Is the integrator's state `step` one the file stores (its file index a multiple of every)?
+  pure logical function stored_index(self, step)
+    type(vci_hdf5_writer_t), intent(in) :: self
+    integer(i8), intent(in) :: step
+    stored_index = modulo(file_index(self, step), int(self%every, i8)) == 0
+  end function stored_index
 
   subroutine w_step(self, step, t, q, p, lambda, energy, stat)
     class(vci_hdf5_writer_t), intent(inout) :: self
@@ -563,16 +717,29 @@ contains
       stat = VCI_ERR_IO; return
     end if
     if (.not. continues_run(self, step, t, stat)) return
-    call buffer_state(self, t, q, p)
     self%last_step = step
-    self%ne = self%ne + 1
-    self%be(self%ne) = energy
-    if (self%m > 0) self%bl(:, self%ne) = lambda
+    self%last_stored = stored_index(self, step)
+    if (.not. self%last_stored) then   ! kept aside: the file's last row if the run ends here
+      self%lt = t; self%lq = q; self%lp = p; self%le = energy
+      if (self%m > 0) self%ll = lambda
+      return
+    end if
+    call buffer_step(self, t, q, p, lambda, energy)
     if (self%ne >= self%flush_every .or. self%flush_pending) then
       call flush_file(self, stat)
       if (stat /= VCI_OK) stat = VCI_ERR_IO
     end if
   end subroutine w_step
+
+  !> A stored state: its row, and the E_d and multipliers of the step that arrived at it.
+  subroutine buffer_step(self, t, q, p, lambda, energy)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    real(dp), intent(in) :: t, q(:), p(:), lambda(:), energy
+    call buffer_state(self, t, q, p, file_index(self, self%last_step))
+    self%ne = self%ne + 1
+    self%be(self%ne) = energy
+    if (self%m > 0) self%bl(:, self%ne) = lambda
+  end subroutine buffer_step
 
   !> A step belongs in the file only if it continues its last state: the next index in the file's
   !> direction, at the time that index has (t = t0 + index h, up to rounding). Stepping the other
@@ -612,7 +779,7 @@ contains
     self%ni = self%ni + 1
     self%it(self%ni) = impact%t
     ! the row of /t the step started from: t(step) and t(step + 1) bracket the impact
-    self%is(self%ni) = self%row_start + (impact%step - self%step0) * self%direction
+    self%is(self%ni) = file_index(self, impact%step)
     self%ia(self%ni) = impact%alpha
     self%ig(self%ni) = impact%gap
     self%iq(:, self%ni) = impact%q
@@ -650,6 +817,11 @@ contains
       stat = VCI_ERR_IO; return
     end if
     s = VCI_OK
+    ! the run's last state is always stored: the file ends where the run did, and continues from there
+    if (.not. self%last_stored) then
+      call buffer_step(self, self%lt, self%lq, self%lp, self%ll, self%le)
+      self%last_stored = .true.
+    end if
     call h5io_put_attr(self%file, 'status', status, s, self%message, self%path)
     if (status == VCI_OK .and. len_trim(message) == 0) then
       call h5io_put_attr(self%file, 'status_message', 'ok', s, self%message, self%path)
@@ -668,6 +840,8 @@ contains
     integer :: err
     if (stat /= VCI_OK) return
     if (self%ns > 0) then
+      if (self%every > 1) call h5io_append_rows(self%d_k, 0, self%rows, self%bk(1:self%ns), self%ns, stat, &
+          self%message, self%path)
       call h5io_append_rows(self%d_t, 0, self%rows, self%bt(1:self%ns), self%ns, stat, self%message, self%path)
       call h5io_append_rows(self%d_q, self%n, self%rows, self%bq(:, 1:self%ns), self%ns, stat, self%message, self%path)
       call h5io_append_rows(self%d_p, self%n, self%rows, self%bp(:, 1:self%ns), self%ns, stat, self%message, self%path)

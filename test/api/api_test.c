@@ -820,6 +820,26 @@ static void suite_pendulum(void) {
   }
 }
 
+#ifdef VCI_TEST_HDF5
+/* 3000 steps of integ into capi_every.h5 through vci_open_output_every; the file's size in bytes
+ * (-1 when something failed). */
+static long run_to_file_size(vci_integrator integ, int every, int compress) {
+  FILE *f;
+  long size = -1;
+  remove("capi_every.h5");
+  CHECK_STATUS(vci_open_output_every(integ, "capi_every.h5", every, compress), VCI_OK);
+  CHECK_STATUS(vci_integrate(integ, 3000, 1), VCI_OK);
+  CHECK_STATUS(vci_close_output(integ), VCI_OK);
+  f = fopen("capi_every.h5", "rb");
+  CHECK(f != NULL);
+  if (f) {
+    if (fseek(f, 0, SEEK_END) == 0) size = ftell(f);
+    fclose(f);
+  }
+  return size;
+}
+#endif
+
 /* ================================================================================================ */
 static void suite_output(void) {
   vci_callbacks cb = ellipse_callbacks();
@@ -851,6 +871,28 @@ static void suite_output(void) {
     CHECK_STATUS(vci_open_output(integ, "/nonexistent-dir/x.h5"), VCI_ERR_IO);
     CHECK_MESSAGE(integ, "nonexistent-dir");
     remove(path);
+  }
+  {
+    /* vci_open_output_every: its arguments are checked; every and compress reach the file: the
+     * same 3000 steps make a smaller file with every = 10 (one chunk of rows instead of three) and
+     * with compress = 1 than with neither */
+    long size_plain, size_every, size_gzip;
+    CHECK_STATUS(vci_open_output_every(integ, "capi_every.h5", 0, 0), VCI_ERR_ARGUMENT);
+    CHECK_MESSAGE(integ, "every must be in [1, 2^30]");
+    CHECK_STATUS(vci_open_output_every(integ, "capi_every.h5", (1 << 30) + 1, 0), VCI_ERR_ARGUMENT);
+    CHECK_STATUS(vci_open_output_every(integ, "capi_every.h5", 1, 10), VCI_ERR_ARGUMENT);
+    CHECK_MESSAGE(integ, "compress must be a gzip level");
+    CHECK_STATUS(vci_open_output_every(integ, "capi_every.h5", 1, -1), VCI_ERR_ARGUMENT);
+    CHECK_STATUS(vci_open_output_every(integ, NULL, 1, 0), VCI_ERR_ARGUMENT);
+    size_plain = run_to_file_size(integ, 1, 0);
+    size_every = run_to_file_size(integ, 10, 0);
+    size_gzip = run_to_file_size(integ, 1, 1);
+    printf("  vci_open_output_every: 3000 steps: %ld bytes, every 10: %ld, gzip 1: %ld\n", size_plain, size_every,
+           size_gzip);
+    CHECK(size_plain > 0 && size_every > 0 && size_gzip > 0);
+    CHECK(size_every < size_plain);
+    CHECK(size_gzip < size_plain);
+    remove("capi_every.h5");
   }
 #else
   CHECK_STATUS(vci_open_output(integ, "capi_output_test.h5"), VCI_ERR_IO);

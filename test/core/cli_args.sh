@@ -36,6 +36,11 @@ bad=(
   "--flush-every 0|--flush-every"
   "--flush-every 1e3|--flush-every"
   "--flush-every 2147483647|--flush-every"
+  "--every 0|--every"
+  "--every 2.5|--every"
+  "--every 2147483647|--every"
+  "--every 10 --output x.csv|--every"
+  "--compress --output x.csv|--compress"
   "--stages 0|--stages"
   "--stages 9|--stages"
   "--scheme trapezoid|--scheme"
@@ -46,7 +51,7 @@ bad=(
   "--append|--append"
 )
 # Issue 31 item 6: an option that needs a value never takes the next option (or nothing) as it.
-valued=(--h --t-final --output --from --impact-energy --rtol --max-impacts --flush-every --scheme --stages)
+valued=(--h --t-final --output --from --impact-energy --rtol --max-impacts --flush-every --every --scheme --stages)
 for opt in "${valued[@]}"; do
   bad+=("$opt --quiet|$opt needs a value" "$opt --no-output|$opt needs a value" "$opt -h|$opt needs a value"
         "--h 0.01 $opt|$opt needs a value" "$opt ''|$opt")
