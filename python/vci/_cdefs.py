@@ -75,6 +75,8 @@ int  vci_get_energy_fallbacks(vci_integrator integ, int64_t *count);
 int  vci_set_impact_callback(vci_integrator integ, vci_impact_fn fn, void *user);
 int  vci_open_output(vci_integrator integ, const char *path);
 int  vci_close_output(vci_integrator integ);
+int  vci_append_output(vci_integrator integ, const char *path);
+int  vci_restore_from_file(vci_integrator integ, const char *path);
 int  vci_last_error(vci_integrator integ, char *buffer, int size);
 const char *vci_status_string(int status);
 int  vci_version(void);

@@ -334,14 +334,32 @@ class Integrator:
         return self._impact_array(self._impacts)
 
     # ---- output ----
-    def open_output(self, path):
-        """Write the trajectory of later steps to the HDF5 file path (replaced if it exists);
-        OutputError when the library was built without HDF5. Layout: docs/OUTPUT.md."""
+    @staticmethod
+    def _path(path):
         path = os.fspath(path)
         if not isinstance(path, str) or not path:
             raise ArgumentError("path must be a non-empty string")
-        self._check(lib.vci_open_output(self._h[0], path.encode()))
+        return path
+
+    def open_output(self, path, *, append=False):
+        """Write the trajectory of later steps to the HDF5 file path (replaced if it exists).
+        append=True continues the file instead: the run must go on from its last state, in its
+        direction (start it with restore(path)); a run that does not is refused (OutputError) at
+        its first step. OutputError when the library was built without HDF5. Layout: docs/OUTPUT.md."""
+        path = self._path(path)
+        opener = lib.vci_append_output if append else lib.vci_open_output
+        self._check(opener(self._h[0], path.encode()))
         self._output = path
+
+    def restore(self, path):
+        """Start from the last state of the HDF5 file path (written by open_output, the Fortran
+        writer or the examples' --output): with the checkpoint the file keeps, the run continues
+        bit for bit as if it had never stopped. The integrator needs the file's model sizes and h
+        (ArgumentError otherwise); OutputError when the file cannot be read."""
+        path = self._path(path)
+        self._impacts = []
+        self._clear()
+        self._check(lib.vci_restore_from_file(self._h[0], path.encode()))
 
     def close_output(self):
         """Finish and close the output file, if any."""

@@ -11,7 +11,8 @@ module vci_capi
   use vci, only: VCI_VERSION_NUMBER
   use vci_model_check, only: vci_check_model, vci_check_report_t
 #ifdef VCI_HAVE_HDF5
-  use vci_hdf5_output, only: vci_hdf5_writer_t
+  use vci_hdf5_output, only: vci_hdf5_writer_t, vci_hdf5_read_checkpoint
+  use vci_checkpoint, only: vci_checkpoint_t
 #endif
   use vci_capi_models
   use vci_capi_registry
@@ -26,6 +27,7 @@ module vci_capi
   public :: vci_get_state, vci_get_multipliers, vci_get_energy, vci_get_index, vci_get_stats
   public :: vci_get_energy_fallbacks
   public :: vci_set_impact_callback, vci_open_output, vci_close_output
+  public :: vci_append_output, vci_restore_from_file
   public :: vci_last_error, vci_status_string, vci_version
 
   ! NUL-terminated status strings handed out by vci_status_string: initialised at load time, read-only
@@ -773,29 +775,55 @@ contains
   !> it exists); VCI_ERR_IO when the library was built without HDF5.
   integer(c_int) function vci_open_output(integ, path) bind(C, name='vci_open_output')
     type(c_ptr), value :: integ, path
-    type(c_integrator_t), pointer :: ip
+    vci_open_output = open_output_entry(integ, path, 'vci_open_output', .false.)
+  end function vci_open_output
+
+  !> int vci_append_output(vci_integrator integ, const char *path): continue the HDF5 file PATH
+  !> (written by vci_open_output, the Fortran writer or the examples' --output) with the later
+  !> steps; the run must go on from the file's last state, in its direction (vci_restore_from_file).
+  integer(c_int) function vci_append_output(integ, path) bind(C, name='vci_append_output')
+    type(c_ptr), value :: integ, path
+    vci_append_output = open_output_entry(integ, path, 'vci_append_output', .true.)
+  end function vci_append_output
+
+  !> A C string as a Fortran one; false (and a failure recorded on ip) when NULL or empty.
+  logical function c_path(ip, who, path, fpath) result(ok)
+    type(c_integrator_t), intent(inout) :: ip
+    character(len=*), intent(in) :: who
+    type(c_ptr), intent(in) :: path
+    character(len=:), allocatable, intent(out) :: fpath
     character(kind=c_char), pointer :: chars(:)
-    character(len=:), allocatable :: fpath
-    integer :: stat, i, nc
-    call enter(integ, 'vci_open_output', ip, stat)
-    if (stat /= VCI_OK) then
-      vci_open_output = stat; return
-    end if
-    nc = 0
+    integer :: i, nc, stat
+    ok = .false.
     if (.not. c_associated(path)) then
-      stat = fail(ip, VCI_ERR_ARGUMENT, 'vci_open_output: path is NULL')
-    else
-      nc = int(min(c_strlen(path), int(huge(1), c_size_t)))
-      if (nc == 0) stat = fail(ip, VCI_ERR_ARGUMENT, 'vci_open_output: path is empty')
+      stat = fail(ip, VCI_ERR_ARGUMENT, who//': path is NULL'); return
     end if
-    if (stat == VCI_OK) then
-      call c_f_pointer(path, chars, [nc])
-      allocate (character(len=nc) :: fpath)
-      do i = 1, nc
-        fpath(i:i) = chars(i)
-      end do
+    nc = int(min(c_strlen(path), int(huge(1), c_size_t)))
+    if (nc == 0) then
+      stat = fail(ip, VCI_ERR_ARGUMENT, who//': path is empty'); return
+    end if
+    call c_f_pointer(path, chars, [nc])
+    allocate (character(len=nc) :: fpath)
+    do i = 1, nc
+      fpath(i:i) = chars(i)
+    end do
+    ok = .true.
+  end function c_path
+
+  !> vci_open_output (a new file, replacing PATH) and vci_append_output (`append`: continue PATH).
+  integer function open_output_entry(integ, path, who, append) result(stat)
+    type(c_ptr), intent(in) :: integ, path
+    character(len=*), intent(in) :: who
+    logical, intent(in) :: append
+    type(c_integrator_t), pointer :: ip
+    character(len=:), allocatable :: fpath
+    call enter(integ, who, ip, stat)
+    if (stat /= VCI_OK) return
+    if (.not. c_path(ip, who, path, fpath)) then
+      stat = ip%integ%status()
+    else
       stat = close_output(ip)
-      if (stat /= VCI_OK) stat = fail(ip, stat, 'vci_open_output: the previous output file could not be finished')
+      if (stat /= VCI_OK) stat = fail(ip, stat, who//': the previous output file could not be finished')
     end if
     if (stat == VCI_OK) then
 #ifdef VCI_HAVE_HDF5
@@ -803,13 +831,17 @@ contains
         type(vci_hdf5_writer_t), allocatable :: w
         allocate (w, stat=stat)
         if (stat /= 0) then
-          stat = fail(ip, VCI_ERR_MEMORY, 'vci_open_output: out of memory')
+          stat = fail(ip, VCI_ERR_MEMORY, who//': out of memory')
         else
           call lock_io()
-          call w%open(fpath, stat, overwrite=.true.)
+          if (append) then
+            call w%open(fpath, stat, append=.true.)
+          else
+            call w%open(fpath, stat, overwrite=.true.)
+          end if
           call unlock_io()
           if (stat /= VCI_OK) then
-            stat = fail(ip, VCI_ERR_IO, 'vci_open_output: '//trim(w%message))
+            stat = fail(ip, VCI_ERR_IO, who//': '//trim(w%message))
           else
             call move_alloc(w, ip%obs%output)
             ip%obs%started = .false.
@@ -818,13 +850,66 @@ contains
         end if
       end block
 #else
-      stat = fail(ip, VCI_ERR_IO, 'vci_open_output: cannot write '//fpath// &
+      stat = fail(ip, VCI_ERR_IO, who//': cannot write '//fpath// &
                   ': this vci library was built without HDF5 (configure with -DVCI_WITH_HDF5=ON)')
 #endif
     end if
     call leave(ip)
-    vci_open_output = stat
-  end function vci_open_output
+  end function open_output_entry
+
+  !> int vci_restore_from_file(vci_integrator integ, const char *path): start from the last state
+  !> of an HDF5 file of this library. With the checkpoint the writer stores at every flush (the
+  !> last row's state and the solver's memory) the run continues bit for bit; a file without one
+  !> gives its last (t, q, p) at index 0, as vci_init_from_momentum would.
+  integer(c_int) function vci_restore_from_file(integ, path) bind(C, name='vci_restore_from_file')
+    type(c_ptr), value :: integ, path
+    character(len=*), parameter :: who = 'vci_restore_from_file'
+    type(c_integrator_t), pointer :: ip
+    character(len=:), allocatable :: fpath
+    integer :: stat
+    call enter(integ, who, ip, stat)
+    if (stat /= VCI_OK) then
+      vci_restore_from_file = stat; return
+    end if
+    if (.not. c_path(ip, who, path, fpath)) then
+      stat = ip%integ%status()
+    else if (.not. output_blocks_init(ip, who, stat)) then
+#ifdef VCI_HAVE_HDF5
+      block
+        type(vci_checkpoint_t) :: cp
+        character(len=VCI_MSG_LEN) :: msg
+        character(len=160) :: why
+        call lock_io()
+        call vci_hdf5_read_checkpoint(fpath, cp, stat, msg)
+        call unlock_io()
+        if (stat /= VCI_OK) then
+          call ip%integ%forget_state()
+          stat = fail(ip, VCI_ERR_IO, who//': '//trim(msg))
+        else if (size(cp%q) /= ip%model%n .or. size(cp%lambda) /= ip%model%m) then
+          call ip%integ%forget_state()
+          write (why, '(2(a,i0),a,2(i0,a))') ': the file holds n = ', size(cp%q), ', m = ', size(cp%lambda), &
+            '; the model has n = ', ip%model%n, ', m = ', ip%model%m, ' (a file of another model)'
+          stat = fail(ip, VCI_ERR_ARGUMENT, who//': '//fpath//trim(why))
+        else if (cp%h /= ip%integ%step_length()) then
+          call ip%integ%forget_state()
+          write (why, '(a,es24.17,a,es24.17,a)') ': the file''s step length h = ', cp%h, &
+            ' differs from the integrator''s h = ', ip%integ%step_length(), ' (create it with the file''s h)'
+          stat = fail(ip, VCI_ERR_ARGUMENT, who//': '//fpath//trim(why))
+        else
+          call ip%integ%restore(cp, stat)
+          stat = after_call(ip, stat)
+          if (stat /= VCI_OK) stat = fail(ip, stat, who//': '//fpath//': '//trim(ip%integ%message_text()))
+        end if
+      end block
+#else
+      call ip%integ%forget_state()
+      stat = fail(ip, VCI_ERR_IO, who//': cannot read '//fpath// &
+                  ': this vci library was built without HDF5 (configure with -DVCI_WITH_HDF5=ON)')
+#endif
+    end if
+    call leave(ip)
+    vci_restore_from_file = stat
+  end function vci_restore_from_file
 
   !> int vci_close_output(vci_integrator integ): finish and close the output file (no-op without one).
   integer(c_int) function vci_close_output(integ) bind(C, name='vci_close_output')
