@@ -49,38 +49,15 @@ contains
     type(c_ptr), value :: model, cb, user
     integer(c_int), value :: n, m, ngaps
     type(vci_callbacks_c), target :: local
-    integer(c_size_t), pointer :: size_field
     integer(c_int8_t), pointer :: src(:), dst(:)
-    integer(c_size_t) :: nbytes, ours, least
-    character(len=24) :: txt
+    integer(c_size_t) :: nbytes, ours
     integer :: k
     vci_model_create_v2 = VCI_ERR_ARGUMENT
-    if (.not. c_associated(model)) then
-      call set_thread_message('vci_model_create: the model argument is NULL'); return
-    end if
-    call null_out(model)
-    if (.not. c_associated(cb)) then
-      call set_thread_message('vci_model_create: the callbacks argument is NULL'); return
-    end if
-    call c_f_pointer(cb, size_field)
-    nbytes = size_field
     ours = c_sizeof(local)
-    least = c_sizeof(local%size) + 3 * c_sizeof(c_null_funptr)   ! up to d3_ld: the required ones
-    txt = size_text(nbytes)
-    if (.not. whole_callbacks(nbytes, least)) then
-      call set_thread_message('vci_model_create: cb->size = '//trim(txt)//' is not the size of a vci_callbacks '// &
-                              '(initialise it with VCI_CALLBACKS_INIT)')
-      return
-    end if
+    ! up to d3_ld: the required ones
+    if (.not. callbacks_usable('vci_model_create', model, cb, ours, c_sizeof(local%size) + 3 * c_sizeof(c_null_funptr), &
+                               'vci_callbacks', 'VCI_CALLBACKS_INIT', nbytes)) return
     call c_f_pointer(cb, src, [nbytes])
-    if (nbytes > ours) then
-      ! built against a newer vci.h: fine as long as the members this library does not know are NULL
-      if (any(src(ours + 1:nbytes) /= 0)) then
-        call set_thread_message('vci_model_create: callbacks this library does not know are set (cb->size = '// &
-                                trim(txt)//'; the program was built against a newer vci.h)')
-        return
-      end if
-    end if
     local = vci_callbacks_c()
     call c_f_pointer(c_loc(local), dst, [ours])
     k = int(min(nbytes, ours))
@@ -97,13 +74,7 @@ contains
     type(vci_callbacks_v0_1), pointer :: old
     type(vci_callbacks_c) :: local
     vci_model_create_v0_1 = VCI_ERR_ARGUMENT
-    if (.not. c_associated(model)) then
-      call set_thread_message('vci_model_create: the model argument is NULL'); return
-    end if
-    call null_out(model)
-    if (.not. c_associated(cb)) then
-      call set_thread_message('vci_model_create: the callbacks argument is NULL'); return
-    end if
+    if (.not. pointers_given('vci_model_create', model, cb)) return
     call c_f_pointer(cb, old)
     local = vci_callbacks_c(c_sizeof(local), old%d1_ld, old%d2_ld, old%d3_ld, old%mixed_hessian, &
                             old%constraint_forms, old%discrete_constraint, old%gaps, old%gap_gradients, old%energy)
@@ -119,38 +90,15 @@ contains
     integer(c_int), value :: n, m, ngaps
     type(vci_lagrangian_callbacks_c) :: local
     type(c_funptr), pointer :: fps(:)
-    integer(c_size_t), pointer :: size_field
-    integer(c_int8_t), pointer :: src(:)
-    integer(c_size_t) :: nbytes, ours, least
-    character(len=24) :: txt
+    integer(c_size_t) :: nbytes, ours
     character(len=64) :: what
     integer :: k, i
     vci_model_create_lagrangian = VCI_ERR_ARGUMENT
-    if (.not. c_associated(model)) then
-      call set_thread_message('vci_model_create_lagrangian: the model argument is NULL'); return
-    end if
-    call null_out(model)
-    if (.not. c_associated(cb)) then
-      call set_thread_message('vci_model_create_lagrangian: the callbacks argument is NULL'); return
-    end if
-    call c_f_pointer(cb, size_field)
-    nbytes = size_field
     ours = c_sizeof(local)
-    least = c_sizeof(local%size) + 3 * c_sizeof(c_null_funptr)   ! up to dl_dv: the required ones
-    txt = size_text(nbytes)
-    if (.not. whole_callbacks(nbytes, least)) then
-      call set_thread_message('vci_model_create_lagrangian: cb->size = '//trim(txt)//' is not the size of a '// &
-                              'vci_lagrangian_callbacks (initialise it with VCI_LAGRANGIAN_CALLBACKS_INIT)')
-      return
-    end if
-    call c_f_pointer(cb, src, [nbytes])
-    if (nbytes > ours) then
-      if (any(src(ours + 1:nbytes) /= 0)) then
-        call set_thread_message('vci_model_create_lagrangian: callbacks this library does not know are set '// &
-                                '(cb->size = '//trim(txt)//'; the program was built against a newer vci.h)')
-        return
-      end if
-    end if
+    ! up to dl_dv: the required ones
+    if (.not. callbacks_usable('vci_model_create_lagrangian', model, cb, ours, &
+                               c_sizeof(local%size) + 3 * c_sizeof(c_null_funptr), 'vci_lagrangian_callbacks', &
+                               'VCI_LAGRANGIAN_CALLBACKS_INIT', nbytes)) return
     ! the members the caller's header has (those beyond its size stay NULL), one by one: a byte copy
     ! into `local` through a second pointer was lost to gfortran's optimiser
     k = int((min(nbytes, ours) - c_sizeof(local%size)) / c_sizeof(c_null_funptr))
@@ -183,6 +131,57 @@ contains
     ! sizes, allocation and registry as for a discrete model
     vci_model_create_lagrangian = create_model('vci_model_create_lagrangian', model, n, m, ngaps, vci_callbacks_c(), user, local)
   end function vci_model_create_lagrangian
+
+  !> The model_create entry points' first checks (`who`: the one called): model and cb not NULL;
+  !> then *model = NULL. False (the thread's message says why) when the call must fail.
+  logical function pointers_given(who, model, cb) result(ok)
+    character(len=*), intent(in) :: who
+    type(c_ptr), intent(in) :: model, cb
+    ok = .false.
+    if (.not. c_associated(model)) then
+      call set_thread_message(who//': the model argument is NULL'); return
+    end if
+    call null_out(model)
+    if (.not. c_associated(cb)) then
+      call set_thread_message(who//': the callbacks argument is NULL'); return
+    end if
+    ok = .true.
+  end function pointers_given
+
+  !> pointers_given, then the versioned struct at cb (`struct`, initialised by `init`; this
+  !> library's is `ours` bytes, its required members end at `least`): nbytes = cb->size must be a
+  !> whole struct of some header, and members beyond `ours` (a newer header's) must be NULL.
+  logical function callbacks_usable(who, model, cb, ours, least, struct, init, nbytes) result(ok)
+    character(len=*), intent(in) :: who, struct, init
+    type(c_ptr), intent(in) :: model, cb
+    integer(c_size_t), intent(in) :: ours, least
+    integer(c_size_t), intent(out) :: nbytes
+    integer(c_size_t), pointer :: size_field
+    integer(c_int8_t), pointer :: src(:)
+    character(len=24) :: txt
+    nbytes = 0
+    ok = pointers_given(who, model, cb)
+    if (.not. ok) return
+    ok = .false.
+    call c_f_pointer(cb, size_field)
+    nbytes = size_field
+    txt = size_text(nbytes)
+    if (.not. whole_callbacks(nbytes, least)) then
+      call set_thread_message(who//': cb->size = '//trim(txt)//' is not the size of a '//struct// &
+                              ' (initialise it with '//init//')')
+      return
+    end if
+    call c_f_pointer(cb, src, [nbytes])
+    if (nbytes > ours) then
+      ! built against a newer vci.h: fine as long as the members this library does not know are NULL
+      if (any(src(ours + 1:nbytes) /= 0)) then
+        call set_thread_message(who//': callbacks this library does not know are set (cb->size = '// &
+                                trim(txt)//'; the program was built against a newer vci.h)')
+        return
+      end if
+    end if
+    ok = .true.
+  end function callbacks_usable
 
   !> A versioned callbacks struct (size field, then function pointers) of nbytes: at least the
   !> required members, whole members only (a size between two members is no header's struct), and
