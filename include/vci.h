@@ -340,6 +340,32 @@ int  vci_open_output_every(vci_integrator integ, const char *path, int every, in
  *  VCI_ERR_IO: the file could not be finished (the message says why); VCI_ERR_STATE: busy. */
 int  vci_close_output(vci_integrator integ);
 
+/* ---- Restart (docs/C_API.md, "Restart"): continue a run from its HDF5 file, bit for bit ---- */
+
+/** Continue the HDF5 file `path` with the later steps (instead of replacing it, as vci_open_output
+ *  does). The file is one written by vci_open_output, the Fortran writer or the examples'
+ *  --output; the run must go on from its last state in its direction, with the same n, m, ngaps
+ *  and h (restore that state first with vci_restore_from_file). Finished like vci_open_output's.
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, path NULL or empty; VCI_ERR_IO: the file does not
+ *  exist, is not a regular file, not an HDF5 file of this library or not writable, or this library
+ *  was built without HDF5 (vci_last_error says which); VCI_ERR_MEMORY; VCI_ERR_STATE: busy.
+ *  The first step after it returns VCI_ERR_IO (nothing written) when the run does not continue the
+ *  file: another state, direction, n, m, ngaps or h. */
+int  vci_append_output(vci_integrator integ, const char *path);
+
+/** Start from the last state of the HDF5 file `path`. Every flush of the file stores a checkpoint
+ *  (the state of its last row and the solver's memory): from it the run continues bit for bit, as
+ *  if it had never stopped (same t, q, p, step index and discrete energy as the uninterrupted run,
+ *  step after step). A file without a checkpoint gives its last (t, q, p) at index 0, as
+ *  vci_init_from_momentum would. The integrator must have the file's model sizes and step length.
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, path NULL or empty, the file's n or m differ from
+ *  the model's, or its h from the integrator's; VCI_ERR_IO: the file cannot be read (missing, not
+ *  a regular file, not an HDF5 file of this library, damaged) or this library was built without
+ *  HDF5; VCI_ERR_INADMISSIBLE, VCI_ERR_CALLBACK, VCI_ERR_NONFINITE: the file's state is refused as
+ *  vci_init_from_momentum refuses one; VCI_ERR_STATE: busy, or an open output file already holds
+ *  steps (close it first). After a failure the integrator has no state until initialised again. */
+int  vci_restore_from_file(vci_integrator integ, const char *path);
+
 /** Copy the message of the last call on integ (empty after a success) into buffer[size],
  *  truncated to size - 1 characters and NUL-terminated. integ = NULL: the calling thread's last
  *  failure that had no live integrator to hold it (failed create, NULL, dead or busy handle).

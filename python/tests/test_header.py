@@ -42,7 +42,7 @@ def test_prototypes_and_constants_compile_with_the_header(tmp_path):
 def test_struct_layout_matches_the_header(tmp_path):
     lines = ['#include <stdio.h>', '#include <stddef.h>', '#include "vci.h"', 'int main(void) {']
     expected = []
-    for struct in ("vci_callbacks", "vci_lagrangian_callbacks"):
+    for struct in ("vci_callbacks", "vci_lagrangian_callbacks", "vci_progress"):
         lines.append(f'  printf("{struct} sizeof %zu\\n", sizeof({struct}));')
         expected.append(f"{struct} sizeof {ffi.sizeof(struct)}")
         for name, field in ffi.typeof(struct).fields:

@@ -11,8 +11,8 @@ or, with L as a sympy formula, vci.formula.lagrangian_model(L, q, qdot, gaps=[..
 from ._lib import library_path, lib as _clib
 from .errors import (ArgumentError, CallbackError, DtypeError, FormulaError, ImpactError, InadmissibleError,
                      MemoryError_, NewtonError, NonFiniteError, OutputError, RecoverableError, StateError,
-                     TooManyImpactsError, VciError, status_string)
-from .integrator import Integrator, State, Stats, Trajectory, impact_dtype
+                     StoppedError, TooManyImpactsError, VciError, status_string)
+from .integrator import CheckReport, Integrator, Progress, State, Stats, Trajectory, check_model, impact_dtype
 from .model import DiscreteModel, LagrangianModel, Model
 
 

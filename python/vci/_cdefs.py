@@ -27,6 +27,7 @@ CONSTANTS = {
     "VCI_SCHEME_LEFT": 1,
     "VCI_SCHEME_MIDPOINT": 2,
     "VCI_SCHEME_LOBATTO": 3,
+    "VCI_SCHEME_COMPOSITION": 4,
     "VCI_LOBATTO_MAX_STAGES": 8,
     "VCI_VERSION_MAJOR": 0,
     "VCI_VERSION_MINOR": 2,
@@ -77,9 +78,14 @@ int  vci_get_split_steps(vci_integrator integ, int64_t *steps, int64_t *largest)
 int  vci_set_impact_callback(vci_integrator integ, vci_impact_fn fn, void *user);
 int  vci_open_output(vci_integrator integ, const char *path);
 int  vci_close_output(vci_integrator integ);
+int  vci_append_output(vci_integrator integ, const char *path);
+int  vci_restore_from_file(vci_integrator integ, const char *path);
 int  vci_last_error(vci_integrator integ, char *buffer, int size);
 const char *vci_status_string(int status);
 int  vci_version(void);
+int  vci_set_progress(vci_integrator integ, vci_progress_fn fn, double interval, void *user);
+int  vci_check_model(vci_model model, const double *q, const double *v, double h, double tol, int *passed,
+                     double *worst, char *report, int size);
 """
 
 #: The two callback structs, member for member (cffi needs the whole layout).
@@ -96,6 +102,12 @@ typedef struct vci_callbacks {
   vci_dconstraint_fn discrete_constraint_jacobian;
 } vci_callbacks;
 
+typedef struct vci_progress {
+  int64_t steps_done, steps_total, impacts;
+  double t, elapsed, steps_per_second, eta;
+} vci_progress;
+typedef int (*vci_progress_fn)(const vci_progress *info, void *user);
+
 typedef struct vci_lagrangian_callbacks {
   size_t size;
   vci_lagrangian_value_fn lagrangian;
@@ -111,8 +123,6 @@ typedef struct vci_lagrangian_callbacks {
 #: Functions of vci.h deliberately not bound, with the reason.
 UNBOUND = {
     "vci_model_create": "a macro for vci_model_create_v2; the symbol is the 0.1 entry (struct without size)",
-    "vci_check_model": "new in issue 31 (the model checker); not bound in Python yet",
-    "vci_set_progress": "new in issue 31 (progress callback); not bound in Python yet",
     "vci_open_output_every": "new in issue 31 (every k-th state, compression); not bound in Python yet",
 }
 

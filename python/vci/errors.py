@@ -82,6 +82,12 @@ class MemoryError_(VciError, MemoryError):
     status = 10
 
 
+class StoppedError(VciError):
+    """VCI_STOPPED: the run was stopped by the progress callback (Integrator.set_progress); the
+    state is that of the last step done, and the integrator may go on from it."""
+    status = 11
+
+
 class FormulaError(ArgumentError):
     """A formula the symbolic path cannot use (a free symbol that is neither a coordinate, a
     velocity nor a given parameter; wrong sizes)."""
@@ -99,7 +105,7 @@ class RecoverableError(Exception):
 
 BY_STATUS = {cls.status: cls for cls in (ArgumentError, CallbackError, NonFiniteError, NewtonError, ImpactError,
                                          TooManyImpactsError, InadmissibleError, OutputError, StateError,
-                                         MemoryError_)}
+                                         MemoryError_, StoppedError)}
 
 
 def status_string(status):

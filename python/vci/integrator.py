@@ -12,7 +12,7 @@ from ._lib import ffi, lib
 from .errors import ArgumentError, DtypeError, last_error, make_error
 from .model import LagrangianModel, Model
 
-SCHEMES = {"left": 1, "midpoint": 2, "lobatto": 3}
+SCHEMES = {"left": 1, "midpoint": 2, "lobatto": 3, "composition": 4}
 IMPACT_ENERGY = {"discrete": 0, "hamiltonian": 1}
 _DIRECTIONS = {1: 1, -1: -1, "forward": 1, "backward": -1}
 
@@ -57,6 +57,57 @@ class Stats(NamedTuple):
     newton_iterations: int
 
 
+class Progress(NamedTuple):
+    """What a progress callback (Integrator.set_progress) is told: steps done of this integrate
+    call and its total, impacts so far, model time, wall seconds of this call, rate, estimated
+    seconds left (-1: unknown)."""
+    steps_done: int
+    steps_total: int
+    impacts: int
+    t: float
+    elapsed: float
+    steps_per_second: float
+    eta: float
+
+
+class CheckReport(NamedTuple):
+    """The model checker's verdict (check_model): passed when every supplied derivative agrees
+    with central differences within the tolerance, worst the largest relative mismatch, lines
+    one text line per comparison."""
+    passed: bool
+    worst: float
+    lines: list
+
+
+def check_model(model, q, v, h=0.0, tol=0.0):
+    """Compare every derivative callback the model supplies with central differences at one point
+    (vci_check_model): q (n,) and v (n,) (the second configuration of L_d(q, v, h) for a
+    DiscreteModel, the velocity for a LagrangianModel); h > 0 is needed by a discrete model;
+    tol <= 0: the library's default 1e-6. Returns a CheckReport; a callback that fails at the point
+    raises CallbackError naming it."""
+    if not isinstance(model, Model):
+        raise ArgumentError(f"model must be a vci DiscreteModel or LagrangianModel, got {type(model).__name__}")
+    a, b = as_vector("q", q, model.n), as_vector("v", v, model.n)
+    h = _real("h", h)
+    if isinstance(model, LagrangianModel) and h <= 0.0:
+        h = 1.0  # not used by a continuous model's checks, but the library asks for h > 0
+    passed, worst = ffi.new("int *"), ffi.new("double *")
+    size = 8192
+    report = ffi.new("char[]", size)
+    model._log.clear()
+    status = lib.vci_check_model(model.handle, ffi.from_buffer("double[]", a), ffi.from_buffer("double[]", b), h,
+                                 _real("tol", tol), passed, worst, report, size)
+    if status != 0:
+        msg = last_error(None)
+        found = model._log.latest()
+        if found is not None:
+            name, exc, last = found
+            raise make_error(status, f"{msg}; Python callback {name} raised {last}") from exc
+        raise make_error(status, msg)
+    lines = [ln for ln in ffi.string(report).decode("utf-8", "replace").split("\n") if ln.strip()]
+    return CheckReport(bool(passed[0]), float(worst[0]), lines)
+
+
 @dataclasses.dataclass
 class Trajectory:
     """A recorded run: t (N+1,), q and p (N+1, n), energy (N,) the discrete energy of each step,
@@ -75,8 +126,9 @@ class Integrator:
     Integrator(model, h, scheme=None, stages=None, rtol=1e-12, atol=0.0, max_iterations=30,
                impact_energy='discrete', max_impacts=16, on_impact=None)
 
-    scheme ('left', 'midpoint', 'lobatto' with stages = s in 1..8) is for a LagrangianModel only
-    (default 'midpoint'). impact_energy 'hamiltonian' keeps H(q, p) at impacts. on_impact(record)
+    scheme ('left', 'midpoint', 'lobatto' with stages = s in 1..8, 'composition' with stages = the
+    order) is for a LagrangianModel only (default 'midpoint'); 'composition' takes only the library's
+    separable models, so a Python model gets ArgumentError from the library. impact_energy 'hamiltonian' keeps H(q, p) at impacts. on_impact(record)
     is called at each impact with a record of impact_dtype; every impact is also kept in
     `impacts` (cleared by the next init_*).
     """
@@ -113,6 +165,9 @@ class Integrator:
         if max_impacts is not None:
             self._check(lib.vci_set_max_impacts(self._h[0], int(max_impacts)))
         self._output = None
+        self._progress_fn = None
+        self._progress_cb = None
+        self._progress_exc = None
 
     # ---- plumbing ----
     def _clear(self):
@@ -161,13 +216,15 @@ class Integrator:
 
     # ---- settings ----
     def set_scheme(self, scheme, stages=None):
-        """'left', 'midpoint' or 'lobatto' (stages = s, 1..8); resets the state."""
+        """'left', 'midpoint', 'lobatto' (stages = s, 1..8) or 'composition' (stages = the order,
+        2, 4, 6, 8 or 10); resets the state."""
         if scheme not in SCHEMES:
             raise ArgumentError(f"unknown scheme {scheme!r}; one of {sorted(SCHEMES)}")
-        if scheme == "lobatto" and stages is None:
-            raise ArgumentError("the lobatto scheme needs stages = s (1..8)")
+        if scheme in ("lobatto", "composition") and stages is None:
+            raise ArgumentError(f"the {scheme} scheme needs stages = "
+                                + ("s (1..8)" if scheme == "lobatto" else "the order (2, 4, 6, 8, 10)"))
         self._check(lib.vci_set_scheme(self._h[0], SCHEMES[scheme], int(stages or 0)))
-        self.scheme = (scheme, stages if scheme == "lobatto" else None)
+        self.scheme = (scheme, stages if scheme in ("lobatto", "composition") else None)
 
     def set_tolerances(self, rtol=1e-12, atol=0.0, max_iterations=30):
         """Newton's tolerances (a row converges when |r_i| <= atol + rtol * size of its terms)."""
@@ -180,6 +237,32 @@ class Integrator:
             raise ArgumentError(f"unknown impact energy condition {mode!r}; one of {sorted(IMPACT_ENERGY)}")
         self._clear()
         self._check(lib.vci_set_impact_energy(self._h[0], IMPACT_ENERGY[mode]))
+
+    def set_progress(self, fn, interval=1.0):
+        """Call fn(Progress) at most once per `interval` wall seconds during integrate (one library
+        call, record=False) and after its last step; fn = None: no more reports. A truthy return
+        stops the run after the current step: integrate then raises StoppedError, the state being
+        that of the last step done. An exception inside fn also stops the run and is raised by
+        integrate."""
+        if fn is not None and not callable(fn):
+            raise ArgumentError(f"the progress callback must be callable, got {type(fn).__name__}")
+        interval = _real("interval", interval)
+        if fn is None:
+            self._check(lib.vci_set_progress(self._h[0], ffi.NULL, interval, ffi.NULL))
+            self._progress_fn = self._progress_cb = None
+            return
+        cb = ffi.callback("vci_progress_fn", self._progress)
+        self._check(lib.vci_set_progress(self._h[0], cb, interval, ffi.NULL))
+        self._progress_fn, self._progress_cb = fn, cb
+
+    def _progress(self, info, user):
+        try:
+            p = Progress(int(info.steps_done), int(info.steps_total), int(info.impacts), info.t, info.elapsed,
+                         info.steps_per_second, info.eta)
+            return 1 if self._progress_fn(p) else 0
+        except BaseException as exc:  # noqa: B902 -- carried to integrate, never through C
+            self._progress_exc = exc
+            return 1
 
     # ---- starting ----
     def init_from_pair(self, t0, q0, q1):
@@ -229,7 +312,12 @@ class Integrator:
             raise ArgumentError("nsteps must be a non-negative integer")
         if not record:
             self._clear()
-            self._check(lib.vci_integrate(self._h[0], nsteps, d))
+            self._progress_exc = None
+            status = lib.vci_integrate(self._h[0], nsteps, d)
+            exc, self._progress_exc = self._progress_exc, None
+            if exc is not None and status == 11:
+                raise exc
+            self._check(status)
             return self.state
         return self._record(nsteps, d)
 
@@ -345,14 +433,32 @@ class Integrator:
         return self._impact_array(self._impacts)
 
     # ---- output ----
-    def open_output(self, path):
-        """Write the trajectory of later steps to the HDF5 file path (replaced if it exists);
-        OutputError when the library was built without HDF5. Layout: docs/OUTPUT.md."""
+    @staticmethod
+    def _path(path):
         path = os.fspath(path)
         if not isinstance(path, str) or not path:
             raise ArgumentError("path must be a non-empty string")
-        self._check(lib.vci_open_output(self._h[0], path.encode()))
+        return path
+
+    def open_output(self, path, *, append=False):
+        """Write the trajectory of later steps to the HDF5 file path (replaced if it exists).
+        append=True continues the file instead: the run must go on from its last state, in its
+        direction (start it with restore(path)); a run that does not is refused (OutputError) at
+        its first step. OutputError when the library was built without HDF5. Layout: docs/OUTPUT.md."""
+        path = self._path(path)
+        opener = lib.vci_append_output if append else lib.vci_open_output
+        self._check(opener(self._h[0], path.encode()))
         self._output = path
+
+    def restore(self, path):
+        """Start from the last state of the HDF5 file path (written by open_output, the Fortran
+        writer or the examples' --output): with the checkpoint the file keeps, the run continues
+        bit for bit as if it had never stopped. The integrator needs the file's model sizes and h
+        (ArgumentError otherwise); OutputError when the file cannot be read."""
+        path = self._path(path)
+        self._impacts = []
+        self._clear()
+        self._check(lib.vci_restore_from_file(self._h[0], path.encode()))
 
     def close_output(self):
         """Finish and close the output file, if any."""

@@ -11,7 +11,8 @@ module vci_capi
   use vci, only: VCI_VERSION_NUMBER
   use vci_model_check, only: vci_check_model, vci_check_report_t
 #ifdef VCI_HAVE_HDF5
-  use vci_hdf5_output, only: vci_hdf5_writer_t
+  use vci_hdf5_output, only: vci_hdf5_writer_t, vci_hdf5_read_checkpoint
+  use vci_checkpoint, only: vci_checkpoint_t
 #endif
   use vci_capi_models
   use vci_capi_registry
@@ -27,6 +28,7 @@ module vci_capi
   public :: vci_get_energy_fallbacks
   public :: vci_set_step_splits, vci_get_split_steps
   public :: vci_set_impact_callback, vci_open_output, vci_open_output_every, vci_close_output
+  public :: vci_append_output, vci_restore_from_file
   public :: vci_last_error, vci_status_string, vci_version
 
   ! NUL-terminated status strings handed out by vci_status_string: initialised at load time, read-only
@@ -48,38 +50,15 @@ contains
     type(c_ptr), value :: model, cb, user
     integer(c_int), value :: n, m, ngaps
     type(vci_callbacks_c), target :: local
-    integer(c_size_t), pointer :: size_field
     integer(c_int8_t), pointer :: src(:), dst(:)
-    integer(c_size_t) :: nbytes, ours, least
-    character(len=24) :: txt
+    integer(c_size_t) :: nbytes, ours
     integer :: k
     vci_model_create_v2 = VCI_ERR_ARGUMENT
-    if (.not. c_associated(model)) then
-      call set_thread_message('vci_model_create: the model argument is NULL'); return
-    end if
-    call null_out(model)
-    if (.not. c_associated(cb)) then
-      call set_thread_message('vci_model_create: the callbacks argument is NULL'); return
-    end if
-    call c_f_pointer(cb, size_field)
-    nbytes = size_field
     ours = c_sizeof(local)
-    least = c_sizeof(local%size) + 3 * c_sizeof(c_null_funptr)   ! up to d3_ld: the required ones
-    txt = size_text(nbytes)
-    if (.not. whole_callbacks(nbytes, least)) then
-      call set_thread_message('vci_model_create: cb->size = '//trim(txt)//' is not the size of a vci_callbacks '// &
-                              '(initialise it with VCI_CALLBACKS_INIT)')
-      return
-    end if
+    ! up to d3_ld: the required ones
+    if (.not. callbacks_usable('vci_model_create', model, cb, ours, c_sizeof(local%size) + 3 * c_sizeof(c_null_funptr), &
+                               'vci_callbacks', 'VCI_CALLBACKS_INIT', nbytes)) return
     call c_f_pointer(cb, src, [nbytes])
-    if (nbytes > ours) then
-      ! built against a newer vci.h: fine as long as the members this library does not know are NULL
-      if (any(src(ours + 1:nbytes) /= 0)) then
-        call set_thread_message('vci_model_create: callbacks this library does not know are set (cb->size = '// &
-                                trim(txt)//'; the program was built against a newer vci.h)')
-        return
-      end if
-    end if
     local = vci_callbacks_c()
     call c_f_pointer(c_loc(local), dst, [ours])
     k = int(min(nbytes, ours))
@@ -96,13 +75,7 @@ contains
     type(vci_callbacks_v0_1), pointer :: old
     type(vci_callbacks_c) :: local
     vci_model_create_v0_1 = VCI_ERR_ARGUMENT
-    if (.not. c_associated(model)) then
-      call set_thread_message('vci_model_create: the model argument is NULL'); return
-    end if
-    call null_out(model)
-    if (.not. c_associated(cb)) then
-      call set_thread_message('vci_model_create: the callbacks argument is NULL'); return
-    end if
+    if (.not. pointers_given('vci_model_create', model, cb)) return
     call c_f_pointer(cb, old)
     local = vci_callbacks_c(c_sizeof(local), old%d1_ld, old%d2_ld, old%d3_ld, old%mixed_hessian, &
                             old%constraint_forms, old%discrete_constraint, old%gaps, old%gap_gradients, old%energy)
@@ -118,38 +91,15 @@ contains
     integer(c_int), value :: n, m, ngaps
     type(vci_lagrangian_callbacks_c) :: local
     type(c_funptr), pointer :: fps(:)
-    integer(c_size_t), pointer :: size_field
-    integer(c_int8_t), pointer :: src(:)
-    integer(c_size_t) :: nbytes, ours, least
-    character(len=24) :: txt
+    integer(c_size_t) :: nbytes, ours
     character(len=64) :: what
     integer :: k, i
     vci_model_create_lagrangian = VCI_ERR_ARGUMENT
-    if (.not. c_associated(model)) then
-      call set_thread_message('vci_model_create_lagrangian: the model argument is NULL'); return
-    end if
-    call null_out(model)
-    if (.not. c_associated(cb)) then
-      call set_thread_message('vci_model_create_lagrangian: the callbacks argument is NULL'); return
-    end if
-    call c_f_pointer(cb, size_field)
-    nbytes = size_field
     ours = c_sizeof(local)
-    least = c_sizeof(local%size) + 3 * c_sizeof(c_null_funptr)   ! up to dl_dv: the required ones
-    txt = size_text(nbytes)
-    if (.not. whole_callbacks(nbytes, least)) then
-      call set_thread_message('vci_model_create_lagrangian: cb->size = '//trim(txt)//' is not the size of a '// &
-                              'vci_lagrangian_callbacks (initialise it with VCI_LAGRANGIAN_CALLBACKS_INIT)')
-      return
-    end if
-    call c_f_pointer(cb, src, [nbytes])
-    if (nbytes > ours) then
-      if (any(src(ours + 1:nbytes) /= 0)) then
-        call set_thread_message('vci_model_create_lagrangian: callbacks this library does not know are set '// &
-                                '(cb->size = '//trim(txt)//'; the program was built against a newer vci.h)')
-        return
-      end if
-    end if
+    ! up to dl_dv: the required ones
+    if (.not. callbacks_usable('vci_model_create_lagrangian', model, cb, ours, &
+                               c_sizeof(local%size) + 3 * c_sizeof(c_null_funptr), 'vci_lagrangian_callbacks', &
+                               'VCI_LAGRANGIAN_CALLBACKS_INIT', nbytes)) return
     ! the members the caller's header has (those beyond its size stay NULL), one by one: a byte copy
     ! into `local` through a second pointer was lost to gfortran's optimiser
     k = int((min(nbytes, ours) - c_sizeof(local%size)) / c_sizeof(c_null_funptr))
@@ -182,6 +132,57 @@ contains
     ! sizes, allocation and registry as for a discrete model
     vci_model_create_lagrangian = create_model('vci_model_create_lagrangian', model, n, m, ngaps, vci_callbacks_c(), user, local)
   end function vci_model_create_lagrangian
+
+  !> The model_create entry points' first checks (`who`: the one called): model and cb not NULL;
+  !> then *model = NULL. False (the thread's message says why) when the call must fail.
+  logical function pointers_given(who, model, cb) result(ok)
+    character(len=*), intent(in) :: who
+    type(c_ptr), intent(in) :: model, cb
+    ok = .false.
+    if (.not. c_associated(model)) then
+      call set_thread_message(who//': the model argument is NULL'); return
+    end if
+    call null_out(model)
+    if (.not. c_associated(cb)) then
+      call set_thread_message(who//': the callbacks argument is NULL'); return
+    end if
+    ok = .true.
+  end function pointers_given
+
+  !> pointers_given, then the versioned struct at cb (`struct`, initialised by `init`; this
+  !> library's is `ours` bytes, its required members end at `least`): nbytes = cb->size must be a
+  !> whole struct of some header, and members beyond `ours` (a newer header's) must be NULL.
+  logical function callbacks_usable(who, model, cb, ours, least, struct, init, nbytes) result(ok)
+    character(len=*), intent(in) :: who, struct, init
+    type(c_ptr), intent(in) :: model, cb
+    integer(c_size_t), intent(in) :: ours, least
+    integer(c_size_t), intent(out) :: nbytes
+    integer(c_size_t), pointer :: size_field
+    integer(c_int8_t), pointer :: src(:)
+    character(len=24) :: txt
+    nbytes = 0
+    ok = pointers_given(who, model, cb)
+    if (.not. ok) return
+    ok = .false.
+    call c_f_pointer(cb, size_field)
+    nbytes = size_field
+    txt = size_text(nbytes)
+    if (.not. whole_callbacks(nbytes, least)) then
+      call set_thread_message(who//': cb->size = '//trim(txt)//' is not the size of a '//struct// &
+                              ' (initialise it with '//init//')')
+      return
+    end if
+    call c_f_pointer(cb, src, [nbytes])
+    if (nbytes > ours) then
+      ! built against a newer vci.h: fine as long as the members this library does not know are NULL
+      if (any(src(ours + 1:nbytes) /= 0)) then
+        call set_thread_message(who//': callbacks this library does not know are set (cb->size = '// &
+                                trim(txt)//'; the program was built against a newer vci.h)')
+        return
+      end if
+    end if
+    ok = .true.
+  end function callbacks_usable
 
   !> A versioned callbacks struct (size field, then function pointers) of nbytes: at least the
   !> required members, whole members only (a size between two members is no header's struct), and
@@ -812,7 +813,7 @@ contains
   !> it exists); VCI_ERR_IO when the library was built without HDF5.
   integer(c_int) function vci_open_output(integ, path) bind(C, name='vci_open_output')
     type(c_ptr), value :: integ, path
-    vci_open_output = open_output_file(integ, path, 1, 0, 'vci_open_output')
+    vci_open_output = open_output_entry(integ, path, 'vci_open_output', .false., 1, 0)
   end function vci_open_output
 
   !> int vci_open_output_every(vci_integrator integ, const char *path, int every, int compress):
@@ -821,41 +822,61 @@ contains
   integer(c_int) function vci_open_output_every(integ, path, every, compress) bind(C, name='vci_open_output_every')
     type(c_ptr), value :: integ, path
     integer(c_int), value :: every, compress
-    vci_open_output_every = open_output_file(integ, path, int(every), int(compress), 'vci_open_output_every')
+    vci_open_output_every = open_output_entry(integ, path, 'vci_open_output_every', .false., int(every), int(compress))
   end function vci_open_output_every
 
-  !> vci_open_output and vci_open_output_every (`caller` names the entry in messages).
-  integer function open_output_file(integ, path, every, compress, caller) result(res)
+  !> int vci_append_output(vci_integrator integ, const char *path): continue the HDF5 file PATH
+  !> (written by vci_open_output, the Fortran writer or the examples' --output) with the later
+  !> steps; the run must go on from the file's last state, in its direction (vci_restore_from_file).
+  integer(c_int) function vci_append_output(integ, path) bind(C, name='vci_append_output')
     type(c_ptr), value :: integ, path
-    integer, intent(in) :: every, compress
-    character(len=*), intent(in) :: caller
-    type(c_integrator_t), pointer :: ip
+    vci_append_output = open_output_entry(integ, path, 'vci_append_output', .true., 0, 0)
+  end function vci_append_output
+
+  !> A C string as a Fortran one; false (and a failure recorded on ip) when NULL or empty.
+  logical function c_path(ip, who, path, fpath) result(ok)
+    type(c_integrator_t), intent(inout) :: ip
+    character(len=*), intent(in) :: who
+    type(c_ptr), intent(in) :: path
+    character(len=:), allocatable, intent(out) :: fpath
     character(kind=c_char), pointer :: chars(:)
+    integer :: i, nc, stat
+    ok = .false.
+    if (.not. c_associated(path)) then
+      stat = fail(ip, VCI_ERR_ARGUMENT, who//': path is NULL'); return
+    end if
+    nc = int(min(c_strlen(path), int(huge(1), c_size_t)))
+    if (nc == 0) then
+      stat = fail(ip, VCI_ERR_ARGUMENT, who//': path is empty'); return
+    end if
+    call c_f_pointer(path, chars, [nc])
+    allocate (character(len=nc) :: fpath)
+    do i = 1, nc
+      fpath(i:i) = chars(i)
+    end do
+    ok = .true.
+  end function c_path
+
+  !> vci_open_output(_every) (a new file, replacing PATH, every `every`-th state, gzip level
+  !> `compress`) and vci_append_output (`append`: continue PATH with the file's own settings).
+  integer function open_output_entry(integ, path, who, append, every, compress) result(stat)
+    type(c_ptr), intent(in) :: integ, path
+    character(len=*), intent(in) :: who
+    logical, intent(in) :: append
+    integer, intent(in) :: every, compress
+    type(c_integrator_t), pointer :: ip
     character(len=:), allocatable :: fpath
-    integer :: stat, i, nc
-    call enter(integ, caller, ip, stat)
-    if (stat /= VCI_OK) then
-      res = stat; return
-    end if
-    nc = 0
-    if (every < 1 .or. every > 2**30) then   ! the HDF5 writer's VCI_HDF5_EVERY_MAX (also without HDF5)
-      stat = fail(ip, VCI_ERR_ARGUMENT, caller//': every must be in [1, 2^30]')
-    else if (compress < 0 .or. compress > 9) then
-      stat = fail(ip, VCI_ERR_ARGUMENT, caller//': compress must be a gzip level in [0, 9] (0: none)')
-    else if (.not. c_associated(path)) then
-      stat = fail(ip, VCI_ERR_ARGUMENT, caller//': path is NULL')
+    call enter(integ, who, ip, stat)
+    if (stat /= VCI_OK) return
+    if (.not. append .and. (every < 1 .or. every > 2**30)) then   ! the HDF5 writer's VCI_HDF5_EVERY_MAX
+      stat = fail(ip, VCI_ERR_ARGUMENT, who//': every must be in [1, 2^30]')
+    else if (.not. append .and. (compress < 0 .or. compress > 9)) then
+      stat = fail(ip, VCI_ERR_ARGUMENT, who//': compress must be a gzip level in [0, 9] (0: none)')
+    else if (.not. c_path(ip, who, path, fpath)) then
+      stat = ip%integ%status()
     else
-      nc = int(min(c_strlen(path), int(huge(1), c_size_t)))
-      if (nc == 0) stat = fail(ip, VCI_ERR_ARGUMENT, caller//': path is empty')
-    end if
-    if (stat == VCI_OK) then
-      call c_f_pointer(path, chars, [nc])
-      allocate (character(len=nc) :: fpath)
-      do i = 1, nc
-        fpath(i:i) = chars(i)
-      end do
       stat = close_output(ip)
-      if (stat /= VCI_OK) stat = fail(ip, stat, caller//': the previous output file could not be finished')
+      if (stat /= VCI_OK) stat = fail(ip, stat, who//': the previous output file could not be finished')
     end if
     if (stat == VCI_OK) then
 #ifdef VCI_HAVE_HDF5
@@ -863,13 +884,17 @@ contains
         type(vci_hdf5_writer_t), allocatable :: w
         allocate (w, stat=stat)
         if (stat /= 0) then
-          stat = fail(ip, VCI_ERR_MEMORY, caller//': out of memory')
+          stat = fail(ip, VCI_ERR_MEMORY, who//': out of memory')
         else
           call lock_io()
-          call w%open(fpath, stat, overwrite=.true., every=every, compress=compress)
+          if (append) then
+            call w%open(fpath, stat, append=.true.)
+          else
+            call w%open(fpath, stat, overwrite=.true., every=every, compress=compress)
+          end if
           call unlock_io()
           if (stat /= VCI_OK) then
-            stat = fail(ip, VCI_ERR_IO, caller//': '//trim(w%message))
+            stat = fail(ip, VCI_ERR_IO, who//': '//trim(w%message))
           else
             call move_alloc(w, ip%obs%output)
             ip%obs%started = .false.
@@ -878,13 +903,66 @@ contains
         end if
       end block
 #else
-      stat = fail(ip, VCI_ERR_IO, caller//': cannot write '//fpath// &
+      stat = fail(ip, VCI_ERR_IO, who//': cannot write '//fpath// &
                   ': this vci library was built without HDF5 (configure with -DVCI_WITH_HDF5=ON)')
 #endif
     end if
     call leave(ip)
-    res = stat
-  end function open_output_file
+  end function open_output_entry
+
+  !> int vci_restore_from_file(vci_integrator integ, const char *path): start from the last state
+  !> of an HDF5 file of this library. With the checkpoint the writer stores at every flush (the
+  !> last row's state and the solver's memory) the run continues bit for bit; a file without one
+  !> gives its last (t, q, p) at index 0, as vci_init_from_momentum would.
+  integer(c_int) function vci_restore_from_file(integ, path) bind(C, name='vci_restore_from_file')
+    type(c_ptr), value :: integ, path
+    character(len=*), parameter :: who = 'vci_restore_from_file'
+    type(c_integrator_t), pointer :: ip
+    character(len=:), allocatable :: fpath
+    integer :: stat
+    call enter(integ, who, ip, stat)
+    if (stat /= VCI_OK) then
+      vci_restore_from_file = stat; return
+    end if
+    if (.not. c_path(ip, who, path, fpath)) then
+      stat = ip%integ%status()
+    else if (.not. output_blocks_init(ip, who, stat)) then
+#ifdef VCI_HAVE_HDF5
+      block
+        type(vci_checkpoint_t) :: cp
+        character(len=VCI_MSG_LEN) :: msg
+        character(len=160) :: why
+        call lock_io()
+        call vci_hdf5_read_checkpoint(fpath, cp, stat, msg)
+        call unlock_io()
+        if (stat /= VCI_OK) then
+          call ip%integ%forget_state()
+          stat = fail(ip, VCI_ERR_IO, who//': '//trim(msg))
+        else if (size(cp%q) /= ip%model%n .or. size(cp%lambda) /= ip%model%m) then
+          call ip%integ%forget_state()
+          write (why, '(2(a,i0),a,2(i0,a))') ': the file holds n = ', size(cp%q), ', m = ', size(cp%lambda), &
+            '; the model has n = ', ip%model%n, ', m = ', ip%model%m, ' (a file of another model)'
+          stat = fail(ip, VCI_ERR_ARGUMENT, who//': '//fpath//trim(why))
+        else if (cp%h /= ip%integ%step_length()) then
+          call ip%integ%forget_state()
+          write (why, '(a,es24.17,a,es24.17,a)') ': the file''s step length h = ', cp%h, &
+            ' differs from the integrator''s h = ', ip%integ%step_length(), ' (create it with the file''s h)'
+          stat = fail(ip, VCI_ERR_ARGUMENT, who//': '//fpath//trim(why))
+        else
+          call ip%integ%restore(cp, stat)
+          stat = after_call(ip, stat)
+          if (stat /= VCI_OK) stat = fail(ip, stat, who//': '//fpath//': '//trim(ip%integ%message_text()))
+        end if
+      end block
+#else
+      call ip%integ%forget_state()
+      stat = fail(ip, VCI_ERR_IO, who//': cannot read '//fpath// &
+                  ': this vci library was built without HDF5 (configure with -DVCI_WITH_HDF5=ON)')
+#endif
+    end if
+    call leave(ip)
+    vci_restore_from_file = stat
+  end function vci_restore_from_file
 
   !> int vci_close_output(vci_integrator integ): finish and close the output file (no-op without one).
   integer(c_int) function vci_close_output(integ) bind(C, name='vci_close_output')

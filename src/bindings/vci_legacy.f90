@@ -20,6 +20,9 @@
 !>     VCIMSG(IH, MSG)                                           message of the last call
 !>     VCIDEL(IH)                                                free; IH becomes 0
 !>     VCICHK(IH, Q, V, H, TOL, IPASS, WORST, ISTAT)              model checker (vci_model_check)
+!>     VCIOUT(IH, PATH, IAPP, ISTAT)                             HDF5 output of later steps (IAPP 1: append)
+!>     VCICLS(IH, ISTAT)                                         finish the output file
+!>     VCIRST(IH, PATH, ISTAT)                                   restart from an HDF5 file's last state
 !>
 !> The model routine (one EXTERNAL, selecting what to compute by TASK as MINPACK's FCN does
 !> with IFLAG):
@@ -69,16 +72,19 @@ module vci_legacy
   use vci_model_base, only: vci_model_base_t
   use vci_model, only: vci_model_t
   use vci_lagrangian, only: vci_lagrangian_t
-  use vci_observer, only: vci_observer_t, vci_impact_t
+  use vci_observer, only: vci_observer_t, vci_impact_t, vci_run_info_t
   use vci_integrator, only: vci_integrator_t
   use vci_callback_adapter, only: vci_callback_record_t
   use vci_limits, only: vci_size_problem
   use vci_model_check, only: vci_check_model, vci_check_report_t
+  use vci_checkpoint, only: vci_checkpoint_t
+  use vci_bindings_h5, only: bindings_open_h5, bindings_read_h5
   implicit none
   private
 
   public :: vci_legacy_model_fn, legacy_new, legacy_get, legacy_after, legacy_delete, legacy_advance, legacy_message
   public :: legacy_set_scheme, legacy_init, legacy_check, legacy_size
+  public :: legacy_open_output, legacy_close_output, legacy_restore
 
   !> TASK codes of the model routine: a discrete L_d (1-4, 6), a continuous L (10-13), both (5, 7-9).
   integer, parameter, public :: TASK_D1 = 1, TASK_D2 = 2, TASK_D3 = 3, TASK_HESSIAN = 4, TASK_FORMS = 5, &
@@ -144,14 +150,29 @@ module vci_legacy
     procedure :: energy => ll_energy
   end type legacy_lagrangian_t
 
-  !> Records the impact times of one VCIADV call; clears the callback record after every step.
+  !> The output file of one integrator of the handle interface (VCIOUT): one run from VCIOUT to
+  !> VCICLS or VCIDEL, however many VCIADV calls it spans (all one way, from one start).
+  type :: legacy_output_t
+    class(vci_observer_t), allocatable :: writer
+    logical :: started = .false.
+    integer :: direction = 0        !< of the file's run, once started
+  end type legacy_output_t
+
+  !> Records the impact times of one VCIADV call; clears the callback record after every step;
+  !> hands everything on to the output file, if any.
   type, extends(vci_observer_t) :: impact_log_t
     integer :: count = 0
     real(dp), allocatable :: times(:)
     type(vci_callback_record_t), pointer :: record => null()
+    type(legacy_output_t), pointer :: out => null()
   contains
     procedure :: on_impact => log_impact
     procedure :: on_step => log_step
+    procedure :: on_start => log_start
+    procedure :: keeps_checkpoints => log_keeps_checkpoints
+    procedure :: wants_checkpoint => log_wants_checkpoint
+    procedure :: on_checkpoint => log_checkpoint
+    procedure :: failure_cause => log_failure_cause
   end type impact_log_t
 
   !> One live integrator of the handle interface, over one of the two kinds of model.
@@ -160,6 +181,7 @@ module vci_legacy
     type(legacy_model_t), pointer :: model => null()
     type(legacy_lagrangian_t), pointer :: lag => null()
     type(vci_integrator_t), pointer :: integ => null()
+    type(legacy_output_t), pointer :: out => null()   !< VCIOUT's file, if open
   end type slot_t
 
   type(slot_t), allocatable, save :: slots(:)
@@ -427,7 +449,54 @@ contains
     integer, intent(inout) :: stat
     self%count = self%count + 1
     if (self%count <= size(self%times)) self%times(self%count) = impact%t
+    if (has_writer(self)) call self%out%writer%on_impact(impact, stat)
   end subroutine log_impact
+
+  pure logical function has_writer(self)
+    class(impact_log_t), intent(in) :: self
+    has_writer = associated(self%out)
+    if (has_writer) has_writer = allocated(self%out%writer)
+  end function has_writer
+
+  !> The file's run starts with the first VCIADV after VCIOUT (later ones continue it).
+  subroutine log_start(self, info, q, p, stat)
+    class(impact_log_t), intent(inout) :: self
+    type(vci_run_info_t), intent(in) :: info
+    real(dp), intent(in) :: q(:), p(:)
+    integer, intent(inout) :: stat
+    if (.not. has_writer(self)) return
+    if (self%out%started) return
+    call self%out%writer%on_start(info, q, p, stat)
+    self%out%started = .true.
+    self%out%direction = info%direction
+  end subroutine log_start
+
+  ! checkpoints go to the file (HDF5 keeps them: VCIRST from it continues bit for bit)
+  pure logical function log_keeps_checkpoints(self)
+    class(impact_log_t), intent(in) :: self
+    log_keeps_checkpoints = .false.
+    if (has_writer(self)) log_keeps_checkpoints = self%out%writer%keeps_checkpoints()
+  end function log_keeps_checkpoints
+
+  pure logical function log_wants_checkpoint(self)
+    class(impact_log_t), intent(in) :: self
+    log_wants_checkpoint = .false.
+    if (has_writer(self)) log_wants_checkpoint = self%out%writer%wants_checkpoint()
+  end function log_wants_checkpoint
+
+  subroutine log_checkpoint(self, cp, stat)
+    class(impact_log_t), intent(inout) :: self
+    type(vci_checkpoint_t), intent(in) :: cp
+    integer, intent(inout) :: stat
+    if (has_writer(self)) call self%out%writer%on_checkpoint(cp, stat)
+  end subroutine log_checkpoint
+
+  subroutine log_failure_cause(self, cause)
+    class(impact_log_t), intent(in) :: self
+    character(len=*), intent(out) :: cause
+    cause = ''
+    if (has_writer(self)) call self%out%writer%failure_cause(cause)
+  end subroutine log_failure_cause
 
   !> An accepted step: a failure the line search absorbed in it is no cause of a later failure.
   subroutine log_step(self, step, t, q, p, lambda, energy, stat)
@@ -436,6 +505,7 @@ contains
     real(dp), intent(in) :: t, q(:), p(:), lambda(:), energy
     integer, intent(inout) :: stat
     if (associated(self%record)) call self%record%clear()
+    if (has_writer(self)) call self%out%writer%on_step(step, t, q, p, lambda, energy, stat)
   end subroutine log_step
 
   ! ---------------------------------------------------------------------------------------------
@@ -530,6 +600,8 @@ contains
   !> Free what slot i holds and mark it free; the table goes when nothing is left in it.
   subroutine free_slot(i)
     integer, intent(in) :: i
+    integer :: stat
+    if (associated(slots(i)%out)) stat = close_output(i)
     if (associated(slots(i)%integ)) deallocate (slots(i)%integ)
     if (associated(slots(i)%model)) deallocate (slots(i)%model)
     if (associated(slots(i)%lag)) deallocate (slots(i)%lag)
@@ -653,6 +725,7 @@ contains
     integer :: n
     call legacy_get(ih, who, integ, stat)
     if (stat /= VCI_OK) return
+    if (output_blocks_start(slot_of(ih), who, stat)) return
     n = integ%n_coordinates()
     if (from_pair) then
       call integ%init_from_pair(t0, q0(1:n), x1(1:n), stat)
@@ -702,6 +775,15 @@ contains
       stat = VCI_ERR_MEMORY; return
     end if
     log%record => slot_record(i)
+    log%out => slots(i)%out
+    if (associated(log%out)) then
+      if (log%out%started .and. (idir == 1 .or. idir == -1) .and. idir /= log%out%direction) then
+        nimp = 0
+        call slots(i)%integ%report_failure(VCI_ERR_STATE, 'VCIADV: the output file (VCIOUT) holds a run in the '// &
+          'other direction; close it (VCICLS) or open a new one to integrate this way')
+        stat = VCI_ERR_STATE; return
+      end if
+    end if
     associate (integ => slots(i)%integ)
       call integ%integrate(int(nsteps, i8), idir, stat, log)
       nimp = log%count
@@ -712,6 +794,119 @@ contains
       end if
     end associate
   end subroutine legacy_advance
+
+  !> An output file holds one run from one start: no new start (VCIINP, VCIINM, VCIRST) while it
+  !> has steps.
+  logical function output_blocks_start(i, who, stat) result(blocked)
+    integer, intent(in) :: i
+    character(len=*), intent(in) :: who
+    integer, intent(inout) :: stat
+    blocked = .false.
+    if (associated(slots(i)%out)) blocked = slots(i)%out%started
+    if (blocked) then
+      call slots(i)%integ%forget_state()
+      call slots(i)%integ%report_failure(VCI_ERR_STATE, who//': the output file (VCIOUT) holds the run so far; '// &
+                                         'close it (VCICLS) or open a new one before starting again')
+      stat = VCI_ERR_STATE
+    end if
+  end function output_blocks_start
+
+  !> Finish and drop the output file of slot i (its last state's checkpoint first); its status.
+  integer function close_output(i) result(stat)
+    integer, intent(in) :: i
+    stat = VCI_OK
+    if (.not. associated(slots(i)%out)) return
+    if (allocated(slots(i)%out%writer)) then
+      associate (w => slots(i)%out%writer)
+        if (slots(i)%out%started .and. w%keeps_checkpoints()) call w%on_checkpoint(slots(i)%integ%checkpoint(), stat)
+        stat = VCI_OK
+        call w%on_finish(slots(i)%integ%status(), trim(slots(i)%integ%message_text()), stat)
+        if (stat /= VCI_OK) call w%failure_cause(global_message)
+      end associate
+    end if
+    deallocate (slots(i)%out)
+    if (stat /= VCI_OK) stat = VCI_ERR_IO
+  end function close_output
+
+  !> VCIOUT: write the later steps of ih (live) to the HDF5 file path (replaced), or with append
+  !> continue it (the run must go on from its last state: VCIRST).
+  subroutine legacy_open_output(ih, path, append, stat)
+    integer, intent(in) :: ih
+    character(len=*), intent(in) :: path
+    logical, intent(in) :: append
+    integer, intent(out) :: stat
+    character(len=VCI_MSG_LEN) :: msg
+    integer :: i
+    i = slot_of(ih)
+    if (len_trim(path) == 0) then
+      call slots(i)%integ%report_failure(VCI_ERR_ARGUMENT, 'VCIOUT: PATH is blank'); stat = VCI_ERR_ARGUMENT
+      return
+    end if
+    stat = close_output(i)
+    if (stat /= VCI_OK) then
+      call slots(i)%integ%report_failure(stat, 'VCIOUT: the previous output file could not be finished: '// &
+                                         trim(global_message))
+      return
+    end if
+    allocate (slots(i)%out, stat=stat)
+    if (stat /= 0) then
+      call slots(i)%integ%report_failure(VCI_ERR_MEMORY, 'VCIOUT: out of memory'); stat = VCI_ERR_MEMORY; return
+    end if
+    call bindings_open_h5(trim(path), append, slots(i)%out%writer, stat, msg)
+    if (stat /= VCI_OK) then
+      deallocate (slots(i)%out)
+      call slots(i)%integ%report_failure(stat, 'VCIOUT: '//trim(msg))
+    end if
+  end subroutine legacy_open_output
+
+  !> VCICLS: finish and close the output file of ih (live), if any.
+  subroutine legacy_close_output(ih, stat)
+    integer, intent(in) :: ih
+    integer, intent(out) :: stat
+    integer :: i
+    i = slot_of(ih)
+    global_message = ''
+    stat = close_output(i)
+    if (stat /= VCI_OK) call slots(i)%integ%report_failure(stat, 'VCICLS: the output file could not be finished: '// &
+                                                             trim(global_message))
+  end subroutine legacy_close_output
+
+  !> VCIRST: start ih (live) from the last state of the HDF5 file path: bit for bit from the
+  !> checkpoint the file keeps; the file's n, m and h must be the integrator's.
+  subroutine legacy_restore(ih, path, stat)
+    integer, intent(in) :: ih
+    character(len=*), intent(in) :: path
+    integer, intent(out) :: stat
+    type(vci_checkpoint_t) :: cp
+    character(len=VCI_MSG_LEN) :: msg
+    character(len=160) :: why
+    integer :: i
+    i = slot_of(ih)
+    stat = VCI_OK
+    if (output_blocks_start(i, 'VCIRST', stat)) return
+    associate (integ => slots(i)%integ)
+      if (len_trim(path) == 0) then
+        call integ%forget_state()
+        call integ%report_failure(VCI_ERR_ARGUMENT, 'VCIRST: PATH is blank'); stat = VCI_ERR_ARGUMENT; return
+      end if
+      call bindings_read_h5(trim(path), cp, stat, msg)
+      if (stat /= VCI_OK) then
+        call integ%forget_state()
+        call integ%report_failure(stat, 'VCIRST: '//trim(msg)); return
+      end if
+      if (size(cp%q) /= integ%n_coordinates() .or. size(cp%lambda) /= integ%n_constraints() .or. &
+          cp%h /= integ%step_length()) then
+        call integ%forget_state()
+        write (why, '(2(a,i0),a,es24.17,2(a,i0),a,es24.17,a)') ': the file holds n = ', size(cp%q), ', m = ', &
+          size(cp%lambda), ', h = ', cp%h, '; the integrator has N = ', integ%n_coordinates(), ', M = ', &
+          integ%n_constraints(), ', H = ', integ%step_length(), ' (another model or step length)'
+        call integ%report_failure(VCI_ERR_ARGUMENT, 'VCIRST: '//trim(path)//trim(why)); stat = VCI_ERR_ARGUMENT
+        return
+      end if
+      call integ%restore(cp, stat)
+    end associate
+    call legacy_after(ih, stat)
+  end subroutine legacy_restore
 
   !> The message of the last call on ih, or of the last failure without a live handle.
   function legacy_message(ih) result(msg)
@@ -941,3 +1136,58 @@ subroutine vcirun(model, n, m, ng, iopt, h, t0, q0, q1, nsteps, t, q, p, nimp, t
   if (istat /= VCI_OK) msg = legacy_message(ih)
   call vcidel(ih)
 end subroutine vcirun
+
+!> HDF5 output of the later VCIADV steps of IH to PATH (trailing blanks ignored): IAPP = 0 a new
+!> file (replaced if it exists), IAPP = 1 continue the file (the run must go on from its last
+!> state, in its direction: start it with VCIRST). The file is finished by VCICLS or VCIDEL.
+!> ISTAT 0; 1 (bad IH, blank PATH, IAPP not 0 or 1); 8 (the file cannot be created or continued,
+!> or no HDF5 in this build; VCIMSG says which); 10. A run that does not continue an appended
+!> file is refused by its first VCIADV (ISTAT 8).
+subroutine vciout(ih, path, iapp, istat)
+  use vci_status, only: VCI_OK, VCI_ERR_ARGUMENT
+  use vci_integrator, only: vci_integrator_t
+  use vci_legacy, only: legacy_get, legacy_open_output
+  implicit none
+  integer, intent(in) :: ih, iapp
+  character(len=*), intent(in) :: path
+  integer, intent(out) :: istat
+  type(vci_integrator_t), pointer :: integ
+  call legacy_get(ih, 'VCIOUT', integ, istat)
+  if (istat /= VCI_OK) return
+  if (iapp /= 0 .and. iapp /= 1) then
+    call integ%report_failure(VCI_ERR_ARGUMENT, 'VCIOUT: IAPP must be 0 (new file) or 1 (append)')
+    istat = VCI_ERR_ARGUMENT; return
+  end if
+  call legacy_open_output(ih, path, iapp == 1, istat)
+end subroutine vciout
+
+!> Finish and close the output file of IH, if any. ISTAT 0; 1 (bad IH); 8 (it could not be finished).
+subroutine vcicls(ih, istat)
+  use vci_status, only: VCI_OK
+  use vci_integrator, only: vci_integrator_t
+  use vci_legacy, only: legacy_get, legacy_close_output
+  implicit none
+  integer, intent(in) :: ih
+  integer, intent(out) :: istat
+  type(vci_integrator_t), pointer :: integ
+  call legacy_get(ih, 'VCICLS', integ, istat)
+  if (istat == VCI_OK) call legacy_close_output(ih, istat)
+end subroutine vcicls
+
+!> Restart IH from the last state of the HDF5 file PATH (written by VCIOUT, vci_open_output, the
+!> Fortran writer or the examples' --output): from the checkpoint the file keeps, later VCIADV calls
+!> give bit for bit what the run that wrote it would have given. ISTAT 0; 1 (bad IH, blank PATH,
+!> the file's N or H differ from IH's); 8 (the file cannot be read, or no HDF5 in this build);
+!> 9 (the open VCIOUT file holds steps); 2, 3, 7 (the file's state refused as VCIINM would).
+subroutine vcirst(ih, path, istat)
+  use vci_status, only: VCI_OK
+  use vci_integrator, only: vci_integrator_t
+  use vci_legacy, only: legacy_get, legacy_restore
+  implicit none
+  integer, intent(in) :: ih
+  character(len=*), intent(in) :: path
+  integer, intent(out) :: istat
+  type(vci_integrator_t), pointer :: integ
+  call legacy_get(ih, 'VCIRST', integ, istat)
+  if (istat == VCI_OK) call legacy_restore(ih, path, istat)
+end subroutine vcirst

@@ -4,7 +4,9 @@
 !>
 !> A member is built by a factory (`vci_model_factory_t%build`, or `vci_prototype_factory_t`,
 !> which copies a prototype), so members never share mutable model state; each member gets its own
-!> integrator. What a member yields depends only on its own inputs (start, parameters, the shared
+!> integrator. Continuous models (a `vci_lagrangian_t`, discretised by `config%scheme` with
+!> `config%stages`) come from `vci_lagrangian_prototype_factory_t`, or from any factory that
+!> overrides `build_model`, the procedure the run calls (its default wraps `build`). What a member yields depends only on its own inputs (start, parameters, the shared
 !> configuration), never on which thread or rank ran it: results are bitwise reproducible.
 !>
 !> Per member: status and message, final (t, q, p), accepted steps, total impact count, the first
@@ -18,6 +20,8 @@ module vci_ensemble
   use vci_kinds, only: dp, i8
   use vci_status
   use vci_model, only: vci_model_t
+  use vci_model_base, only: vci_model_base_t
+  use vci_lagrangian, only: vci_lagrangian_t
   use vci_observer, only: vci_observer_t, vci_run_info_t, vci_impact_t
   use vci_integrator, only: vci_integrator_t, vci_stats_t
   implicit none
@@ -41,6 +45,9 @@ module vci_ensemble
   contains
     !> Allocate the model of member `member` from its parameters `params` (interface factory_build).
     procedure(factory_build), deferred :: build
+    !> The model of a member as the run takes it, discrete or continuous: by default `build`'s
+    !> discrete model; a factory of continuous models overrides this (and refuses `build`).
+    procedure :: build_model => factory_build_model
   end type vci_model_factory_t
 
   abstract interface
@@ -65,6 +72,18 @@ module vci_ensemble
     procedure :: build => prototype_build
   end type vci_prototype_factory_t
 
+  !> Every member is a deep copy of a continuous model `prototype` (a vci_lagrangian_t: the
+  !> ensemble's config%scheme and config%stages discretise it). To vary parameters, extend
+  !> vci_model_factory_t and override build_model instead.
+  type, extends(vci_model_factory_t), public :: vci_lagrangian_prototype_factory_t
+    class(vci_lagrangian_t), allocatable :: prototype  !< the model every member gets a deep copy of
+  contains
+    !> Refused (stat = VCI_ERR_ARGUMENT): the prototype is not a discrete vci_model_t.
+    procedure :: build => lagrangian_prototype_refuse
+    !> A deep copy of the prototype (`allocate(source=)`), whatever the member's parameters.
+    procedure :: build_model => lagrangian_prototype_build
+  end type vci_lagrangian_prototype_factory_t
+
   !> What every member shares. Settings left negative (or 0 for counts) keep the integrator's defaults.
   type, public :: vci_ensemble_config_t
     real(dp) :: h = 0.0_dp                 !< step length
@@ -76,6 +95,10 @@ module vci_ensemble
     integer :: max_iterations = 0               !< Newton iteration cap when > 0
     integer :: impact_energy = -1          !< VCI_IMPACT_DISCRETE or VCI_IMPACT_HAMILTONIAN when >= 0
     integer :: max_impacts_per_step = 0    !< set_max_impacts when > 0
+    !> VCI_SCHEME_LEFT, _MIDPOINT, _LOBATTO or _COMPOSITION for continuous models when >= 0 (the
+    !> integrator's default, midpoint, when negative); a discrete model takes none
+    integer :: scheme = -1
+    integer :: stages = 0                  !< the scheme's stages s (lobatto) or order (composition)
     integer :: impact_cap = 64             !< impact times kept per member (the count is always total)
     integer(i8) :: stride = 0_i8           !< keep the state every `stride` steps (0: no trajectories)
     integer :: threads = 0                 !< OpenMP threads (0: OpenMP's default, OMP_NUM_THREADS)
@@ -310,7 +333,7 @@ contains
     type(vci_ensemble_table_t), intent(in) :: table
     integer, intent(in) :: member, j
     type(vci_ensemble_results_t), intent(inout) :: results
-    class(vci_model_t), allocatable, target :: model
+    class(vci_model_base_t), allocatable, target :: model
     type(vci_integrator_t) :: integ
     type(member_observer_t) :: obs
     integer :: stat, n, s
@@ -327,7 +350,7 @@ contains
     end if
 
     stat = 0
-    call factory%build(member, params, model, stat)
+    call factory%build_model(member, params, model, stat)
     if (stat /= 0 .or. .not. allocated(model)) then
       write (msg, '(a,i0,a,i0)') 'factory: building the model of member ', member, ' failed with status ', stat
       call store_failure(results, j, VCI_ERR_CALLBACK, msg); return
@@ -338,7 +361,21 @@ contains
       call store_failure(results, j, VCI_ERR_ARGUMENT, msg); return
     end if
 
-    call integ%create(model, config%h, stat)
+    select type (mm => model)
+    class is (vci_model_t)
+      call integ%create(mm, config%h, stat)
+      if (stat == VCI_OK .and. config%scheme >= 0) then
+        write (msg, '(a,i0,a)') 'ensemble: config%scheme = ', config%scheme, &
+          ' for a discrete model (schemes discretise continuous models: leave it negative)'
+        call store_failure(results, j, VCI_ERR_ARGUMENT, msg); return
+      end if
+    class is (vci_lagrangian_t)
+      call integ%create(mm, config%h, stat)
+      if (stat == VCI_OK .and. config%scheme >= 0) call integ%set_scheme(config%scheme, config%stages, stat)
+    class default
+      call store_failure(results, j, VCI_ERR_ARGUMENT, 'factory: the model is neither a vci_model_t nor a '// &
+                         'vci_lagrangian_t'); return
+    end select
     if (stat == VCI_OK .and. (config%atol >= 0.0_dp .or. config%rtol >= 0.0_dp .or. config%max_iterations > 0)) &
       call integ%set_tolerances(max(config%atol, 0.0_dp), merge(config%rtol, 1.0e-12_dp, config%rtol >= 0.0_dp), &
                                 merge(config%max_iterations, 30, config%max_iterations > 0), stat)
@@ -431,6 +468,39 @@ contains
     end if
     allocate (model, source=self%prototype, stat=stat)
   end subroutine prototype_build
+
+  !> The default build_model: the factory's discrete model (build).
+  subroutine factory_build_model(self, member, params, model, stat)
+    class(vci_model_factory_t), intent(in) :: self
+    integer, intent(in) :: member
+    real(dp), intent(in) :: params(:)
+    class(vci_model_base_t), allocatable, intent(out) :: model
+    integer, intent(inout) :: stat
+    class(vci_model_t), allocatable :: built
+    call self%build(member, params, built, stat)
+    if (allocated(built)) call move_alloc(built, model)
+  end subroutine factory_build_model
+
+  subroutine lagrangian_prototype_refuse(self, member, params, model, stat)
+    class(vci_lagrangian_prototype_factory_t), intent(in) :: self
+    integer, intent(in) :: member
+    real(dp), intent(in) :: params(:)
+    class(vci_model_t), allocatable, intent(out) :: model
+    integer, intent(inout) :: stat
+    stat = VCI_ERR_ARGUMENT
+  end subroutine lagrangian_prototype_refuse
+
+  subroutine lagrangian_prototype_build(self, member, params, model, stat)
+    class(vci_lagrangian_prototype_factory_t), intent(in) :: self
+    integer, intent(in) :: member
+    real(dp), intent(in) :: params(:)
+    class(vci_model_base_t), allocatable, intent(out) :: model
+    integer, intent(inout) :: stat
+    if (.not. allocated(self%prototype)) then
+      stat = VCI_ERR_ARGUMENT; return
+    end if
+    allocate (model, source=self%prototype, stat=stat)
+  end subroutine lagrangian_prototype_build
 
   ! --- the member's observer ---
 

@@ -907,6 +907,172 @@ static void suite_output(void) {
 }
 
 /* ================================================================================================ */
+/* Restart from the C ABI: a run split in two (the first half written to a file, the second started
+ * from that file by vci_restore_from_file and appended to it by vci_append_output) ends in exactly
+ * the state of the uninterrupted run: bit for bit (memcmp), index and energy too. The ellipse hits
+ * its wall in both halves (impacts at t = 0.75, 1.15; the split is at t = 1.0). */
+#ifdef VCI_TEST_HDF5
+/* The paper's nonholonomic pendulum (m = 1: multipliers, the predictor's history) split at `split`
+ * of `nsteps` steps through a file: 1 when the end state is the uninterrupted run's, bit for bit. */
+static int pendulum_restart_matches(int64_t nsteps, int64_t split) {
+  vci_callbacks cb = pendulum_callbacks();
+  pendulum_params par = pendulum_default;
+  vci_model model = NULL;
+  vci_integrator integ[3] = {NULL, NULL, NULL};
+  const char *path = "capi_restart_pendulum.h5";
+  double h = 1e-2, q0[2], q1[2], t[3] = {0, 0, 0}, q[3][2], p[3][2], lam[3] = {0, 0, 0};
+  int64_t impacts = 0;
+  int i, same;
+  memset(q, 0, sizeof q);
+  memset(p, 0, sizeof p);
+  pendulum_initial_pair(h, q0, q1);
+  remove(path);
+  CHECK_STATUS(vci_model_create(&model, 2, 1, 1, &cb, &par), VCI_OK);
+  for (i = 0; i < 3; ++i) {
+    CHECK_STATUS(vci_integrator_create(&integ[i], model, h), VCI_OK);
+    CHECK_STATUS(vci_set_tolerances(integ[i], 0.0, 1e-14, 30), VCI_OK);
+  }
+  CHECK_STATUS(vci_init_from_pair(integ[0], 0.0, q0, q1), VCI_OK);
+  CHECK_STATUS(vci_integrate(integ[0], nsteps, 1), VCI_OK);
+  CHECK_STATUS(vci_init_from_pair(integ[1], 0.0, q0, q1), VCI_OK);
+  CHECK_STATUS(vci_open_output(integ[1], path), VCI_OK);
+  CHECK_STATUS(vci_integrate(integ[1], split, 1), VCI_OK);
+  CHECK_STATUS(vci_close_output(integ[1]), VCI_OK);
+  CHECK_STATUS(vci_restore_from_file(integ[2], path), VCI_OK);
+  CHECK_STATUS(vci_append_output(integ[2], path), VCI_OK);
+  CHECK_STATUS(vci_integrate(integ[2], nsteps - split, 1), VCI_OK);
+  CHECK_STATUS(vci_get_stats(integ[0], NULL, &impacts, NULL), VCI_OK);
+  CHECK(impacts >= 1);
+  for (i = 0; i < 3; i += 2) {
+    CHECK_STATUS(vci_get_state(integ[i], &t[i], q[i], p[i]), VCI_OK);
+    CHECK_STATUS(vci_get_multipliers(integ[i], &lam[i]), VCI_OK);
+  }
+  same = memcmp(&t[0], &t[2], sizeof t[0]) == 0 && memcmp(q[0], q[2], sizeof q[0]) == 0 &&
+         memcmp(p[0], p[2], sizeof p[0]) == 0 && memcmp(&lam[0], &lam[2], sizeof lam[0]) == 0;
+  if (!same) printf("pendulum restart: q = %.17g %.17g, uninterrupted %.17g %.17g\n", q[2][0], q[2][1], q[0][0], q[0][1]);
+  for (i = 0; i < 3; ++i) vci_integrator_destroy(&integ[i]);
+  vci_model_destroy(&model);
+  remove(path);
+  return same;
+}
+#endif
+
+static void suite_restart(void) {
+  vci_callbacks cb = ellipse_callbacks();
+  vci_model model = NULL;
+  vci_integrator whole = make_ellipse(&model, &cb, 1e-2), half = NULL, other = NULL;
+  double t_a = 0, t_b = 1, q_a[3] = {0}, q_b[3] = {1}, p_a[3] = {0}, p_b[3] = {1}, e_a = 0, e_b = 1;
+  int64_t k_a = 0, k_b = 1, impacts_b = 0;
+#ifdef VCI_TEST_HDF5
+  const char *path = "capi_restart_test.h5", *bare = "capi_restart_not_h5.txt";
+  FILE *f;
+  remove(path);
+  CHECK_STATUS(vci_integrate(whole, 200, 1), VCI_OK);
+  CHECK_STATUS(vci_get_state(whole, &t_a, q_a, p_a), VCI_OK);
+  CHECK_STATUS(vci_get_energy(whole, &e_a), VCI_OK);
+  CHECK_STATUS(vci_get_index(whole, &k_a), VCI_OK);
+  vci_integrator_destroy(&whole);
+
+  /* first half: 99 steps from the pair (index 1 -> 100), into the file */
+  half = make_ellipse(&model, &cb, 1e-2);
+  CHECK_STATUS(vci_open_output(half, path), VCI_OK);
+  CHECK_STATUS(vci_integrate(half, 99, 1), VCI_OK);
+  CHECK_STATUS(vci_close_output(half), VCI_OK);
+  vci_integrator_destroy(&half);
+
+  /* second half: a fresh integrator continues from the file and appends to it */
+  CHECK_STATUS(vci_integrator_create(&half, model, 1e-2), VCI_OK);
+  CHECK_STATUS(vci_set_tolerances(half, 0.0, 1e-12, 30), VCI_OK);
+  CHECK_STATUS(vci_restore_from_file(half, path), VCI_OK);
+  CHECK_STATUS(vci_get_index(half, &k_b), VCI_OK);
+  CHECK(k_b == 100);
+  CHECK_STATUS(vci_append_output(half, path), VCI_OK);
+  CHECK_STATUS(vci_integrate(half, 101, 1), VCI_OK);
+  CHECK_STATUS(vci_get_state(half, &t_b, q_b, p_b), VCI_OK);
+  CHECK_STATUS(vci_get_energy(half, &e_b), VCI_OK);
+  CHECK_STATUS(vci_get_index(half, &k_b), VCI_OK);
+  CHECK_STATUS(vci_get_stats(half, NULL, &impacts_b, NULL), VCI_OK);
+  CHECK_STATUS(vci_close_output(half), VCI_OK);
+  CHECK(k_a == 201 && k_b == k_a);
+  CHECK(impacts_b >= 1); /* the second half has an impact of its own */
+  CHECK(memcmp(&t_a, &t_b, sizeof t_a) == 0);
+  CHECK(memcmp(q_a, q_b, sizeof q_a) == 0);
+  CHECK(memcmp(p_a, p_b, sizeof p_a) == 0);
+  CHECK(memcmp(&e_a, &e_b, sizeof e_a) == 0);
+
+  CHECK(pendulum_restart_matches(400, 173));
+
+  /* the appended file restarts too: at its new end, the state just reached */
+  CHECK_STATUS(vci_integrator_create(&other, model, 1e-2), VCI_OK);
+  CHECK_STATUS(vci_restore_from_file(other, path), VCI_OK);
+  CHECK_STATUS(vci_get_state(other, &t_b, q_b, p_b), VCI_OK);
+  CHECK_STATUS(vci_get_index(other, &k_b), VCI_OK);
+  CHECK(k_b == k_a && memcmp(q_a, q_b, sizeof q_a) == 0 && memcmp(p_a, p_b, sizeof p_a) == 0);
+  vci_integrator_destroy(&other);
+
+  /* refusals, each with its status and a message naming the cause */
+  CHECK_STATUS(vci_integrator_create(&other, model, 2e-2), VCI_OK);
+  CHECK_STATUS(vci_restore_from_file(other, path), VCI_ERR_ARGUMENT);
+  CHECK_MESSAGE(other, "step length");
+  CHECK_STATUS(vci_step(other, 1), VCI_ERR_STATE); /* no state after a failed restore */
+  CHECK_STATUS(vci_restore_from_file(other, NULL), VCI_ERR_ARGUMENT);
+  CHECK_MESSAGE(other, "path is NULL");
+  CHECK_STATUS(vci_restore_from_file(other, ""), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_restore_from_file(other, "capi_restart_missing.h5"), VCI_ERR_IO);
+  CHECK_MESSAGE(other, "does not exist");
+  f = fopen(bare, "w");
+  if (f) {
+    fputs("not hdf5\n", f);
+    fclose(f);
+  }
+  CHECK_STATUS(vci_restore_from_file(other, bare), VCI_ERR_IO);
+  CHECK_MESSAGE(other, "not an HDF5 file");
+  CHECK_STATUS(vci_append_output(other, "capi_restart_missing.h5"), VCI_ERR_IO);
+  CHECK_MESSAGE(other, "does not exist");
+  CHECK_STATUS(vci_append_output(other, NULL), VCI_ERR_ARGUMENT);
+  vci_integrator_destroy(&other);
+  CHECK_STATUS(vci_restore_from_file(NULL, path), VCI_ERR_ARGUMENT);
+  CHECK_STATUS(vci_append_output(NULL, path), VCI_ERR_ARGUMENT);
+  {
+    /* a file of another model (n = 2) is refused by size */
+    vci_callbacks pcb = pendulum_callbacks();
+    vci_model pm = NULL;
+    pendulum_params pp = pendulum_default;
+    CHECK_STATUS(vci_model_create(&pm, 2, 1, 1, &pcb, &pp), VCI_OK);
+    CHECK_STATUS(vci_integrator_create(&other, pm, 1e-2), VCI_OK);
+    CHECK_STATUS(vci_restore_from_file(other, path), VCI_ERR_ARGUMENT);
+    CHECK_MESSAGE(other, "another model");
+    vci_integrator_destroy(&other);
+    vci_model_destroy(&pm);
+  }
+  /* appending a run that does not continue the file: the first step says so, nothing written */
+  other = make_ellipse(&model, &cb, 1e-2);
+  CHECK_STATUS(vci_append_output(other, path), VCI_OK);
+  CHECK_STATUS(vci_integrate(other, 5, 1), VCI_ERR_IO);
+  CHECK_MESSAGE(other, "does not start from the file's last state");
+  /* an output that holds steps blocks a restore (one file, one run) */
+  CHECK_STATUS(vci_open_output(other, "capi_restart_other.h5"), VCI_OK);
+  CHECK_STATUS(vci_init_from_pair(other, 0.0, q_a, q_a), VCI_OK);
+  CHECK_STATUS(vci_integrate(other, 2, 1), VCI_OK);
+  CHECK_STATUS(vci_restore_from_file(other, path), VCI_ERR_STATE);
+  CHECK_MESSAGE(other, "close it");
+  vci_integrator_destroy(&other);
+  remove(path);
+  remove(bare);
+  remove("capi_restart_other.h5");
+#else
+  CHECK_STATUS(vci_restore_from_file(whole, "capi_restart_test.h5"), VCI_ERR_IO);
+  CHECK_MESSAGE(whole, "built without HDF5");
+  CHECK_STATUS(vci_append_output(whole, "capi_restart_test.h5"), VCI_ERR_IO);
+  CHECK_MESSAGE(whole, "built without HDF5");
+  vci_integrator_destroy(&whole);
+  (void)half; (void)other; (void)t_a; (void)t_b; (void)q_a; (void)q_b; (void)p_a; (void)p_b;
+  (void)e_a; (void)e_b; (void)k_a; (void)k_b; (void)impacts_b;
+#endif
+  vci_model_destroy(&model);
+}
+
+/* ================================================================================================ */
 /* Callbacks that return huge finite values (1e308, whose differences overflow) or NaN now and then:
  * every run ends with a status (never a hang), and no NaN/Inf ever reaches LAPACK (lapack_guard.c
  * counts LAPACK calls with non-finite input). The faults hit from the `from`-th call of one
@@ -1285,7 +1451,7 @@ int main(int argc, char **argv) {
       {"callbacks", suite_callbacks}, {"ellipse", suite_ellipse},   {"hamiltonian", suite_hamiltonian},
       {"pendulum", suite_pendulum},   {"output", suite_output},     {"erratic", suite_erratic},
       {"limits", suite_limits},       {"contract", suite_contract}, {"status", suite_status},
-      {"abi", suite_abi}};
+      {"abi", suite_abi},             {"restart", suite_restart}};
   size_t i, n = sizeof suites / sizeof suites[0];
   int ran = 0;
   atexit(exit_guard);

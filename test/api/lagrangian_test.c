@@ -4,7 +4,9 @@
  *       theta'(0) = 4, 10 s) with lobatto s = 4 from C, against REF_FILE written by vci_lagrangian_ref
  *       (the same run through the Fortran API with the scene's Fortran model, and the exact state).
  *  bad: missing required callbacks, unknown scheme, s out of range, a scheme for a discrete model,
- *       and the return contract (a negative code from dl_dq fails the step and is named). */
+ *       and the return contract (a negative code from dl_dq fails the step and is named).
+ *  restart: that run split at step 83 through an HDF5 file (vci_restore_from_file,
+ *       vci_append_output) ends bit for bit where the uninterrupted run ends. */
 #include <math.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -325,13 +327,57 @@ static void suite_bad(void) {
   vci_model_destroy(&model);
 }
 
+/* The run of run() in two halves: 83 steps into a file, then a new integrator restored from it
+ * that appends the other 117. Lobatto's Newton starts from the checkpoint's velocity: a restart
+ * that lost it ends ~1e-13 away, which memcmp sees. */
+static void suite_restart(void) {
+#ifdef VCI_TEST_HDF5
+  vci_lagrangian_callbacks cb = pendulum_callbacks(1);
+  vci_model model = NULL;
+  vci_integrator it[2] = {NULL, NULL};
+  const char *path = "capi_lagrangian_restart.h5";
+  double q0 = 0.0, p0 = 4.0, t_a = 0, q_a = 0, p_a = 0, t_b = 1, q_b = 1, p_b = 1;
+  int64_t impacts = 0, k = 0;
+  int i;
+  CHECK(run(&cb, &t_a, &q_a, &p_a, &impacts) == VCI_OK);
+  remove(path);
+  CHECK(vci_model_create_lagrangian(&model, 1, 0, 2, &cb, NULL) == VCI_OK);
+  for (i = 0; i < 2; ++i) {
+    CHECK(vci_integrator_create(&it[i], model, 0.05) == VCI_OK);
+    CHECK(vci_set_scheme(it[i], VCI_SCHEME_LOBATTO, 4) == VCI_OK);
+    CHECK(vci_set_tolerances(it[i], 0.0, 1e-15, 30) == VCI_OK);
+  }
+  CHECK(vci_init_from_momentum(it[0], 0.0, &q0, &p0) == VCI_OK);
+  CHECK(vci_open_output(it[0], path) == VCI_OK);
+  CHECK(vci_integrate(it[0], 83, 1) == VCI_OK);
+  CHECK(vci_close_output(it[0]) == VCI_OK);
+  CHECK(vci_restore_from_file(it[1], path) == VCI_OK);
+  CHECK(vci_get_index(it[1], &k) == VCI_OK && k == 83);
+  CHECK(vci_append_output(it[1], path) == VCI_OK);
+  CHECK(vci_integrate(it[1], 117, 1) == VCI_OK);
+  CHECK(vci_get_state(it[1], &t_b, &q_b, &p_b) == VCI_OK);
+  CHECK(vci_close_output(it[1]) == VCI_OK);
+  printf("  whole run q = %.17g, split run q = %.17g\n", q_a, q_b);
+  CHECK(memcmp(&t_a, &t_b, sizeof t_a) == 0);
+  CHECK(memcmp(&q_a, &q_b, sizeof q_a) == 0);
+  CHECK(memcmp(&p_a, &p_b, sizeof p_a) == 0);
+  for (i = 0; i < 2; ++i) vci_integrator_destroy(&it[i]);
+  vci_model_destroy(&model);
+  remove(path);
+#else
+  printf("  built without HDF5: nothing to restart from\n");
+#endif
+}
+
 int main(int argc, char **argv) {
   if (argc >= 3 && strcmp(argv[1], "run") == 0) {
     suite_run(argv[2]);
   } else if (argc >= 2 && strcmp(argv[1], "bad") == 0) {
     suite_bad();
+  } else if (argc >= 2 && strcmp(argv[1], "restart") == 0) {
+    suite_restart();
   } else {
-    printf("usage: vci_lagrangian_test run REF_FILE | bad\n");
+    printf("usage: vci_lagrangian_test run REF_FILE | bad | restart\n");
     return 2;
   }
   printf("%s: %d failure(s)\n", argv[1], failures);

@@ -156,6 +156,80 @@ C     a scheme for a discrete model (IOPT without bit 8)
       CALL VCISCH(IH, 3, NSTG, ISTAT)
       CALL CHECKI('VCISCH on a deleted handle', ISTAT, 1, NBAD)
 C
+C     3. Restart (VCIOUT, VCIRST, VCICLS): 200 steps in one run; then
+C        83 steps into a file, and a new integrator restarted from it
+C        (VCIRST) appending the other 117 (VCIOUT, IAPP = 1): the same
+C        final state to the last bit (tolerance 0)
+      IPAR(1) = 0
+      CALL VCINEW(PWMOD, N, M, NG, 15, H, RPAR, IPAR, IH, ISTAT)
+      CALL VCISCH(IH, 3, NSTG, ISTAT)
+      CALL VCITOL(IH, 0.0D0, 1.0D-15, 30, ISTAT)
+      CALL VCIINM(IH, 0.0D0, Q0, P0, ISTAT)
+      CALL VCIADV(IH, 200, 1, T1, Q1, P1, NIMP, TIMP, LTIMP, ISTAT)
+      CALL CHECKI('whole run', ISTAT, 0, NBAD)
+      CALL VCIDEL(IH)
+      DO 30 K = 1, 2
+        CALL VCINEW(PWMOD, N, M, NG, 15, H, RPAR, IPAR, IH, ISTAT)
+        CALL VCISCH(IH, 3, NSTG, ISTAT)
+        CALL VCITOL(IH, 0.0D0, 1.0D-15, 30, ISTAT)
+        IF (K .EQ. 1) THEN
+          CALL VCIINM(IH, 0.0D0, Q0, P0, ISTAT)
+          CALL VCIOUT(IH, 'pendw77_restart.h5', 0, ISTAT)
+          IF (ISTAT .EQ. 8) THEN
+C           a build without HDF5 says so; nothing to restart from
+            CALL VCIMSG(IH, MSG)
+            CALL CHECKS('VCIOUT without HDF5', MSG,
+     &                  'built without HDF5', NBAD)
+            CALL VCIDEL(IH)
+            GO TO 40
+          END IF
+          CALL CHECKI('VCIOUT', ISTAT, 0, NBAD)
+          CALL VCIADV(IH, 83, 1, T, Q, P, NIMP, TIMP, LTIMP, ISTAT)
+          CALL CHECKI('first part', ISTAT, 0, NBAD)
+C         one file, one run: no new start while it holds steps
+          CALL VCIINM(IH, 0.0D0, Q0, P0, ISTAT)
+          CALL CHECKI('VCIINM with the file open', ISTAT, 9, NBAD)
+        ELSE
+          CALL VCIRST(IH, 'pendw77_restart.h5', ISTAT)
+          CALL CHECKI('VCIRST', ISTAT, 0, NBAD)
+          CALL VCIOUT(IH, 'pendw77_restart.h5', 1, ISTAT)
+          CALL CHECKI('VCIOUT append', ISTAT, 0, NBAD)
+          CALL VCIADV(IH, 117, 1, T, Q, P, NIMP, TIMP, LTIMP, ISTAT)
+          CALL CHECKI('second part', ISTAT, 0, NBAD)
+          CALL CHECKI('impacts in the second part', MIN(NIMP, 1), 1,
+     &                NBAD)
+          CALL CHECKR('restart: same t', T, T1, 0.0D0, NBAD)
+          CALL CHECKR('restart: same q', Q(1), Q1(1), 0.0D0, NBAD)
+          CALL CHECKR('restart: same p', P(1), P1(1), 0.0D0, NBAD)
+        END IF
+        CALL VCICLS(IH, ISTAT)
+        CALL CHECKI('VCICLS', ISTAT, 0, NBAD)
+        CALL VCIDEL(IH)
+   30 CONTINUE
+C     the appended file restarts at its new end; refusals
+      CALL VCINEW(PWMOD, N, M, NG, 15, H, RPAR, IPAR, IH, ISTAT)
+      CALL VCISCH(IH, 3, NSTG, ISTAT)
+      CALL VCIRST(IH, 'pendw77_restart.h5', ISTAT)
+      CALL CHECKI('VCIRST appended file', ISTAT, 0, NBAD)
+      CALL VCIADV(IH, 0, 1, T, Q, P, NIMP, TIMP, LTIMP, ISTAT)
+      CALL CHECKR('appended file ends at the end', Q(1), Q1(1), 0.0D0,
+     &            NBAD)
+      CALL VCIRST(IH, 'pendw77_missing.h5', ISTAT)
+      CALL CHECKI('VCIRST missing file', ISTAT, 8, NBAD)
+      CALL VCIADV(IH, 1, 1, T, Q, P, NIMP, TIMP, LTIMP, ISTAT)
+      CALL CHECKI('VCIADV after a failed VCIRST', ISTAT, 9, NBAD)
+      CALL VCIOUT(IH, 'pendw77_restart.h5', 2, ISTAT)
+      CALL CHECKI('VCIOUT IAPP = 2', ISTAT, 1, NBAD)
+      CALL VCIDEL(IH)
+      CALL VCINEW(PWMOD, N, M, NG, 15, 4.0D-2, RPAR, IPAR, IH, ISTAT)
+      CALL VCIRST(IH, 'pendw77_restart.h5', ISTAT)
+      CALL CHECKI('VCIRST with another H', ISTAT, 1, NBAD)
+      CALL VCIMSG(IH, MSG)
+      WRITE (*, '(2A)') ' another H: ', MSG(1:160)
+      CALL CHECKS('another H message', MSG, 'step length', NBAD)
+      CALL VCIDEL(IH)
+   40 CONTINUE
+C
       IF (NBAD .NE. 0) THEN
         WRITE (*, '(A, I3, A)') ' legacy pendulum:', NBAD, ' FAILED'
         STOP 1
