@@ -214,7 +214,7 @@ contains
 
   subroutine sweep(file)
     character(len=*), intent(in) :: file
-    integer :: unit, k, iv, r, reps, rstat, nq
+    integer :: unit, k, iv, r, reps, rstat, nq, isc
     type(run_result_t) :: res
     real(rk), allocatable :: qref(:), qdref(:), tref(:)
     real(c_double) :: tol, walls(9), cpus(9), w0, c0, e0, err_final, err_impact
@@ -222,7 +222,10 @@ contains
     open (newunit=unit, file=file, status='replace', action='write')
     write (unit, '(a)') 'scene,method,param,wall_median,cpu_median,reps,err_final,err_energy,err_impact,' // &
       'n_impacts,n_ref_impacts,steps,status'
-    do scene = 1, N_SCENES
+    do isc = 1, N_SCENES
+      ! the module variable the callbacks read is set, not used as the DO variable: at -O3 a DO
+      ! variable may live in a register while the loop runs, and the callbacks saw a stale scene
+      scene = isc
       call reference_at(scene, t_final(scene), qref, qdref, tref, rstat)
       e0 = exact_energy0(scene)
       nq = state_size(scene) / 2
