@@ -73,7 +73,7 @@ rm -f "$OUT"/*.csv "$OUT"/long/*.csv
 
 # --- runs ------------------------------------------------------------------------------------
 echo "== the compiled DOP853 checked: order 8, dense output order, event times against exact solutions"
-run "DOP853 check" "$BUILD/dop853_results_driver" check
+run "DOP853 check" sh -c '"$1" check >"$2"; rc=$?; cat "$2"; exit $rc' sh "$BUILD/dop853_results_driver" "$OUT/dop853_check.txt"
 echo "== references"
 run "references" "$BUILD/vci_results_driver" reference "$OUT/reference.json"
 echo "== vci step-size sweep (hand-written L_d, the schemes from L, the explicit compositions)"
