@@ -14,6 +14,7 @@
 !>                                             their exact solutions; exit status 1 if any fails
 !>   dop853_results_driver sweep FILE         tolerance sweep rtol = atol = 1e-3 .. 1e-13 -> CSV
 !>   dop853_results_driver long SCENE DIR RTOL  ellipse (1.1e5 s) or walled pendulum (6e4 s)
+!>   dop853_results_driver once SCENE RTOL    one untimed run (for callgrind: --toggle-collect='*run_dop*')
 !>
 !> Timing and error measures as in the CVODE driver (vci_results_common); the energy and the
 !> constraint residual are evaluated at every accepted step, inside the timed loop.
@@ -61,6 +62,11 @@ program dop853_results_driver
   case ('sweep')
     call get_command_argument(2, path)
     call sweep(trim(path))
+  case ('once')
+    call get_command_argument(2, path)
+    call get_command_argument(3, arg)
+    read (arg, *) rtol_long
+    call once(trim(path), rtol_long)
   case ('long')
     call get_command_argument(2, path)
     call get_command_argument(3, dir)
@@ -347,6 +353,24 @@ contains
       cpu, ' s CPU, ', res%n_impacts, ' impacts)'
     flush (output_unit)
   end subroutine long_run
+
+  !> One run of a scene at rtol = atol = tol, and its final error.
+  subroutine once(scene_name, tol)
+    character(len=*), intent(in) :: scene_name
+    real(rk), intent(in) :: tol
+    type(run_result_t) :: res
+    real(rk), allocatable :: qref(:), qdref(:), tref(:)
+    integer :: rstat
+    scene = findloc(scene_names, scene_name, 1)
+    if (scene == 0) then
+      write (error_unit, '(a)') 'once: unknown scene '//scene_name
+      stop 2
+    end if
+    call run_dop(tol, t_final(scene), max_step_of(scene), exact_energy0(scene), res)
+    call reference_at(scene, t_final(scene), qref, qdref, tref, rstat)
+    write (output_unit, '(a,es10.3,a,i0,a,i0,a,es10.3)') 'dop853 tol ', tol, ' status ', res%status, ' steps ', &
+      res%steps, ' final error ', maxval(abs(res%y(1:state_size(scene) / 2) - qref))
+  end subroutine once
 
   ! ---- the checks -------------------------------------------------------------------------------
 

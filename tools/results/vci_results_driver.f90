@@ -5,6 +5,8 @@
 !>   vci_results_driver sweep FILE [PREFIX [SCENE]]  step-size sweep of every variant -> CSV
 !>                                         (PREFIX, SCENE: only the rows whose label starts so)
 !>   vci_results_driver richardson FILE    pendulum reference vs Richardson extrapolation of vci
+!>   vci_results_driver once SCENE LABEL H one untimed run of one row (for callgrind: the work is in
+!>                                         run_once, --toggle-collect='*run_once*')
 !>   vci_results_driver long SCENE DIR     long run (>= 10^5 impacts) of the ellipse or the walled
 !>                                         pendulum at h = 1e-2: |E - E0| over time
 !>
@@ -179,7 +181,8 @@ program vci_results_driver
 
   nargs = command_argument_count()
   if (nargs < 2) then
-    write (error_unit, '(a)') 'usage: vci_results_driver reference|sweep|richardson PATH | long SCENE DIR'
+    write (error_unit, '(a)') 'usage: vci_results_driver reference|sweep|richardson PATH | long SCENE DIR | ' // &
+      'once SCENE LABEL H'
     stop 2
   end if
   call get_command_argument(1, mode)
@@ -192,6 +195,10 @@ program vci_results_driver
     if (nargs >= 4) call get_command_argument(4, arg4)
     call sweep(trim(target_path), trim(arg3), trim(arg4))
   case ('richardson'); call richardson(trim(target_path))
+  case ('once')
+    call get_command_argument(3, arg3)
+    call get_command_argument(4, arg4)
+    call once(trim(target_path), trim(arg3), trim(arg4))
   case ('long')
     call get_command_argument(3, arg3)
     call long_run(trim(target_path), trim(arg3))
@@ -547,6 +554,44 @@ contains
     end do
     close (unit)
   end subroutine richardson
+
+  !> One run of the row `label` on `scene_name` at the nominal step h_text, work in run_once (the
+  !> profile of the report's rows: model set-up, create, set_scheme, init and the whole run).
+  subroutine once(scene_name, label, h_text)
+    character(len=*), intent(in) :: scene_name, label, h_text
+    type(variant_t), allocatable :: vs(:)
+    real(dp) :: h
+    integer :: scene, iv, stat, rstat
+    real(dp), allocatable :: q(:), qref(:), qdref(:), tref(:)
+    vs = variants()
+    scene = findloc(scene_names, scene_name, 1)
+    iv = 0
+    if (scene > 0) iv = findloc([(vs(iv)%label == label, iv = 1, size(vs))], .true., 1)
+    if (scene == 0 .or. iv == 0) then
+      write (error_unit, '(a)') 'once: unknown scene or row '//scene_name//' '//label
+      stop 2
+    end if
+    read (h_text, *) h
+    h = grid_step(scene, vs(iv), h, t_final(scene))
+    call run_once(scene, vs(iv), h, q, stat)
+    call reference_at(scene, t_final(scene), qref, qdref, tref, rstat)
+    write (output_unit, '(a,es10.3,a,i0,a,es10.3)') trim(label)//' h = ', h, ' status ', stat, ' final error ', &
+      maxval(abs(q - qref))
+  end subroutine once
+
+  subroutine run_once(scene, var, h, q, stat)
+    integer, intent(in) :: scene
+    type(variant_t), intent(in) :: var
+    real(dp), intent(in) :: h
+    real(dp), allocatable, intent(out) :: q(:)
+    integer, intent(out) :: stat
+    class(vci_model_base_t), allocatable, target :: model
+    type(vci_integrator_t) :: integ
+    call make_model(scene, var, model)
+    call start(scene, var, model, h, integ, stat)
+    if (stat == VCI_OK) call integ%integrate(steps_to(scene, var, h, t_final(scene)), 1, stat)
+    q = integ%configuration()
+  end subroutine run_once
 
   !> Long run of the ellipse (1.1e5 s) or the walled pendulum (6e4 s), >= 10^5 impacts, of every
   !> variant with long_h > 0 (the ld rows at h = 1e-2 with both impact conditions; the best
