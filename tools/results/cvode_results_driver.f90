@@ -14,117 +14,10 @@ module cvode_results_problem
   use fsundials_nvector_mod
   use fnvector_serial_mod
   use vci_results_common
+  use results_scene_ode
   implicit none
   integer :: scene = SCENE_PARTICLE   !< the problem the callbacks evaluate
 contains
-
-  integer function state_size(sc)
-    integer, intent(in) :: sc
-    select case (sc)
-    case (SCENE_ELLIPSE); state_size = 6
-    case (SCENE_PWALLS); state_size = 2
-    case (SCENE_FPU); state_size = 2 * fpu_n
-    case default; state_size = 4
-    end select
-  end function state_size
-
-  integer function n_roots(sc)
-    integer, intent(in) :: sc
-    select case (sc)
-    case (SCENE_PWALLS); n_roots = 2
-    case (SCENE_FPU); n_roots = 2 * fpu_n
-    case default; n_roots = 1
-    end select
-  end function n_roots
-
-  !> Right-hand side of the scene's first-order system, state (q, qdot).
-  subroutine scene_rhs(sc, y, f)
-    integer, intent(in) :: sc
-    real(c_double), intent(in) :: y(:)
-    real(c_double), intent(out) :: f(:)
-    real(c_double) :: s, c, ff, dff, ml2, r1, r2
-    real(c_double) :: r(0:fpu_n), fr(0:fpu_n)
-    integer :: n
-    select case (sc)
-    case (SCENE_PWALLS)
-      f = [y(2), -(grav / pw_l) * sin(y(1))]
-    case (SCENE_FPU)
-      n = fpu_n
-      r(0) = y(1); r(1:n - 1) = y(2:n) - y(1:n - 1); r(n) = -y(n)
-      fr = r + fpu_beta * r**3
-      f(1:n) = y(n + 1:2 * n)
-      f(n + 1:2 * n) = fr(1:n) - fr(0:n - 1)
-    case (SCENE_PARTICLE)
-      f = [y(3), y(4), 0.0_c_double, -grav]
-    case (SCENE_ELLIPSE)
-      f = [y(4), y(5), y(6), 0.0_c_double, 0.0_c_double, -grav]
-    case default
-      ! Lagrange-d'Alembert with the multiplier of omega = f dtheta - dphi eliminated
-      ! (the same system as tools/reference/references.py, solved in closed form).
-      s = sin(y(1)); c = cos(y(1)); ff = pend_f(y(1)); dff = -2.0_c_double * s * c
-      ml2 = mass * pend_l**2
-      r1 = ml2 * y(4)**2 * s * c + mass * grav * pend_l * s
-      r2 = -2.0_c_double * ml2 * s * c * y(3) * y(4)
-      f(1) = y(3); f(2) = y(4)
-      f(3) = (r2 - ml2 * s**2 * dff * y(3)**2 + r1 / ff) / (ml2 * (s**2 * ff + 1.0_c_double / ff))
-      f(4) = ff * f(3) + dff * y(3)**2
-    end select
-  end subroutine scene_rhs
-
-  subroutine scene_gaps(sc, y, g)
-    integer, intent(in) :: sc
-    real(c_double), intent(in) :: y(:)
-    real(c_double), intent(out) :: g(:)
-    select case (sc)
-    case (SCENE_PARTICLE)
-      g(1) = y(2)
-    case (SCENE_ELLIPSE)
-      g(1) = y(3) - sqrt(ell_a**2 * sin(y(1))**2 + ell_b**2 * cos(y(1))**2)
-    case (SCENE_PWALLS)
-      g(1) = pw_wall - y(1); g(2) = y(1) + pw_wall
-    case (SCENE_FPU)
-      g(1:fpu_n) = fpu_w - y(1:fpu_n); g(fpu_n + 1:) = fpu_w + y(1:fpu_n)
-    case default
-      g(1) = pend_r**2 - pend_l**2 * sin(y(1))**2
-    end select
-  end subroutine scene_gaps
-
-  !> Elastic frictionless impact map; found(j) /= 0 for the gaps that closed.
-  subroutine scene_impact(sc, y, found)
-    integer, intent(in) :: sc
-    real(c_double), intent(inout) :: y(:)
-    integer(c_int), intent(in) :: found(:)
-    real(c_double) :: n(3), minv(3), mu, phi
-    integer :: j, i
-    select case (sc)
-    case (SCENE_PWALLS)
-      y(2) = -y(2)
-    case (SCENE_FPU)
-      do j = 1, size(found)
-        if (found(j) == 0) cycle
-        i = mod(j - 1, fpu_n) + 1
-        y(fpu_n + i) = -y(fpu_n + i)   ! unit masses, wall normal e_i: v_i reverses
-      end do
-    case (SCENE_PARTICLE)
-      y(4) = -y(4)
-    case (SCENE_ELLIPSE)
-      phi = sqrt(ell_a**2 * sin(y(1))**2 + ell_b**2 * cos(y(1))**2)
-      n = [-(ell_a**2 - ell_b**2) * sin(y(1)) * cos(y(1)) / phi, 0.0_c_double, 1.0_c_double]
-      minv = [4.0_c_double / (mass * (ell_a**2 + ell_b**2)), 1.0_c_double / mass, 1.0_c_double / mass]
-      mu = -2.0_c_double * dot_product(n, y(4:6)) / dot_product(n, minv * n)
-      y(4:6) = y(4:6) + mu * minv * n
-    case default
-      y(3:4) = -y(3:4)   ! the velocity on the constraint that keeps the energy (docs/DESIGN.md §8)
-    end select
-  end subroutine scene_impact
-
-  real(c_double) function scene_energy(sc, y)
-    integer, intent(in) :: sc
-    real(c_double), intent(in) :: y(:)
-    integer :: n
-    n = size(y) / 2
-    scene_energy = energy_of_velocity(sc, y(1:n), y(n + 1:))
-  end function scene_energy
 
   integer(c_int) function rhs_cb(t, sunvec_y, sunvec_f, user_data) result(ierr) bind(C)
     real(c_double), value :: t
@@ -170,6 +63,7 @@ program cvode_results_driver
   type :: run_result_t
     real(c_double), allocatable :: y(:), times(:), sample_t(:), sample_e(:)
     real(c_double) :: emax = 0.0_c_double, t_end = 0.0_c_double
+    real(c_double) :: cmax = 0.0_c_double   !< largest constraint residual (the nonholonomic pendulum)
     integer :: n_impacts = 0, n_samples = 0, status = 0
     integer(c_long) :: steps = 0
   end type run_result_t
@@ -257,6 +151,7 @@ contains
     end if
     ret = FCVodeSetStopTime(mem, t_end)
     res%emax = abs(scene_energy(scene, y) - e0)
+    res%cmax = abs(scene_constraint(scene, y))
     wmax = 0.0_c_double; wend = huge(1.0_c_double)
     if (present(sample_dt)) wend = sample_dt
     do
@@ -266,6 +161,7 @@ contains
       end if
       err = abs(scene_energy(scene, y) - e0)
       res%emax = max(res%emax, err)
+      res%cmax = max(res%cmax, abs(scene_constraint(scene, y)))
       if (present(sample_dt)) then
         do while (tret(1) > wend .and. res%n_samples < ns)
           res%n_samples = res%n_samples + 1
@@ -321,15 +217,18 @@ contains
 
   subroutine sweep(file)
     character(len=*), intent(in) :: file
-    integer :: unit, k, iv, r, reps, rstat, nq
+    integer :: unit, k, iv, r, reps, rstat, nq, isc
     type(run_result_t) :: res
     real(rk), allocatable :: qref(:), qdref(:), tref(:)
     real(c_double) :: tol, walls(9), cpus(9), w0, c0, e0, err_final, err_impact
     character(len=16) :: name
     open (newunit=unit, file=file, status='replace', action='write')
     write (unit, '(a)') 'scene,method,param,wall_median,cpu_median,reps,err_final,err_energy,err_impact,' // &
-      'n_impacts,n_ref_impacts,steps,status'
-    do scene = 1, N_SCENES
+      'n_impacts,n_ref_impacts,steps,status,err_constraint'
+    do isc = 1, N_SCENES
+      ! the module variable the callbacks read is set, not used as the DO variable: at -O3 a DO
+      ! variable may live in a register while the loop runs, and the callbacks saw a stale scene
+      scene = isc
       call reference_at(scene, t_final(scene), qref, qdref, tref, rstat)
       e0 = exact_energy0(scene)
       nq = state_size(scene) / 2
@@ -348,15 +247,15 @@ contains
             if (r >= 5 .and. sum(walls(1:r)) > 0.2_c_double) exit
           end do
           if (res%status /= 0) then
-            write (unit, '(a,",",a,",",es10.3,",",9(a,","),i0)') trim(scene_names(scene)), trim(name), tol, &
-              ('nan', r = 1, 9), res%status
+            write (unit, '(a,",",a,",",es10.3,",",9(a,","),i0,a)') trim(scene_names(scene)), trim(name), tol, &
+              ('nan', r = 1, 9), res%status, ',nan'
             cycle
           end if
           err_final = maxval(abs(res%y(1:nq) - qref))
           err_impact = impact_time_error(tref, res%times, res%n_impacts)
-          write (unit, '(a,",",a,",",es10.3,",",es12.5,",",es12.5,",",i0,",",3(es12.5,","),i0,",",i0,",",i0,",",i0)') &
+          write (unit, '(a,",",a,",",es10.3,",",es12.5,",",es12.5,",",i0,",",3(es12.5,","),i0,",",i0,",",i0,",",i0,",",es12.5)') &
             trim(scene_names(scene)), trim(name), tol, median(walls(1:reps)), median(cpus(1:reps)), reps, &
-            err_final, res%emax, err_impact, res%n_impacts, size(tref), res%steps, res%status
+            err_final, res%emax, err_impact, res%n_impacts, size(tref), res%steps, res%status, res%cmax
           flush (unit)
         end do
       end do

@@ -1,15 +1,19 @@
 #!/bin/sh
 # Regenerate docs/RESULTS.md and docs/figures/results_*.png: error against run time of vci and its
-# peers (SUNDIALS CVODE, SciPy solve_ivp, Siconos) on five scenes (the paper's three, the walled
+# peers (a compiled DOP853 with dense-output events, SUNDIALS CVODE, SciPy solve_ivp (interpreted),
+# Siconos) on five scenes (the paper's three, the walled
 # pendulum, the FPU chain between walls), every method from the same exact start, and the
 # long-time energy of the ellipse and the walled pendulum (>= 10^5 impacts). Installs missing
 # Debian packages, builds, runs everything one job at a time (the timings must not compete with
-# each other), writes the page. Under 15 minutes on 2 cores (the page states the measured time).
+# each other), writes the page. The page states the time the command took (about 40 minutes on a
+# 2-core machine shared with other builds; less on an idle one).
 #
 #   tools/results/run_results.sh
 #
 # Environment: VCI_RESULTS_BUILD (build directory, default $TMPDIR/vci-results-build),
-# VCI_RESULTS_OUT (raw CSV output, default $VCI_RESULTS_BUILD/out).
+# VCI_RESULTS_OUT (raw CSV output, default $VCI_RESULTS_BUILD/out), VCI_RESULTS_BUDGET (seconds for
+# the whole command, default 3600: each run gets what is left; a run that exceeds it is stopped and
+# the command fails naming it, so a rerun on a slower or busier machine fails clearly, not silently).
 set -eu
 
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
@@ -17,13 +21,36 @@ BUILD=${VCI_RESULTS_BUILD:-${TMPDIR:-/tmp}/vci-results-build}
 OUT=${VCI_RESULTS_OUT:-$BUILD/out}
 PY=/usr/bin/python3
 START=$(date +%s)
+BUDGET=${VCI_RESULTS_BUDGET:-3600}
+
+# run NAME CMD...: run one phase within what is left of the budget; on failure or timeout say which
+# phase, how long it ran and where its messages are, and stop.
+run() {
+  name=$1; shift
+  left=$((BUDGET - ($(date +%s) - START)))
+  if [ "$left" -le 0 ]; then
+    echo "run_results.sh: time budget of ${BUDGET} s used up before '$name' (set VCI_RESULTS_BUDGET)" >&2
+    exit 1
+  fi
+  t0=$(date +%s)
+  rc=0
+  timeout "$left" "$@" || rc=$?
+  if [ "$rc" -ne 0 ]; then
+    if [ "$rc" -eq 124 ]; then
+      echo "run_results.sh: '$name' stopped after $(( $(date +%s) - t0 )) s: the time budget of ${BUDGET} s ran out (set VCI_RESULTS_BUDGET)" >&2
+    else
+      echo "run_results.sh: '$name' failed (exit status $rc after $(( $(date +%s) - t0 )) s; its messages are above, raw output in $OUT)" >&2
+    fi
+    exit 1
+  fi
+}
 # single-threaded BLAS for every method: on a shared 2-core machine a threaded LU only adds
 # contention (docs/SCHEMES.md, Cost), and CPU time would count both threads
 export OPENBLAS_NUM_THREADS=1
 
 # --- Debian packages -------------------------------------------------------------------------
 PKGS="gfortran gcc cmake make liblapack-dev python3-numpy python3-scipy python3-matplotlib
-      libsundials-dev libsundials-fortran-dev python3-siconos"
+      libsundials-dev libsundials-fortran-dev python3-siconos valgrind"
 MISSING=""
 for p in $PKGS; do
   dpkg -s "$p" >/dev/null 2>&1 || MISSING="$MISSING $p"
@@ -40,40 +67,51 @@ cmake -S "$ROOT/tools/results" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release -DVCI_ROOT
   || { cat "$BUILD.cmake.log"; exit 1; }
 cmake --build "$BUILD" -j2 >"$BUILD.build.log" 2>&1 || { tail -40 "$BUILD.build.log"; exit 1; }
 [ -x "$BUILD/cvode_results_driver" ] || { echo "CVODE driver not built (see $BUILD.cmake.log)"; exit 1; }
+[ -x "$BUILD/dop853_results_driver" ] || { echo "DOP853 driver not built (see $BUILD.build.log)"; exit 1; }
 
 mkdir -p "$OUT/long"
-rm -f "$OUT"/*.csv "$OUT"/long/*.csv
+rm -f "$OUT"/*.csv "$OUT"/*.md "$OUT"/*.txt "$OUT"/long/*.csv
 
 # --- runs ------------------------------------------------------------------------------------
+echo "== the compiled DOP853 checked: order 8, dense output order, event times against exact solutions"
+run "DOP853 check" sh -c '"$1" check >"$2"; rc=$?; cat "$2"; exit $rc' sh "$BUILD/dop853_results_driver" "$OUT/dop853_check.txt"
 echo "== references"
-"$BUILD/vci_results_driver" reference "$OUT/reference.json"
-echo "== vci step-size sweep (hand-written L_d and the schemes from L, both impact conditions)"
-"$BUILD/vci_results_driver" sweep "$OUT/vci_sweep.csv" 2>"$OUT/vci_sweep.stderr"
+run "references" "$BUILD/vci_results_driver" reference "$OUT/reference.json"
+echo "== vci step-size sweep (hand-written L_d, the schemes from L, the explicit compositions)"
+run "vci sweep" sh -c '"$1" sweep "$2" 2>"$3"' sh "$BUILD/vci_results_driver" "$OUT/vci_sweep.csv" "$OUT/vci_sweep.stderr"
 echo "== pendulum: reference vs Richardson extrapolation of vci"
-"$BUILD/vci_results_driver" richardson "$OUT/richardson.csv"
+run "Richardson check" "$BUILD/vci_results_driver" richardson "$OUT/richardson.csv"
+echo "== compiled DOP853 tolerance sweep"
+run "DOP853 sweep" sh -c '"$1" sweep "$2" 2>"$3"' sh "$BUILD/dop853_results_driver" "$OUT/dop853_sweep.csv" "$OUT/dop853_sweep.stderr"
 echo "== CVODE tolerance sweep"
-"$BUILD/cvode_results_driver" sweep "$OUT/cvode_sweep.csv"
+run "CVODE sweep" "$BUILD/cvode_results_driver" sweep "$OUT/cvode_sweep.csv"
 echo "== SciPy tolerance sweep"
-$PY "$ROOT/tools/results/peers_scipy.py" sweep "$OUT/reference.json" "$OUT/scipy_sweep.csv"
+run "SciPy sweep" $PY "$ROOT/tools/results/peers_scipy.py" sweep "$OUT/reference.json" "$OUT/scipy_sweep.csv"
 echo "== Siconos step-size sweep"
-$PY "$ROOT/tools/results/peers_siconos.py" sweep "$OUT/reference.json" "$BUILD" "$OUT/siconos_sweep.csv"
+run "Siconos sweep" $PY "$ROOT/tools/results/peers_siconos.py" sweep "$OUT/reference.json" "$BUILD" "$OUT/siconos_sweep.csv"
 echo "== long runs (>= 10^5 impacts): the ellipse over 1.1e5 s, the walled pendulum over 6e4 s"
 for scene in ellipse pendulum_walls; do
-  "$BUILD/vci_results_driver" long "$scene" "$OUT/long"
+  run "vci long run ($scene)" "$BUILD/vci_results_driver" long "$scene" "$OUT/long"
   # BDF (no better than Adams here, and the slowest) only at 1e-6 and 1e-10: the time budget
   for tol in 1e-6 1e-10; do
-    "$BUILD/cvode_results_driver" long "$scene" "$OUT/long" $tol
+    run "CVODE long run ($scene, $tol)" "$BUILD/cvode_results_driver" long "$scene" "$OUT/long" $tol
   done
   for tol in 1e-8 1e-12; do
-    "$BUILD/cvode_results_driver" long "$scene" "$OUT/long" $tol adams
+    run "CVODE-Adams long run ($scene, $tol)" "$BUILD/cvode_results_driver" long "$scene" "$OUT/long" $tol adams
+  done
+  for tol in 1e-8 1e-12; do
+    run "DOP853 long run ($scene, $tol)" "$BUILD/dop853_results_driver" long "$scene" "$OUT/long" $tol
   done
 done
 # SciPy and Siconos pay ~1 ms of Python per impact (restart) or per few steps: over a tenth of the
 # horizon (~10^4 impacts), to stay in the time budget; the page says so.
-$PY "$ROOT/tools/results/peers_scipy.py" long ellipse "$OUT/long" DOP853 1e-10 1.1e4
-$PY "$ROOT/tools/results/peers_scipy.py" long pendulum_walls "$OUT/long" DOP853 1e-10 6e3
-$PY "$ROOT/tools/results/peers_siconos.py" long ellipse "$BUILD" "$OUT/long" 1e-2 1.1e4
-$PY "$ROOT/tools/results/peers_siconos.py" long pendulum_walls "$BUILD" "$OUT/long" 1e-2 6e3
+run "SciPy long run (ellipse)" $PY "$ROOT/tools/results/peers_scipy.py" long ellipse "$OUT/long" DOP853 1e-10 1.1e4
+run "SciPy long run (pendulum_walls)" $PY "$ROOT/tools/results/peers_scipy.py" long pendulum_walls "$OUT/long" DOP853 1e-10 6e3
+run "Siconos long run (ellipse)" $PY "$ROOT/tools/results/peers_siconos.py" long ellipse "$BUILD" "$OUT/long" 1e-2 1.1e4
+run "Siconos long run (pendulum_walls)" $PY "$ROOT/tools/results/peers_siconos.py" long pendulum_walls "$BUILD" "$OUT/long" 1e-2 6e3
+
+echo "== where the time goes (callgrind, walled pendulum): DOP853 against vci's compositions"
+run "profile (callgrind)" "$ROOT/tools/results/profile_peers.sh" "$BUILD" "$OUT"
 
 # --- the page --------------------------------------------------------------------------------
 END=$(date +%s)
@@ -86,5 +124,5 @@ cat >"$OUT/meta.json" <<EOF
  "sundials": "$(ver libsundials-dev)",
  "versions": "gfortran $(gfortran -dumpfullversion), LAPACK $(ver liblapack3), SUNDIALS $(ver libsundials-dev), SciPy $($PY -c 'import scipy; print(scipy.__version__)'), NumPy $($PY -c 'import numpy; print(numpy.__version__)'), Siconos $(ver python3-siconos)"}
 EOF
-$PY "$ROOT/tools/results/make_report.py" "$OUT" "$ROOT"
+run "the page (make_report.py)" $PY "$ROOT/tools/results/make_report.py" "$OUT" "$ROOT"
 echo "wrote $ROOT/docs/RESULTS.md and $ROOT/docs/figures/results_*.png in $((END - START)) s (raw data: $OUT)"

@@ -5,6 +5,8 @@
 !>   vci_results_driver sweep FILE [PREFIX [SCENE]]  step-size sweep of every variant -> CSV
 !>                                         (PREFIX, SCENE: only the rows whose label starts so)
 !>   vci_results_driver richardson FILE    pendulum reference vs Richardson extrapolation of vci
+!>   vci_results_driver once SCENE LABEL H one untimed run of one row (for callgrind: the work is in
+!>                                         run_once, --toggle-collect='*run_once*')
 !>   vci_results_driver long SCENE DIR     long run (>= 10^5 impacts) of the ellipse or the walled
 !>                                         pendulum at h = 1e-2: |E - E0| over time
 !>
@@ -33,13 +35,14 @@ module vci_results_recorder
   use vci_results_common, only: mass, grav, pend_l, pend_f
   implicit none
   private
-  public :: grow, energy_at
+  public :: grow, energy_at, constraint_at
 
   !> Records impacts and the energy error of every state.
   type, public, extends(vci_observer_t) :: recorder_t
     class(vci_model_base_t), pointer :: model => null()
     logical :: reduced_pendulum_energy = .false.  !< pendulum: E from (theta, p_theta), see energy_at
     real(dp) :: e0 = 0.0_dp, emax = 0.0_dp
+    real(dp) :: cmax = 0.0_dp   !< pendulum: largest constraint residual at the step ends, see constraint_at
     real(dp), allocatable :: times(:)
     integer :: n_impacts = 0
     integer(i8) :: block = 0_i8           !< >0: keep the largest error of each block of steps
@@ -63,6 +66,7 @@ contains
     e = energy_at(self, q, p)
     err = abs(e - self%e0)
     self%emax = max(self%emax, err)
+    if (self%reduced_pendulum_energy) self%cmax = max(self%cmax, abs(constraint_at(q, p)))
     if (self%block > 0) then
       self%block_max = max(self%block_max, err)
       if (mod(step, self%block) == 0) then
@@ -94,6 +98,14 @@ contains
       call self%model%energy(q, p, e, s)
     end if
   end function energy_at
+
+  !> The nonholonomic pendulum's constraint phidot = f(theta) thetadot in momentum form over m l^2,
+  !> (f sin^2(theta) p_theta - p_phi) / (m l^2) = sin^2(theta) (f thetadot - phidot): finite through
+  !> theta = pi, and the same measure as the ODE peers' (results_scene_ode%scene_constraint).
+  real(dp) function constraint_at(q, p) result(r)
+    real(dp), intent(in) :: q(:), p(:)
+    r = (pend_f(q(1)) * sin(q(1))**2 * p(1) - p(2)) / (mass * pend_l**2)
+  end function constraint_at
 
   subroutine rec_impact(self, impact, stat)
     class(recorder_t), intent(inout) :: self
@@ -128,6 +140,8 @@ program vci_results_driver
   use vci_scene_pendulum_walls, only: pendulum_walls_model
   use vci_scene_fpu_walls, only: fpu_walls_lagrangian_model
   use vci_results_recorder
+  use vci_scene_pendulum_walls_sep, only: pendulum_walls_sep_model
+  use results_separable_scenes, only: particle_sep_model, ellipse_sep_model, fpu_sep_model
   implicit none
 
   !> How the scene's model is discretised. SCHEME_LD (= VCI_SCHEME_DISCRETE): the scene's own
@@ -158,13 +172,17 @@ program vci_results_driver
   logical, parameter :: NO_FPU(N_SCENES) = [.true., .true., .true., .true., .false.]
   logical, parameter :: HOLONOMIC(N_SCENES) = [.true., .true., .false., .true., .true.]
   logical, parameter :: HOLO_NO_FPU(N_SCENES) = [.true., .true., .false., .true., .false.]
+  logical, parameter :: PENDULUM_ONLY(N_SCENES) = [.false., .false., .true., .false., .false.]
+  !> the scenes with a separable Lagrangian (constant M): the explicit compositions run there
+  logical, parameter :: SEPARABLE(N_SCENES) = [.true., .true., .false., .true., .true.]
 
   character(len=512) :: mode, target_path, arg3, arg4
   integer :: nargs
 
   nargs = command_argument_count()
   if (nargs < 2) then
-    write (error_unit, '(a)') 'usage: vci_results_driver reference|sweep|richardson PATH | long SCENE DIR'
+    write (error_unit, '(a)') 'usage: vci_results_driver reference|sweep|richardson PATH | long SCENE DIR | ' // &
+      'once SCENE LABEL H'
     stop 2
   end if
   call get_command_argument(1, mode)
@@ -177,6 +195,10 @@ program vci_results_driver
     if (nargs >= 4) call get_command_argument(4, arg4)
     call sweep(trim(target_path), trim(arg3), trim(arg4))
   case ('richardson'); call richardson(trim(target_path))
+  case ('once')
+    call get_command_argument(3, arg3)
+    call get_command_argument(4, arg4)
+    call once(trim(target_path), trim(arg3), trim(arg4))
   case ('long')
     call get_command_argument(3, arg3)
     call long_run(trim(target_path), trim(arg3))
@@ -189,13 +211,16 @@ contains
 
   !> The method rows. Add new schemes here (EXTENSION POINT).
   !> `left` only with the paper's condition (with `hamiltonian` its first-order momenta make the
-  !> wall's energy balance drift, docs/SCHEMES.md); lobatto takes constraints since issue 25 but is not
-  !> yet run on the nonholonomic pendulum here (the rows predate it); on the FPU chain midpoint and lobatto s = 2, 4 with the
-  !> hamiltonian condition (the time budget).
+  !> wall's energy balance drift, docs/SCHEMES.md). Lobatto s = 1 .. 4 on the nonholonomic pendulum
+  !> (constraints at the nodes, issue 25), s = 2 .. 4 on the holonomic scenes; on the FPU chain
+  !> midpoint and lobatto s = 2, 4 with the hamiltonian condition (the time budget). The explicit
+  !> compositions of order 2 .. 10 (VCI_SCHEME_COMPOSITION, issue 32) on every separable scene; they
+  !> always reflect with the Hamiltonian condition (docs/SCHEMES.md), hence the suffix.
   function variants() result(v)
     type(variant_t), allocatable :: v(:)
     integer, parameter :: D = VCI_IMPACT_DISCRETE, H = VCI_IMPACT_HAMILTONIAN
     integer, parameter :: LEFT = VCI_SCHEME_LEFT, MID = VCI_SCHEME_MIDPOINT, LOB = VCI_SCHEME_LOBATTO
+    integer, parameter :: COMP = VCI_SCHEME_COMPOSITION
     v = [variant_t('vci-ld-discrete', D, .false., long_h=[1.0e-2_dp, 1.0e-2_dp]), &
          variant_t('vci-ld-hamiltonian', H, .false., long_h=[1.0e-2_dp, 1.0e-2_dp]), &
          variant_t('vci-ld-pair-discrete', D, .true., scenes=PAPER), &
@@ -203,18 +228,27 @@ contains
          variant_t('vci-left-discrete', D, .false., LEFT, 1, scenes=NO_FPU, steps=STEPS_MID), &
          variant_t('vci-midpoint-discrete', D, .false., MID, 1, scenes=NO_FPU, steps=STEPS_MID), &
          variant_t('vci-midpoint-hamiltonian', H, .false., MID, 1, steps=STEPS_MID), &
-         variant_t('vci-lobatto2-discrete', D, .false., LOB, 2, scenes=HOLO_NO_FPU, steps=STEPS_COARSE, &
+         variant_t('vci-lobatto1-discrete', D, .false., LOB, 1, scenes=PENDULUM_ONLY, steps=STEPS_COARSE, &
                    rtol=1.0e-14_dp), &
-         variant_t('vci-lobatto2-hamiltonian', H, .false., LOB, 2, scenes=HOLONOMIC, steps=STEPS_COARSE, &
+         variant_t('vci-lobatto1-hamiltonian', H, .false., LOB, 1, scenes=PENDULUM_ONLY, steps=STEPS_COARSE, &
+                   rtol=1.0e-14_dp), &
+         variant_t('vci-lobatto2-discrete', D, .false., LOB, 2, scenes=NO_FPU, steps=STEPS_COARSE, &
+                   rtol=1.0e-14_dp), &
+         variant_t('vci-lobatto2-hamiltonian', H, .false., LOB, 2, steps=STEPS_COARSE, &
                    rtol=1.0e-14_dp, long_h=[0.0_dp, 1.0e-1_dp]), &
-         variant_t('vci-lobatto3-discrete', D, .false., LOB, 3, scenes=HOLO_NO_FPU, steps=STEPS_COARSE, &
+         variant_t('vci-lobatto3-discrete', D, .false., LOB, 3, scenes=NO_FPU, steps=STEPS_COARSE, &
                    rtol=1.0e-14_dp), &
-         variant_t('vci-lobatto3-hamiltonian', H, .false., LOB, 3, scenes=HOLO_NO_FPU, steps=STEPS_COARSE, &
+         variant_t('vci-lobatto3-hamiltonian', H, .false., LOB, 3, scenes=NO_FPU, steps=STEPS_COARSE, &
                    rtol=1.0e-14_dp), &
-         variant_t('vci-lobatto4-discrete', D, .false., LOB, 4, scenes=HOLO_NO_FPU, steps=STEPS_COARSE, &
+         variant_t('vci-lobatto4-discrete', D, .false., LOB, 4, scenes=NO_FPU, steps=STEPS_COARSE, &
                    rtol=1.0e-14_dp), &
-         variant_t('vci-lobatto4-hamiltonian', H, .false., LOB, 4, scenes=HOLONOMIC, steps=STEPS_COARSE, &
-                   rtol=1.0e-14_dp, long_h=[1.0e-1_dp, 0.0_dp], fpu_h_min=4.9e-2_dp)]
+         variant_t('vci-lobatto4-hamiltonian', H, .false., LOB, 4, steps=STEPS_COARSE, &
+                   rtol=1.0e-14_dp, long_h=[1.0e-1_dp, 0.0_dp], fpu_h_min=4.9e-2_dp), &
+         variant_t('vci-composition2-hamiltonian', H, .false., COMP, 2, scenes=SEPARABLE, steps=STEPS_MID), &
+         variant_t('vci-composition4-hamiltonian', H, .false., COMP, 4, scenes=SEPARABLE, steps=STEPS_COARSE), &
+         variant_t('vci-composition6-hamiltonian', H, .false., COMP, 6, scenes=SEPARABLE, steps=STEPS_COARSE), &
+         variant_t('vci-composition8-hamiltonian', H, .false., COMP, 8, scenes=SEPARABLE, steps=STEPS_COARSE), &
+         variant_t('vci-composition10-hamiltonian', H, .false., COMP, 10, scenes=SEPARABLE, steps=STEPS_COARSE)]
   end function variants
 
   !> A fresh model of the scene, discretised as the variant says.
@@ -222,7 +256,16 @@ contains
     integer, intent(in) :: scene
     type(variant_t), intent(in) :: var
     class(vci_model_base_t), allocatable, intent(out) :: model
-    if (var%scheme == SCHEME_LD) then
+    if (var%scheme == VCI_SCHEME_COMPOSITION) then
+      ! the separable forms (constant M): the explicit compositions need this model kind
+      select case (scene)
+      case (SCENE_PARTICLE); allocate (model, source=particle_sep_model())
+      case (SCENE_ELLIPSE); allocate (model, source=ellipse_sep_model())
+      case (SCENE_PWALLS); allocate (model, source=pendulum_walls_sep_model(.true.))
+      case (SCENE_FPU); allocate (model, source=fpu_sep_model())
+      case default; error stop 'make_model: the nonholonomic pendulum has no separable form'
+      end select
+    else if (var%scheme == SCHEME_LD) then
       select case (scene)
       case (SCENE_PARTICLE); allocate (model, source=particle_on_floor(mass, grav))
       case (SCENE_ELLIPSE); allocate (model, source=ellipse_model())
@@ -318,6 +361,7 @@ contains
     integer(i8) :: nsteps
     integer :: stat, rstat, reps, r
     character(len=VCI_MSG_LEN) :: msg
+    character(len=16) :: constraint_text
 
     call make_model(scene, var, model)
     nsteps = steps_to(scene, var, h, t_final(scene))
@@ -330,6 +374,7 @@ contains
     if (stat == VCI_OK) then
       e = energy_at(rec, integ%configuration(), integ%momentum())
       rec%emax = abs(e - rec%e0)
+      if (scene == SCENE_PENDULUM) rec%cmax = abs(constraint_at(integ%configuration(), integ%momentum()))
       call integ%integrate(nsteps, 1, stat, rec)
     end if
     msg = integ%message()
@@ -340,7 +385,7 @@ contains
     if (stat /= VCI_OK) then
       write (error_unit, '(a,es9.2,a)') trim(scene_names(scene))//' '//trim(var%label)//' h = ', h, &
         ': '//trim(msg)
-      write (unit, '(a,",",a,",",es10.3,",",9(a,","),i0)') trim(scene_names(scene)), trim(var%label), &
+      write (unit, '(a,",",a,",",es10.3,",",9(a,","),i0,",nan")') trim(scene_names(scene)), trim(var%label), &
         h, ('nan', r = 1, 9), stat
       return
     end if
@@ -348,6 +393,8 @@ contains
     call reference_at(scene, t_final(scene), qref, qdref, tref, rstat)
     err_final = maxval(abs(integ%configuration() - qref))
     err_impact = impact_time_error(tref, rec%times, rec%n_impacts)
+    constraint_text = 'nan'
+    if (scene == SCENE_PENDULUM) write (constraint_text, '(es12.5)') rec%cmax
 
     ! timed repeats: more of them for short runs
     reps = 0
@@ -361,9 +408,9 @@ contains
       if (r >= 5 .and. sum(walls(1:r)) > 0.2_dp) exit
       if (walls(1) > 2.0_dp) exit
     end do
-    write (unit, '(a,",",a,",",es10.3,",",es12.5,",",es12.5,",",i0,",",3(es12.5,","),i0,",",i0,",",i0,",",i0)') &
+    write (unit, '(a,",",a,",",es10.3,",",es12.5,",",es12.5,",",i0,",",3(es12.5,","),i0,",",i0,",",i0,",",i0,",",a)') &
       trim(scene_names(scene)), trim(var%label), h, median(walls(1:reps)), median(cpus(1:reps)), reps, &
-      err_final, rec%emax, err_impact, rec%n_impacts, size(tref), nsteps, stat
+      err_final, rec%emax, err_impact, rec%n_impacts, size(tref), nsteps, stat, trim(constraint_text)
     flush (unit)
   end subroutine measure
 
@@ -405,7 +452,7 @@ contains
     vs = variants()
     open (newunit=unit, file=path, status='replace', action='write')
     write (unit, '(a)') 'scene,method,param,wall_median,cpu_median,reps,err_final,err_energy,err_impact,' // &
-      'n_impacts,n_ref_impacts,steps,status'
+      'n_impacts,n_ref_impacts,steps,status,err_constraint'
     do scene = 1, N_SCENES
       if (len(only_scene) > 0 .and. only_scene /= trim(scene_names(scene))) cycle
       do iv = 1, size(vs)
@@ -507,6 +554,44 @@ contains
     end do
     close (unit)
   end subroutine richardson
+
+  !> One run of the row `label` on `scene_name` at the nominal step h_text, work in run_once (the
+  !> profile of the report's rows: model set-up, create, set_scheme, init and the whole run).
+  subroutine once(scene_name, label, h_text)
+    character(len=*), intent(in) :: scene_name, label, h_text
+    type(variant_t), allocatable :: vs(:)
+    real(dp) :: h
+    integer :: scene, iv, stat, rstat
+    real(dp), allocatable :: q(:), qref(:), qdref(:), tref(:)
+    vs = variants()
+    scene = findloc(scene_names, scene_name, 1)
+    iv = 0
+    if (scene > 0) iv = findloc([(vs(iv)%label == label, iv = 1, size(vs))], .true., 1)
+    if (scene == 0 .or. iv == 0) then
+      write (error_unit, '(a)') 'once: unknown scene or row '//scene_name//' '//label
+      stop 2
+    end if
+    read (h_text, *) h
+    h = grid_step(scene, vs(iv), h, t_final(scene))
+    call run_once(scene, vs(iv), h, q, stat)
+    call reference_at(scene, t_final(scene), qref, qdref, tref, rstat)
+    write (output_unit, '(a,es10.3,a,i0,a,es10.3)') trim(label)//' h = ', h, ' status ', stat, ' final error ', &
+      maxval(abs(q - qref))
+  end subroutine once
+
+  subroutine run_once(scene, var, h, q, stat)
+    integer, intent(in) :: scene
+    type(variant_t), intent(in) :: var
+    real(dp), intent(in) :: h
+    real(dp), allocatable, intent(out) :: q(:)
+    integer, intent(out) :: stat
+    class(vci_model_base_t), allocatable, target :: model
+    type(vci_integrator_t) :: integ
+    call make_model(scene, var, model)
+    call start(scene, var, model, h, integ, stat)
+    if (stat == VCI_OK) call integ%integrate(steps_to(scene, var, h, t_final(scene)), 1, stat)
+    q = integ%configuration()
+  end subroutine run_once
 
   !> Long run of the ellipse (1.1e5 s) or the walled pendulum (6e4 s), >= 10^5 impacts, of every
   !> variant with long_h > 0 (the ld rows at h = 1e-2 with both impact conditions; the best
