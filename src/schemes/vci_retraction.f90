@@ -51,6 +51,7 @@ contains
     self%lag => lag
     self%rule = rule
     self%n = lag%n; self%m = lag%m; self%n_gaps = lag%n_gaps
+    self%hessian_bandwidth = lag%hessian_bandwidth; self%check_bandwidth = lag%check_bandwidth
     n = lag%n
     call lagrangian_work_setup(self%work, n, stat)
     if (stat /= 0) return
