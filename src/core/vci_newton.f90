@@ -418,18 +418,38 @@ contains
 
   !> Solve the small dense system a x = b in place (b becomes x), with the solver's workspace.
   !> info /= 0: singular even for least squares, or a or b not finite (LAPACK is then not called).
-  subroutine linear_solve(self, n, a, b, info)
+  !> structured_as (optional): a system whose declared structure a has (vci_banded): then a is
+  !> factorised in band storage with its border, as Newton's matrices of that system are.
+  subroutine linear_solve(self, n, a, b, info, structured_as)
     class(vci_newton_t), intent(inout) :: self
     integer, intent(in) :: n
     real(dp), intent(in) :: a(:, :)
     real(dp), intent(inout) :: b(:)
     integer, intent(out) :: info
-    integer :: rank
+    class(vci_system_t), intent(inout), optional :: structured_as
+    integer :: rank, nb, bw, i
+    logical :: chk
     if (.not. (all_finite(a(1:n, 1:n)) .and. all_finite(b(1:n)))) then
       info = -1; return
     end if
     self%rt(1:n) = b(1:n)                  ! the right-hand side, for the fallback
     self%have_lu = .false.            ! the factors below are not a Newton matrix's
+    if (present(structured_as)) then
+      call structured_as%structure(nb, bw, chk)
+      if (nb > 0 .and. nb <= n .and. bw >= 0) then
+        if (.not. band_rows(self, n, nb, bw, a, size(a, 1)) <= huge(1.0_dp)) nb = 0
+        call self%band%factor(n, nb, bw, a, size(a, 1), self%rw, info)
+        if (info == 0) then
+          do i = 1, n
+            b(i) = b(i) * self%rw(i)
+          end do
+          call self%band%solve(b(1:n))
+          self%lu_banded = .true.
+          if (all_finite(b(1:n))) return
+          b(1:n) = self%rt(1:n)
+        end if
+      end if
+    end if
     self%lu(1:n, 1:n) = a(1:n, 1:n)
     call lu_factor(self, n, info)
     if (info == 0) then
@@ -498,7 +518,7 @@ contains
     logical, intent(out) :: factored
     type(vci_newton_result_t), intent(inout) :: res
     integer :: i, j, nb, bw, info
-    real(dp) :: big, total
+    real(dp) :: total
     factored = .false.
     nb = self%snb; bw = self%sbw
     if (self%scheck) then
@@ -507,24 +527,8 @@ contains
         res%reason = NEWTON_STRUCTURE; res%bad_row = i; res%bad_col = j; return
       end if
     end if
-    total = 0.0_dp
+    total = band_rows(self, n, nb, bw, self%jac, self%capacity)
     do i = 1, n
-      big = 0.0_dp
-      if (i <= nb) then
-        do j = max(1, i - bw), min(nb, i + bw)
-          big = max(big, abs(self%jac(i, j)))
-        end do
-        do j = nb + 1, n
-          big = max(big, abs(self%jac(i, j)))
-        end do
-      else
-        do j = 1, n
-          big = max(big, abs(self%jac(i, j)))
-        end do
-      end if
-      total = total + big
-      self%rw(i) = 1.0_dp
-      if (big > 0.0_dp) self%rw(i) = 1.0_dp / big
       self%dx(i) = self%r(i) * self%rw(i)
     end do
     ! NaN/Inf in the matrix or r w: the dense path reports it (nothing non-finite goes to LAPACK)
@@ -537,6 +541,35 @@ contains
     factored = all(ieee_is_finite(self%dx(1:n)))
     self%lu_banded = factored
   end subroutine structured_direction
+
+  !> rw(i) = 1 / the largest |a(i, j)| of row i over the band and the border (the entries outside the
+  !> band are zero); returns the sum of those maxima (not finite: a NaN or Inf in the matrix).
+  real(dp) function band_rows(self, n, nb, bw, a, lda) result(total)
+    type(vci_newton_t), intent(inout) :: self
+    integer, intent(in) :: n, nb, bw, lda
+    real(dp), intent(in) :: a(lda, *)
+    integer :: i, j
+    real(dp) :: big
+    total = 0.0_dp
+    do i = 1, n
+      big = 0.0_dp
+      if (i <= nb) then
+        do j = max(1, i - bw), min(nb, i + bw)
+          big = max(big, abs(a(i, j)))
+        end do
+        do j = nb + 1, n
+          big = max(big, abs(a(i, j)))
+        end do
+      else
+        do j = 1, n
+          big = max(big, abs(a(i, j)))
+        end do
+      end if
+      total = total + big
+      self%rw(i) = 1.0_dp
+      if (big > 0.0_dp) self%rw(i) = 1.0_dp / big
+    end do
+  end function band_rows
 
   !> One chord step with the last LU factors; kept only if it does not make the residual worse.
   subroutine polish_step(self, sys, x, n, phi, res)

@@ -273,6 +273,7 @@ awk -v cmd="tools/bench/run_bench.sh${*:+ $*}" '
   echo "impact step also pays for code that regular steps leave cold (one step in 100 on the ellipse, in"
   echo "1700 on the pendulum): its time ratio is above its instruction ratio and moves between runs."
 } >>"$OUT"
+BUILD_DIR="$BUILD_DIR" sh "$ROOT/tools/bench/run_chain.sh" || status=$?   # the chain's impact steps (docs/bench/chain.md)
 if [ "$status" -ne 0 ]; then
   echo "run_bench.sh: benchmark failed (status $status); see the trajectory check in $OUT" >&2
 fi
