@@ -1,7 +1,8 @@
 !> Newton matrices with structure (issue 28): a leading block of nb unknowns whose entries vanish
 !> outside a band |i - j| <= bw, bordered by nx - nb dense rows and columns (constraint multipliers,
 !> the impact fraction alpha or the impulse mu). The block is factorised in LAPACK's band storage
-!> (dgbtrf, O(nb bw^2)) and the border by its Schur complement S = D - C A^{-1} B (docs/DESIGN.md,
+!> (partial pivoting as dgbtrf, O(nb bw^2), in line: for bw = 1 LAPACK's per-column BLAS calls cost
+!> several times the arithmetic, a quarter of a chain's impact step at n = 128) and the border by its Schur complement S = D - C A^{-1} B (docs/DESIGN.md,
 !> "Structured Newton matrices"):
 !>
 !>     [A B] [x1]   [r1]      x2 = S^{-1} (r2 - C A^{-1} r1),   x1 = A^{-1} r1 - (A^{-1} B) x2,
@@ -18,23 +19,6 @@ module vci_banded
   implicit none
   private
 
-  interface
-    subroutine dgbtrf(m, n, kl, ku, ab, ldab, ipiv, info)
-      import :: dp
-      integer, intent(in) :: m, n, kl, ku, ldab
-      real(dp), intent(inout) :: ab(ldab, *)
-      integer, intent(out) :: ipiv(*), info
-    end subroutine dgbtrf
-    subroutine dgbtrs(trans, n, kl, ku, nrhs, ab, ldab, ipiv, b, ldb, info)
-      import :: dp
-      character(len=1), intent(in) :: trans
-      integer, intent(in) :: n, kl, ku, nrhs, ldab, ldb
-      real(dp), intent(in) :: ab(ldab, *)
-      integer, intent(in) :: ipiv(*)
-      real(dp), intent(inout) :: b(ldb, *)
-      integer, intent(out) :: info
-    end subroutine dgbtrs
-  end interface
 
   !> Borders up to this size have their Schur complement factorised in line (no LAPACK call).
   integer, parameter :: border_max = 64
@@ -84,7 +68,7 @@ contains
         self%ab(2 * bw + 1 + i - j, j) = rw(i) * jac(i, j)
       end do
     end do
-    call dgbtrf(nb, nb, bw, bw, self%ab, ldab, self%ipiv, info)
+    call band_lu(nb, bw, self%ab, self%ipiv, info)
     if (info /= 0) return
     dmin = huge(1.0_dp); dmax = 0.0_dp
     do j = 1, nb
@@ -100,8 +84,9 @@ contains
           self%w(i, k) = rw(i) * jac(i, nb + k)
         end do
       end do
-      call dgbtrs('N', nb, bw, bw, nd, self%ab, ldab, self%ipiv, self%w, nb, info)
-      if (info /= 0) return
+      do k = 1, nd
+        call band_solve(nb, bw, self%ab, self%ipiv, self%w(:, k))
+      end do
       do j = 1, nb
         do i = 1, nd
           self%c(i, j) = rw(nb + i) * jac(nb + i, j)
@@ -137,10 +122,10 @@ contains
   subroutine solve(self, b)
     class(vci_banded_lu_t), intent(inout) :: self
     real(dp), intent(inout) :: b(:)
-    integer :: nb, nd, i, j, info
+    integer :: nb, nd, i, j
     real(dp) :: acc
     nb = self%nb; nd = self%nx - nb
-    call dgbtrs('N', nb, self%bw, self%bw, 1, self%ab, size(self%ab, 1), self%ipiv, b, nb, info)
+    call band_solve(nb, self%bw, self%ab, self%ipiv, b)
     if (nd == 0) return
     do i = 1, nd                    ! r2 - C A^{-1} r1
       acc = b(nb + i)
@@ -156,6 +141,84 @@ contains
       end do
     end do
   end subroutine solve
+
+  !> LU with partial pivoting of the n x n band matrix (kl = ku = bw) in ab (LAPACK's band storage,
+  !> A(r, c) = ab(2 bw + 1 + r - c, c), with bw rows for the fill-in, zero on entry); ipiv and info as
+  !> dgbtrf's. The pivot is the first largest |entry| of the column, as idamax picks it.
+  pure subroutine band_lu(n, bw, ab, ipiv, info)
+    integer, intent(in) :: n, bw
+    real(dp), intent(inout) :: ab(:, :)
+    integer, intent(out) :: ipiv(:), info
+    integer :: j, c, r, km, jp, ju, kv, p
+    real(dp) :: t, big
+    kv = 2 * bw
+    info = 0
+    ju = 1
+    do j = 1, n
+      km = min(bw, n - j)
+      jp = 0; big = -1.0_dp
+      do r = 0, km
+        if (abs(ab(kv + 1 + r, j)) > big) then
+          big = abs(ab(kv + 1 + r, j)); jp = r
+        end if
+      end do
+      ipiv(j) = j + jp
+      if (ab(kv + 1 + jp, j) == 0.0_dp) then
+        if (info == 0) info = j
+        cycle
+      end if
+      ju = max(ju, min(j + bw + jp, n))     ! the last column the pivot row reaches
+      if (jp /= 0) then                     ! swap rows j and j + jp over columns j .. ju
+        p = j + jp
+        do c = j, ju
+          t = ab(kv + 1 + p - c, c); ab(kv + 1 + p - c, c) = ab(kv + 1 + j - c, c); ab(kv + 1 + j - c, c) = t
+        end do
+      end if
+      if (km > 0) then
+        t = 1.0_dp / ab(kv + 1, j)
+        do r = 1, km
+          ab(kv + 1 + r, j) = ab(kv + 1 + r, j) * t
+        end do
+        do c = j + 1, ju
+          t = ab(kv + 1 + j - c, c)
+          if (t /= 0.0_dp) then
+            do r = 1, km
+              ab(kv + 1 + j + r - c, c) = ab(kv + 1 + j + r - c, c) - ab(kv + 1 + r, j) * t
+            end do
+          end if
+        end do
+      end if
+    end do
+  end subroutine band_lu
+
+  !> b := A^{-1} b with band_lu's factors (as dgbtrs 'N' with one right-hand side).
+  pure subroutine band_solve(n, bw, ab, ipiv, b)
+    integer, intent(in) :: n, bw
+    real(dp), intent(in) :: ab(:, :)
+    integer, intent(in) :: ipiv(:)
+    real(dp), intent(inout) :: b(:)
+    integer :: j, i, lm, l, kv
+    real(dp) :: t
+    kv = 2 * bw
+    do j = 1, n - 1                  ! L, with the row interchanges
+      lm = min(bw, n - j)
+      l = ipiv(j)
+      if (l /= j) then
+        t = b(l); b(l) = b(j); b(j) = t
+      end if
+      t = b(j)
+      do i = 1, lm
+        b(j + i) = b(j + i) - ab(kv + 1 + i, j) * t
+      end do
+    end do
+    do j = n, 1, -1                  ! U: upper band of width 2 bw
+      b(j) = b(j) / ab(kv + 1, j)
+      t = b(j)
+      do i = max(1, j - kv), j - 1
+        b(i) = b(i) - ab(kv + 1 + i - j, j) * t
+      end do
+    end do
+  end subroutine band_solve
 
   !> The first entry (i, j) of the block jac(1:nb, 1:nb) with |i - j| > bw that is not zero (i = 0:
   !> none): a declared band the model's Hessians do not keep.
