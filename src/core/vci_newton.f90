@@ -85,7 +85,8 @@ module vci_newton
     integer :: iterations = 0          !< Jacobian evaluations + polishing step
     logical :: used_fallback = .false. !< the least-squares solve was needed
     real(dp) :: scaled_residual = 0.0_dp  !< max_i |r_i| / (atol + rtol scale_i) at the end
-    integer :: bad_row = 0, bad_col = 0   !< NEWTON_STRUCTURE: the entry outside the declared band
+    integer :: bad_row = 0                !< NEWTON_STRUCTURE: the row of the entry outside the declared band
+    integer :: bad_col = 0                !< NEWTON_STRUCTURE: its column
   end type vci_newton_result_t
 
   !> Damped Newton's method on LAPACK: solves a vci_system_t; settings, workspace and counters.

@@ -42,5 +42,9 @@ export OPENBLAS_NUM_THREADS=1
     echo
     rm -f "$f"
   done
+  echo "With the band declared the LU factorisations leave the profile; what is left is O(n^2) per"
+  echo "Newton matrix (the Hessian and gap-gradient callbacks' dense arrays, the Jacobian's zeroing and row"
+  echo "sizes) and the number of solves an impact needs (stage 1 on every violated wall): docs/DESIGN.md,"
+  echo "\"Structured Newton matrices\"."
 } >"$OUT"
 echo "wrote $OUT"
