@@ -29,6 +29,7 @@ module vci_bench_same
   real(dp), parameter :: floor_factor = 8.0_dp * epsilon(1.0_dp) / rtol   ! the round-off floor, in rtol units
 
   public :: same_ellipse, same_pendulum
+  public :: lu_small, lu_small_solve, merit   ! (the Lobatto hand loop's too: bench/hand_lobatto.f90)
 
 contains
 

@@ -16,6 +16,7 @@ module vci_kernels
 
   public :: momentum_terms, kinetic_and_floor, jacobian_sizes, equilibrate, scaled_merit, small_lu, small_lu_solve
   public :: substep_rows, substep_direction, pivots_regular
+  public :: lobatto_nodes, lobatto_forces, lobatto_blocks
 
 contains
 
@@ -272,4 +273,92 @@ contains
     end do
     ok = dmin > 1.0e-14_dp * dmax
   end function pivots_regular
+  !> The Lobatto scheme's nodes from the stage increments dx(:, j) = y_j - a (j = 1..s): positions
+  !> y(:, 0) = a, y(:, j) = a + dx(:, j), and velocities v(:, i) = c sum_j d(i, j) dx(:, j) (c = dir/tau;
+  !> d the differentiation matrix on the nodes 0..s, whose rows sum to zero). The velocities take
+  !> the increments themselves: no position is subtracted, so |q| does not round them.
+  pure subroutine lobatto_nodes(n, s, c, d, a, dx, y, v)
+    integer, intent(in) :: n, s
+    real(dp), intent(in) :: c, d(0:s, 0:s), a(n), dx(n, s)
+    real(dp), intent(out) :: y(n, 0:s), v(n, 0:s)
+    integer :: i, j, l
+    real(dp) :: t
+    do l = 1, n
+      y(l, 0) = a(l)
+    end do
+    do j = 1, s
+      do l = 1, n
+        y(l, j) = a(l) + dx(l, j)
+      end do
+    end do
+    do i = 0, s
+      do l = 1, n
+        t = 0.0_dp
+        do j = 1, s
+          t = t + d(i, j) * dx(l, j)
+        end do
+        v(l, i) = c * t
+      end do
+    end do
+  end subroutine lobatto_nodes
+
+  !> The Lobatto scheme's node forces F_j = tau b_j lq_j + dir sum_i b_i d(i, j) lv_i (j = 0..s) and
+  !> fs(:, j) the sum of their terms' sizes.
+  pure subroutine lobatto_forces(n, s, tau, dsign, b, d, lq, lv, f, fs)
+    integer, intent(in) :: n, s
+    real(dp), intent(in) :: tau, dsign, b(0:s), d(0:s, 0:s), lq(n, 0:s), lv(n, 0:s)
+    real(dp), intent(out) :: f(n, 0:s), fs(n, 0:s)
+    integer :: i, j, l
+    real(dp) :: w, t, ts
+    do j = 0, s
+      do l = 1, n
+        t = tau * b(j) * lq(l, j)
+        ts = abs(t)
+        do i = 0, s
+          w = dsign * b(i) * d(i, j)
+          t = t + w * lv(l, i)
+          ts = ts + abs(w) * abs(lv(l, i))
+        end do
+        f(l, j) = t
+        fs(l, j) = ts
+      end do
+    end do
+  end subroutine lobatto_forces
+
+  !> The Lobatto scheme's Jacobian blocks dF_j/dy_k (rows of node j = j0..s-1, row block j at
+  !> jac(j n + 1 : (j + 1) n, :); columns of stage k = 1..s), added to jac:
+  !>   tau b_j hqq_j d_jk + dir b_j d(j, k) hqv_j + dir b_k d(k, j) hqv_k^T + (1/tau) sum_i w(i, j, k) hvv_i,
+  !> w(i, j, k) = b_i d(i, j) d(i, k) (the rule's, computed once), row block 0 (the momentum rows)
+  !> times dir. jac is assumed-shape: Newton's matrix is a section of a larger array (an
+  !> explicit-shape dummy would copy it).
+  pure subroutine lobatto_blocks(n, s, j0, tau, dsign, b, d, w, hqq, hqv, hvv, jac)
+    integer, intent(in) :: n, s, j0
+    real(dp), intent(in) :: tau, dsign, b(0:s), d(0:s, 0:s), w(0:s, 0:s - 1, s)
+    real(dp), intent(in) :: hqq(n, n, 0:s), hqv(n, n, 0:s), hvv(n, n, 0:s)
+    real(dp), intent(inout) :: jac(:, :)
+    integer :: i, j, k, r, c, r0, c0
+    real(dp) :: rs, wq, wa, wb, t, rst
+    do k = 1, s
+      c0 = (k - 1) * n
+      do j = j0, s - 1
+        r0 = j * n
+        rs = 1.0_dp
+        if (j == 0) rs = dsign
+        wq = 0.0_dp
+        if (j == k) wq = rs * tau * b(j)
+        wa = rs * dsign * b(j) * d(j, k)
+        wb = rs * dsign * b(k) * d(k, j)
+        rst = rs / tau   ! (no array of weights here: an automatic array is a malloc in gfortran)
+        do c = 1, n
+          do r = 1, n
+            t = wq * hqq(r, c, j) + wa * hqv(r, c, j) + wb * hqv(c, r, k)
+            do i = 0, s
+              t = t + (rst * w(i, j, k)) * hvv(r, c, i)
+            end do
+            jac(r0 + r, c0 + c) = jac(r0 + r, c0 + c) + t
+          end do
+        end do
+      end do
+    end do
+  end subroutine lobatto_blocks
 end module vci_kernels

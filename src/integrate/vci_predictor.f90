@@ -14,8 +14,9 @@ contains
   !> quadratic from depth 2: 3 q_k - 3 q_{k-1} + q_{k-2}; lambda linear at depth 2, quadratic at 3);
   !> before, q + h v and the last multipliers. Exact for the quadratic free flight of uniform
   !> gravity (no iteration then), else O(h^3) from the solution. Schemes with interior stages
-  !> (Lobatto) keep q + h v: their stage values start on the chord to the guess, so a better
-  !> endpoint alone is not a better start. q_guess (n) and lambda_start (m) are workspace.
+  !> (Lobatto) place every stage on that quadratic (put_quadratic_start): on the chord to the
+  !> guessed endpoint the interior stages would start O(h^2) off. q_guess (n) and lambda_start (m)
+  !> are workspace.
   subroutine vci_predict_start(sys, state, dir, depth, x, q_guess, lambda_start)
     class(vci_scheme_t), intent(inout) :: sys
     type(vci_state_t), intent(in) :: state
@@ -23,12 +24,16 @@ contains
     real(dp), intent(inout) :: x(:), q_guess(:), lambda_start(:)
     real(dp) :: h
     h = state%h
-    if (depth >= 2 .and. .not. sys%needs_pair_solve()) then
-      q_guess(:) = state%q + real(dir, dp) * h * (2.0_dp * state%velocity - state%velocity_before)
+    if (depth >= 2 .and. sys%needs_pair_solve()) then
+      call sys%put_quadratic_start(x, state%q, real(dir, dp) * h, state%velocity, state%velocity_before)
     else
-      q_guess(:) = state%q + real(dir, dp) * h * state%velocity
+      if (depth >= 2) then
+        q_guess(:) = state%q + real(dir, dp) * h * (2.0_dp * state%velocity - state%velocity_before)
+      else
+        q_guess(:) = state%q + real(dir, dp) * h * state%velocity
+      end if
+      call sys%put_endpoint(x, state%q, q_guess)
     end if
-    call sys%put_endpoint(x, state%q, q_guess)
     if (sys%m == 0) then
       call sys%put_multipliers(x, state%lambda)
     else if (depth >= 3) then

@@ -226,6 +226,19 @@ contains
     end if
   end subroutine segment_inc
 
+  !> The segment's point and velocity (segment_inc) and the partials lq = dL/dq, lv = dL/dqdot there
+  !> (stat: the first failing callback's).
+  subroutine segment_partials(self, a, d, h, dir, stat)
+    class(vci_retraction_model_t), intent(inout) :: self
+    real(dp), intent(in) :: a(:), d(:), h
+    integer, intent(in) :: dir
+    integer, intent(inout) :: stat
+    call segment_inc(self, a, d, h, dir)
+    call self%lag%dl_dq(self%pt, self%w, self%lq, stat)
+    if (stat /= 0) return
+    call self%lag%dl_dv(self%pt, self%w, self%lv, stat)
+  end subroutine segment_partials
+
   !> s D1 L^s of the sub-step (forward D1 L_d(a, b), backward -D2 L_d(b, a)) from the increment.
   subroutine d1s_inc(self, a, d, h, dir, out, stat)
     class(vci_retraction_model_t), intent(inout) :: self
@@ -234,10 +247,8 @@ contains
     real(dp), intent(out) :: out(:)
     integer, intent(inout) :: stat
     real(dp) :: c
-    call segment_inc(self, a, d, h, dir)
-    call self%lag%dl_dq(self%pt, self%w, self%lq, stat)
+    call segment_partials(self, a, d, h, dir, stat)
     if (stat /= 0) return
-    call self%lag%dl_dv(self%pt, self%w, self%lv, stat)
     c = h
     if (self%rule == RETRACTION_MIDPOINT) c = 0.5_dp * h
     if (dir > 0) then
@@ -256,10 +267,8 @@ contains
     integer, intent(in) :: dir
     real(dp), intent(out) :: out(:)
     integer, intent(inout) :: stat
-    call segment_inc(self, a, d, h, dir)
-    call self%lag%dl_dq(self%pt, self%w, self%lq, stat)
+    call segment_partials(self, a, d, h, dir, stat)
     if (stat /= 0) return
-    call self%lag%dl_dv(self%pt, self%w, self%lv, stat)
     if (self%rule == RETRACTION_MIDPOINT) then
       out = real(dir, dp) * 0.5_dp * h * self%lq + self%lv   ! D2 L_d(a, b) or -D1 L_d(b, a), midpoint
     else if (dir > 0) then

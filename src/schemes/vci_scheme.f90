@@ -85,6 +85,7 @@ module vci_scheme
     procedure :: restore_position_carry
     procedure :: needs_pair_solve
     procedure :: endpoint_direction
+    procedure :: put_quadratic_start
     procedure :: forget_jacobian
     procedure :: fused_substep => no_fused_substep
     procedure :: substep_sensitivity => no_substep_sensitivity
@@ -412,6 +413,17 @@ contains
     real(dp), intent(out) :: v(:)
     call self%get_endpoint(x, v)
   end subroutine endpoint_direction
+
+  !> Newton's start from the quadratic through the last three points, a + dh (c v + c (c + 1)/2 (v -
+  !> v_before)) at the fraction c of the step (dh = dir h; v, v_before the chord velocities of the last
+  !> two steps): here the endpoint c = 1 only; schemes with interior stages place those on it too.
+  subroutine put_quadratic_start(self, x, a, dh, v, v_before)
+    class(vci_scheme_t), intent(inout) :: self
+    real(dp), intent(inout) :: x(:)
+    real(dp), intent(in) :: a(:), dh, v(:), v_before(:)
+    self%qp(:) = a + dh * (2.0_dp * v - v_before)   ! (workspace of n: an automatic array is a malloc)
+    call self%put_endpoint(x, a, self%qp)
+  end subroutine put_quadratic_start
 
   !> A new solve starts (schemes that size rows from the last Jacobian reset that memory here).
   subroutine forget_jacobian(self)

@@ -13,8 +13,10 @@
 !> mu (+ mu grad g in the momentum rows) and E_d = E_minus, where the discrete energy is
 !> E_d = -dL_d/dtau = sum_i b_i E(y_i, V_i) (the interior points are stationary, so only the explicit
 !> tau-dependence counts; checked against a difference quotient in test/core/test_schemes.pf).
-!> Unknowns: x = [y_1, ..., y_s (n each), extra]; the interior stages are unknowns of the same Newton
-!> system as the new point.
+!> Unknowns: x = [y_1 - a, ..., y_s - a (n each), extra]: the stage values as increments from the known
+!> point (as the retractions, docs/DESIGN.md §6), so that the velocities W_i = (1/tau) sum_j D_ij (y_j - a)
+!> are not rounded to ulps of |a|; the interior stages are unknowns of the same Newton system as the
+!> new point. The new momentum of a regular sub-step is p_a plus the force impulse (impact_momentum).
 !> Constraints (m > 0; docs/SCHEMES.md): unknowns x = [y_1..y_s, Lambda_0..Lambda_(s-1), extra]; the
 !> rows of nodes j = 0..s-1 carry the forces tau b_j Omega(y_j) Lambda_j (row 0 times dir), the
 !> constraint is tested by the rule, sum_i b_i (2 c_i - 1)^k Omega(y_i)^T V_i = 0 (k = 0..s-1: s m
@@ -30,6 +32,7 @@ module vci_scheme_lobatto
                             lagrangian_hessians, lagrangian_hamiltonian
   use vci_lobatto_rule, only: vci_lobatto_rule_t, lobatto_rule, VCI_LOBATTO_MAX_STAGES
   use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_STAGE1, KIND_STAGE2, KIND_IMPULSE, KIND_PAIR, vci_fd_rel
+  use vci_kernels, only: lobatto_nodes, lobatto_forces, lobatto_blocks
   implicit none
   private
 
@@ -42,6 +45,13 @@ module vci_scheme_lobatto
     real(dp), allocatable, private :: y(:, :), v(:, :), lq(:, :), lv(:, :), lval(:), f(:, :), fs(:, :)
     real(dp), allocatable, private :: hqq(:, :, :), hqv(:, :, :), hvv(:, :, :), g(:), dg(:, :), tmp(:)
     real(dp), allocatable, private :: jscale(:)
+    real(dp), allocatable, private :: wdd(:, :, :)   ! b_i D_ij D_ik (i = 0..s, j = 0..s-1, k = 1..s)
+    ! the point of the last evaluation (evaluate): the Jacobian and the end momentum that follow a
+    ! residual at the same point take its node values instead of calling the model again
+    real(dp), allocatable, private :: x_eval(:), a_eval(:)
+    real(dp), private :: tau_eval = 0.0_dp
+    integer, private :: dir_eval = 0
+    logical, private :: have_eval = .false., eval_values = .false.
     ! constraints (m > 0): forms at the nodes, node multipliers, moment weights, their derivatives,
     ! and the end projection's saddle system
     real(dp), allocatable, private :: om(:, :, :), lam(:, :), wmom(:, :), ctv(:, :), dctv(:, :), dol(:, :)
@@ -57,6 +67,8 @@ module vci_scheme_lobatto
     procedure :: impact_momentum
     procedure :: needs_pair_solve
     procedure :: forget_jacobian
+    procedure :: endpoint_direction
+    procedure :: put_quadratic_start
   end type vci_scheme_lobatto_t
 
 contains
@@ -69,7 +81,7 @@ contains
     integer, intent(in) :: s
     logical, intent(in) :: has_hessians, has_energy
     integer, intent(out) :: stat
-    integer :: n, nx, m, i, k
+    integer :: n, nx, m, i, j, k
     if (s < 1 .or. s > VCI_LOBATTO_MAX_STAGES) then
       stat = VCI_ERR_ARGUMENT; return
     end if
@@ -89,17 +101,27 @@ contains
     self%has_model_energy = has_energy
     nx = s * n + s * lag%m + 1
     if (allocated(self%y)) deallocate (self%y, self%v, self%lq, self%lv, self%lval, self%f, self%fs, self%hqq, &
-                                       self%hqv, self%hvv, self%g, self%dg, self%tmp, self%jscale)
+                                       self%hqv, self%hvv, self%g, self%dg, self%tmp, self%jscale, self%x_eval, &
+                                       self%a_eval, self%wdd)
     if (allocated(self%om)) deallocate (self%om, self%lam, self%wmom, self%ctv, self%dctv, self%dol, self%op, &
                                         self%omm, self%qd, self%kkt, self%krhs, self%pbar, self%wv, self%kpiv, &
                                         self%nuw)
     allocate (self%y(n, 0:s), self%v(n, 0:s), self%lq(n, 0:s), self%lv(n, 0:s), self%lval(0:s), self%f(n, 0:s), &
               self%fs(n, 0:s), self%hqq(n, n, 0:s), self%hqv(n, n, 0:s), self%hvv(n, n, 0:s), &
-              self%g(max(1, lag%n_gaps)), self%dg(n, max(1, lag%n_gaps)), self%tmp(n), self%jscale(nx), stat=stat)
+              self%g(max(1, lag%n_gaps)), self%dg(n, max(1, lag%n_gaps)), self%tmp(n), self%jscale(nx), &
+              self%x_eval(nx), self%a_eval(n), self%wdd(0:s, 0:s - 1, s), stat=stat)
     if (stat /= 0) then
       stat = VCI_ERR_MEMORY; return
     end if
     self%jscale = 0.0_dp
+    self%have_eval = .false.
+    do k = 1, s
+      do j = 0, s - 1
+        do i = 0, s
+          self%wdd(i, j, k) = self%rule%b(i) * self%rule%d(i, j) * self%rule%d(i, k)
+        end do
+      end do
+    end do
     if (lag%m > 0) then
       m = lag%m
       allocate (self%om(n, m, 0:s), self%lam(m, 0:s - 1), self%wmom(0:s - 1, 0:s), self%ctv(m, 0:s), &
@@ -120,10 +142,12 @@ contains
 
   !> A new solve starts: the round-off floor of the last Jacobian (another segment length, perhaps
   !> much shorter) must not size this solve's first residual, or the line search compares merits
-  !> taken with different floors.
+  !> taken with different floors. Nor is the last evaluation reused across solves (the model may have
+  !> changed between steps).
   subroutine forget_jacobian(self)
     class(vci_scheme_lobatto_t), intent(inout) :: self
     self%jscale = 0.0_dp
+    self%have_eval = .false.
   end subroutine forget_jacobian
 
   pure logical function needs_pair_solve(self)
@@ -148,17 +172,45 @@ contains
     integer :: i, n
     n = self%n
     do i = 1, self%s - 1
-      x((i - 1) * n + 1:i * n) = a + self%rule%c(i) * (b - a)
+      x((i - 1) * n + 1:i * n) = self%rule%c(i) * (b - a)
     end do
-    x((self%s - 1) * n + 1:self%s * n) = b
+    x((self%s - 1) * n + 1:self%s * n) = b - a
   end subroutine put_endpoint
 
+  !> The new point a + (y_s - a), from the sub-step's start a set by the stepper.
   subroutine get_endpoint(self, x, v)
     class(vci_scheme_lobatto_t), intent(inout) :: self
     real(dp), intent(in) :: x(:)
     real(dp), intent(out) :: v(:)
-    v = x((self%s - 1) * self%n + 1:self%s * self%n)
+    v = self%a + x((self%s - 1) * self%n + 1:self%s * self%n)
   end subroutine get_endpoint
+
+  !> The endpoint's part of a change dx of the unknowns: the last increment's.
+  subroutine endpoint_direction(self, x, v)
+    class(vci_scheme_lobatto_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:)
+    real(dp), intent(out) :: v(:)
+    v = x((self%s - 1) * self%n + 1:self%s * self%n)
+  end subroutine endpoint_direction
+
+  !> Newton's start from the quadratic through the last three points (vci_predictor): stage i at
+  !> a + dh (c_i v + c_i (c_i + 1)/2 (v - v_before)), dh = dir h, v and v_before the chord velocities
+  !> of the last two steps. Each stage O(h^3) from the solution, where the chord to a guessed endpoint
+  !> leaves the interior stages O(h^2) off.
+  subroutine put_quadratic_start(self, x, a, dh, v, v_before)
+    class(vci_scheme_lobatto_t), intent(inout) :: self
+    real(dp), intent(inout) :: x(:)
+    real(dp), intent(in) :: a(:), dh, v(:), v_before(:)
+    integer :: i, l, n
+    real(dp) :: c
+    n = self%n
+    do i = 1, self%s
+      c = self%rule%c(i)
+      do l = 1, n
+        x((i - 1) * n + l) = dh * (c * v(l) + (0.5_dp * c * (c + 1.0_dp)) * (v(l) - v_before(l)))
+      end do
+    end do
+  end subroutine put_quadratic_start
 
   subroutine put_multipliers(self, x, v)
     class(vci_scheme_lobatto_t), intent(in) :: self
@@ -190,65 +242,95 @@ contains
   end subroutine momentum_rhs
 
   !> Stage values, velocities and the partials of L at the nodes of the segment (a, x, tau);
-  !> f(:, j) = F_j and fs(:, j) the size of its terms. With `values`, L at the nodes too.
+  !> f(:, j) = F_j and fs(:, j) the size of its terms. With `values`, L at the nodes too. The last
+  !> evaluation stands when it was at the same point (the Jacobian and the end momentum follow the
+  !> residual at their x). One finiteness test per evaluation: a NaN or Inf among the callbacks'
+  !> values reaches the sizes fs of the forces (the callbacks are looked at one by one only then, to
+  !> name the one that failed).
   subroutine evaluate(self, x, a, tau, values, stat)
     class(vci_scheme_lobatto_t), intent(inout) :: self
     real(dp), intent(in) :: x(:), a(:), tau
     logical, intent(in) :: values
     integer, intent(out) :: stat
-    integer :: i, j, n, s
-    real(dp) :: dsign, w
+    integer :: i, j, n, s, nv
+    real(dp) :: dsign, total
     n = self%n; s = self%s
+    nv = s * n + s * self%m
+    if (self%have_eval) then
+      if (tau == self%tau_eval .and. self%dir == self%dir_eval) then
+        if (all(x(1:nv) == self%x_eval(1:nv)) .and. all(a == self%a_eval)) then
+          if (values .and. .not. self%eval_values) then
+            call node_values(self, stat)   ! (L too, for E_d)
+          else
+            stat = VCI_OK
+          end if
+          return
+        end if
+      end if
+    end if
+    self%have_eval = .false.
     dsign = real(self%dir, dp)
-    self%y(:, 0) = a
-    do i = 1, s
-      self%y(:, i) = x((i - 1) * n + 1:i * n)
-    end do
-    ! V_i = (dir/tau) sum_j D_ij (y_j - a) (the rows of D sum to 0): differences from the known point
-    ! keep the round-off of large positions out of the velocities
+    call lobatto_nodes(n, s, dsign / tau, self%rule%d, a, x, self%y, self%v)
+    stat = 0
     do i = 0, s
-      self%v(:, i) = 0.0_dp
-      do j = 1, s
-        self%v(:, i) = self%v(:, i) + self%rule%d(i, j) * (self%y(:, j) - a)
-      end do
-      self%v(:, i) = (dsign / tau) * self%v(:, i)
-    end do
-    do i = 0, s
-      stat = 0
       call self%lag%dl_dq(self%y(:, i), self%v(:, i), self%lq(:, i), stat)
-      call self%check(stat, self%lq(:, i), 'dL/dq')
-      if (stat /= VCI_OK) return
+      if (stat /= 0) then
+        call self%check(stat, self%lq(:, i), 'dL/dq'); return
+      end if
       call self%lag%dl_dv(self%y(:, i), self%v(:, i), self%lv(:, i), stat)
-      call self%check(stat, self%lv(:, i), 'dL/dqdot')
-      if (stat /= VCI_OK) return
+      if (stat /= 0) then
+        call self%check(stat, self%lv(:, i), 'dL/dqdot'); return
+      end if
       if (values) then
         call self%lag%lagrangian(self%y(:, i), self%v(:, i), self%lval(i), stat)
-        call self%check(stat, self%lval(i:i), 'L')
-        if (stat /= VCI_OK) return
+        if (stat /= 0) then
+          call self%check(stat, self%lval(i:i), 'L'); return
+        end if
       end if
     end do
-    do j = 0, s
-      self%f(:, j) = tau * self%rule%b(j) * self%lq(:, j)
-      self%fs(:, j) = abs(self%f(:, j))
+    call lobatto_forces(n, s, tau, dsign, self%rule%b, self%rule%d, self%lq, self%lv, self%f, self%fs)
+    total = sum(self%fs)
+    if (values) total = total + sum(abs(self%lval))
+    if (.not. (total <= huge(1.0_dp))) then
+      ! which callback: the first non-finite value, in the order they were called
       do i = 0, s
-        w = dsign * self%rule%b(i) * self%rule%d(i, j)
-        self%f(:, j) = self%f(:, j) + w * self%lv(:, i)
-        self%fs(:, j) = self%fs(:, j) + abs(w) * abs(self%lv(:, i))
+        call self%check(stat, self%lq(:, i), 'dL/dq')
+        if (stat == VCI_OK) call self%check(stat, self%lv(:, i), 'dL/dqdot')
+        if (stat == VCI_OK .and. values) call self%check(stat, self%lval(i:i), 'L')
+        if (stat /= VCI_OK) return
       end do
-    end do
+    end if
     stat = VCI_OK
-    if (self%m == 0) return
-    do i = 0, s
-      call self%eval_forms(self%y(:, i), self%om(:, :, i), stat)
-      if (stat /= VCI_OK) return
-      do j = 1, self%m
-        self%ctv(j, i) = dot_product(self%om(:, j, i), self%v(:, i))
+    if (self%m > 0) then
+      do i = 0, s
+        call self%eval_forms(self%y(:, i), self%om(:, :, i), stat)
+        if (stat /= VCI_OK) return
+        do j = 1, self%m
+          self%ctv(j, i) = dot_product(self%om(:, j, i), self%v(:, i))
+        end do
       end do
-    end do
-    do j = 0, s - 1
-      self%lam(:, j) = x(s * n + j * self%m + 1:s * n + (j + 1) * self%m)
-    end do
+      do j = 0, s - 1
+        self%lam(:, j) = x(s * n + j * self%m + 1:s * n + (j + 1) * self%m)
+      end do
+    end if
+    self%x_eval(1:nv) = x(1:nv); self%a_eval(:) = a   ! ((:): no reallocation check)
+    self%tau_eval = tau; self%dir_eval = self%dir
+    self%have_eval = .true.; self%eval_values = values
   end subroutine evaluate
+
+  !> L at the nodes of the last evaluation (which was without them): stat as evaluate's.
+  subroutine node_values(self, stat)
+    class(vci_scheme_lobatto_t), intent(inout) :: self
+    integer, intent(out) :: stat
+    integer :: i
+    stat = 0
+    do i = 0, self%s
+      call self%lag%lagrangian(self%y(:, i), self%v(:, i), self%lval(i), stat)
+      call self%check(stat, self%lval(i:i), 'L')
+      if (stat /= VCI_OK) return
+    end do
+    self%eval_values = .true.
+  end subroutine node_values
 
   !> At node y (velocity v, multiplier lam): dol = d(Omega(y) lam)/dy (n x n) and
   !> dctv = d(Omega(y)^T v)/dy at fixed v (m x n), by central differences of the forms.
@@ -297,8 +379,10 @@ contains
     call evaluate(self, x, self%a, tau, self%kind == KIND_STAGE2, stat)
     if (stat /= VCI_OK) return
     if (self%kind == KIND_PAIR) then
-      r(1:n) = self%y(:, s) - self%b_target
-      scale(1:n) = abs(self%y(:, s)) + abs(self%b_target)
+      ! the given end as an increment, computed as put_endpoint does
+      self%tmp(:) = self%b_target - self%a
+      r(1:n) = x((s - 1) * n + 1:s * n) - self%tmp
+      scale(1:n) = abs(x((s - 1) * n + 1:s * n)) + abs(self%tmp)
     else
       r(1:n) = self%pa + dsign * self%f(:, 0)
       scale(1:n) = abs(self%pa) + self%fs(:, 0)
@@ -354,14 +438,14 @@ contains
       call self%eval_gaps(self%y(:, s), self%g(1:self%n_gaps), stat)
       if (stat /= VCI_OK) return
       r(last) = self%g(self%gap)
-      scale(last) = abs(r(last)) + sum(self%gscale * (abs(self%y(:, s)) + abs(self%y(:, s) - self%a)))
+      scale(last) = abs(r(last)) + sum(self%gscale * (abs(self%y(:, s)) + abs(x((s - 1) * n + 1:s * n))))
     case (KIND_STAGE2)
       e = 0.0_dp
       do j = 0, s
         e = e + self%rule%b(j) * (dot_product(self%lv(:, j), self%v(:, j)) - self%lval(j))
       end do
       r(last) = e - self%e_minus
-      scale(last) = abs(e) + abs(self%e_minus) + sum(abs(self%pa) * abs(self%y(:, s) - self%a)) / tau
+      scale(last) = abs(e) + abs(self%e_minus) + sum(abs(self%pa) * abs(x((s - 1) * n + 1:s * n))) / tau
     end select
     ! round-off floor of each row, in units of rtol: the rounding of summing its 2(s + 1) terms, and
     ! a few ulps of sum_j |dR_i/dx_j| |x_j| (positions large next to their change over the segment)
@@ -376,41 +460,46 @@ contains
     real(dp), intent(in) :: x(:), r(:)
     real(dp), intent(inout) :: jac(:, :)
     integer, intent(out) :: stat
-    integer :: n, s, i, j, k, last, nx, r0, c0, a1, m, l, k0, ro
+    integer :: n, s, i, j, k, last, nx, c0, a1, m, l, k0, ro
     real(dp) :: tau, dsign, rs, wgt
     n = self%n; s = self%s; m = self%m; last = s * n + s * m + 1
     nx = self%unknowns(self%kind)
     dsign = real(self%dir, dp)
     tau = step_length(self, x)
+    ! (the residual at x was evaluated last: evaluate() takes its node values)
     call evaluate(self, x, self%a, tau, .false., stat)
     if (stat /= VCI_OK) return
-    do i = 0, s
-      call lagrangian_hessians(self%lag, self%work, self%y(:, i), self%v(:, i), self%hqq(:, :, i), &
-                               self%hqv(:, :, i), self%hvv(:, :, i), stat)
-      if (stat /= VCI_OK) then
-        call lagrangian_failure(self, stat, 'Hessian blocks of L')
-        return
-      end if
-    end do
-    ! rows j = 0..s-1 (row 0 is the momentum block, times dir), columns k = 1..s
-    do j = 0, s - 1
-      r0 = j * n
-      rs = 1.0_dp
-      if (j == 0) rs = dsign
-      if (j == 0 .and. self%kind == KIND_PAIR) cycle
-      do k = 1, s
-        c0 = (k - 1) * n
-        associate (blk => jac(r0 + 1:r0 + n, c0 + 1:c0 + n))
-          if (j == k) blk = blk + rs * tau * self%rule%b(j) * self%hqq(:, :, j)
-          blk = blk + rs * dsign * self%rule%b(j) * self%rule%d(j, k) * self%hqv(:, :, j)
-          blk = blk + rs * dsign * self%rule%b(k) * self%rule%d(k, j) * transpose(self%hqv(:, :, k))
-          do i = 0, s
-            wgt = self%rule%b(i) * self%rule%d(i, j) * self%rule%d(i, k) / tau
-            if (wgt /= 0.0_dp) blk = blk + rs * wgt * self%hvv(:, :, i)
-          end do
-        end associate
+    if (self%work%has_hessians) then
+      ! the model's blocks, one finiteness test for all nodes
+      do i = 0, s
+        stat = 0
+        call self%lag%hessians(self%y(:, i), self%v(:, i), self%hqq(:, :, i), self%hqv(:, :, i), self%hvv(:, :, i), stat)
+        if (stat /= 0) then
+          call self%note_failure(stat, 'Hessian blocks of L')
+          stat = VCI_ERR_CALLBACK; return
+        end if
       end do
-    end do
+      if (.not. (abs(sum(self%hqq)) + abs(sum(self%hqv)) + abs(sum(self%hvv)) <= huge(1.0_dp))) then
+        if (.not. (all(abs(self%hqq) <= huge(1.0_dp)) .and. all(abs(self%hqv) <= huge(1.0_dp)) .and. &
+                   all(abs(self%hvv) <= huge(1.0_dp)))) then
+          stat = VCI_ERR_NONFINITE
+          call lagrangian_failure(self, stat, 'Hessian blocks of L')
+          return
+        end if
+      end if
+    else
+      do i = 0, s
+        call lagrangian_hessians(self%lag, self%work, self%y(:, i), self%v(:, i), self%hqq(:, :, i), &
+                                 self%hqv(:, :, i), self%hvv(:, :, i), stat)
+        if (stat /= VCI_OK) then
+          call lagrangian_failure(self, stat, 'Hessian blocks of L')
+          return
+        end if
+      end do
+    end if
+    ! rows j = 0..s-1 (row 0 is the momentum block, times dir; not in the pair), columns k = 1..s
+    call lobatto_blocks(n, s, merge(1, 0, self%kind == KIND_PAIR), tau, dsign, self%rule%b, self%rule%d, &
+                        self%wdd, self%hqq, self%hqv, self%hvv, jac)
     if (self%kind == KIND_PAIR) then
       do a1 = 1, n
         jac(a1, (s - 1) * n + a1) = 1.0_dp
@@ -548,7 +637,14 @@ contains
     real(dp), intent(in) :: x(:), a(:), tau
     real(dp), intent(out) :: p(:)
     integer, intent(out) :: stat
-    real(dp), intent(in), optional :: pa(:)   !< not used: the end momentum comes from the stages
+    real(dp), intent(in), optional :: pa(:)   !< p_a: the regular sub-step's momentum from the impulse
+    ! a regular sub-step (x solves the one posed): p_a plus the impulse, no kinetic term (its sum of
+    ! s + 1 momenta, each from differenced stages, rounds at ulps of |p| times sum_i |b_i D_is|)
+    if (present(pa) .and. self%kind == KIND_SUBSTEP) then
+      if (tau == self%tau .and. all(a == self%a)) then
+        call self%impact_momentum(x, a, tau, p, stat, pa); return
+      end if
+    end if
     call evaluate(self, x, a, tau, .false., stat)
     if (stat /= VCI_OK) return
     p = real(self%dir, dp) * self%f(:, self%s)
