@@ -16,7 +16,7 @@ module vci
                             VCI_LOBATTO_MAX_STAGES, vci_scheme_name, VCI_SCHEME_COMPOSITION, VCI_COMPOSITION_ORDERS
   use vci_newton, only: vci_newton_t, vci_newton_result_t, vci_system_t, NEWTON_CONVERGED, &
                         NEWTON_MAX_ITERATIONS, NEWTON_NO_DESCENT, NEWTON_SINGULAR, NEWTON_EVALUATION, &
-                        NEWTON_NONFINITE
+                        NEWTON_NONFINITE, NEWTON_STRUCTURE
   use vci_csv_output, only: vci_csv_writer_t
   implicit none
   public

@@ -14,9 +14,10 @@
 module vci_newton
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use vci_kinds, only: dp, i8
-  use vci_status, only: VCI_OK, VCI_ERR_NEWTON, VCI_ERR_NONFINITE, VCI_ERR_MEMORY
+  use vci_status, only: VCI_OK, VCI_ERR_NEWTON, VCI_ERR_NONFINITE, VCI_ERR_MEMORY, VCI_ERR_ARGUMENT
   use vci_lapack, only: dgetrf, dgetrs, dgelsd
   use vci_kernels, only: equilibrate, scaled_merit, small_lu, small_lu_solve, pivots_regular
+  use vci_banded, only: vci_banded_lu_t, outside_band
   implicit none
   private
 
@@ -31,6 +32,7 @@ module vci_newton
   integer, parameter, public :: NEWTON_SINGULAR = 3        !< even the least-squares solve failed
   integer, parameter, public :: NEWTON_EVALUATION = 4      !< the residual or Jacobian reported failure
   integer, parameter, public :: NEWTON_NONFINITE = 5       !< residual, scale or Jacobian not finite (overflow)
+  integer, parameter, public :: NEWTON_STRUCTURE = 6       !< a nonzero outside the declared band (debug check)
 
   !> A starting merit at or below this is round-off: the start is accepted without a Newton step.
   real(dp), parameter, public :: start_roundoff = 1.0e-3_dp
@@ -53,6 +55,8 @@ module vci_newton
     procedure :: admissible => always_admissible
     !> A nonzero key names a family of systems whose Jacobians may share LU factors (default 0: none).
     procedure :: reuse_key => never_reuse
+    !> The Jacobian's structure: a banded leading block and a dense border (default: dense).
+    procedure :: structure => no_structure
   end type vci_system_t
 
   abstract interface
@@ -81,6 +85,8 @@ module vci_newton
     integer :: iterations = 0          !< Jacobian evaluations + polishing step
     logical :: used_fallback = .false. !< the least-squares solve was needed
     real(dp) :: scaled_residual = 0.0_dp  !< max_i |r_i| / (atol + rtol scale_i) at the end
+    integer :: bad_row = 0                !< NEWTON_STRUCTURE: the row of the entry outside the declared band
+    integer :: bad_col = 0                !< NEWTON_STRUCTURE: its column
   end type vci_newton_result_t
 
   !> Damped Newton's method on LAPACK: solves a vci_system_t; settings, workspace and counters.
@@ -109,6 +115,12 @@ module vci_newton
     real(dp), allocatable, private :: jac(:, :), lu(:, :), r(:), sc(:), dx(:), xt(:), rt(:), sct(:)
     real(dp), allocatable, private :: sv(:), work(:), rw(:)
     integer, allocatable, private :: ipiv(:), iwork(:)
+    !> Factorisations in band storage with a Schur-complement border (systems that declare structure)
+    integer(i8) :: structured_factorisations = 0
+    type(vci_banded_lu_t), private :: band         !< the factors when the last factorisation was structured
+    logical, private :: lu_banded = .false.        !< the kept/last factors are band's, not lu's
+    integer, private :: snb = 0, sbw = -1          !< the posed system's block and half-bandwidth
+    logical, private :: scheck = .false.           !< check the band on every Newton matrix
   contains
     !> Allocate workspace for systems of up to nmax unknowns (call once, outside the step loop).
     procedure :: reserve
@@ -134,6 +146,15 @@ contains
     class(vci_system_t), intent(inout) :: self
     never_reuse = 0.0_dp
   end function never_reuse
+
+  !> The Jacobian's structure: unknowns 1..nb form a block whose entries vanish outside |i - j| <= bw,
+  !> the others a dense border; check: verify the band on every matrix. nb = 0 or bw < 0: dense.
+  subroutine no_structure(self, nb, bw, check)
+    class(vci_system_t), intent(inout) :: self
+    integer, intent(out) :: nb, bw
+    logical, intent(out) :: check
+    nb = 0; bw = -1; check = .false.
+  end subroutine no_structure
 
   logical function always_admissible(self, x)
     class(vci_system_t), intent(inout) :: self
@@ -189,7 +210,7 @@ contains
     integer, allocatable, intent(out) :: ipiv(:)
     integer, intent(out) :: stat
     nf = 0; key = 0.0_dp; stat = VCI_OK
-    if (.not. self%have_lu) return
+    if (.not. self%have_lu .or. self%lu_banded) return   ! (band factors: the continued run refactorises)
     allocate (rw(self%lu_n), lu(self%lu_n, self%lu_n), ipiv(self%lu_n), stat=stat)
     if (stat /= 0) then
       stat = VCI_ERR_MEMORY; return
@@ -212,6 +233,7 @@ contains
     if (any(ipiv < 1) .or. any(ipiv > nf)) return
     if (.not. (all_finite(rw) .and. all_finite(lu))) return     ! (from a file: nothing non-finite to LAPACK)
     self%rw(1:nf) = rw; self%lu(1:nf, 1:nf) = lu; self%ipiv(1:nf) = ipiv
+    self%lu_banded = .false.
     self%lu_n = nf; self%lu_key = key
     self%have_lu = .true.
   end subroutine keep_factors
@@ -254,6 +276,8 @@ contains
     sys%unrecoverable = .false.
     key = 0.0_dp
     if (n >= self%reuse_min) key = sys%reuse_key()
+    call sys%structure(self%snb, self%sbw, self%scheck)
+    if (self%snb > n .or. self%sbw < 0) self%snb = 0
     call sys%residual(x, self%r(1:n), self%sc(1:n), stat)
     if (stat /= VCI_OK) then
       call fail_eval(res, stat); return
@@ -304,6 +328,9 @@ contains
       end if
       ! (a NaN/Inf in the Jacobian reaches the equilibrated matrix, which newton_direction checks)
       call newton_direction(self, n, factored, res)
+      if (res%reason == NEWTON_STRUCTURE) then
+        res%status = VCI_ERR_ARGUMENT; return
+      end if
       if (res%reason /= NEWTON_CONVERGED .and. phi <= 1.0_dp) then
         res%reason = NEWTON_CONVERGED; factored = .false.; exit
       end if
@@ -392,18 +419,38 @@ contains
 
   !> Solve the small dense system a x = b in place (b becomes x), with the solver's workspace.
   !> info /= 0: singular even for least squares, or a or b not finite (LAPACK is then not called).
-  subroutine linear_solve(self, n, a, b, info)
+  !> structured_as (optional): a system whose declared structure a has (vci_banded): then a is
+  !> factorised in band storage with its border, as Newton's matrices of that system are.
+  subroutine linear_solve(self, n, a, b, info, structured_as)
     class(vci_newton_t), intent(inout) :: self
     integer, intent(in) :: n
     real(dp), intent(in) :: a(:, :)
     real(dp), intent(inout) :: b(:)
     integer, intent(out) :: info
-    integer :: rank
+    class(vci_system_t), intent(inout), optional :: structured_as
+    integer :: rank, nb, bw, i
+    logical :: chk
     if (.not. (all_finite(a(1:n, 1:n)) .and. all_finite(b(1:n)))) then
       info = -1; return
     end if
     self%rt(1:n) = b(1:n)                  ! the right-hand side, for the fallback
     self%have_lu = .false.            ! the factors below are not a Newton matrix's
+    if (present(structured_as)) then
+      call structured_as%structure(nb, bw, chk)
+      if (nb > 0 .and. nb <= n .and. bw >= 0) then
+        if (.not. band_rows(self, n, nb, bw, a, size(a, 1)) <= huge(1.0_dp)) nb = 0
+        call self%band%factor(n, nb, bw, a, size(a, 1), self%rw, info)
+        if (info == 0) then
+          do i = 1, n
+            b(i) = b(i) * self%rw(i)
+          end do
+          call self%band%solve(b(1:n))
+          self%lu_banded = .true.
+          if (all_finite(b(1:n))) return
+          b(1:n) = self%rt(1:n)
+        end if
+      end if
+    end if
     self%lu(1:n, 1:n) = a(1:n, 1:n)
     call lu_factor(self, n, info)
     if (info == 0) then
@@ -430,6 +477,11 @@ contains
     logical, intent(out) :: factored
     type(vci_newton_result_t), intent(inout) :: res
     integer :: i, info, rank
+    if (self%snb > 0) then
+      call structured_direction(self, n, factored, res)
+      if (factored .or. res%reason /= NEWTON_CONVERGED) return
+      ! a singular band block or Schur complement (or no workspace): the dense path below decides
+    end if
     ! rows equilibrated by their largest entry; jac keeps the equilibrated matrix for the fallback
     call equilibrate(n, self%capacity, self%jac, self%lu, self%r, self%dx, self%rw)
     factored = .false.
@@ -456,6 +508,69 @@ contains
     res%used_fallback = .true.
     if (info /= 0 .or. .not. all(ieee_is_finite(self%dx(1:n)))) res%reason = NEWTON_SINGULAR
   end subroutine newton_direction
+
+  !> Newton direction for a system that declared structure (vci_banded): rows equilibrated by their
+  !> largest entry in the band and the border (the entries outside are zero), the band block and
+  !> the Schur complement of the border factorised. factored false: fall back to the dense path
+  !> (jac untouched); res%reason NEWTON_STRUCTURE when the debug check finds an entry outside the band.
+  subroutine structured_direction(self, n, factored, res)
+    type(vci_newton_t), intent(inout) :: self
+    integer, intent(in) :: n
+    logical, intent(out) :: factored
+    type(vci_newton_result_t), intent(inout) :: res
+    integer :: i, j, nb, bw, info
+    real(dp) :: total
+    factored = .false.
+    nb = self%snb; bw = self%sbw
+    if (self%scheck) then
+      call outside_band(nb, bw, self%jac, self%capacity, i, j)
+      if (i > 0) then
+        res%reason = NEWTON_STRUCTURE; res%bad_row = i; res%bad_col = j; return
+      end if
+    end if
+    total = band_rows(self, n, nb, bw, self%jac, self%capacity)
+    do i = 1, n
+      self%dx(i) = self%r(i) * self%rw(i)
+    end do
+    ! NaN/Inf in the matrix or r w: the dense path reports it (nothing non-finite goes to LAPACK)
+    if (.not. (total <= huge(1.0_dp) .and. all_finite(self%dx(1:n)))) return
+    call self%band%factor(n, nb, bw, self%jac, self%capacity, self%rw, info)
+    if (info /= 0) return
+    self%factorisations = self%factorisations + 1
+    self%structured_factorisations = self%structured_factorisations + 1
+    call self%band%solve(self%dx(1:n))
+    factored = all(ieee_is_finite(self%dx(1:n)))
+    self%lu_banded = factored
+  end subroutine structured_direction
+
+  !> rw(i) = 1 / the largest |a(i, j)| of row i over the band and the border (the entries outside the
+  !> band are zero); returns the sum of those maxima (not finite: a NaN or Inf in the matrix).
+  real(dp) function band_rows(self, n, nb, bw, a, lda) result(total)
+    type(vci_newton_t), intent(inout) :: self
+    integer, intent(in) :: n, nb, bw, lda
+    real(dp), intent(in) :: a(lda, *)
+    integer :: i, j
+    real(dp) :: big
+    total = 0.0_dp
+    do i = 1, n
+      big = 0.0_dp
+      if (i <= nb) then
+        do j = max(1, i - bw), min(nb, i + bw)
+          big = max(big, abs(a(i, j)))
+        end do
+        do j = nb + 1, n
+          big = max(big, abs(a(i, j)))
+        end do
+      else
+        do j = 1, n
+          big = max(big, abs(a(i, j)))
+        end do
+      end if
+      total = total + big
+      self%rw(i) = 1.0_dp
+      if (big > 0.0_dp) self%rw(i) = 1.0_dp / big
+    end do
+  end function band_rows
 
   !> One chord step with the last LU factors; kept only if it does not make the residual worse.
   subroutine polish_step(self, sys, x, n, phi, res)
@@ -493,6 +608,7 @@ contains
     type(vci_newton_t), intent(inout) :: self
     integer, intent(in) :: n
     integer, intent(out) :: info
+    self%lu_banded = .false.
     if (n <= self%small_lu_max) then
       call small_lu(n, self%lu, self%ipiv, info)
     else
@@ -506,7 +622,9 @@ contains
     integer, intent(in) :: n
     real(dp), intent(inout) :: b(:)
     integer :: info
-    if (n <= self%small_lu_max) then
+    if (self%lu_banded) then
+      call self%band%solve(b(1:n))
+    else if (n <= self%small_lu_max) then
       call small_lu_solve(n, self%lu, self%ipiv, b)
     else
       call dgetrs('N', n, 1, self%lu, self%capacity, self%ipiv, b, size(b), info)

@@ -533,7 +533,7 @@ contains
           call set_cause(self, trim(what)//' initial guess'); return
         end if
         call self%sys%momentum_rhs(self%q_trial, self%rhs(1:nx0))
-        call self%newton%linear_solve(nx0, self%jac, self%rhs, info)
+        call self%newton%linear_solve(nx0, self%jac, self%rhs, info, structured_as=self%sys)
       end if
       call self%sys%endpoint_direction(self%rhs(1:nx0), self%q_trial)   ! a sensitivity, not a point
       den = dot_product(self%sys%grad, self%q_trial)

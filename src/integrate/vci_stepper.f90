@@ -14,7 +14,7 @@ module vci_stepper
   use vci_kinds, only: dp, i8
   use vci_status
   use vci_newton, only: vci_newton_t, vci_newton_result_t, NEWTON_MAX_ITERATIONS, NEWTON_NO_DESCENT, &
-                        NEWTON_SINGULAR, NEWTON_EVALUATION, NEWTON_NONFINITE
+                        NEWTON_SINGULAR, NEWTON_EVALUATION, NEWTON_NONFINITE, NEWTON_STRUCTURE
   use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_STAGE1, KIND_STAGE2, KIND_IMPULSE, &
                         VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN, VCI_IMPACT_BLENDED
   use vci_observer, only: vci_impact_t
@@ -577,6 +577,9 @@ contains
       call explain_newton(self, nx)
     case (NEWTON_NONFINITE)
       self%cause = what//': residual or Newton matrix not finite (callback values overflow)'
+    case (NEWTON_STRUCTURE)      ! (the debug check of a declared Hessian bandwidth)
+      write (self%cause, '(a,i0,a,i0,a)') what//': the Newton matrix has a nonzero at (', res%bad_row, ', ', &
+        res%bad_col, ') outside the Hessian bandwidth the model declared'
     case (NEWTON_EVALUATION)
       if (stat == VCI_ERR_NONFINITE) then
         self%cause = what//': callback '//trim(self%sys%failed_callback)//' returned NaN or Inf'

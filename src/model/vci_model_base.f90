@@ -20,8 +20,18 @@ module vci_model_base
     integer :: n = 0        !< configuration dimension
     integer :: m = 0        !< number of constraint one-forms (0: unconstrained)
     integer :: n_gaps = 0   !< number of gap functions g_j(q) >= 0 bounding the admissible set
+    !> Declared half-bandwidth of the Hessian blocks (L_qq, L_qv, L_vv of L, or D1 D2 L_d): entries
+    !> (i, j) with |i - j| > hessian_bandwidth are zero; the schemes then factorise their Newton
+    !> matrices in band storage (docs/DESIGN.md, "Structured Newton matrices"). -1: dense (default).
+    integer :: hessian_bandwidth = -1
+    !> With a declared band: check every Newton matrix for a nonzero outside it (a debug check,
+    !> O(n^2) per factorisation); the solve then fails with a message naming the entry.
+    logical :: check_bandwidth = .false.
     logical, private :: declined = .false.   !< an optional procedure answered "not provided"
   contains
+    !> Declare the Hessian blocks banded with half-bandwidth bw (bw < 0: dense); check (optional):
+    !> verify the band on every Newton matrix (debug).
+    procedure, non_overridable :: declare_bandwidth
     !> Called by an optional procedure the model does not supply, instead of computing: marks "not provided".
     procedure, non_overridable :: not_provided
     !> Start a probe: forget any earlier "not provided".
@@ -39,6 +49,17 @@ module vci_model_base
   end type vci_model_base_t
 
 contains
+
+  !> Declare the Hessian blocks banded with half-bandwidth bw (entries with |i - j| > bw are zero;
+  !> bw < 0: dense, the default). check (optional, default false): verify it on every Newton matrix.
+  subroutine declare_bandwidth(self, bw, check)
+    class(vci_model_base_t), intent(inout) :: self
+    integer, intent(in) :: bw
+    logical, intent(in), optional :: check
+    self%hessian_bandwidth = max(bw, -1)
+    self%check_bandwidth = .false.
+    if (present(check)) self%check_bandwidth = check
+  end subroutine declare_bandwidth
 
   !> Called by an optional procedure the model does not supply (the defaults below, or an adapter
   !> whose callback is absent) instead of computing: marks the answer as "not provided" and sets

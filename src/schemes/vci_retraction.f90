@@ -51,6 +51,7 @@ contains
     self%lag => lag
     self%rule = rule
     self%n = lag%n; self%m = lag%m; self%n_gaps = lag%n_gaps
+    self%hessian_bandwidth = lag%hessian_bandwidth; self%check_bandwidth = lag%check_bandwidth
     n = lag%n
     call lagrangian_work_setup(self%work, n, stat)
     if (stat /= 0) return
@@ -158,12 +159,34 @@ contains
     if (s /= VCI_OK) then
       stat = failure_code(self, s); return
     end if
-    if (self%rule == RETRACTION_LEFT) then
+    if (self%hessian_bandwidth >= 0 .and. .not. self%check_bandwidth) then   ! (the debug check sees all entries)
+      call banded_mixed_block(self, h, hess)
+    else if (self%rule == RETRACTION_LEFT) then
       hess = self%lqv - self%lvv / h
     else
       hess = 0.25_dp * h * self%lqq + 0.5_dp * (self%lqv - transpose(self%lqv)) - self%lvv / h
     end if
   end subroutine mixed_block
+
+  !> mixed_block's formulas on the declared band only (the blocks vanish outside it): O(n bw)
+  !> arithmetic, and no transpose temporary.
+  subroutine banded_mixed_block(self, h, hess)
+    class(vci_retraction_model_t), intent(inout) :: self
+    real(dp), intent(in) :: h
+    real(dp), intent(out) :: hess(:, :)
+    integer :: i, j, n, bw
+    n = size(hess, 1); bw = self%hessian_bandwidth
+    hess = 0.0_dp
+    do j = 1, n
+      do i = max(1, j - bw), min(n, j + bw)
+        if (self%rule == RETRACTION_LEFT) then
+          hess(i, j) = self%lqv(i, j) - self%lvv(i, j) / h
+        else
+          hess(i, j) = 0.25_dp * h * self%lqq(i, j) + 0.5_dp * (self%lqv(i, j) - self%lqv(j, i)) - self%lvv(i, j) / h
+        end if
+      end do
+    end do
+  end subroutine banded_mixed_block
 
   subroutine constraint_forms(self, q, omega, stat)
     class(vci_retraction_model_t), intent(inout) :: self

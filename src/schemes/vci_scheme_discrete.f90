@@ -76,6 +76,7 @@ module vci_scheme_discrete
     procedure :: fused_substep
     procedure :: substep_sensitivity
     procedure :: use_derivatives
+    procedure :: structure => banded_structure
     procedure :: position_carry => discrete_position_carry
     procedure :: restore_position_carry => discrete_restore_carry
   end type vci_scheme_discrete_t
@@ -98,6 +99,19 @@ module vci_scheme_discrete
   end interface
 
 contains
+
+  !> Newton's view of the matrix (vci_banded): with a declared Hessian bandwidth, the position
+  !> unknowns x(1:n) form a band block (D1 D2 L_d has the Hessians' band) and the multipliers, alpha
+  !> or mu are its dense border; the impulse system [nu, mu] has no such block. Else dense.
+  subroutine banded_structure(self, nb, bw, check)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    integer, intent(out) :: nb, bw
+    logical, intent(out) :: check
+    nb = 0; bw = -1; check = .false.
+    if (self%kind == KIND_IMPULSE .or. .not. associated(self%base)) return
+    if (self%base%hessian_bandwidth < 0) return
+    nb = self%n; bw = self%base%hessian_bandwidth; check = self%base%check_bandwidth
+  end subroutine banded_structure
 
   !> The model's mixed Hessian, discrete constraint Jacobian and gap gradients (each differenced
   !> when the model does not supply it).

@@ -341,6 +341,7 @@ awk -v cmd="tools/bench/run_bench.sh${*:+ $*}" '
   echo "1700 on the pendulum): its time ratio is above its instruction ratio and moves between runs."
 } >>"$OUT"
 lobatto_table
+BUILD_DIR="$BUILD_DIR" sh "$ROOT/tools/bench/run_chain.sh" || status=$?   # the chain's impact steps (docs/bench/chain.md)
 if [ "$status" -ne 0 ]; then
   echo "run_bench.sh: benchmark failed (status $status); see the trajectory check in $OUT" >&2
 fi

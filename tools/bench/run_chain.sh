@@ -1,0 +1,50 @@
+#!/bin/sh
+# Impact steps on the FPU-beta chain between walls (issue 28): bench/chain_impacts.f90 with the
+# dense Newton matrices and with the declared bandwidth 1 (band block + Schur-complement border),
+# OpenBLAS on one thread; then callgrind's instruction counts of the run at n = 128 and the
+# functions that take the most of them. Writes docs/bench/chain.md. Times are medians of
+# individually timed steps and move with the machine's load: compare within one run.
+#
+#   tools/bench/run_chain.sh               # uses $BUILD_DIR (default: build), target built here
+set -eu
+ROOT=$(cd "$(dirname "$0")/../.." && pwd)
+BUILD_DIR=${BUILD_DIR:-$ROOT/build}
+OUT=${OUT:-$ROOT/docs/bench/chain.md}
+NS=${NS:-"32 128 256"}
+cmake --build "$BUILD_DIR" --target vci_bench_chain_impacts -j1 >/dev/null
+EXE="$BUILD_DIR/bin/vci_bench_chain_impacts"
+export OPENBLAS_NUM_THREADS=1
+{
+  echo "# The FPU chain between walls: regular and impact steps"
+  echo
+  echo "Written by \`tools/bench/run_chain.sh\` ($(date -u +%Y-%m-%d), $(uname -m), $(nproc) cores)."
+  echo "\`OPENBLAS_NUM_THREADS=1 vci_bench_chain_impacts [banded] $NS\` (bench/chain_impacts.f90): midpoint"
+  echo "from L, analytic Hessians, \`hamiltonian\` impacts, h = 0.01, T = 2, walls |x_i| <= 0.6."
+  echo
+  # shellcheck disable=SC2086
+  "$EXE" $NS
+  echo
+  # shellcheck disable=SC2086
+  "$EXE" banded $NS | tail -n +3
+  echo
+  echo "Instructions (valgrind --tool=callgrind) of the whole run at n = 128, inclusive, by function:"
+  echo
+  for mode in dense banded; do
+    arg=""; [ "$mode" = banded ] && arg=banded
+    f=$(mktemp)
+    # shellcheck disable=SC2086
+    valgrind --tool=callgrind --callgrind-out-file="$f" "$EXE" $arg 128 >/dev/null 2>&1
+    echo "$mode:"
+    echo
+    echo '```'
+    callgrind_annotate --inclusive=yes "$f" 2>/dev/null | grep -E 'PROGRAM TOTALS|resolve_impacts|MOD_advance|dgetrf_|dgbtrf_|step_jacobian|linear_solve|lagrangian_hessians|MOD_substep ' | sed 's/ \[.*\]//'
+    echo '```'
+    echo
+    rm -f "$f"
+  done
+  echo "With the band declared the LU factorisations leave the profile; what is left is O(n^2) per"
+  echo "Newton matrix (the Hessian and gap-gradient callbacks' dense arrays, the Jacobian's zeroing and row"
+  echo "sizes) and the number of solves an impact needs (stage 1 on every violated wall): docs/DESIGN.md,"
+  echo "\"Structured Newton matrices\"."
+} >"$OUT"
+echo "wrote $OUT"
