@@ -4,8 +4,12 @@
 !> l = 1) from θ = 0, θ' = 4; free for the regular steps, between walls at ±1 rad for the impacts.
 !>
 !>   vci_bench_composition [order]                    timed runs (best of 5), ratios
-!>   vci_bench_composition --profile lib|hand|walls order   one run of the *run_timed* routine, for
-!>                                                          callgrind --toggle-collect='*run_timed*'
+!>   vci_bench_composition --profile lib|step|hand|walls|far order   one run of the *run_timed* routine,
+!>                                                for callgrind --toggle-collect='*run_timed*':
+!>                                                lib: integrate (no observer), step: step() one by
+!>                                                one (H each step), walls: walls at ±1 rad (3520
+!>                                                impacts), far: walls at ±2 rad (never reached:
+!>                                                the walled run's regular step)
 !>   vci_bench_composition --sweep                    the walled pendulum over 10 s (18 impacts) from
 !>                                                    the exact start: final error against the exact
 !>                                                    solution and CPU time per run, orders 4 … 10
@@ -21,7 +25,7 @@ program vci_bench_composition
   real(dp), parameter :: h = 0.01_dp
   character(len=16) :: arg, what
   integer :: order, stat, rep, nimp_steps
-  real(dp) :: q_lib, p_lib, q_hand, p_hand, t_lib, t_hand, t_walls, t
+  real(dp) :: q_lib, p_lib, q_hand, p_hand, q_step, p_step, t_lib, t_hand, t_walls, t_far, t_step, t
   order = 6
   if (command_argument_count() >= 1) then
     call get_command_argument(1, arg)
@@ -32,28 +36,39 @@ program vci_bench_composition
       call get_command_argument(2, what); call get_command_argument(3, arg); read (arg, *) order
       select case (what)
       case ('lib'); call run_timed_lib(order, q_lib, p_lib, stat)
+      case ('step'); call run_timed_step(order, q_lib, p_lib, stat)
       case ('hand'); call run_timed_hand(order, q_hand, p_hand)
       case ('walls'); call run_timed_walls(order, nimp_steps, stat)
+      case ('far'); call run_timed_walls(order, nimp_steps, stat, 2.0_dp)
+        if (nimp_steps /= 0) error stop 'walls at 2 rad were reached'
       end select
       stop
     end if
     read (arg, *) order
   end if
-  t_lib = huge(1.0_dp); t_hand = huge(1.0_dp); t_walls = huge(1.0_dp)
+  t_lib = huge(1.0_dp); t_hand = huge(1.0_dp); t_walls = huge(1.0_dp); t_far = huge(1.0_dp); t_step = huge(1.0_dp)
   do rep = 1, 5
     t = clock(); call run_timed_lib(order, q_lib, p_lib, stat); t_lib = min(t_lib, clock() - t)
     if (stat /= VCI_OK) error stop 'library run failed'
+    t = clock(); call run_timed_step(order, q_step, p_step, stat); t_step = min(t_step, clock() - t)
+    if (stat /= VCI_OK) error stop 'library run (step by step) failed'
+    t = clock(); call run_timed_walls(order, nimp_steps, stat, 2.0_dp); t_far = min(t_far, clock() - t)
+    if (stat /= VCI_OK) error stop 'far-walled run failed'
     t = clock(); call run_timed_hand(order, q_hand, p_hand); t_hand = min(t_hand, clock() - t)
     t = clock(); call run_timed_walls(order, nimp_steps, stat); t_walls = min(t_walls, clock() - t)
     if (stat /= VCI_OK) error stop 'walled run failed'
   end do
   write (output_unit, '(a,i0,a,i0,a,es9.2)') 'order ', order, '  steps ', nsteps, '  h ', h
-  write (output_unit, '(a,l1)') 'library and hand loop end in the same bits: ', q_lib == q_hand .and. p_lib == p_hand
-  write (output_unit, '(a,f8.1,a,f8.1,a,f6.2)') 'regular step: library ', 1.0e9_dp * t_lib / nsteps, &
-    ' ns, hand loop ', 1.0e9_dp * t_hand / nsteps, ' ns, ratio ', t_lib / t_hand
-  ! impact steps: the extra time of the walled run over the free one, per impact step
-  write (output_unit, '(a,i0,a,f6.2)') 'impact steps: ', nimp_steps, '; impact step / regular step ', &
-    (t_walls - t_lib * real(nsteps - nimp_steps, dp) / nsteps) / nimp_steps / (t_lib / nsteps)
+  write (output_unit, '(a,l1)') 'library (integrate, step by step) and hand loop end in the same bits: ', &
+    q_lib == q_hand .and. p_lib == p_hand .and. q_step == q_hand .and. p_step == p_hand
+  write (output_unit, '(a,f8.1,a,f8.1,a,f8.1,a,f6.2,a,f6.2)') 'regular step: integrate ', 1.0e9_dp * t_lib / nsteps, &
+    ' ns, step() ', 1.0e9_dp * t_step / nsteps, ' ns, hand loop ', 1.0e9_dp * t_hand / nsteps, ' ns; ratios ', &
+    t_lib / t_hand, ', ', t_step / t_hand
+  ! walled runs: the regular step with walls that are never reached, then the extra time of the
+  ! run with impacts over it, per impact step
+  write (output_unit, '(a,f6.2)') 'walled regular step / free regular step ', t_far / t_lib
+  write (output_unit, '(a,i0,a,f6.2)') 'impact steps: ', nimp_steps, '; impact step / walled regular step ', &
+    (t_walls - t_far * real(nsteps - nimp_steps, dp) / nsteps) / nimp_steps / (t_far / nsteps)
 
 contains
 
@@ -78,6 +93,26 @@ contains
     q = integ%configuration(); p = integ%momentum()
     q_end = q(1); p_end = p(1)
   end subroutine run_timed_lib
+
+  !> The library run as a caller stepping one by one (step(): the general path, H each step).
+  subroutine run_timed_step(order, q_end, p_end, stat)
+    integer, intent(in) :: order
+    real(dp), intent(out) :: q_end, p_end
+    integer, intent(out) :: stat
+    type(pendulum_walls_sep_t), target :: model
+    type(vci_integrator_t) :: integ
+    real(dp) :: q(1), p(1)
+    integer :: k
+    model = pendulum_walls_sep_model(.false.)
+    call integ%create(model, h, stat)
+    if (stat == VCI_OK) call integ%set_scheme(VCI_SCHEME_COMPOSITION, order, stat)
+    if (stat == VCI_OK) call integ%init_from_momentum(0.0_dp, [0.0_dp], [4.0_dp], stat)
+    do k = 1, nsteps
+      if (stat == VCI_OK) call integ%step(1, stat)
+    end do
+    q = integ%configuration(); p = integ%momentum()
+    q_end = q(1); p_end = p(1)
+  end subroutine run_timed_step
 
   !> The same composition written out: merged half kicks, M⁻¹ = 1/(m l²) = 1, force −m g l sin θ.
   subroutine run_timed_hand(order, q, p)
@@ -157,13 +192,15 @@ contains
     end do
   end subroutine sweep
 
-  subroutine run_timed_walls(order, impact_steps, stat)
+  subroutine run_timed_walls(order, impact_steps, stat, theta_wall)
     integer, intent(in) :: order
     integer, intent(out) :: impact_steps, stat
+    real(dp), intent(in), optional :: theta_wall   !< default 1 rad
     type(pendulum_walls_sep_t), target :: model
     type(vci_integrator_t) :: integ
     type(vci_stats_t) :: st
     model = pendulum_walls_sep_model(.true.)
+    if (present(theta_wall)) model%theta_wall = theta_wall
     call integ%create(model, h, stat)
     if (stat == VCI_OK) call integ%set_scheme(VCI_SCHEME_COMPOSITION, order, stat)
     if (stat == VCI_OK) call integ%init_from_momentum(0.0_dp, [0.0_dp], [4.0_dp], stat)

@@ -22,7 +22,7 @@ program pendulum_walls
   real(dp), allocatable :: q(:), p(:)
   type(vci_impact_t) :: imp
   type(vci_stats_t) :: stats
-  integer :: stat, nex, nimp, j
+  integer :: stat, nex, nimp, j, used_energy
   integer(i8) :: nsteps, k
   opts%h = 5.0e-2_dp; opts%t_final = 10.0_dp
   opts%scheme = 'lobatto'; opts%stages = 4; opts%rtol = 1.0e-15_dp
@@ -66,9 +66,13 @@ program pendulum_walls
       if (nimp <= size(found)) found(nimp) = imp%t
     end do
   end do
-  write (output_unit, '(a,i0,a,es10.3,a,i0,a,a)') 'scheme: '//trim(vci_scheme_name(integ%scheme()))//'   stages: ', &
+  used_energy = opts%impact_energy
+  ! what was used: a composition has an order, not stages, and its impacts always use H
+  if (integ%scheme() == VCI_SCHEME_COMPOSITION) used_energy = VCI_IMPACT_HAMILTONIAN
+  write (output_unit, '(a,i0,a,es10.3,a,i0,a,a)') 'scheme: '//trim(vci_scheme_name(integ%scheme()))// &
+    trim(merge('   order: ', '   stages:', integ%scheme() == VCI_SCHEME_COMPOSITION))//' ', &
     integ%stages(), '   h = ', opts%h, '   steps: ', nsteps, '   impact energy: ', &
-    trim(merge('hamiltonian', 'discrete   ', opts%impact_energy == VCI_IMPACT_HAMILTONIAN))
+    trim(merge('hamiltonian', 'discrete   ', used_energy == VCI_IMPACT_HAMILTONIAN))
   if (stat /= VCI_OK) then
     write (output_unit, '(a)') 'status: '//vci_status_name(stat)//': '//integ%message()
     stop 2

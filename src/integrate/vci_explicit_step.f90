@@ -24,7 +24,7 @@ module vci_explicit_step
   use vci_composition, only: vci_composition_t
   use vci_separable, only: vci_separable_t
   use vci_observer, only: vci_impact_t
-  use vci_state, only: vci_impact_buffer_t
+  use vci_state, only: vci_impact_buffer_t, vci_state_t
   use vci_scheme, only: VCI_IMPACT_HAMILTONIAN
   implicit none
   private
@@ -39,12 +39,18 @@ module vci_explicit_step
     integer :: max_impacts = 16           !< the records grow on demand up to it
     integer :: samples = 1                !< sorted(1:samples): stage-end fractions in (0, 1), then 1
     real(dp), allocatable :: a(:), pa(:), qe(:), pe(:), qt(:), pt(:), stage_q(:, :)
+    real(dp), allocatable :: q_run(:), p_run(:)   !< explicit_run's step result before it is committed
+    real(dp), allocatable :: q_root(:), p_root(:), v_scratch(:)  !< stage 1's last point (fraction root_alpha)
+    real(dp), allocatable :: g_sample_min(:)      !< each wall's least gap over the internal stages
+    real(dp) :: root_alpha = -1.0_dp
+    logical :: root_known = .false.
     real(dp), allocatable :: g_start(:), g_end(:), g_trial(:), grads(:, :), sorted(:), g_samples(:, :)
     integer, allocatable :: order(:)
     integer(i8) :: root_maps = 0      !< composed maps evaluated by stage 1 (statistics)
   contains
     procedure :: setup => explicit_setup
     procedure :: advance => explicit_advance
+    procedure :: run => explicit_run
   end type vci_explicit_t
 
 contains
@@ -63,8 +69,11 @@ contains
     self%n = n; self%ng = model%n_gaps
     if (allocated(self%a)) deallocate (self%a, self%pa, self%qe, self%pe, self%qt, self%pt, self%stage_q, &
                                        self%g_start, self%g_end, self%g_trial, self%grads, self%sorted, self%order, &
-                                       self%g_samples)
-    allocate (self%a(n), self%pa(n), self%qe(n), self%pe(n), self%qt(n), self%pt(n), self%stage_q(n, s), &
+                                       self%g_samples, self%q_run, self%p_run, self%q_root, self%p_root, &
+                                       self%v_scratch, self%g_sample_min)
+    allocate (self%q_run(n), self%p_run(n), self%q_root(n), self%p_root(n), self%v_scratch(n), self%g_sample_min(ng), &
+              self%a(n), self%pa(n), self%qe(n), self%pe(n), self%qt(n), &
+              self%pt(n), self%stage_q(n, s), &
               self%g_start(ng), self%g_end(ng), self%g_trial(ng), self%grads(n, ng), self%sorted(s), &
               self%order(s), self%g_samples(ng, s), stat=stat)
     if (stat /= 0) then
@@ -101,28 +110,83 @@ contains
     real(dp), intent(in) :: q(:), p(:), h, t
     integer, intent(in) :: dir, max_impacts
     type(vci_impact_buffer_t), intent(inout) :: impacts
-    real(dp), intent(out) :: q_new(:), p_new(:), e_new
+    real(dp), contiguous, intent(out) :: q_new(:), p_new(:)
+    real(dp), intent(out) :: e_new
+    character(len=*), intent(inout) :: cause
+    integer, intent(out) :: stat
+    e_new = 0.0_dp
+    call move(self, q, p, h, dir, t, max_impacts, impacts, q_new, p_new, cause, stat)
+    if (stat /= VCI_OK) return
+    call self%map%hamiltonian(q_new, p_new, e_new, stat)
+    if (stat /= VCI_OK) call fail(self, 'energy of the new state', stat, cause)
+  end subroutine explicit_advance
+
+  !> Up to nsteps steps from the state in direction dir, each taken as explicit_advance takes it
+  !> (the same arithmetic: the same bits) and committed as the stepper commits a step (q, p, k,
+  !> the impacts' step index), without what nobody reads inside a run: H, the velocity and the
+  !> arriving energy are left to the run's last step, which the caller takes on the general path
+  !> (vci_integrator's integrate without an observer). Stops before committing a step that fails;
+  !> the caller retakes that one on the general path, which reports it. done: steps committed;
+  !> found: impacts in them; `impacts` holds the last committed step's.
+  subroutine explicit_run(self, state, nsteps, dir, max_impacts, impacts, done, found)
+    class(vci_explicit_t), intent(inout) :: self
+    type(vci_state_t), intent(inout) :: state
+    integer(i8), intent(in) :: nsteps
+    integer, intent(in) :: dir, max_impacts
+    type(vci_impact_buffer_t), intent(inout) :: impacts
+    integer(i8), intent(out) :: done, found
+    character(len=VCI_MSG_LEN) :: cause
+    integer :: stat, i
+    done = 0; found = 0
+    do while (done < nsteps)
+      call move(self, state%q, state%p, state%h, dir, state%time(), max_impacts, impacts, self%q_run, self%p_run, &
+                cause, stat)
+      if (stat /= VCI_OK) then
+        impacts%count = 0; return
+      end if
+      call copy(self%n, self%q_run, state%q); call copy(self%n, self%p_run, state%p)
+      do i = 1, impacts%count
+        impacts%records(i)%step = state%k
+      end do
+      state%k = state%k + dir
+      done = done + 1; found = found + impacts%count
+    end do
+  end subroutine explicit_run
+
+  !> The step of explicit_advance without H at its end.
+  subroutine move(self, q, p, h, dir, t, max_impacts, impacts, q_new, p_new, cause, stat)
+    type(vci_explicit_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), p(:), h, t
+    integer, intent(in) :: dir, max_impacts
+    type(vci_impact_buffer_t), intent(inout) :: impacts
+    real(dp), contiguous, intent(out) :: q_new(:), p_new(:)   ! (contiguous: no packing check per step)
     character(len=*), intent(inout) :: cause
     integer, intent(out) :: stat
     real(dp) :: tau, elapsed, alpha, best, mu, e_before
     integer :: j, jbest
     self%max_impacts = max_impacts
-    self%a(:) = q; self%pa(:) = p
-    tau = h; elapsed = 0.0_dp
     impacts%count = 0
+    if (self%ng == 0) then                  ! no walls: the composed map straight into the result
+      call copy(self%n, q, q_new); call copy(self%n, p, p_new)
+      call self%map%flow(q_new, p_new, dir * h, stat)
+      if (stat /= VCI_OK) call fail(self, 'regular step', stat, cause)
+      return
+    end if
+    call copy(self%n, q, self%a); call copy(self%n, p, self%pa)
+    tau = h; elapsed = 0.0_dp
     do
-      self%qe(:) = self%a; self%pe(:) = self%pa
+      call copy(self%n, self%a, self%qe); call copy(self%n, self%pa, self%pe)
       call self%map%flow(self%qe, self%pe, dir * tau, stat, self%stage_q)
       if (stat /= VCI_OK) then
         call fail(self, 'regular step', stat, cause); return
       end if
-      if (self%ng == 0) exit
       call gaps(self, self%qe, self%g_end, stat)
       if (stat /= VCI_OK) then
         call fail(self, 'gaps of the step''s end', stat, cause); return
       end if
       self%start_gaps_known = .false.       ! (evaluated only when a wall may be crossed)
       self%samples_known = .false.
+      self%root_known = .false.
       ! stage 1: the first wall reached along the composed map
       best = 2.0_dp; jbest = 0
       do j = 1, self%ng
@@ -141,8 +205,14 @@ contains
         return
       end if
       ! stage 2: the exact reflection at the wall point of the composed map over best * tau
-      self%qt = self%a; self%pt = self%pa
-      if (best > 0.0_dp) call self%map%flow(self%qt, self%pt, dir * best * tau, stat)
+      if (self%root_known .and. self%root_alpha == best) then   ! stage 1 ended on this point
+        call copy(self%n, self%q_root, self%qt); call copy(self%n, self%p_root, self%pt)
+        stat = VCI_OK
+      else
+        call copy(self%n, self%a, self%qt); call copy(self%n, self%pa, self%pt)
+        stat = VCI_OK
+        if (best > 0.0_dp) call self%map%flow(self%qt, self%pt, dir * best * tau, stat)
+      end if
       if (stat == VCI_OK) call gap_gradients(self, self%qt, stat)
       if (stat == VCI_OK) call self%map%hamiltonian(self%qt, self%pt, e_before, stat)
       if (stat /= VCI_OK) then
@@ -165,10 +235,8 @@ contains
       self%pa = self%pt + mu * self%grads(:, jbest)
       tau = h - elapsed
     end do
-    q_new(:) = self%qe; p_new(:) = self%pe
-    call self%map%hamiltonian(q_new, p_new, e_new, stat)
-    if (stat /= VCI_OK) call fail(self, 'energy of the new state', stat, cause)
-  end subroutine explicit_advance
+    call copy(self%n, self%qe, q_new); call copy(self%n, self%pe, p_new)
+  end subroutine move
 
   !> Stage 1 for wall j on the sub-step of length tau from (a, pa): alpha = the fraction at which
   !> the composed map first reaches g_j = 0, or 2 when it does not within the sub-step (nor before
@@ -179,19 +247,19 @@ contains
     real(dp), intent(in) :: tau, limit
     real(dp), intent(out) :: alpha
     integer, intent(out) :: stat
-    real(dp) :: lo, hi, glo, ghi, c, g, gs
-    integer :: i, k, nk, side
-    logical :: have_lo, any_inside, on_wall
+    real(dp) :: lo, hi, glo, ghi, c, g, gs, slope, delta, delta_prev
+    integer :: i, k, nk, side, cb
+    logical :: have_lo, any_inside, on_wall, finite
     alpha = 2.0_dp; stat = VCI_OK
     nk = self%samples
     if (.not. self%samples_known) then      ! every wall's gap at every internal stage, once
-      do k = 1, nk - 1
-        call gaps(self, self%stage_q(:, self%order(k)), self%g_samples(:, k), stat)
-        if (stat /= VCI_OK) return
-      end do
+      call sample_stages(self%map%model, self%n, self%ng, nk - 1, self%order, self%stage_q, self%g_samples, &
+                         self%g_sample_min, cb, finite)
+      call callback_status(self, cb, finite, stat)
+      if (stat /= VCI_OK) return
       self%samples_known = .true.
     end if
-    any_inside = self%g_end(j) < 0.0_dp .or. any(self%g_samples(j, 1:nk - 1) < 0.0_dp)
+    any_inside = self%g_end(j) < 0.0_dp .or. self%g_sample_min(j) < 0.0_dp
     if (.not. any_inside) return
     ! A start on the wall (after a reflection, or a step that ended on it), to within the rounding
     ! of g there: moving into it, reflect at once; departing from it, the bracket's low end is the
@@ -233,16 +301,26 @@ contains
     if (ghi == 0.0_dp) then
       alpha = hi; return
     end if
-    ! Illinois on [lo, hi]: g(lo) > 0 > g(hi)
-    side = 0
+    ! Newton along the composed map inside the bracket [lo, hi] (g(lo) > 0 > g(hi)): the slope of
+    ! α ↦ g_j(q(Φ_{ατ})) is dir τ ∇g_jᵀ M⁻¹ p there up to the composition's error, so Newton
+    ! converges linearly at a tiny rate and its first point, the root of the cubic Hermite
+    ! interpolant of g and its slope at the sub-step's ends (both on the true map), is already
+    ! close. A point outside the bracket is replaced by Illinois's (modified regula falsi).
+    ! Accepted: a point where the correction is round-off, or the next point when the observed
+    ! rate says its error is (its map is the one stage 2 needs anyway).
+    call hermite_start(self, j, dir, tau, lo, hi, c, stat)
+    if (stat /= VCI_OK) return
+    side = 0; delta_prev = 0.0_dp
     do i = 1, ILLINOIS_MAX
-      c = (lo * ghi - hi * glo) / (ghi - glo)
-      if (.not. (c > lo .and. c < hi)) c = 0.5_dp * (lo + hi)
-      if (c <= lo .or. c >= hi) exit          ! no floating-point number left between the ends
+      if (.not. (c > lo .and. c < hi)) then
+        c = (lo * ghi - hi * glo) / (ghi - glo)
+        if (.not. (c > lo .and. c < hi)) c = 0.5_dp * (lo + hi)
+        if (c <= lo .or. c >= hi) exit        ! no floating-point number left between the ends
+      end if
       call gap_on_map(self, j, dir, c * tau, gs, stat)
       if (stat /= VCI_OK) return
       if (gs == 0.0_dp) then
-        lo = c; glo = gs; exit
+        call keep_root(self, c); alpha = c; return
       else if (gs > 0.0_dp) then
         lo = c; glo = gs
         if (side == 1) ghi = 0.5_dp * ghi
@@ -252,10 +330,98 @@ contains
         if (side == -1) glo = 0.5_dp * glo
         side = -1
       end if
+      call slope_on_map(self, j, dir, tau, slope, stat)
+      if (stat /= VCI_OK) return
+      delta = -gs / slope
+      if (.not. abs(delta) <= huge(1.0_dp)) then
+        c = -1.0_dp; delta_prev = 0.0_dp           ! no usable slope: Illinois's point next
+        cycle
+      end if
+      if (abs(delta) <= 4.0_dp * epsilon(1.0_dp) * c) then
+        call keep_root(self, c); alpha = c; return
+      end if
+      if (delta_prev /= 0.0_dp .and. abs(delta) < abs(delta_prev)) then
+        if (abs(delta / delta_prev) * abs(delta) <= 4.0_dp * epsilon(1.0_dp) * c .and. &
+            c + delta > lo .and. c + delta < hi) then
+          alpha = c + delta; return               ! (its state: stage 2's map)
+        end if
+      end if
+      delta_prev = delta
+      c = c + delta
       if (hi - lo <= 2.0_dp * epsilon(1.0_dp) * hi) exit
     end do
     alpha = lo                                 ! the admissible side of the crossing
   end subroutine first_crossing
+
+  !> Stage 1's first point in (lo, hi) for wall j: the root there of the cubic Hermite interpolant
+  !> of α ↦ g_j on [0, 1] from g and its slope (dir τ ∇g_jᵀ M⁻¹ p) at the sub-step's start (a, pa)
+  !> and end (qe, pe), both states of the true map; -1 (Illinois's point) when the cubic does
+  !> not change sign on [lo, hi]. A few safeguarded Newton steps on the cubic (arithmetic only).
+  subroutine hermite_start(self, j, dir, tau, lo, hi, c, stat)
+    type(vci_explicit_t), intent(inout) :: self
+    integer, intent(in) :: j, dir
+    real(dp), intent(in) :: tau, lo, hi
+    real(dp), intent(out) :: c
+    integer, intent(out) :: stat
+    real(dp) :: g0, g1, d0, d1, a, b, fa, fb, f, df
+    integer :: i
+    c = -1.0_dp
+    call gap_gradients(self, self%a, stat)
+    if (stat /= VCI_OK) return
+    call self%map%model%inverse_mass_times(self%pa, self%qt)
+    d0 = dir * tau * dot_product(self%grads(:, j), self%qt)
+    call gap_gradients(self, self%qe, stat)
+    if (stat /= VCI_OK) return
+    call self%map%model%inverse_mass_times(self%pe, self%qt)
+    d1 = dir * tau * dot_product(self%grads(:, j), self%qt)
+    g0 = self%g_start(j); g1 = self%g_end(j)
+    a = lo; b = hi
+    fa = cubic(a); fb = cubic(b)
+    if (.not. (fa > 0.0_dp .and. fb < 0.0_dp)) return
+    c = 0.5_dp * (a + b)
+    do i = 1, 30
+      f = cubic(c)
+      if (f > 0.0_dp) then
+        a = c
+      else
+        b = c
+      end if
+      df = (6.0_dp * g0 - 6.0_dp * g1 + 3.0_dp * d0 + 3.0_dp * d1) * c**2 &
+           + (-6.0_dp * g0 + 6.0_dp * g1 - 4.0_dp * d0 - 2.0_dp * d1) * c + d0
+      c = c - f / df
+      if (.not. (c > a .and. c < b)) c = 0.5_dp * (a + b)
+      if (b - a <= 1.0e-3_dp * abs(f / df) .or. abs(f / df) <= epsilon(1.0_dp) * c) exit
+    end do
+  contains
+    real(dp) function cubic(x)
+      real(dp), intent(in) :: x
+      cubic = (2.0_dp * x**3 - 3.0_dp * x**2 + 1.0_dp) * g0 + (x**3 - 2.0_dp * x**2 + x) * d0 &
+              + (-2.0_dp * x**3 + 3.0_dp * x**2) * g1 + (x**3 - x**2) * d1
+    end function cubic
+  end subroutine hermite_start
+
+  !> d/dα of g_j(q(Φ_{ατ})) at the state (qt, pt) of the last gap_on_map, to the composition's
+  !> error: dir τ ∇g_j(qt)ᵀ M⁻¹ pt.
+  subroutine slope_on_map(self, j, dir, tau, slope, stat)
+    type(vci_explicit_t), intent(inout) :: self
+    integer, intent(in) :: j, dir
+    real(dp), intent(in) :: tau
+    real(dp), intent(out) :: slope
+    integer, intent(out) :: stat
+    slope = 0.0_dp
+    call gap_gradients(self, self%qt, stat)
+    if (stat /= VCI_OK) return
+    call self%map%model%inverse_mass_times(self%pt, self%v_scratch)
+    slope = dir * tau * dot_product(self%grads(:, j), self%v_scratch)
+  end subroutine slope_on_map
+
+  !> Stage 1 ends on the point of the last gap_on_map (fraction c): keep its state for stage 2.
+  subroutine keep_root(self, c)
+    type(vci_explicit_t), intent(inout) :: self
+    real(dp), intent(in) :: c
+    call copy(self%n, self%qt, self%q_root); call copy(self%n, self%pt, self%p_root)
+    self%root_alpha = c; self%root_known = .true.
+  end subroutine keep_root
 
   !> g_j at the end of the composed map over the fraction `frac_tau` from (a, pa).
   subroutine gap_on_map(self, j, dir, frac_tau, g, stat)
@@ -271,6 +437,41 @@ contains
     call gaps(self, self%qt, self%g_trial, stat)
     g = self%g_trial(j)
   end subroutine gap_on_map
+
+  !> The gaps at the internal stage ends stage_q(:, order(k)), k = 1 … nk, into g_samples(:, k):
+  !> one callback per stage on explicit-shape storage (this runs on every step of a walled run).
+  !> cb: the callback's code (0: ok); finite: every gap finite.
+  subroutine sample_stages(model, n, ng, nk, order, stage_q, g_samples, g_min, cb, finite)
+    class(vci_separable_t), intent(inout) :: model
+    integer, intent(in) :: n, ng, nk, order(*)
+    real(dp), intent(in) :: stage_q(n, *)
+    real(dp), intent(inout) :: g_samples(ng, *)
+    real(dp), intent(out) :: g_min(ng)         !< each wall's least sampled gap (huge: none sampled)
+    integer, intent(out) :: cb
+    logical, intent(out) :: finite
+    integer :: k, i
+    cb = 0; finite = .true.
+    g_min = huge(1.0_dp)
+    do k = 1, nk
+      call model%gaps(stage_q(:, order(k)), g_samples(:, k), cb)
+      if (cb /= 0) return
+      do i = 1, ng
+        if (.not. abs(g_samples(i, k)) <= huge(1.0_dp)) finite = .false.
+        g_min(i) = min(g_min(i), g_samples(i, k))
+      end do
+    end do
+  end subroutine sample_stages
+
+  !> dst = src (explicit shape: a plain loop, not a descriptor-driven copy).
+  pure subroutine copy(n, src, dst)
+    integer, intent(in) :: n
+    real(dp), intent(in) :: src(n)
+    real(dp), intent(out) :: dst(n)
+    integer :: j
+    do j = 1, n
+      dst(j) = src(j)
+    end do
+  end subroutine copy
 
   subroutine gaps(self, q, g, stat)
     type(vci_explicit_t), intent(inout) :: self

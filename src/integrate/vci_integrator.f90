@@ -742,7 +742,7 @@ contains
     !> progress%report(info, stop_requested) at most once per progress%interval seconds and after the last
     !> step; stop_requested = .true. ends the run after the current step with VCI_STOPPED (vci_progress)
     class(vci_progress_t), intent(inout), optional :: progress
-    integer(i8) :: i
+    integer(i8) :: i, first
     integer :: ostat
     if (nsteps < 0) then
       write (self%last_message, '(a,i0,a)') 'integrate: nsteps = ', nsteps, ' (need >= 0)'
@@ -776,7 +776,9 @@ contains
     if (present(progress)) then
       call steps_with_progress(self, nsteps, direction, stat, progress, observer)
     else
-      do i = 1, nsteps
+      first = 1
+      if (.not. present(observer)) call run_explicit_steps(self, nsteps, direction, first)
+      do i = first, nsteps
         call self%step(direction, stat, observer)
         if (stat /= VCI_OK) exit
       end do
@@ -796,6 +798,25 @@ contains
     self%last_status = stat
     if (stat == VCI_OK) self%last_message = ''   ! also after 0 steps: no message of an earlier call
   end subroutine integrate
+
+  !> integrate without an observer on an explicit composition: the steps before the last run in
+  !> one call (vci_stepper's explicit_steps: the same bits, no per-step H), when none of their
+  !> times overflows; next = the index of the first step left to the general loop (the last one,
+  !> which sets H and the velocity, or the one that failed in the run, retaken there to report it).
+  subroutine run_explicit_steps(self, nsteps, direction, next)
+    class(vci_integrator_t), intent(inout) :: self
+    integer(i8), intent(in) :: nsteps
+    integer, intent(in) :: direction
+    integer(i8), intent(out) :: next
+    integer(i8) :: done, found
+    next = 1
+    if (nsteps < 2) return
+    if (.not. ieee_is_finite(self%state%t0 + real(self%state%k + direction * nsteps, dp) * self%state%h)) return
+    call self%stepper%explicit_steps(self%state, nsteps - 1, direction, self%impacts, done, found)
+    self%steps_taken = self%steps_taken + done
+    self%impacts_found = self%impacts_found + found
+    next = done + 1
+  end subroutine run_explicit_steps
 
   !> integrate's loop with progress reports (the clock is read each step: ~20 ns against a step's
   !> microseconds).

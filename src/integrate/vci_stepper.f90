@@ -102,6 +102,7 @@ module vci_stepper
     procedure :: forget_factors
     procedure :: advance
     procedure :: use_explicit
+    procedure :: explicit_steps
     procedure :: pair_momentum
   end type vci_stepper_t
 
@@ -638,5 +639,23 @@ contains
     write (k, '(i0)') stat
     text = ' (stat = '//trim(k)//trim(merge(', recoverable  ', ', unrecoverable', stat > 0))//')'
   end function stat_text
+
+  ! ---- explicit compositions: a run of steps without per-step bookkeeping (issue 32) ----
+
+  !> Up to nsteps steps of the explicit composition in direction dir, committed to the state
+  !> (vci_explicit_step's run: the same bits as advance, without H and the velocity, which the
+  !> run's last step, taken by advance, sets). done = 0 when the steps are not explicit; the run
+  !> stops before a failing step, which advance then retakes and reports.
+  subroutine explicit_steps(self, state, nsteps, dir, impacts, done, found)
+    class(vci_stepper_t), intent(inout) :: self
+    type(vci_state_t), intent(inout) :: state
+    integer(i8), intent(in) :: nsteps
+    integer, intent(in) :: dir
+    type(vci_impact_buffer_t), intent(inout) :: impacts
+    integer(i8), intent(out) :: done, found
+    done = 0; found = 0
+    if (.not. allocated(self%explicit) .or. nsteps < 1) return
+    call self%explicit%run(state, nsteps, dir, self%settings%max_impacts_per_step, impacts, done, found)
+  end subroutine explicit_steps
 
 end module vci_stepper

@@ -119,40 +119,100 @@ contains
   !> (q, p) ← Φ_h(q, p) in place (h < 0: the inverse map, the backward step). With stage_q, the
   !> position at the end of each Verlet sub-step (column i: after γ_1 … γ_i) for sampling the gaps.
   !> stat: VCI_OK, VCI_ERR_CALLBACK (code in failed_stat), VCI_ERR_NONFINITE.
-  !> The stages run as leaf kernels on plain arrays (kick_drift): on allocatable components
-  !> gfortran reloads descriptors per element, which at small n cost more than the arithmetic.
+  !> The whole stage loop runs in one leaf kernel on explicit-shape arrays (compose_stages): on
+  !> allocatable components and assumed-shape dummies gfortran reloads descriptors per element and
+  !> per call, which at small n cost more than the arithmetic (docs/bench/composition.md).
   subroutine flow(self, q, p, h, stat, stage_q)
     class(vci_composition_t), intent(inout) :: self
-    real(dp), intent(inout) :: q(:), p(:)
+    ! (contiguous: passed on to the explicit-shape kernel without a packing check per call)
+    real(dp), contiguous, intent(inout) :: q(:), p(:)
     real(dp), intent(in) :: h
     integer, intent(out) :: stat
-    real(dp), intent(inout), optional :: stage_q(:, :)
-    integer :: i, n
-    logical :: diag
-    n = self%n
+    real(dp), contiguous, intent(inout), optional :: stage_q(:, :)
+    integer :: cb, done
+    logical :: finite
     stat = VCI_OK
-    if (.not. (self%cached .and. all(q(1:n) == self%q_cached))) then
+    if (.not. (self%cached .and. same_point(self%n, q, self%q_cached))) then
       call gradient_at(self, q, stat)
       if (stat /= VCI_OK) return
     end if
     self%cached = .false.
-    diag = self%model%diagonal_mass
-    do i = 1, self%stages
-      if (diag) then
-        call kick_drift_diagonal(n, q, p, self%force, self%kick(i) * h, self%gamma(i) * h, self%model%minv_diag)
-      else
-        call kick_drift_dense(n, q, p, self%force, self%kick(i) * h, self%gamma(i) * h, self%model%minv, self%vel)
-      end if
-      call gradient_at(self, q, stat)
-      if (stat /= VCI_OK) return
-      if (present(stage_q)) stage_q(1:n, i) = q(1:n)
-    end do
-    call kick(n, p, self%force, self%kick(self%stages + 1) * h)
-    if (.not. (all(ieee_is_finite(p(1:n))) .and. all(ieee_is_finite(q(1:n))))) then
+    if (present(stage_q)) then
+      call compose_stages(self%model, self%n, self%stages, q, p, self%force, self%kick, self%gamma, h, &
+                          self%model%diagonal_mass, self%vel, cb, done, finite, self%q_cached, stage_q)
+    else
+      call compose_stages(self%model, self%n, self%stages, q, p, self%force, self%kick, self%gamma, h, &
+                          self%model%diagonal_mass, self%vel, cb, done, finite, self%q_cached)
+    end if
+    self%gradients = self%gradients + done
+    if (cb /= 0) then
+      self%failed_stat = cb; stat = VCI_ERR_CALLBACK; return
+    end if
+    if (.not. finite) then
       stat = VCI_ERR_NONFINITE; return
     end if
-    self%q_cached = q(1:n); self%cached = .true.   ! force holds ∇V(q): the next step starts here
+    self%cached = .true.   ! force holds ∇V(q_cached = q): the next step starts here
   end subroutine flow
+
+  !> q == q_cached element by element (explicit shape: no descriptor walk per call).
+  pure logical function same_point(n, q, q_cached)
+    integer, intent(in) :: n
+    real(dp), intent(in) :: q(n), q_cached(n)
+    integer :: j
+    same_point = .false.
+    do j = 1, n
+      if (q(j) /= q_cached(j)) return
+    end do
+    same_point = .true.
+  end function same_point
+
+  !> The s Verlet sub-steps with merged kicks: for each stage p ← p − (k_i h) ∇V, q ← q + (γ_i h) M⁻¹p,
+  !> ∇V at the new q (the model's callback, into dv); then the last half kick. M⁻¹ is the model's
+  !> (diagonal or dense; `vel` is scratch for the dense product). cb: the callback's code (0: ok),
+  !> done: gradients evaluated; finite: q and p are finite at the end; q_end = q there.
+  subroutine compose_stages(model, n, s, q, p, dv, kick, gamma, h, diagonal, vel, cb, done, finite, q_end, stage_q)
+    class(vci_separable_t), intent(inout) :: model
+    integer, intent(in) :: n, s
+    real(dp), intent(inout) :: q(n), p(n), dv(n)
+    real(dp), intent(in) :: kick(s + 1), gamma(s), h
+    logical, intent(in) :: diagonal
+    real(dp), intent(out) :: vel(n), q_end(n)
+    integer, intent(out) :: cb, done
+    logical, intent(out) :: finite
+    real(dp), intent(inout), optional :: stage_q(n, s)
+    real(dp) :: a, b
+    integer :: i, j
+    cb = 0; done = 0; finite = .false.
+    do i = 1, s
+      a = kick(i) * h; b = gamma(i) * h
+      if (diagonal) then
+        if (present(stage_q)) then   ! (the stage end stored in the same loop: no memcpy call per stage)
+          do j = 1, n
+            p(j) = p(j) - a * dv(j)
+            q(j) = q(j) + b * (model%minv_diag(j) * p(j))
+            stage_q(j, i) = q(j)
+          end do
+        else
+          call kick_drift_diagonal(n, q, p, dv, a, b, model%minv_diag)
+        end if
+      else
+        call kick_drift_dense(n, q, p, dv, a, b, model%minv, vel)
+        if (present(stage_q)) stage_q(:, i) = q
+      end if
+      call model%potential_gradient(q, dv, cb)
+      done = done + 1
+      if (cb /= 0) return
+    end do
+    a = kick(s + 1) * h
+    do j = 1, n
+      p(j) = p(j) - a * dv(j)
+    end do
+    finite = .true.
+    do j = 1, n
+      if (.not. (ieee_is_finite(p(j)) .and. ieee_is_finite(q(j)))) finite = .false.
+      q_end(j) = q(j)
+    end do
+  end subroutine compose_stages
 
   !> p ← p − a ∇V; q ← q + b M⁻¹ p (M diagonal).
   pure subroutine kick_drift_diagonal(n, q, p, dv, a, b, minv)
@@ -183,13 +243,6 @@ contains
       q(j) = q(j) + b * v(j)
     end do
   end subroutine kick_drift_dense
-
-  pure subroutine kick(n, p, dv, a)
-    integer, intent(in) :: n
-    real(dp), intent(inout) :: p(n)
-    real(dp), intent(in) :: dv(n), a
-    p = p - a * dv
-  end subroutine kick
 
   !> force = ∇V(q) (the name is kept short: it is the gradient, the force is its negative).
   subroutine gradient_at(self, q, stat)
