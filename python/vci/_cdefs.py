@@ -79,6 +79,7 @@ int  vci_set_impact_callback(vci_integrator integ, vci_impact_fn fn, void *user)
 int  vci_open_output(vci_integrator integ, const char *path);
 int  vci_close_output(vci_integrator integ);
 int  vci_append_output(vci_integrator integ, const char *path);
+int  vci_open_output_every(vci_integrator integ, const char *path, int every, int compress);
 int  vci_restore_from_file(vci_integrator integ, const char *path);
 int  vci_last_error(vci_integrator integ, char *buffer, int size);
 const char *vci_status_string(int status);
@@ -123,7 +124,6 @@ typedef struct vci_lagrangian_callbacks {
 #: Functions of vci.h deliberately not bound, with the reason.
 UNBOUND = {
     "vci_model_create": "a macro for vci_model_create_v2; the symbol is the 0.1 entry (struct without size)",
-    "vci_open_output_every": "new in issue 31 (every k-th state, compression); not bound in Python yet",
 }
 
 

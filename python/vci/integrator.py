@@ -440,14 +440,24 @@ class Integrator:
             raise ArgumentError("path must be a non-empty string")
         return path
 
-    def open_output(self, path, *, append=False):
+    def open_output(self, path, *, append=False, every=1, compress=0):
         """Write the trajectory of later steps to the HDF5 file path (replaced if it exists).
-        append=True continues the file instead: the run must go on from its last state, in its
+        every=k stores every k-th state (and the run's last; impacts always in full); compress=L
+        gzip level 1..9 with shuffle (0: none). append=True continues the file instead, with the
+        file's own every and compression: the run must go on from its last state, in its
         direction (start it with restore(path)); a run that does not is refused (OutputError) at
-        its first step. OutputError when the library was built without HDF5. Layout: docs/OUTPUT.md."""
+        its first step. OutputError when the library was built without HDF5; ArgumentError for an
+        every outside [1, 2^30] or a level outside [0, 9]. Layout: docs/OUTPUT.md."""
         path = self._path(path)
-        opener = lib.vci_append_output if append else lib.vci_open_output
-        self._check(opener(self._h[0], path.encode()))
+        if append:
+            if every != 1 or compress != 0:
+                raise ArgumentError("open_output: append=True keeps the file's own every and "
+                                    "compression; do not pass them")
+            self._check(lib.vci_append_output(self._h[0], path.encode()))
+        elif every == 1 and compress == 0:
+            self._check(lib.vci_open_output(self._h[0], path.encode()))
+        else:
+            self._check(lib.vci_open_output_every(self._h[0], path.encode(), int(every), int(compress)))
         self._output = path
 
     def restore(self, path):

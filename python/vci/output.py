@@ -20,6 +20,8 @@ def read_output(path):
         p = f["p"][:steps + 1]
         energy = f["energy"][:steps]
         lam = f["lambda"][:steps] if m > 0 and "lambda" in f else np.empty((steps, m))
+        # index of the last state on disk: its row, or /step's entry when the file keeps every k-th
+        last_index = int(f["step"][steps]) if "step" in f else steps
         imp = np.zeros(0, dtype=impact_dtype(n))
         if "impacts" in f:
             g = f["impacts"]
@@ -30,5 +32,5 @@ def read_output(path):
             imp["gap"] = g["gap_index"][:] - 1
             imp["impulse"] = g["impulse"][:]
             imp["q"] = g["q"][:].reshape(k, n)
-            imp = imp[g["step"][:] < steps]
+            imp = imp[g["step"][:] < last_index]
     return Trajectory(t, q, p, energy, lam, imp), attrs

@@ -68,6 +68,7 @@ module vci_integrator
     logical :: lag_hessians = .false.  !< lag supplies its Hessians
     logical :: lag_energy = .false.    !< lag supplies its energy H(q, p)
     integer :: scheme_id = VCI_SCHEME_DISCRETE  !< VCI_SCHEME_*; set_scheme chooses it for a continuous model
+    integer :: start_kind = 0   !< how the run started: 0 not known, 1 pair, 2 momentum, 3 a checkpoint (provenance)
     integer :: n_stages = 0                     !< s of the lobatto scheme
     type(vci_stepper_t) :: stepper              !< holds the scheme and the one settings object
     logical :: created = .false.      !< create has succeeded
@@ -541,7 +542,7 @@ contains
     self%state%velocity = (q1 - q0) / self%state%h
     call self%state%forget_history()
     self%state%arriving_energy = self%state%step_energy; self%state%arriving_direction = 1
-    self%initialized = .true.
+    self%initialized = .true.; self%start_kind = 1
     call finish(self, VCI_OK, stat)
   end subroutine init_from_pair
 
@@ -560,7 +561,7 @@ contains
     self%state%step_energy = ieee_value(1.0_dp, ieee_quiet_nan)
     self%state%arriving_direction = 0
     call self%stepper%forget_factors()
-    self%initialized = .true.
+    self%initialized = .true.; self%start_kind = 2
     call finish(self, VCI_OK, stat)
   end subroutine init_from_momentum
 
@@ -902,7 +903,7 @@ contains
       if (size(cp%position_lo) == self%model%n) call self%stepper%restore_position_carry(self%state%q, cp%position_lo)
     end if
     call self%stepper%factors_from_checkpoint(cp)
-    self%initialized = .true.
+    self%initialized = .true.; self%start_kind = 3
     call finish(self, VCI_OK, stat)
   end subroutine restore
 
@@ -918,6 +919,7 @@ contains
     info%impact_energy = settings%impact_energy
     info%scheme = self%scheme_id; info%stages = self%n_stages
     info%rtol = settings%rtol; info%atol = settings%atol; info%max_impacts = settings%max_impacts_per_step
+    info%start = self%start_kind
   end function run_info
 
   !> An allocation for the model's sizes failed: VCI_ERR_MEMORY naming the sizes.

@@ -27,6 +27,7 @@ module vci_observer
     real(dp) :: rtol = 0.0_dp           !< Newton tolerance relative to the size of each row's terms
     real(dp) :: atol = 0.0_dp           !< absolute floor of Newton's per-row tolerance
     integer :: max_impacts = 0          !< impacts allowed in one step
+    integer :: start = 0                !< how the run started: 0 not known, 1 (q0, q1) pair, 2 (q0, p0), 3 a checkpoint
   end type vci_run_info_t
 
   !> One impact, as resolved by stages 1 and 2.

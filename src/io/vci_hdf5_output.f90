@@ -117,6 +117,18 @@ module vci_hdf5_output
 
 contains
 
+  !> The root attribute `start`: how the run began (vci_run_info_t%start).
+  pure function start_name(kind) result(name)
+    integer, intent(in) :: kind
+    character(len=10) :: name
+    select case (kind)
+    case (1); name = 'pair'
+    case (2); name = 'momentum'
+    case (3); name = 'checkpoint'
+    case default; name = 'unknown'
+    end select
+  end function start_name
+
   !> Open PATH for a run. A new file is created; an existing one is kept (VCI_ERR_IO) unless
   !> `overwrite`. With `append`, PATH must exist and the run must continue its last state in the same
   !> direction. `scene` names the model (root attribute), `flush_every` sets the flush interval.
@@ -546,6 +558,7 @@ contains
     call h5io_put_attr(self%file, 'rtol', info%rtol, stat, self%message, self%path)
     call h5io_put_attr(self%file, 'atol', info%atol, stat, self%message, self%path)
     call h5io_put_attr(self%file, 'max_impacts', info%max_impacts, stat, self%message, self%path)
+    call h5io_put_attr(self%file, 'start', trim(start_name(info%start)), stat, self%message, self%path)
     call h5io_put_attr(self%file, 'resumes', '', stat, self%message, self%path)
     call h5io_make_rows(self%file, 't', 0, chunk_rows, H5T_IEEE_F64LE, self%d_t, stat, self%message, self%path, &
         self%deflate)
