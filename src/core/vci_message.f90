@@ -46,7 +46,8 @@ contains
     write (s, '(i0)') i
   end function i8_text
 
-  !> A real in the edit descriptor fmt (say '(es14.7)', at most 40 characters wide), left-adjusted.
+  !> A real in the edit descriptor fmt (say '(es14.7)', at most 40 characters wide), as an internal
+  !> write puts it in a message (its field's leading blanks kept: messages read as before).
   pure function vci_real_text(x, fmt) result(s)
     real(dp), intent(in) :: x
     character(len=*), intent(in) :: fmt
@@ -54,6 +55,5 @@ contains
     integer :: ios
     write (s, fmt, iostat=ios) x
     if (ios /= 0) s = '?'
-    s = adjustl(s)
   end function vci_real_text
 end module vci_message
