@@ -393,7 +393,12 @@ contains
 #endif
     stat = VCI_OK
     if (.not. self%is_open) return
-    if (self%discarded) then      ! the message says why; the disk keeps every block written before
+#ifdef VCI_HAVE_MPI
+    ! a rank whose writes failed abandons; every rank must take that branch with it (collective)
+    if (self%discarded) stat = VCI_ERR_IO
+    call sync(self, stat)
+#endif
+    if (self%discarded .or. stat /= VCI_OK) then   ! the message says why; the disk keeps every block written before
       call f_abandon(self)
       stat = VCI_ERR_IO; return
     end if
