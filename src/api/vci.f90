@@ -2,6 +2,7 @@
 module vci
   use vci_kinds, only: dp, i8
   use vci_status
+  use vci_message, only: VCI_MSG_CUT
   use vci_model_base, only: vci_model_base_t
   use vci_model, only: vci_model_t
   use vci_lagrangian, only: vci_lagrangian_t

@@ -15,7 +15,9 @@
 !> A write that fails (a full disk) ends the file's writing: its descriptor is pointed at a sink
 !> (vci_h5_io's h5io_discard_writes, as the run writer does), so that HDF5 closes it without touching
 !> the disk again, and the disk keeps the metadata flushed at creation and every block written
-!> before. Under MPI a failure inside create is made every rank's before the next collective call.
+!> before. Under MPI a failure inside create is made every rank's before the next collective call;
+!> abandoning, every rank discards its own writes before the collective close; a successful close
+!> leaves the totals to rank 0 alone, through the serial driver after the collective close.
 module vci_ensemble_h5
   use, intrinsic :: iso_c_binding, only: c_ptr, c_loc, c_null_ptr
   use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
@@ -27,6 +29,7 @@ module vci_ensemble_h5
   use vci_kinds, only: dp, i8
   use vci_status, only: VCI_OK, VCI_ERR_IO, VCI_ERR_ARGUMENT, VCI_MSG_LEN
   use vci_h5_io, only: h5io_put_attr, h5io_get_attr, h5io_string_type, h5io_check_dims, h5io_discard_writes, &
+                       h5io_discard_path, &
                        h5io_os_cause, h5io_free_bytes
   use vci_ensemble, only: vci_ensemble_config_t, vci_ensemble_table_t, vci_ensemble_results_t, &
                           vci_ensemble_samples, vci_ensemble_results_alloc, vci_ensemble_size, &
@@ -68,6 +71,7 @@ module vci_ensemble_h5
     integer(hid_t), private :: file = -1
     integer(hid_t), private :: d(N_DSETS) = -1
     logical, private :: discarded = .false.   !< a write failed: nothing more reaches the file
+    logical, private :: parallel = .false.    !< opened collectively through the MPI-IO driver
 #ifdef VCI_HAVE_MPI
     type(MPI_Comm), private :: comm
 #endif
@@ -126,8 +130,10 @@ contains
     self%samples = vci_ensemble_samples(config)
     self%d = -1
     self%discarded = .false.
+    self%parallel = .false.
 #ifdef VCI_HAVE_MPI
     self%comm = comm
+    self%parallel = .true.
 #endif
     replace = .false.
     if (present(overwrite)) replace = overwrite
@@ -382,12 +388,59 @@ contains
     integer, intent(in) :: members_run, members_failed
     integer, intent(out) :: stat
     integer :: i, err
+#ifdef VCI_HAVE_MPI
+    integer :: rank
+#endif
     stat = VCI_OK
     if (.not. self%is_open) return
-    if (self%discarded) then      ! the message says why; the disk keeps every block written before
+#ifdef VCI_HAVE_MPI
+    ! a rank whose writes failed abandons; every rank must take that branch with it (collective)
+    if (self%discarded) stat = VCI_ERR_IO
+    call sync(self, stat)
+#endif
+    if (self%discarded .or. stat /= VCI_OK) then   ! the message says why; the disk keeps every block written before
       call f_abandon(self)
       stat = VCI_ERR_IO; return
     end if
+#ifdef VCI_HAVE_MPI
+    ! The parallel file is closed as it was flushed at creation: its metadata are unchanged, so the
+    ! collective close has nothing to write that a full disk could fail half-way (parallel HDF5's
+    ! metadata flush leaves rank 0 at a failed write while the others wait for it). Rank 0 then
+    ! records the totals alone through the serial driver, where a failure is discarded as in one
+    ! process, and every rank learns the outcome.
+    do i = 1, N_DSETS
+      if (self%d(i) >= 0) call h5dclose_f(self%d(i), err)
+      self%d(i) = -1
+    end do
+    call h5fclose_f(self%file, err)
+    self%is_open = .false.
+    if (err /= 0) call fail(self, 'cannot close the file', stat)
+    call sync(self, stat)
+    if (stat /= VCI_OK) return
+    call MPI_Comm_rank(self%comm, rank, err)
+    if (rank == 0) then
+      call h5fopen_f(self%path, H5F_ACC_RDWR_F, self%file, err)
+      if (err /= 0) then
+        call fail(self, 'cannot reopen the file to record the totals'//os_cause(), stat)
+      else
+        self%is_open = .true.
+        self%parallel = .false.
+        call write_totals(self, members_run, members_failed, stat)
+      end if
+    end if
+    call sync(self, stat)
+#else
+    call write_totals(self, members_run, members_failed, stat)
+#endif
+  end subroutine f_close
+
+  !> The totals and `complete` written into the open file (one process), flushed and closed; on a
+  !> failure the file is abandoned (its descriptor discarded) and closed all the same.
+  subroutine write_totals(self, members_run, members_failed, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    integer, intent(in) :: members_run, members_failed
+    integer, intent(inout) :: stat
+    integer :: i, err
     call h5io_put_attr(self%file, 'members_run', members_run, stat, self%message, who(self))
     call h5io_put_attr(self%file, 'members_failed', members_failed, stat, self%message, who(self))
     call h5io_put_attr(self%file, 'complete', merge(1, 0, members_run == self%n_members), stat, self%message, who(self))
@@ -406,7 +459,7 @@ contains
     call h5fclose_f(self%file, err)
     if (err /= 0 .and. stat == VCI_OK) call fail(self, 'cannot close the file', stat)
     self%is_open = .false.
-  end subroutine f_close
+  end subroutine write_totals
 
   !> Stop writing: what HDF5 still holds goes to a sink (serial files; see the module's head), then
   !> close. The file keeps its metadata as flushed at creation and every block of members written
@@ -415,13 +468,13 @@ contains
     class(vci_ensemble_file_t), intent(inout) :: self
     integer :: i, err
     if (.not. self%is_open) return
-    if (.not. self%discarded) call discard(self)
+    ! in parallel every rank points its own descriptor at the sink, failed or not: the collective
+    ! close's metadata flush (rank 0 writes) then cannot fail on one rank and hang the others
+    if (.not. self%discarded .or. self%parallel) call discard(self)
     self%discarded = .true.
     ! a metadata flush that failed half-way (a full disk) is completed into the sink: HDF5 1.10
     ! can neither close a file with such a flush pending nor leave it (it crashed at exit)
-#ifndef VCI_HAVE_MPI
-    call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
-#endif
+    if (.not. self%parallel) call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
     do i = 1, N_DSETS
       if (self%d(i) >= 0) call h5dclose_f(self%d(i), err)
       self%d(i) = -1
@@ -486,14 +539,18 @@ contains
 #endif
   end subroutine sync
 
-  !> Point the file's descriptor at a sink (vci_h5_io). Serial files only: the MPI-IO driver has no
-  !> descriptor to redirect, and asking HDF5 for the driver of such a file is itself collective
-  !> (H5Fget_access_plist duplicates the communicator), which one failed rank cannot call alone.
+  !> Point the file's descriptor at a sink (vci_h5_io), this process's only (not collective). A
+  !> parallel file's descriptors are found by the file's path: HDF5 does not hand out the MPI-IO
+  !> driver's, and asking it for the driver of such a file is itself collective (H5Fget_access_plist
+  !> duplicates the communicator), which one failed rank cannot call alone.
   subroutine discard(self)
     type(vci_ensemble_file_t), intent(inout) :: self
-#ifndef VCI_HAVE_MPI
-    call h5io_discard_writes(self%file)
-#endif
+    integer :: redirected
+    if (self%parallel) then
+      redirected = h5io_discard_path(self%path)
+    else
+      call h5io_discard_writes(self%file)
+    end if
     self%discarded = .true.
   end subroutine discard
 

@@ -21,6 +21,7 @@
 module vci_explicit_step
   use vci_kinds, only: dp, i8
   use vci_status
+  use vci_message, only: vci_set_message, vci_int_text
   use vci_composition, only: vci_composition_t
   use vci_separable, only: vci_separable_t
   use vci_observer, only: vci_impact_t
@@ -548,7 +549,8 @@ contains
     character(len=*), intent(inout) :: cause
     select case (stat)
     case (VCI_ERR_CALLBACK)
-      write (cause, '(a,i0,a)') what//': a callback of the model reported failure (stat = ', self%map%failed_stat, ')'
+      call vci_set_message(cause, what//': a callback of the model reported failure (stat = '// &
+        trim(vci_int_text(self%map%failed_stat))//')')
     case (VCI_ERR_NONFINITE)
       cause = what//': a callback of the model returned NaN or Inf'
     case (VCI_ERR_MEMORY)

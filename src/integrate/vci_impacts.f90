@@ -345,7 +345,8 @@ contains
     alpha = self%sys%get_extra(self%x, KIND_STAGE1)
     if (.not. (alpha > 0.0_dp .and. alpha <= 1.0_dp)) then
       stat = VCI_ERR_IMPACT
-      write (self%cause, '(a,es10.3,a)') trim(what)//': impact fraction ', alpha, ' outside (0, 1]'
+      call vci_set_message(self%cause, trim(what)//': impact fraction '//trim(vci_real_text(alpha, '(es10.3)'))// &
+        ' outside (0, 1]')
     end if
   end subroutine stage_wall
 

@@ -12,6 +12,7 @@ module vci_integrator
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_value, ieee_quiet_nan
   use vci_kinds, only: dp, i8
   use vci_status
+  use vci_message, only: vci_set_message, vci_int_text, vci_real_text
   use vci_model_base, only: vci_model_base_t
   use vci_model, only: vci_model_t
   use vci_lagrangian, only: vci_lagrangian_t
@@ -706,8 +707,8 @@ contains
     if (stat /= VCI_OK) then
       dname = 'forward'
       if (direction < 0) dname = 'backward'
-      write (self%last_message, '(a,i0,a,es14.7,a)') 'step from index ', self%state%k, ' (t = ', t, ', '// &
-        trim(dname)//'): '//trim(self%stepper%failure_cause())
+      call vci_set_message(self%last_message, 'step from index '//trim(vci_int_text(self%state%k))//' (t = '// &
+        trim(vci_real_text(t, '(es14.7)'))//', '//trim(dname)//'): '//trim(self%stepper%failure_cause()))
       call keep_failure(self, stat); return
     end if
     t = self%time()

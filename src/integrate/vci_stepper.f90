@@ -13,6 +13,7 @@ module vci_stepper
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_value, ieee_quiet_nan
   use vci_kinds, only: dp, i8
   use vci_status
+  use vci_message, only: vci_set_message, vci_int_text, vci_real_text
   use vci_newton, only: vci_newton_t, vci_newton_result_t, NEWTON_MAX_ITERATIONS, NEWTON_NO_DESCENT, &
                         NEWTON_SINGULAR, NEWTON_EVALUATION, NEWTON_NONFINITE, NEWTON_STRUCTURE
   use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_STAGE1, KIND_STAGE2, KIND_IMPULSE, &
@@ -566,12 +567,12 @@ contains
     if (stat == VCI_OK) return
     select case (res%reason)
     case (NEWTON_MAX_ITERATIONS)
-      write (self%cause, '(a,i0,a,es9.2,a)') what//': Newton did not converge in ', res%iterations, &
-        ' iterations (scaled residual ', res%scaled_residual, ')'
+      call vci_set_message(self%cause, what//': Newton did not converge in '//trim(vci_int_text(res%iterations))// &
+        ' iterations (scaled residual '//trim(vci_real_text(res%scaled_residual, '(es9.2)'))//')')
       call explain_newton(self, nx)
     case (NEWTON_NO_DESCENT)
-      write (self%cause, '(a,es9.2,a)') what//': Newton line search found no decrease (scaled residual ', &
-        res%scaled_residual, ')'
+      call vci_set_message(self%cause, what//': Newton line search found no decrease (scaled residual '// &
+        trim(vci_real_text(res%scaled_residual, '(es9.2)'))//')')
       call explain_newton(self, nx)
     case (NEWTON_SINGULAR)
       self%cause = what//': Newton matrix singular and least-squares solve failed'
@@ -579,8 +580,8 @@ contains
     case (NEWTON_NONFINITE)
       self%cause = what//': residual or Newton matrix not finite (callback values overflow)'
     case (NEWTON_STRUCTURE)      ! (the debug check of a declared Hessian bandwidth)
-      write (self%cause, '(a,i0,a,i0,a)') what//': the Newton matrix has a nonzero at (', res%bad_row, ', ', &
-        res%bad_col, ') outside the Hessian bandwidth the model declared'
+      call vci_set_message(self%cause, what//': the Newton matrix has a nonzero at ('//trim(vci_int_text(res%bad_row))// &
+        ', '//trim(vci_int_text(res%bad_col))//') outside the Hessian bandwidth the model declared')
     case (NEWTON_EVALUATION)
       if (stat == VCI_ERR_NONFINITE) then
         self%cause = what//': callback '//trim(self%sys%failed_callback)//' returned NaN or Inf'

@@ -17,7 +17,7 @@ module vci_h5_io
   implicit none
   private
 
-  public :: h5io_fail, h5io_os_cause, h5io_discard_writes, h5io_free_bytes, h5io_path_kind
+  public :: h5io_fail, h5io_os_cause, h5io_discard_writes, h5io_discard_path, h5io_free_bytes, h5io_path_kind
   public :: h5io_put_attr, h5io_get_attr
   public :: h5io_make_rows, h5io_open_dset, h5io_rows, h5io_append_rows, h5io_read_row, h5io_read_i8, h5io_check_dims
   public :: h5io_put_vector, h5io_get_vector, h5io_close_dset, h5io_string_type
@@ -62,6 +62,11 @@ module vci_h5_io
       import :: c_int
       integer(c_int), value :: fd
     end function vci_discard_fd
+    !> src/io/vci_fd_discard.c: every descriptor on the file at path pointed at a sink; how many, or -1
+    integer(c_int) function vci_discard_path(path) bind(C, name='vci_discard_path')
+      import :: c_int, c_char
+      character(kind=c_char), intent(in) :: path(*)
+    end function vci_discard_path
     !> src/io/vci_fs_space.c: bytes free where path would be written, -1 when unknown
     integer(c_long_long) function vci_free_bytes(path) bind(C, name='vci_free_bytes')
       import :: c_long_long, c_char
@@ -149,6 +154,14 @@ contains
       r = vci_discard_fd(fd)   ! (src/io/vci_fd_discard.c: a sink that also takes HDF5's ftruncate at close)
     end if
   end subroutine h5io_discard_writes
+
+  !> Point this process's descriptors of the file at PATH at a sink (vci_fd_discard.c), for drivers
+  !> whose descriptor HDF5 does not hand out (MPI-IO); local, not collective. How many were redirected,
+  !> or -1 when this system cannot tell.
+  integer function h5io_discard_path(path)
+    character(len=*), intent(in) :: path
+    h5io_discard_path = int(vci_discard_path(path//c_null_char))
+  end function h5io_discard_path
 
   !> Bytes free on the file system that would hold PATH (the file need not exist); -1 when unknown.
   integer(i8) function h5io_free_bytes(path)

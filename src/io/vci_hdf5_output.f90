@@ -22,6 +22,7 @@ module vci_hdf5_output
   use vci_kinds, only: dp, i8
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use vci_status, only: VCI_OK, VCI_ERR_IO, VCI_MSG_LEN
+  use vci_message, only: vci_set_message, vci_int_text
   use vci_limits, only: vci_size_problem
   use vci_observer, only: vci_observer_t, vci_run_info_t, vci_impact_t
   use vci_h5_io
@@ -205,8 +206,8 @@ contains
       self%is_open = .true.
       call open_existing(self, stat)
       if (stat == VCI_OK .and. every_asked > 0 .and. every_asked /= self%every) then
-        write (self%message, '(a,i0,a,i0,a)') self%path//': cannot append: the file stores every ', self%every, &
-          '-th state, not every ', every_asked, '-th'
+        call vci_set_message(self%message, self%path//': cannot append: the file stores every '// &
+          trim(vci_int_text(self%every))//'-th state, not every '//trim(vci_int_text(every_asked))//'-th')
         stat = VCI_ERR_IO
       end if
       if (stat /= VCI_OK) call w_close(self)
@@ -404,8 +405,9 @@ contains
       self%message = ''; return      ! unreadable: no usable checkpoint, the last row serves
     end if
     if (self%cp_version > VCI_CHECKPOINT_VERSION) then
-      write (self%message, '(a,i0,a,i0,a)') self%path//': its checkpoint has layout version ', self%cp_version, &
-        ', newer than this library''s ', VCI_CHECKPOINT_VERSION, ' (written by a newer vci: continue it with that one)'
+      call vci_set_message(self%message, self%path//': its checkpoint has layout version '// &
+        trim(vci_int_text(self%cp_version))//', newer than this library''s '// &
+        trim(vci_int_text(VCI_CHECKPOINT_VERSION))//' (written by a newer vci: continue it with that one)')
       stat = VCI_ERR_IO; return
     end if
     if (self%cp_version /= VCI_CHECKPOINT_VERSION) return   ! an older layout: the last row serves
