@@ -244,7 +244,7 @@ int  vci_set_tolerances(vci_integrator integ, double atol, double rtol, int max_
  *  callback; VCI_ERR_STATE: busy. */
 int  vci_set_impact_energy(vci_integrator integ, int mode);
 
-/** Impacts allowed inside one step before VCI_ERR_TOO_MANY_IMPACTS (default 16); the records
+/** Impacts allowed inside one step before VCI_ERR_TOO_MANY_IMPACTS (default max(16, 4 ngaps)); the records
  *  grow on demand, so a large bound costs nothing up front.
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, max_impacts < 1; VCI_ERR_STATE: busy. */
 int  vci_set_max_impacts(vci_integrator integ, int max_impacts);

@@ -124,11 +124,12 @@ class Integrator:
     """Integrate a model with step h.
 
     Integrator(model, h, scheme=None, stages=None, rtol=1e-12, atol=0.0, max_iterations=30,
-               impact_energy='discrete', max_impacts=16, on_impact=None)
+               impact_energy='discrete', max_impacts=None, on_impact=None)
 
     scheme ('left', 'midpoint', 'lobatto' with stages = s in 1..8, 'composition' with stages = the
     order) is for a LagrangianModel only (default 'midpoint'); 'composition' takes only the library's
-    separable models, so a Python model gets ArgumentError from the library. impact_energy 'hamiltonian' keeps H(q, p) at impacts. on_impact(record)
+    separable models, so a Python model gets ArgumentError from the library. impact_energy 'hamiltonian' keeps H(q, p) at impacts.
+    max_impacts bounds the impacts of one step (default: the library's max(16, 4 ngaps)). on_impact(record)
     is called at each impact with a record of impact_dtype; every impact is also kept in
     `impacts` (cleared by the next init_*).
     """

@@ -27,6 +27,7 @@ module vci_explicit_step
   use vci_observer, only: vci_impact_t
   use vci_state, only: vci_impact_buffer_t, vci_state_t
   use vci_scheme, only: VCI_IMPACT_HAMILTONIAN
+  use vci_settings, only: vci_too_many_impacts_cause
   implicit none
   private
 
@@ -202,7 +203,7 @@ contains
       if (jbest == 0) exit
       if (impacts%count >= max_impacts) then
         stat = VCI_ERR_TOO_MANY_IMPACTS
-        write (cause, '(a,i0,a)') 'more than ', max_impacts, ' impacts in one step (persistent contact or chatter)'
+        cause = vci_too_many_impacts_cause(max_impacts)
         return
       end if
       ! stage 2: the exact reflection at the wall point of the composed map over best * tau

@@ -35,8 +35,7 @@ contains
       if (all(self%gaps_end(1:self%ng) >= 0.0_dp)) exit
       if (impacts%count >= self%settings%max_impacts_per_step) then
         stat = VCI_ERR_TOO_MANY_IMPACTS
-        write (self%cause, '(a,i0,a)') 'more than ', self%settings%max_impacts_per_step, &
-          ' impacts in one step (persistent contact or chatter)'
+        self%cause = vci_too_many_impacts_cause(self%settings%max_impacts_per_step)
         return
       end if
       call self%sys%eval_gaps(self%q_start, self%gaps_start(1:self%ng), stat)

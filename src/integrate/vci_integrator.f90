@@ -17,7 +17,7 @@ module vci_integrator
   use vci_model, only: vci_model_t
   use vci_lagrangian, only: vci_lagrangian_t
   use vci_limits, only: vci_size_problem
-  use vci_settings, only: vci_settings_t, vci_solver_stats_t
+  use vci_settings, only: vci_settings_t, vci_solver_stats_t, vci_default_max_impacts
   use vci_state, only: vci_state_t, vci_impact_buffer_t
   use vci_stepper, only: vci_stepper_t
   use vci_scheme, only: vci_scheme_t, VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN, VCI_IMPACT_BLENDED, VCI_SCHEME_DISCRETE, &
@@ -96,7 +96,7 @@ module vci_integrator
     procedure :: set_tolerances
     !> Impact energy condition: VCI_IMPACT_DISCRETE (the paper's, default) or VCI_IMPACT_HAMILTONIAN.
     procedure :: set_impact_energy
-    !> Bound on impacts resolved inside one step (default 16).
+    !> Bound on impacts resolved inside one step (default max(16, 4 n_gaps): vci_default_max_impacts).
     procedure :: set_max_impacts
     !> The safety net: retry a failed step as up to max_splits equal sub-steps (1: off).
     procedure :: set_step_splits
@@ -228,6 +228,7 @@ contains
     real(dp), intent(in) :: h
     integer, intent(out) :: stat
     character(len=80) :: why
+    type(vci_settings_t) :: settings
     self%created = .false.; self%initialized = .false.
     self%steps_taken = 0_i8; self%impacts_found = 0_i8; self%impacts%count = 0
     ! sizes checked before anything is allocated (vci_limits)
@@ -243,6 +244,12 @@ contains
     end if
     self%model => model
     self%state%h = h
+    ! the impacts-per-step bound scales with the walls, unless the caller chose it
+    settings = self%stepper%current_settings()
+    if (.not. settings%max_impacts_chosen) then
+      settings%max_impacts_per_step = vci_default_max_impacts(model%n_gaps)
+      call self%stepper%configure(settings)
+    end if
     call self%state%reserve(model%n, model%m, stat)
     if (stat /= VCI_OK) then
       call out_of_memory(self, 'create', model, stat); return
@@ -477,7 +484,7 @@ contains
     call finish(self, VCI_OK, stat)
   end subroutine set_impact_energy
 
-  !> Bound on impacts resolved inside one step (default 16).
+  !> Bound on impacts resolved inside one step (default max(16, 4 n_gaps): vci_default_max_impacts).
   subroutine set_max_impacts(self, max_impacts, stat)
     class(vci_integrator_t), intent(inout) :: self
     integer, intent(in) :: max_impacts
@@ -489,6 +496,7 @@ contains
     end if
     settings = self%stepper%current_settings()
     settings%max_impacts_per_step = max_impacts
+    settings%max_impacts_chosen = .true.
     call self%stepper%configure(settings)   ! the impact records grow on demand up to it
     call finish(self, VCI_OK, stat)
   end subroutine set_max_impacts

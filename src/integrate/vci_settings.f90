@@ -12,13 +12,18 @@ module vci_settings
     real(dp) :: atol = 0.0_dp            !< absolute floor of Newton's per-row tolerance
     real(dp) :: rtol = 1.0e-12_dp        !< Newton tolerance relative to the size of each row's terms
     integer :: max_iterations = 30       !< Newton iteration cap per solve
-    integer :: max_impacts_per_step = 16 !< beyond this: VCI_ERR_TOO_MANY_IMPACTS (contact, chatter)
+    !> Beyond this: VCI_ERR_TOO_MANY_IMPACTS (contact, chatter, a Zeno-like sequence). Until
+    !> set_max_impacts chooses it, create sets it from the model: vci_default_max_impacts(n_gaps).
+    integer :: max_impacts_per_step = 16
+    logical :: max_impacts_chosen = .false. !< set_max_impacts chose it (create keeps it then)
     integer :: impact_energy = VCI_IMPACT_DISCRETE  !< VCI_IMPACT_DISCRETE or VCI_IMPACT_HAMILTONIAN
     !> The safety net (docs/DESIGN.md §2, "Steps that cannot be solved"): a step whose impacts or
     !> Newton fail is retried as 2, 4, ... equal sub-steps of the same scheme, up to this many;
     !> 1 turns the net off (the step then fails with its own status).
     integer :: max_step_splits = 16
   end type vci_settings_t
+
+  public :: vci_default_max_impacts, vci_too_many_impacts_cause
 
   !> Cumulative solver statistics.
   type, public :: vci_solver_stats_t
@@ -30,4 +35,26 @@ module vci_settings
     integer(i8) :: split_steps = 0       !< steps the safety net took as equal sub-steps
     integer(i8) :: largest_split = 0     !< the most sub-steps one of them needed
   end type vci_solver_stats_t
+contains
+
+  !> The default bound on impacts in one step for a model with n_gaps walls (docs/DESIGN.md §2,
+  !> "Several impacts in one step"): max(16, 4 n_gaps). A step may meet every wall (a chain of n
+  !> particles between walls: 2n gaps, a wave reaching them together), and a wall more than once
+  !> (a corner, a bounce back); 16 covers the few walls of small scenes. Beyond it the step fails
+  !> (and the safety net retries it in parts, each with the same bound).
+  pure integer function vci_default_max_impacts(n_gaps) result(bound)
+    integer, intent(in) :: n_gaps
+    bound = max(16, 4 * n_gaps)
+  end function vci_default_max_impacts
+
+  !> The cause of VCI_ERR_TOO_MANY_IMPACTS: the bound, what reaches it and how to raise it (the
+  !> driver puts the step and the time before it).
+  pure function vci_too_many_impacts_cause(bound) result(cause)
+    integer, intent(in) :: bound
+    character(len=:), allocatable :: cause
+    character(len=16) :: b
+    write (b, '(i0)') bound
+    cause = 'more than '//trim(b)//' impacts in one step (the bound; contact, chatter or impacts '// &
+            'accumulating at one time; set_max_impacts raises it)'
+  end function vci_too_many_impacts_cause
 end module vci_settings

@@ -19,7 +19,7 @@ module vci_stepper
   use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_STAGE1, KIND_STAGE2, KIND_IMPULSE, &
                         VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN, VCI_IMPACT_BLENDED
   use vci_observer, only: vci_impact_t
-  use vci_settings, only: vci_settings_t, vci_solver_stats_t
+  use vci_settings, only: vci_settings_t, vci_solver_stats_t, vci_too_many_impacts_cause
   use vci_state, only: vci_state_t, vci_impact_buffer_t
   use vci_predictor, only: vci_predict_start
   use vci_explicit_step, only: vci_explicit_t
