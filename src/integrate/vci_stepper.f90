@@ -288,11 +288,13 @@ contains
     call self%newton%forget_factors()
   end subroutine forget_factors
 
-  subroutine use_model_derivatives(self, mixed_hessian, gap_gradients, constraint_jacobian, energy)
+  subroutine use_model_derivatives(self, mixed_hessian, gap_gradients, constraint_jacobian, energy, gap_gradient)
     class(vci_stepper_t), intent(inout) :: self
     logical, intent(in), optional :: mixed_hessian, gap_gradients, constraint_jacobian
     logical, intent(in), optional :: energy   !< the model has H(q, p) (the discrete condition's fallback)
+    logical, intent(in), optional :: gap_gradient   !< the model has one wall's gradient (gap_gradient)
     if (present(energy)) self%has_energy = energy
+    if (present(gap_gradient)) self%sys%has_gap_gradient = gap_gradient
     call self%sys%use_derivatives(mixed_hessian, gap_gradients, constraint_jacobian)
   end subroutine use_model_derivatives
 

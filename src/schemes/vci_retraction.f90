@@ -145,6 +145,7 @@ contains
       call self%not_provided(stat); return
     end if
     call point_velocity(self, q, v, h)
+    if (self%hessian_bandwidth >= 0) hess = 0.0_dp   ! (mixed_block writes the band only)
     call mixed_block(self, h, hess, stat)
   end subroutine mixed_hessian
 
@@ -169,14 +170,14 @@ contains
   end subroutine mixed_block
 
   !> mixed_block's formulas on the declared band only (the blocks vanish outside it): O(n bw)
-  !> arithmetic, and no transpose temporary.
+  !> arithmetic, no transpose temporary; the entries outside the band are not written (the caller
+  !> zeroed them: Newton's matrix is zeroed on its band alone, vci_scheme's zero_jacobian).
   subroutine banded_mixed_block(self, h, hess)
     class(vci_retraction_model_t), intent(inout) :: self
     real(dp), intent(in) :: h
-    real(dp), intent(out) :: hess(:, :)
+    real(dp), intent(inout) :: hess(:, :)
     integer :: i, j, n, bw
     n = size(hess, 1); bw = self%hessian_bandwidth
-    hess = 0.0_dp
     do j = 1, n
       do i = max(1, j - bw), min(n, j + bw)
         if (self%rule == RETRACTION_LEFT) then
@@ -313,9 +314,9 @@ contains
     class(vci_retraction_model_t), intent(inout) :: self
     real(dp), intent(in) :: a(:), d(:), h
     integer, intent(in) :: dir
-    real(dp), intent(out) :: jac(:, :)
+    real(dp), intent(inout) :: jac(:, :)
     integer, intent(inout) :: stat
-    integer :: s, i, j
+    integer :: s, i, j, bw
     real(dp) :: t
     if (.not. self%work%has_hessians) then
       jac = 0.0_dp
@@ -329,9 +330,12 @@ contains
     end if
     if (dir >= 0) return
     ! jac = -transpose(jac) in place: the array expression would put a temporary on the heap
+    ! (on the band alone when one is declared: the rest is zero)
+    bw = size(jac, 1)
+    if (self%hessian_bandwidth >= 0 .and. .not. self%check_bandwidth) bw = self%hessian_bandwidth
     do j = 1, size(jac, 2)
       jac(j, j) = -jac(j, j)
-      do i = j + 1, size(jac, 1)
+      do i = j + 1, min(size(jac, 1), j + bw)
         t = jac(i, j); jac(i, j) = -jac(j, i); jac(j, i) = -t
       end do
     end do
