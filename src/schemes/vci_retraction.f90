@@ -33,6 +33,7 @@ module vci_retraction
   contains
     procedure :: bind
     procedure :: d1, d2, d3, mixed_hessian, constraint_forms, discrete_constraint, gaps, gap_gradients, energy
+    procedure :: gap_gradient
     procedure :: impulse_inc
     procedure :: d1s_inc, pout_inc, energy_inc, jacobian_inc, constraint_inc
   end type vci_retraction_model_t
@@ -374,6 +375,15 @@ contains
     integer, intent(inout) :: stat
     call self%lag%gap_gradients(q, dg, stat)
   end subroutine gap_gradients
+
+  subroutine gap_gradient(self, q, j, dg, stat)
+    class(vci_retraction_model_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    integer, intent(in) :: j
+    real(dp), intent(out) :: dg(:)
+    integer, intent(inout) :: stat
+    call self%lag%gap_gradient(q, j, dg, stat)
+  end subroutine gap_gradient
 
   !> H(q, p): the model's, else E(q, w) with dL/dqdot(q, w) = p.
   subroutine energy(self, q, p, e, stat)
