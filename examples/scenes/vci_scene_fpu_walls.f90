@@ -19,9 +19,11 @@ module vci_scene_fpu_walls
 
   type, extends(vci_lagrangian_t), public :: fpu_walls_lagrangian_t
     real(dp) :: beta = 1.0_dp, w = 0.6_dp
+    logical :: one_wall_gradient = .true.   !< supply gap_gradient (one wall's gradient, O(n))
   contains
     procedure :: lagrangian => fl_lagrangian, dl_dq => fl_dl_dq, dl_dv => fl_dl_dv, hessians => fl_hessians
     procedure :: gaps => fl_gaps, gap_gradients => fl_gap_grads, energy => fl_energy
+    procedure :: gap_gradient => fl_gap_grad
   end type fpu_walls_lagrangian_t
 
   public :: fpu_walls_model, fpu_walls_lagrangian_model
@@ -214,6 +216,27 @@ contains
     integer, intent(inout) :: stat
     call wall_gap_gradients(q, dg)
   end subroutine fl_gap_grads
+
+  !> One wall's gradient: -e_i for g_i = w - q_i, +e_i for g_{n+i} = w + q_i (O(n), where
+  !> gap_gradients fills n x 2n); "not provided" when one_wall_gradient is off (tests compare both).
+  subroutine fl_gap_grad(self, q, j, dg, stat)
+    class(fpu_walls_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    integer, intent(in) :: j
+    real(dp), intent(out) :: dg(:)
+    integer, intent(inout) :: stat
+    integer :: n
+    dg = 0.0_dp
+    if (.not. self%one_wall_gradient) then
+      call self%not_provided(stat); return
+    end if
+    n = size(q)
+    if (j <= n) then
+      dg(j) = -1.0_dp
+    else
+      dg(j - n) = 1.0_dp
+    end if
+  end subroutine fl_gap_grad
 
   !> H(q, p) = |p|^2/2 + V_total(q).
   subroutine fl_energy(self, q, p, e, stat)

@@ -14,6 +14,7 @@ module vci_kernels
   implicit none
   private
 
+  public :: band_jacobian_sizes
   public :: momentum_terms, kinetic_and_floor, jacobian_sizes, equilibrate, scaled_merit, small_lu, small_lu_solve
   public :: substep_rows, substep_direction, pivots_regular
   public :: lobatto_nodes, lobatto_forces, lobatto_blocks
@@ -77,6 +78,39 @@ contains
       end do
     end do
   end subroutine jacobian_sizes
+
+  !> jacobian_sizes for a matrix whose leading nb x nb block vanishes outside |i - j| <= bw (a declared
+  !> band, vci_banded): the band and the dense border only, O(nx bw + nx (nx - nb)); jabs is written
+  !> there alone (its other entries are not read by band-aware callers).
+  pure subroutine band_jacobian_sizes(nx, nb, bw, jac, sizes, lda, jabs, jscale)
+    integer, intent(in) :: nx, nb, bw, lda
+    real(dp), intent(in) :: jac(:, :), sizes(nx)
+    real(dp), intent(inout) :: jabs(lda, *)
+    real(dp), intent(out) :: jscale(nx)
+    integer :: i, j
+    real(dp) :: s
+    jscale = 0.0_dp
+    do j = 1, nx
+      if (j <= nb) then
+        do i = max(1, j - bw), min(nb, j + bw)
+          s = abs(jac(i, j))
+          jabs(i, j) = s
+          jscale(i) = jscale(i) + s * sizes(j)
+        end do
+        do i = nb + 1, nx
+          s = abs(jac(i, j))
+          jabs(i, j) = s
+          jscale(i) = jscale(i) + s * sizes(j)
+        end do
+      else
+        do i = 1, nx
+          s = abs(jac(i, j))
+          jabs(i, j) = s
+          jscale(i) = jscale(i) + s * sizes(j)
+        end do
+      end if
+    end do
+  end subroutine band_jacobian_sizes
 
   !> Rows equilibrated by their largest entry (so rows in different units pivot fairly): jac is
   !> scaled in place, lu receives a copy to factorise, dx = r w and rw the weights w.

@@ -430,15 +430,21 @@ contains
     class(vci_system_t), intent(inout), optional :: structured_as
     integer :: rank, nb, bw, i
     logical :: chk
-    if (.not. (all_finite(a(1:n, 1:n)) .and. all_finite(b(1:n)))) then
+    nb = 0; bw = -1; chk = .false.
+    if (present(structured_as)) call structured_as%structure(nb, bw, chk)
+    if (nb > n .or. bw < 0) nb = 0
+    if (nb > 0 .and. .not. chk) then
+      ! a declared band: a's entries outside it were never written (read as zero below)
+      if (.not. (band_rows(self, n, nb, bw, a, size(a, 1)) <= huge(1.0_dp) .and. all_finite(b(1:n)))) then
+        info = -1; return
+      end if
+    else if (.not. (all_finite(a(1:n, 1:n)) .and. all_finite(b(1:n)))) then
       info = -1; return
     end if
     self%rt(1:n) = b(1:n)                  ! the right-hand side, for the fallback
     self%have_lu = .false.            ! the factors below are not a Newton matrix's
-    if (present(structured_as)) then
-      call structured_as%structure(nb, bw, chk)
-      if (nb > 0 .and. nb <= n .and. bw >= 0) then
-        if (.not. band_rows(self, n, nb, bw, a, size(a, 1)) <= huge(1.0_dp)) nb = 0
+    if (nb > 0) then
+      if (band_rows(self, n, nb, bw, a, size(a, 1)) <= huge(1.0_dp)) then
         call self%band%factor(n, nb, bw, a, size(a, 1), self%rw, info)
         if (info == 0) then
           do i = 1, n
@@ -452,6 +458,7 @@ contains
       end if
     end if
     self%lu(1:n, 1:n) = a(1:n, 1:n)
+    if (nb > 0 .and. .not. chk) call zero_outside_band(nb, bw, self%lu, self%capacity)
     call lu_factor(self, n, info)
     if (info == 0) then
       call lu_solve(self, n, b)
@@ -459,6 +466,7 @@ contains
     end if
     ! singular: the minimum-norm least-squares solution, as in the Newton direction
     self%jac(1:n, 1:n) = a(1:n, 1:n)
+    if (nb > 0 .and. .not. chk) call zero_outside_band(nb, bw, self%jac, self%capacity)
     self%dx(1:n) = self%rt(1:n)
     call dgelsd(n, n, 1, self%jac, self%capacity, self%dx, self%capacity, self%sv, 1.0e-12_dp, rank, &
                 self%work, size(self%work), self%iwork, info)
@@ -480,7 +488,9 @@ contains
     if (self%snb > 0) then
       call structured_direction(self, n, factored, res)
       if (factored .or. res%reason /= NEWTON_CONVERGED) return
-      ! a singular band block or Schur complement (or no workspace): the dense path below decides
+      ! a singular band block or Schur complement (or no workspace): the dense path below decides,
+      ! on the matrix with its zeros outside the band written (the assembly wrote the band alone)
+      if (.not. self%scheck) call zero_outside_band(self%snb, self%sbw, self%jac, self%capacity)
     end if
     ! rows equilibrated by their largest entry; jac keeps the equilibrated matrix for the fallback
     call equilibrate(n, self%capacity, self%jac, self%lu, self%r, self%dx, self%rw)
@@ -571,6 +581,22 @@ contains
       if (big > 0.0_dp) self%rw(i) = 1.0_dp / big
     end do
   end function band_rows
+
+  !> a(i, j) = 0 for i, j <= nb with |i - j| > bw: the zeros of a declared band, which a structured
+  !> assembly does not write (O(nb^2): only before a dense fallback).
+  pure subroutine zero_outside_band(nb, bw, a, lda)
+    integer, intent(in) :: nb, bw, lda
+    real(dp), intent(inout) :: a(lda, *)
+    integer :: i, j
+    do j = 1, nb
+      do i = 1, j - bw - 1
+        a(i, j) = 0.0_dp
+      end do
+      do i = j + bw + 1, nb
+        a(i, j) = 0.0_dp
+      end do
+    end do
+  end subroutine zero_outside_band
 
   !> One chord step with the last LU factors; kept only if it does not make the residual worse.
   subroutine polish_step(self, sys, x, n, phi, res)

@@ -39,17 +39,19 @@ contains
         return
       end if
       call self%sys%eval_gaps(self%q_start, self%gaps_start(1:self%ng), stat)
-      if (stat == VCI_OK) call self%sys%eval_gap_gradients(self%q_start, self%gap_grads(:, 1:self%ng), stat)
       if (stat /= VCI_OK) then
         call set_cause(self, 'gap evaluation at the start of the sub-step'); return
       end if
+      self%grad_at_start(1:self%ng) = .false.   ! (each wall's gradient when first needed)
 
       ! Already on a wall and moving into it: the impact is at the start of this sub-step.
       jstar = 0
       do j = 1, self%ng
         if (j == last_gap) cycle   ! just reflected there: the motion leaves it (checked in stage 2)
-        if (self%gaps_end(j) < 0.0_dp .and. on_wall(self, j) .and. &
-            dot_product(self%gap_grads(:, j), self%q_end - self%q_start) < 0.0_dp) then
+        if (self%gaps_end(j) >= 0.0_dp) cycle
+        call start_gradient(self, j, stat)
+        if (stat /= VCI_OK) return
+        if (on_wall(self, j) .and. dot_product(self%gap_grads(:, j), self%q_end - self%q_start) < 0.0_dp) then
           ! the chord points into the wall; so must the motion as it departs (a curved sub-step
           ! may leave the wall first and come back: that is stage 1's business)
           if (departs_into(self, j, tau, stat)) then
@@ -77,10 +79,16 @@ contains
         call self%sys%get_multipliers(self%x, self%lambda_start)
         call self%sys%put_multipliers(self%x_stage1, self%lambda_start)
       else
-        ! Stage 1 on every violated wall; the first one reached (smallest alpha) is the impact.
+        ! Stage 1 on the violated walls; the first one reached (smallest alpha) is the impact. The
+        ! wall the chord crosses first is solved first; then a violated wall is solved only when the
+        ! motion up to the wall found so far has already crossed it (its gap is negative at that
+        ! stage 1's end): one stage-1 solve for most impacts however many walls the sub-step ends
+        ! beyond, not one per violated wall (a chain of n with walls: up to n of them)
         alpha = huge(1.0_dp)
-        do j = 1, self%ng
-          if (self%gaps_end(j) >= 0.0_dp) cycle
+        self%wall_tried(1:self%ng) = .false.
+        j = first_by_chord(self, self%gaps_end)
+        do while (j > 0)
+          self%wall_tried(j) = .true.
           call stage_wall(self, j, tau, alpha_j, stat)
           if (stat /= VCI_OK) return
           if (alpha_j < alpha) then
@@ -88,6 +96,12 @@ contains
             self%x_stage1(1:self%nsub + 1) = self%x(1:self%nsub + 1)
             s1res = self%last_residual
           end if
+          call self%sys%get_endpoint(self%x_stage1, self%q_trial)
+          call self%sys%eval_gaps(self%q_trial, self%gaps_trial(1:self%ng), stat)
+          if (stat /= VCI_OK) then
+            call set_cause(self, 'gap evaluation at the wall'); return
+          end if
+          j = first_by_chord(self, self%gaps_trial)
         end do
         call self%sys%get_endpoint(self%x_stage1, self%q_wall)
         if (self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN) then
@@ -299,6 +313,38 @@ contains
     end function evaluate
   end subroutine tie_to_wall
 
+  !> Of the walls violated at the sub-step's end (gaps_end < 0), not yet tried and with gap(j) < 0,
+  !> the one the chord q_start -> q_end crosses first (smallest g_start / (g_start - g_end)); 0: none.
+  integer function first_by_chord(self, gap)
+    type(vci_stepper_t), intent(in) :: self
+    real(dp), intent(in) :: gap(:)
+    integer :: k
+    real(dp) :: f, best
+    first_by_chord = 0
+    best = huge(1.0_dp)
+    do k = 1, self%ng
+      if (self%wall_tried(k) .or. .not. (self%gaps_end(k) < 0.0_dp .and. gap(k) < 0.0_dp)) cycle
+      f = max(self%gaps_start(k), 0.0_dp) / max(self%gaps_start(k) - self%gaps_end(k), tiny(1.0_dp))
+      if (f < best .or. first_by_chord == 0) then
+        best = f; first_by_chord = k
+      end if
+    end do
+  end function first_by_chord
+
+  !> gap_grads(:, j) = wall j's gradient at q_start, unless it already holds it.
+  subroutine start_gradient(self, j, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: j
+    integer, intent(out) :: stat
+    stat = VCI_OK
+    if (self%grad_at_start(j)) return
+    call self%sys%eval_gap_gradient(self%q_start, j, self%gap_grads(:, j), stat)
+    if (stat /= VCI_OK) then
+      call set_cause(self, 'gap gradient at the start of the sub-step'); return
+    end if
+    self%grad_at_start(j) = .true.
+  end subroutine start_gradient
+
   !> Is configuration a (the sub-step's start) on wall j, to solver tolerance?
   logical function on_wall(self, j)
     type(vci_stepper_t), intent(in) :: self
@@ -320,6 +366,8 @@ contains
     real(dp) :: lo, hi, glo, ghi
     character(len=40) :: what
     what = wall_label('stage 1 (reaching wall ', j)
+    call start_gradient(self, j, stat)
+    if (stat /= VCI_OK) return
     call self%sys%get_multipliers(self%x, self%lambda_start)
     ! Initial guess: the first crossing along the chord a -> b (g is cheap).
     call bracket_crossing(self, ALONG_CHORD, j, tau, lo, hi, glo, ghi, stat)
@@ -506,7 +554,8 @@ contains
     n = self%n; m = self%m; nx0 = self%nsub
     self%impact_condition = self%settings%impact_energy
     what = wall_label('stage 2 (reflecting at wall ', j)
-    call self%sys%eval_gap_gradients(self%q_wall, self%gap_grads(:, 1:self%ng), stat)
+    self%grad_at_start(j) = .false.      ! (column j now holds the gradient at q_wall)
+    call self%sys%eval_gap_gradient(self%q_wall, j, self%gap_grads(:, j), stat)
     if (stat /= VCI_OK) then
       call set_cause(self, 'gap gradients at the wall'); return
     end if

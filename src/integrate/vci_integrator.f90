@@ -582,7 +582,7 @@ contains
     integer, intent(out) :: stat
     real(dp), intent(in), optional :: q1(:)   !< second configuration of a pair: must be admissible too
     integer :: n, s, j
-    real(dp), allocatable :: g(:), omega(:, :), hess(:, :), w(:), dg(:, :), w2(:), cjo(:, :)
+    real(dp), allocatable :: g(:), omega(:, :), hess(:, :), w(:), dg(:, :), w2(:), cjo(:, :), dg1(:)
     self%initialized = .false.
     if (.not. self%created) then
       self%last_message = who//': create the integrator first'
@@ -605,7 +605,7 @@ contains
     end if
     ! optional procedures: each is probed once (vci_model_base: not_provided)
     allocate (hess(n, n), omega(n, max(1, self%model%m)), g(self%model%n_gaps), w(self%model%m), &
-              cjo(self%model%m, n), &
+              cjo(self%model%m, n), dg1(n), &
               dg(n, self%model%n_gaps), w2(self%model%n_gaps), stat=s)
     if (s /= 0) then
       self%last_message = who//': cannot allocate the probes of the model (out of memory)'
@@ -670,9 +670,17 @@ contains
           call finish(self, VCI_ERR_INADMISSIBLE, stat); return
         end if
       end do
+      ! one wall's gradient first: a model that has it need not fill every wall's (O(n n_gaps))
       call self%model%clear_not_provided(); s = 0
-      call self%model%gap_gradients(q0, dg, s)
-      call self%stepper%use_model_derivatives(gap_gradients=.not. self%model%answered_not_provided())
+      call self%model%gap_gradient(q0, 1, dg1, s)
+      if (self%model%answered_not_provided()) then
+        call self%model%clear_not_provided(); s = 0
+        call self%model%gap_gradients(q0, dg, s)
+        call self%stepper%use_model_derivatives(gap_gradients=.not. self%model%answered_not_provided(), &
+                                                gap_gradient=.false.)
+      else
+        call self%stepper%use_model_derivatives(gap_gradients=.false., gap_gradient=.true.)
+      end if
       ! H(q, p) for the impacts where the discrete energy condition has no solution (a continuous
       ! model always has it); the probe's value is discarded
       if (associated(self%lag)) then

@@ -65,6 +65,10 @@ module vci_stepper
     ! Walls (n_gaps) and constraints (m):
     real(dp), allocatable :: gaps_start(:), gaps_end(:), gaps_trial(:)
     real(dp), allocatable :: gap_grads(:, :)  !< at q_start (stage 1), at q_wall (stage 2)
+    !> gap_grads(:, j) holds wall j's gradient at q_start (computed wall by wall, when first needed:
+    !> O(n) a wall with the model's gap_gradient, instead of every wall's at every sub-step)
+    logical, allocatable :: grad_at_start(:)
+    logical, allocatable :: wall_tried(:)     !< stage 1 solved for this wall in this sub-step
     real(dp), allocatable :: lambda_start(:), zero_lambda(:)
     real(dp), allocatable :: x_try(:)         !< stage 2's start: a point on the impulse line
     !> Several impacts in one step: stage 1's state (x, x_stage1; q_end, q_wall, p_arrive) kept while
@@ -157,6 +161,7 @@ contains
               self%rhs(nx), self%res(nx), self%res_scale(nx), self%q_start(n), self%p_start(n), self%q_end(n), &
               self%q_wall(n), self%p_arrive(n), self%p_leave(n), self%chord_velocity(n), self%q_guess(n), &
               self%q_trial(n), self%gaps_start(ngw), self%gaps_end(ngw), self%gaps_trial(ngw), self%gap_grads(n, ngw), &
+              self%grad_at_start(ngw), self%wall_tried(ngw), &
               self%lambda_start(m), self%zero_lambda(m), self%constraint_impulse(m), &
               self%x_try(nx), self%q_new(n), self%p_new(n), self%lambda_new(m), stat=stat)
     if (stat /= 0) then
@@ -180,7 +185,10 @@ contains
     call free1(self%res_scale); call free1(self%q_start); call free1(self%p_start); call free1(self%q_end)
     call free1(self%q_wall); call free1(self%p_arrive); call free1(self%p_leave); call free1(self%chord_velocity)
     call free1(self%q_guess); call free1(self%q_trial); call free1(self%gaps_start); call free1(self%gaps_end)
-    call free1(self%gaps_trial); call free2(self%gap_grads); call free1(self%lambda_start)
+    call free1(self%gaps_trial); call free2(self%gap_grads)
+    if (allocated(self%grad_at_start)) deallocate (self%grad_at_start)
+    if (allocated(self%wall_tried)) deallocate (self%wall_tried)
+    call free1(self%lambda_start)
     call free1(self%zero_lambda); call free1(self%constraint_impulse); call free1(self%x_try)
     call free1(self%q_new); call free1(self%p_new); call free1(self%lambda_new)
     call free2(self%tie_x); call free2(self%tie_q)
@@ -289,11 +297,13 @@ contains
     call self%newton%forget_factors()
   end subroutine forget_factors
 
-  subroutine use_model_derivatives(self, mixed_hessian, gap_gradients, constraint_jacobian, energy)
+  subroutine use_model_derivatives(self, mixed_hessian, gap_gradients, constraint_jacobian, energy, gap_gradient)
     class(vci_stepper_t), intent(inout) :: self
     logical, intent(in), optional :: mixed_hessian, gap_gradients, constraint_jacobian
     logical, intent(in), optional :: energy   !< the model has H(q, p) (the discrete condition's fallback)
+    logical, intent(in), optional :: gap_gradient   !< the model has one wall's gradient (gap_gradient)
     if (present(energy)) self%has_energy = energy
+    if (present(gap_gradient)) self%sys%has_gap_gradient = gap_gradient
     call self%sys%use_derivatives(mixed_hessian, gap_gradients, constraint_jacobian)
   end subroutine use_model_derivatives
 

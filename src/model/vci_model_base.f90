@@ -44,6 +44,9 @@ module vci_model_base
     procedure :: gaps => not_provided_gaps
     !> dg(:, j) = gradient of g_j at q (n x n_gaps).
     procedure :: gap_gradients => not_provided_gap_grads
+    !> dg = gradient of g_j alone at q (n): optional, for many walls that each touch few coordinates
+    !> (O(n) a wall where gap_gradients is O(n n_gaps)); used where one wall's gradient is needed.
+    procedure :: gap_gradient => not_provided_gap_grad
     !> A step-independent energy H(q, p), normally the Hamiltonian (for the 'hamiltonian' impact condition).
     procedure :: energy => not_provided_energy
   end type vci_model_base_t
@@ -112,6 +115,18 @@ contains
     dg = 0.0_dp
     call self%not_provided(stat)
   end subroutine not_provided_gap_grads
+
+  !> dg = gradient of g_j alone at q (n).
+  subroutine not_provided_gap_grad(self, q, j, dg, stat)
+    class(vci_model_base_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    integer, intent(in) :: j
+    real(dp), intent(out) :: dg(:)
+    integer, intent(inout) :: stat
+    dg = 0.0_dp
+    if (j < 0) return
+    call self%not_provided(stat)
+  end subroutine not_provided_gap_grad
 
   !> A step-independent energy H(q, p), normally the Hamiltonian; needed only for the
   !> 'hamiltonian' impact condition (a continuous model gets it by Legendre inversion when absent).

@@ -33,6 +33,7 @@ module vci_retraction
   contains
     procedure :: bind
     procedure :: d1, d2, d3, mixed_hessian, constraint_forms, discrete_constraint, gaps, gap_gradients, energy
+    procedure :: gap_gradient
     procedure :: impulse_inc
     procedure :: d1s_inc, pout_inc, energy_inc, jacobian_inc, constraint_inc
   end type vci_retraction_model_t
@@ -145,6 +146,7 @@ contains
       call self%not_provided(stat); return
     end if
     call point_velocity(self, q, v, h)
+    if (self%hessian_bandwidth >= 0) hess = 0.0_dp   ! (mixed_block writes the band only)
     call mixed_block(self, h, hess, stat)
   end subroutine mixed_hessian
 
@@ -169,14 +171,14 @@ contains
   end subroutine mixed_block
 
   !> mixed_block's formulas on the declared band only (the blocks vanish outside it): O(n bw)
-  !> arithmetic, and no transpose temporary.
+  !> arithmetic, no transpose temporary; the entries outside the band are not written (the caller
+  !> zeroed them: Newton's matrix is zeroed on its band alone, vci_scheme's zero_jacobian).
   subroutine banded_mixed_block(self, h, hess)
     class(vci_retraction_model_t), intent(inout) :: self
     real(dp), intent(in) :: h
-    real(dp), intent(out) :: hess(:, :)
+    real(dp), intent(inout) :: hess(:, :)
     integer :: i, j, n, bw
     n = size(hess, 1); bw = self%hessian_bandwidth
-    hess = 0.0_dp
     do j = 1, n
       do i = max(1, j - bw), min(n, j + bw)
         if (self%rule == RETRACTION_LEFT) then
@@ -313,9 +315,9 @@ contains
     class(vci_retraction_model_t), intent(inout) :: self
     real(dp), intent(in) :: a(:), d(:), h
     integer, intent(in) :: dir
-    real(dp), intent(out) :: jac(:, :)
+    real(dp), intent(inout) :: jac(:, :)
     integer, intent(inout) :: stat
-    integer :: s, i, j
+    integer :: s, i, j, bw
     real(dp) :: t
     if (.not. self%work%has_hessians) then
       jac = 0.0_dp
@@ -329,9 +331,12 @@ contains
     end if
     if (dir >= 0) return
     ! jac = -transpose(jac) in place: the array expression would put a temporary on the heap
+    ! (on the band alone when one is declared: the rest is zero)
+    bw = size(jac, 1)
+    if (self%hessian_bandwidth >= 0 .and. .not. self%check_bandwidth) bw = self%hessian_bandwidth
     do j = 1, size(jac, 2)
       jac(j, j) = -jac(j, j)
-      do i = j + 1, size(jac, 1)
+      do i = j + 1, min(size(jac, 1), j + bw)
         t = jac(i, j); jac(i, j) = -jac(j, i); jac(j, i) = -t
       end do
     end do
@@ -370,6 +375,15 @@ contains
     integer, intent(inout) :: stat
     call self%lag%gap_gradients(q, dg, stat)
   end subroutine gap_gradients
+
+  subroutine gap_gradient(self, q, j, dg, stat)
+    class(vci_retraction_model_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    integer, intent(in) :: j
+    real(dp), intent(out) :: dg(:)
+    integer, intent(inout) :: stat
+    call self%lag%gap_gradient(q, j, dg, stat)
+  end subroutine gap_gradient
 
   !> H(q, p): the model's, else E(q, w) with dL/dqdot(q, w) = p.
   subroutine energy(self, q, p, e, stat)

@@ -19,7 +19,7 @@ module vci_scheme_discrete
   use vci_model, only: vci_model_t
   use vci_retraction, only: vci_retraction_model_t, RETRACTION_LEFT
   use vci_newton, only: vci_large_system, vci_newton_t, vci_newton_result_t
-  use vci_kernels, only: momentum_terms, kinetic_and_floor, jacobian_sizes
+  use vci_kernels, only: momentum_terms, kinetic_and_floor, jacobian_sizes, band_jacobian_sizes
   use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_STAGE1, KIND_STAGE2, KIND_IMPULSE, KIND_PAIR, &
                         VCI_IMPACT_HAMILTONIAN, vci_fd_rel
   implicit none
@@ -40,7 +40,7 @@ module vci_scheme_discrete
     logical :: has_constraint_jacobian = .false.   !< the model's d omega_d (user L_d only)
     real(dp), allocatable, private :: cjo(:, :)   !< the model's d omega_d(a, b) / db
     real(dp), allocatable, private :: d1(:), hess(:, :), g(:), rp(:), rm(:), sp(:), sm(:), xp(:), bb(:)
-    real(dp), allocatable, private :: gg(:, :)   !< gap gradients at stage 1's b (its Jacobian's last row)
+    real(dp), allocatable, private :: gg1(:)   !< the wall's gap gradient at stage 1's b (its Jacobian's last row)
     !> sum_j |dR_i/dx_j| |x_j| from the last Jacobian: the round-off floor of row i (positions are
     !> often large next to their change over a step), added to each row's scale
     real(dp), allocatable, private :: jscale(:)
@@ -164,20 +164,21 @@ contains
                                         self%xp, self%jscale, self%jabs, self%bb, self%start_key, &
                                         self%start_lo, self%end_key, self%end_lo, self%kin, self%cjo, self%sizes, &
                                         self%fjac, self%flu, self%fr, self%fsc, self%frt, self%fsct, self%fxt, &
-                                        self%fdx, self%frw, self%fx0, self%fpiv, self%gg)
+                                        self%fdx, self%frw, self%fx0, self%fpiv, self%gg1)
     allocate (self%fjac(n + m, n + m), self%flu(n + m, n + m), self%fr(n + m), self%fsc(n + m), &
               self%frt(n + m), self%fsct(n + m), self%fxt(n + m), self%fdx(n + m), self%frw(n + m), &
               self%fx0(n + m), self%fpiv(n + m), stat=stat)
     if (stat /= 0) return
     self%fjac = 0.0_dp
-    allocate (self%cjo(m, n), self%sizes(nx), self%gg(n, max(1, model%n_gaps)), &
+    allocate (self%cjo(m, n), self%sizes(nx), self%gg1(n), &
               self%d1(n), self%hess(n, n), self%g(max(1, model%n_gaps)), self%bb(n), self%start_key(n), self%start_lo(n), &
               self%end_key(n), self%end_lo(n), self%kin(n), &
               self%rp(nx), self%rm(nx), self%sp(nx), self%sm(nx), self%xp(nx), self%jscale(nx), &
               self%jabs(nx, nx), stat=stat)
     if (stat /= 0) return
     self%jscale = 0.0_dp
-    self%jabs = 0.0_dp
+    ! (a large banded system reads jabs on the band and the border only: untouched pages stay unmapped)
+    if (model%hessian_bandwidth < 0 .or. model%check_bandwidth .or. nx <= vci_large_system) self%jabs = 0.0_dp
     self%jac_known = .false.
     self%have_end = .false.
     self%start_key = huge(1.0_dp); self%start_lo = 0.0_dp
@@ -572,8 +573,9 @@ contains
     real(dp), intent(in) :: x(:), r(:)
     real(dp), intent(inout) :: jac(:, :)
     integer, intent(out) :: stat
-    integer :: n, m, nx, i, j, last
+    integer :: n, m, nx, i, j, last, nb, bw
     real(dp) :: tau, d, hp, hm
+    logical :: chk
     n = self%n; m = self%m; nx = size(x); last = n + m + 1
     stat = VCI_OK
     tau = step_length(self, x)
@@ -591,9 +593,9 @@ contains
         if (stat /= VCI_OK) return
         if (self%kind == KIND_STAGE1) then
           call endpoint_of(self, x)
-          call self%eval_gap_gradients(self%bb, self%gg, stat)
+          call self%eval_gap_gradient(self%bb, self%gap, self%gg1, stat)
           if (stat /= VCI_OK) return
-          jac(last, 1:n) = self%gg(:, self%gap)
+          jac(last, 1:n) = self%gg1
         end if
       else if (nx > n) then
         do j = 1, n
@@ -642,6 +644,21 @@ contains
         self%sizes(j) = abs(x(j))
       end if
     end do
+    call banded_structure(self, nb, bw, chk)
+    if (nb > 0 .and. .not. chk) then
+      ! the band of the position block and the border only (the rest is zero, and not written in
+      ! Newton's matrix; jabs keeps its zeros there from setup): O(n bw)
+      call band_jacobian_sizes(nx, nb, bw, jac, self%sizes, size(self%jabs, 1), self%jabs, self%jscale)
+      self%jac_known = .true.
+      if (nx < vci_large_system) return
+      self%kin = 0.0_dp
+      do j = 1, n
+        do i = max(1, j - bw), min(n, j + bw)
+          self%kin(i) = self%kin(i) + self%jabs(i, j) * motion(self, x, j)
+        end do
+      end do
+      return
+    end if
     call jacobian_sizes(nx, jac, self%sizes, size(self%jabs, 1), self%jabs, self%jscale)
     self%jac_known = .true.
     if (nx >= vci_large_system) then
@@ -667,15 +684,37 @@ contains
     real(dp), intent(in) :: x(:), tau
     real(dp), intent(inout) :: jac(:, :)
     integer, intent(out) :: stat
-    integer :: i, j, n
+    integer :: i, j, n, nb, bw
+    logical :: chk
     n = self%n
     stat = 0
+    call banded_structure(self, nb, bw, chk)
+    if (nb > 0 .and. .not. chk .and. self%increments) then
+      ! straight into the band of Newton's matrix, checked there: O(n bw)
+      call self%ret%jacobian_inc(self%a, x(1:n), tau, self%dir, jac(1:n, 1:n), stat)
+      call self%check_band(stat, jac(1:n, 1:n), bw, 'mixed Hessian')
+      return
+    end if
     if (self%increments) then
       call self%ret%jacobian_inc(self%a, x(1:n), tau, self%dir, self%hess, stat)
     else if (self%dir > 0) then
       call self%model%mixed_hessian(self%a, x(1:n), tau, self%hess, stat)
     else
       call self%model%mixed_hessian(x(1:n), self%a, tau, self%hess, stat)
+    end if
+    if (nb > 0 .and. .not. chk) then        ! a user's L_d: its dense Hessian, read on the band
+      call self%check_band(stat, self%hess, bw, 'mixed Hessian')
+      if (stat /= VCI_OK) return
+      do j = 1, n
+        do i = max(1, j - bw), min(n, j + bw)
+          if (self%dir > 0) then
+            jac(i, j) = self%hess(i, j)
+          else
+            jac(i, j) = -self%hess(j, i)
+          end if
+        end do
+      end do
+      return
     end if
     call self%check_matrix(stat, self%hess, 'mixed Hessian')
     if (stat /= VCI_OK) return

@@ -188,6 +188,7 @@ contains
     ok = .false.
     stat = 0
     if (self%increments) then
+      self%hess = 0.0_dp      ! (a declared band is written alone; fused systems are small)
       call self%ret%jacobian_inc(self%a, x(1:n), self%tau, self%dir, self%hess, stat)
     else if (self%dir > 0) then
       call self%model%mixed_hessian(self%a, x(1:n), self%tau, self%hess, stat)

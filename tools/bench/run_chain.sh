@@ -42,9 +42,10 @@ export OPENBLAS_NUM_THREADS=1
     echo
     rm -f "$f"
   done
-  echo "With the band declared the LU factorisations leave the profile; what is left is O(n^2) per"
-  echo "Newton matrix (the Hessian and gap-gradient callbacks' dense arrays, the Jacobian's zeroing and row"
-  echo "sizes) and the number of solves an impact needs (stage 1 on every violated wall): docs/DESIGN.md,"
-  echo "\"Structured Newton matrices\"."
+  echo "With the band declared the LU factorisations leave the profile, Newton's matrix is zeroed,"
+  echo "filled and sized on the band and border only, each wall's gradient comes from the model's"
+  echo "gap_gradient when first needed, and stage 1 is solved on the wall the chord crosses first (then"
+  echo "only on walls already crossed there). Still O(n^2) per Jacobian: the model's Hessian callback"
+  echo "fills dense n x n blocks (no banded callback yet): docs/DESIGN.md, \"Structured Newton matrices\"."
 } >"$OUT"
 echo "wrote $OUT"
