@@ -306,8 +306,12 @@ contains
       if (k < nk .and. have_lo) then
         if (on_wall .or. self%g_samples(j, k) >= 0.0_dp) cycle   ! admissible sample: no need of the true map
       end if
-      call gap_on_map(self, j, dir, c * tau, g, stat)
-      if (stat /= VCI_OK) return
+      if (k == nk) then
+        g = self%g_end(j)                      ! c = 1: the step's own end, already on the true map
+      else
+        call gap_on_map(self, j, dir, c * tau, g, stat)
+        if (stat /= VCI_OK) return
+      end if
       if (g > 0.0_dp) then
         have_lo = .true.; lo = c; glo = g
       else if (have_lo) then
