@@ -38,6 +38,9 @@ N=200000
       imp = 3520; printf "| %d | %d | %d | %d | %d | %.2f | %.2f | %.2f | %.1f |\n", o, s, l/n, st/n, hd/n, l/hd, st/hd, f/l, (w - f*(n-imp)/n)/imp/(f/n) }'
   done
   echo
+  echo "Targets (issue 32 item 6): integrate / hand ≤ 1.3 and impact step / walled regular step ≤ 4, read"
+  echo "from the instruction columns above."
+  echo
   echo "Wall times (best of 5; the impact-step ratio: median and range of 5 back-to-back pairs, a difference"
   echo "of two run times of which the impact steps are 1.8 %: at this size it is load noise, the instruction"
   echo "counts above are the measure; same bits checked):"
