@@ -73,6 +73,9 @@ module vci_integrator
     integer :: n_stages = 0                     !< s of the lobatto scheme
     type(vci_stepper_t) :: stepper              !< holds the scheme and the one settings object
     logical :: created = .false.      !< create has succeeded
+    !> the stepper holds the midpoint retraction's scheme for lag, built by the last build_scheme
+    !> (a composition set right after create reuses it instead of building it a second time)
+    logical :: midpoint_built = .false.
     logical :: initialized = .false.  !< there is a state to step from
     !> why the last set_scheme failed (blank: the scheme is usable); until a set_scheme succeeds
     !> the stepper has no complete workspace, and initialisation refuses with VCI_ERR_STATE
@@ -265,6 +268,23 @@ contains
     integer :: rule
     type(vci_settings_t) :: settings
     stat = VCI_OK
+    ! A composition steps explicitly; its stepper's scheme (for the stepper's other queries) is
+    ! the midpoint retraction's, which create built already: only the composition is attached
+    ! (half of the set-up's instructions were this second build, docs/DESIGN.md §9).
+    if (self%scheme_id == VCI_SCHEME_COMPOSITION .and. &
+        self%midpoint_built .and. self%created .and. &
+        self%scheme_failure == '') then
+      call attach_composition(self, stat)
+      if (stat /= VCI_OK) then
+        self%midpoint_built = .false.
+        call out_of_memory(self, who, self%model, stat)
+        call scheme_failed(self, VCI_ERR_MEMORY, stat); return
+      end if
+      self%initialized = .false.
+      self%last_message = ''
+      call finish(self, VCI_OK, stat); return
+    end if
+    self%midpoint_built = .false.
     select case (self%scheme_id)
     case (VCI_SCHEME_DISCRETE)
       allocate (vci_scheme_discrete_t :: sch, stat=stat)
@@ -315,6 +335,7 @@ contains
       call scheme_failed(self, VCI_ERR_MEMORY, stat); return
     end if
     self%created = .true.
+    self%midpoint_built = self%scheme_id == VCI_SCHEME_MIDPOINT .or. self%scheme_id == VCI_SCHEME_COMPOSITION
     self%initialized = .false.
     self%scheme_failure = ''
     self%last_message = ''

@@ -2,7 +2,8 @@
 # Cost of the explicit compositions (issue 32): the library's regular step against a hand-written
 # loop of the same composition (bench/composition.f90; the two end in the same bits), and the
 # walled run's extra cost per impact step. Writes docs/bench/composition.md: callgrind instructions
-# per step (reproducible) and best-of-5 wall times (move with the machine's load).
+# per step (reproducible) and wall times (best of 5; the impact-step ratio as the median of 5
+# back-to-back pairs with its range: they move with the machine's load).
 #
 #   tools/bench/run_composition.sh            # uses $BUILD_DIR (default: build), target built here
 set -eu
@@ -37,7 +38,12 @@ N=200000
       imp = 3520; printf "| %d | %d | %d | %d | %d | %.2f | %.2f | %.2f | %.1f |\n", o, s, l/n, st/n, hd/n, l/hd, st/hd, f/l, (w - f*(n-imp)/n)/imp/(f/n) }'
   done
   echo
-  echo "Wall times (best of 5; same bits checked):"
+  echo "Targets (issue 32 item 6): integrate / hand ≤ 1.3 and impact step / walled regular step ≤ 4, read"
+  echo "from the instruction columns above."
+  echo
+  echo "Wall times (best of 5; the impact-step ratio: median and range of 5 back-to-back pairs, a difference"
+  echo "of two run times of which the impact steps are 1.8 %: at this size it is load noise, the instruction"
+  echo "counts above are the measure; same bits checked):"
   echo
   echo '```'
   for o in 2 6 10; do "$EXE" $o; done

@@ -855,8 +855,8 @@ load, so factors below ~1.5 are not robust):
   the nonholonomic pendulum {pe_dop} (DOP853 integrates the ODE with the multiplier eliminated),
   the particle {pa_dop} (runs of ~0.02 ms, set-up dominated). vci is cheaper on the ellipse
   ({el_dop}): its `hamiltonian` schemes are exact there at any step (uniform gravity, exact
-  reflection), so the coarsest run wins. The profile below says why on the walled pendulum: a
-  composition run executes {prof_ratio} the instructions of the cheapest DOP853 run that is at
+  reflection), so the coarsest run wins. The instruction profile below (callgrind, run and set-up
+  only) on the walled pendulum: a composition run executes {prof_ratio} the instructions of the cheapest DOP853 run that is at
   least as accurate; {prof_share} of them locate the impacts (the composed map evaluated again
   along the root iteration, where DOP853 evaluates its dense-output polynomial), and {prof_setup}
   are vci's set-up (create, set_scheme, init_from_momentum; a whole DOP853 run at rtol 1e-8 is
