@@ -98,9 +98,11 @@ module vci_newton
     logical :: polish = .true.         !< one extra step with the last factorisation: ~ machine precision
     !> Systems of at most this many unknowns are factorised by the in-line LU below (partial
     !> pivoting, the same elimination as LAPACK's unblocked dgetf2) instead of dgetrf/dgetrs: for a
-    !> 3x3 matrix a LAPACK call through OpenBLAS costs ~10x its arithmetic (locks, dispatch). 0: always
-    !> LAPACK. docs/bench/throughput.md measures the difference; test_newton compares both paths.
-    integer :: small_lu_max = 8
+    !> 3x3 matrix a LAPACK call through OpenBLAS costs ~10x its arithmetic (locks, dispatch), and at
+    !> 9x9 (Lobatto s = 3 with a constraint) dgetrf alone took 8k instructions. Every system below
+    !> vci_large_system takes it. 0: always LAPACK. docs/bench/throughput.md measures the difference;
+    !> test_newton compares both paths.
+    integer :: small_lu_max = vci_large_system - 1
     !> Simplified Newton for systems of at least reuse_min unknowns: a solve whose system has the
     !> same nonzero reuse_key as the one the factors were computed for starts with chord steps on
     !> those factors, and evaluates and factorises a new Jacobian only when a chord step contracts

@@ -12,7 +12,8 @@ contains
   !> Newton's start x for the regular step of direction dir from state: after `depth` consecutive
   !> regular steps the configuration and multipliers are extrapolated from the last ones (q
   !> quadratic from depth 2: 3 q_k - 3 q_{k-1} + q_{k-2}; lambda linear at depth 2, quadratic at 3);
-  !> before, q + h v and the last multipliers. Exact for the quadratic free flight of uniform
+  !> before, q + h v and the last multipliers (placed by the scheme: put_multiplier_history). Exact
+  !> for the quadratic free flight of uniform
   !> gravity (no iteration then), else O(h^3) from the solution. Schemes with interior stages
   !> (Lobatto) place every stage on that quadratic (put_quadratic_start): on the chord to the
   !> guessed endpoint the interior stages would start O(h^2) off. q_guess (n) and lambda_start (m)
@@ -36,14 +37,9 @@ contains
     end if
     if (sys%m == 0) then
       call sys%put_multipliers(x, state%lambda)
-    else if (depth >= 3) then
-      lambda_start = 3.0_dp * (state%lambda - state%lambda_before) + state%lambda_before2
-      call sys%put_multipliers(x, lambda_start)
-    else if (depth == 2) then
-      lambda_start = 2.0_dp * state%lambda - state%lambda_before
-      call sys%put_multipliers(x, lambda_start)
     else
-      call sys%put_multipliers(x, state%lambda)
+      call sys%put_multiplier_history(x, depth, state%lambda, state%lambda_before, state%lambda_before2, &
+                                      lambda_start)
     end if
   end subroutine vci_predict_start
 end module vci_predictor

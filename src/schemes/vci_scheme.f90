@@ -98,6 +98,7 @@ module vci_scheme
     procedure :: needs_pair_solve
     procedure :: endpoint_direction
     procedure :: put_quadratic_start
+    procedure :: put_multiplier_history
     procedure :: forget_jacobian
     procedure :: fused_substep => no_fused_substep
     procedure :: substep_sensitivity => no_substep_sensitivity
@@ -502,6 +503,27 @@ contains
     self%qp(:) = a + dh * (2.0_dp * v - v_before)   ! (workspace of n: an automatic array is a malloc)
     call self%put_endpoint(x, a, self%qp)
   end subroutine put_quadratic_start
+
+  !> Newton's start of the multipliers from the last regular steps' (lam, then lam_before and
+  !> lam_before2 one and two steps earlier; depth consecutive regular steps of equal length):
+  !> extrapolated to the new step, quadratic from depth 3, linear at 2, the last one before.
+  !> `work` (m) is workspace. Schemes with multipliers at several nodes override it.
+  subroutine put_multiplier_history(self, x, depth, lam, lam_before, lam_before2, work)
+    class(vci_scheme_t), intent(inout) :: self
+    real(dp), intent(inout) :: x(:)
+    integer, intent(in) :: depth
+    real(dp), intent(in) :: lam(:), lam_before(:), lam_before2(:)
+    real(dp), intent(inout) :: work(:)
+    if (depth >= 3) then
+      work = 3.0_dp * (lam - lam_before) + lam_before2
+      call self%put_multipliers(x, work)
+    else if (depth == 2) then
+      work = 2.0_dp * lam - lam_before
+      call self%put_multipliers(x, work)
+    else
+      call self%put_multipliers(x, lam)
+    end if
+  end subroutine put_multiplier_history
 
   !> A new solve starts (schemes that size rows from the last Jacobian reset that memory here).
   subroutine forget_jacobian(self)

@@ -56,6 +56,12 @@ module vci_scheme_lobatto
     ! and the end projection's saddle system
     real(dp), allocatable, private :: om(:, :, :), lam(:, :), wmom(:, :), ctv(:, :), dctv(:, :), dol(:, :)
     real(dp), allocatable, private :: op(:, :), omm(:, :), qd(:), kkt(:, :), krhs(:), pbar(:), wv(:), nuw(:)
+    real(dp), allocatable, private :: osz(:, :)   ! |Omega(:, j)|_1 |V|_max at node i: the moment rows' sizes
+    ! the last regular sub-step's nodes and node multipliers (m > 0: put_quadratic_start), its signed
+    ! length, and the weights that extrapolate them to the next step's nodes
+    real(dp), allocatable, private :: ypoly(:, :), lpoly(:, :), exq(:, :), exl(:, :)
+    real(dp), private :: poly_dh = 0.0_dp
+    logical, private :: have_poly = .false., poly_used = .false.
     integer, allocatable, private :: kpiv(:)
   contains
     procedure :: setup
@@ -69,6 +75,7 @@ module vci_scheme_lobatto
     procedure :: forget_jacobian
     procedure :: endpoint_direction
     procedure :: put_quadratic_start
+    procedure :: put_multiplier_history
   end type vci_scheme_lobatto_t
 
 contains
@@ -105,7 +112,7 @@ contains
                                        self%a_eval, self%wdd)
     if (allocated(self%om)) deallocate (self%om, self%lam, self%wmom, self%ctv, self%dctv, self%dol, self%op, &
                                         self%omm, self%qd, self%kkt, self%krhs, self%pbar, self%wv, self%kpiv, &
-                                        self%nuw)
+                                        self%nuw, self%osz, self%ypoly, self%lpoly, self%exq, self%exl)
     allocate (self%y(n, 0:s), self%v(n, 0:s), self%lq(n, 0:s), self%lv(n, 0:s), self%lval(0:s), self%f(n, 0:s), &
               self%fs(n, 0:s), self%hqq(n, n, 0:s), self%hqv(n, n, 0:s), self%hvv(n, n, 0:s), &
               self%g(max(1, lag%n_gaps)), self%dg(n, max(1, lag%n_gaps)), self%tmp(n), self%jscale(nx), &
@@ -127,10 +134,24 @@ contains
       allocate (self%om(n, m, 0:s), self%lam(m, 0:s - 1), self%wmom(0:s - 1, 0:s), self%ctv(m, 0:s), &
                 self%dctv(m, n), self%dol(n, n), self%op(n, m), self%omm(n, m), self%qd(n), &
                 self%kkt(n + m, n + m), self%krhs(n + m), self%pbar(n), self%wv(n), self%kpiv(n + m), &
-                self%nuw(m), stat=stat)
+                self%nuw(m), self%osz(m, 0:s), self%ypoly(n, 0:s), self%lpoly(m, 0:s - 1), self%exq(0:s, s), &
+                self%exl(0:s - 1, 0:s - 1), stat=stat)
       if (stat /= 0) then
         stat = VCI_ERR_MEMORY; return
       end if
+      ! Lagrange weights at the next step's nodes 1 + c_j of the polynomials through the last step's
+      ! positions (nodes 0..s, degree s) and node multipliers (nodes 0..s-1, degree s - 1)
+      do j = 1, s
+        do i = 0, s
+          self%exq(i, j) = lagrange_weight(self%rule%c(0:s), i, 1.0_dp + self%rule%c(j))
+        end do
+      end do
+      do j = 0, s - 1
+        do i = 0, s - 1
+          self%exl(i, j) = lagrange_weight(self%rule%c(0:s - 1), i, 1.0_dp + self%rule%c(j))
+        end do
+      end do
+      self%have_poly = .false.
       ! moment weights: the constraint tested against (2c - 1)^k, k = 0..s-1, by the Lobatto rule
       do k = 0, s - 1
         do i = 0, s
@@ -201,9 +222,28 @@ contains
     class(vci_scheme_lobatto_t), intent(inout) :: self
     real(dp), intent(inout) :: x(:)
     real(dp), intent(in) :: a(:), dh, v(:), v_before(:)
-    integer :: i, l, n
-    real(dp) :: c
+    integer :: i, l, n, k
+    real(dp) :: c, t
     n = self%n
+    self%poly_used = .false.
+    if (self%m > 0 .and. self%have_poly) then
+      ! with constraints: the last regular step's polynomial, when it ended here with this step and
+      ! direction (O(h^(s+1)) from the solution where the quadratic is O(h^3): one Newton iteration
+      ! fewer per step on the paper's pendulum; docs/bench/lobatto.md)
+      if (self%poly_dh == dh .and. all(self%ypoly(:, self%s) == a)) then
+        do i = 1, self%s
+          do l = 1, n
+            t = 0.0_dp
+            do k = 0, self%s - 1   ! (node s is a itself: its term is 0)
+              t = t + self%exq(k, i) * (self%ypoly(l, k) - a(l))
+            end do
+            x((i - 1) * n + l) = t
+          end do
+        end do
+        self%poly_used = .true.
+        return
+      end if
+    end if
     do i = 1, self%s
       c = self%rule%c(i)
       do l = 1, n
@@ -222,6 +262,50 @@ contains
       if (self%m > 0) x(o + 1:o + self%m) = v
     end do
   end subroutine put_multipliers
+
+  !> Newton's start of the node multipliers: each node's on the polynomial through the last steps'
+  !> multipliers of node s - 1 (the one the state keeps), at offsets c_(s-1) - 1, - 2, - 3 steps from
+  !> the new step's start, evaluated at the node's own offset c_j (quadratic from depth 3, linear at
+  !> depth 2). The multipliers are forces, smooth in t: the same value at every node would leave the
+  !> start O(h) off at the nodes far from node s - 1, an extra Newton iteration per step.
+  subroutine put_multiplier_history(self, x, depth, lam, lam_before, lam_before2, work)
+    class(vci_scheme_lobatto_t), intent(inout) :: self
+    real(dp), intent(inout) :: x(:)
+    integer, intent(in) :: depth
+    real(dp), intent(in) :: lam(:), lam_before(:), lam_before2(:)
+    real(dp), intent(inout) :: work(:)
+    integer :: j, o, m, i, k
+    real(dp) :: r, t
+    m = self%m
+    if (m == 0) return
+    if (self%poly_used .and. depth >= 2) then
+      self%poly_used = .false.
+      do j = 0, self%s - 1
+        o = self%s * self%n + j * m
+        do k = 1, m
+          t = 0.0_dp
+          do i = 0, self%s - 1
+            t = t + self%exl(i, j) * self%lpoly(k, i)
+          end do
+          x(o + k) = t
+        end do
+      end do
+      return
+    end if
+    do j = 0, self%s - 1
+      o = self%s * self%n + j * m
+      r = self%rule%c(j) - self%rule%c(max(self%s - 1, 0)) + 1.0_dp   ! the node's offset from the last
+      if (depth >= 3) then
+        x(o + 1:o + m) = (0.5_dp * (r + 1.0_dp) * (r + 2.0_dp)) * lam - (r * (r + 2.0_dp)) * lam_before + &
+                         (0.5_dp * r * (r + 1.0_dp)) * lam_before2
+      else if (depth == 2) then
+        x(o + 1:o + m) = (1.0_dp + r) * lam - r * lam_before
+      else
+        x(o + 1:o + m) = lam
+      end if
+    end do
+    if (.false.) work = 0.0_dp
+  end subroutine put_multiplier_history
 
   subroutine get_multipliers(self, x, v)
     class(vci_scheme_lobatto_t), intent(in) :: self
@@ -338,9 +422,9 @@ contains
     class(vci_scheme_lobatto_t), intent(inout) :: self
     real(dp), intent(in) :: y(:), v(:), lam(:)
     integer, intent(out) :: stat
-    integer :: c, mu
-    real(dp) :: d
-    self%qd = y
+    integer :: c, mu, i
+    real(dp) :: d, t, dom
+    self%qd(:) = y
     do c = 1, self%n
       d = vci_fd_rel * max(abs(y(c)), 1.0_dp)
       self%qd(c) = y(c) + d
@@ -350,11 +434,17 @@ contains
       call self%eval_forms(self%qd, self%omm, stat)
       if (stat /= VCI_OK) return
       self%qd(c) = y(c)
-      self%op = (self%op - self%omm) / (2.0_dp * d)
-      self%dol(:, c) = 0.0_dp
+      do i = 1, self%n
+        self%dol(i, c) = 0.0_dp
+      end do
       do mu = 1, self%m
-        self%dol(:, c) = self%dol(:, c) + self%op(:, mu) * lam(mu)
-        self%dctv(mu, c) = dot_product(self%op(:, mu), v)
+        t = 0.0_dp
+        do i = 1, self%n
+          dom = (self%op(i, mu) - self%omm(i, mu)) / (2.0_dp * d)
+          self%dol(i, c) = self%dol(i, c) + dom * lam(mu)
+          t = t + dom * v(i)
+        end do
+        self%dctv(mu, c) = t
       end do
     end do
   end subroutine form_derivatives
@@ -372,7 +462,7 @@ contains
     real(dp), intent(out) :: r(:), scale(:)
     integer, intent(out) :: stat
     integer :: n, s, j, last, m, k, ro, k0, i, a1
-    real(dp) :: tau, e, dsign, rsg, acc
+    real(dp) :: tau, e, dsign, rsg, acc, vmax
     n = self%n; s = self%s; m = self%m; last = s * n + s * m + 1
     dsign = real(self%dir, dp)
     tau = step_length(self, x)
@@ -415,21 +505,30 @@ contains
         scale(s * n + 1:s * n + m) = abs(self%lam(:, 0))
         k0 = 1
       end if
+      ! the size of the terms Omega(:, j)^T V compares: |Omega(:, j)|_1 |V|_max (a product of
+      ! components would vanish where the motion is along one axis and the form along another)
+      do i = 0, s
+        vmax = 0.0_dp
+        do a1 = 1, n
+          vmax = max(vmax, abs(self%v(a1, i)))
+        end do
+        do j = 1, m
+          acc = 0.0_dp
+          do a1 = 1, n
+            acc = acc + abs(self%om(a1, j, i))
+          end do
+          self%osz(j, i) = acc * vmax
+        end do
+      end do
       do k = k0, s - 1
         ro = s * n + k * m
-        r(ro + 1:ro + m) = 0.0_dp
-        scale(ro + 1:ro + m) = 0.0_dp
-        do i = 0, s
-          r(ro + 1:ro + m) = r(ro + 1:ro + m) + self%wmom(k, i) * self%ctv(:, i)
-          ! the size of the terms Omega(:, j)^T V compares: |Omega(:, j)|_1 |V|_max (a product of
-          ! components would vanish where the motion is along one axis and the form along another)
-          do j = 1, m
-            acc = 0.0_dp
-            do a1 = 1, n
-              acc = acc + abs(self%om(a1, j, i))
-            end do
-            scale(ro + j) = scale(ro + j) + abs(self%wmom(k, i)) * acc * maxval(abs(self%v(:, i)))
+        do j = 1, m
+          acc = 0.0_dp; vmax = 0.0_dp
+          do i = 0, s
+            acc = acc + self%wmom(k, i) * self%ctv(j, i)
+            vmax = vmax + abs(self%wmom(k, i)) * self%osz(j, i)
           end do
+          r(ro + j) = acc; scale(ro + j) = vmax
         end do
       end do
     end if
@@ -460,8 +559,8 @@ contains
     real(dp), intent(in) :: x(:), r(:)
     real(dp), intent(inout) :: jac(:, :)
     integer, intent(out) :: stat
-    integer :: n, s, i, j, k, last, nx, c0, a1, m, l, k0, ro
-    real(dp) :: tau, dsign, rs, wgt
+    integer :: n, s, i, j, k, last, nx, c0, a1, m, l, k0, ro, c
+    real(dp) :: tau, dsign, rs, wgt, acc
     n = self%n; s = self%s; m = self%m; last = s * n + s * m + 1
     nx = self%unknowns(self%kind)
     dsign = real(self%dir, dp)
@@ -544,8 +643,12 @@ contains
         rs = 1.0_dp
         if (j == 0) rs = dsign
         c0 = s * n + j * m
-        jac(j * n + 1:(j + 1) * n, c0 + 1:c0 + m) = jac(j * n + 1:(j + 1) * n, c0 + 1:c0 + m) + &
-                                                    (rs * tau * self%rule%b(j)) * self%om(:, :, j)
+        wgt = rs * tau * self%rule%b(j)
+        do a1 = 1, m   ! (scalar loops: a section of the assumed-shape jac cost ~100 instructions a block)
+          do c = 1, n
+            jac(j * n + c, c0 + a1) = jac(j * n + c, c0 + a1) + wgt * self%om(c, a1, j)
+          end do
+        end do
         if (self%kind == KIND_STAGE1) then
           self%tmp = 0.0_dp
           call add_mat_vec(self%tmp, rs * self%tau * self%rule%b(j), self%om(:, :, j), self%lam(:, j))
@@ -568,18 +671,25 @@ contains
         end if
         if (stat /= VCI_OK) return
         c0 = (l - 1) * n
-        if (l < s) jac(l * n + 1:(l + 1) * n, c0 + 1:c0 + n) = jac(l * n + 1:(l + 1) * n, c0 + 1:c0 + n) + &
-                                                               (tau * self%rule%b(l)) * self%dol
+        if (l < s) then
+          wgt = tau * self%rule%b(l)
+          do c = 1, n
+            do a1 = 1, n
+              jac(l * n + a1, c0 + c) = jac(l * n + a1, c0 + c) + wgt * self%dol(a1, c)
+            end do
+          end do
+        end if
+        ! moment rows: d/dy_l sum_i wmom(k, i) Omega(y_i)^T V_i, V_i = (dir/tau) sum_l D_il (y_l - a)
         do k = k0, s - 1
           ro = s * n + k * m
-          jac(ro + 1:ro + m, c0 + 1:c0 + n) = jac(ro + 1:ro + m, c0 + 1:c0 + n) + self%wmom(k, l) * self%dctv
-          do i = 0, s
-            wgt = self%wmom(k, i) * (dsign / tau) * self%rule%d(i, l)
-            if (wgt /= 0.0_dp) then
-              do a1 = 1, m
-                jac(ro + a1, c0 + 1:c0 + n) = jac(ro + a1, c0 + 1:c0 + n) + wgt * self%om(:, a1, i)
+          do c = 1, n
+            do a1 = 1, m
+              acc = self%wmom(k, l) * self%dctv(a1, c)
+              do i = 0, s
+                acc = acc + (self%wmom(k, i) * (dsign / tau) * self%rule%d(i, l)) * self%om(c, a1, i)
               end do
-            end if
+              jac(ro + a1, c0 + c) = jac(ro + a1, c0 + c) + acc
+            end do
           end do
         end do
       end do
@@ -642,7 +752,9 @@ contains
     ! s + 1 momenta, each from differenced stages, rounds at ulps of |p| times sum_i |b_i D_is|)
     if (present(pa) .and. self%kind == KIND_SUBSTEP) then
       if (tau == self%tau .and. all(a == self%a)) then
-        call self%impact_momentum(x, a, tau, p, stat, pa); return
+        call self%impact_momentum(x, a, tau, p, stat, pa)
+        if (stat == VCI_OK .and. self%m > 0) call keep_polynomial(self, x, a, tau)
+        return
       end if
     end if
     call evaluate(self, x, a, tau, .false., stat)
@@ -650,6 +762,32 @@ contains
     p = real(self%dir, dp) * self%f(:, self%s)
     if (self%m > 0) call project_end(self, p, stat)
   end subroutine momentum_out
+
+  !> The regular sub-step just solved (x at a, length tau; evaluate() at it was the last call): its
+  !> nodes, the endpoint as get_endpoint forms it (the next step's start, compared bit for bit), and
+  !> its node multipliers, for the next step's start.
+  subroutine keep_polynomial(self, x, a, tau)
+    class(vci_scheme_lobatto_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:), a(:), tau
+    integer :: n, s
+    n = self%n; s = self%s
+    self%ypoly(:, 0:s - 1) = self%y(:, 0:s - 1)
+    self%ypoly(:, s) = a + x((s - 1) * n + 1:s * n)
+    self%lpoly(:, :) = self%lam(:, :)
+    self%poly_dh = real(self%dir, dp) * tau
+    self%have_poly = .true.
+  end subroutine keep_polynomial
+
+  !> l_i(u) = prod_(k /= i) (u - c_k) / (c_i - c_k): the Lagrange weight of node i at u.
+  pure real(dp) function lagrange_weight(c, i, u) result(w)
+    real(dp), intent(in) :: c(0:), u
+    integer, intent(in) :: i
+    integer :: k
+    w = 1.0_dp
+    do k = 0, size(c) - 1
+      if (k /= i) w = w * (u - c(k)) / (c(i) - c(k))
+    end do
+  end function lagrange_weight
 
   !> The constraint force of the end node, tau b_s Omega(y_s) Lambda_s, enters only the new momentum:
   !> it is fixed by the end state's constraint, p = pbar + Omega(y_s) nu with

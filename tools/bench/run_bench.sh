@@ -23,7 +23,7 @@ LOBATTO_OUT=${LOBATTO_OUT:-$(dirname "$OUT")/lobatto.md}
 cmake -S "$ROOT" -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release \
   -DVCI_BUILD_BENCH=ON -DVCI_BUILD_TESTS=OFF -DVCI_BUILD_EXAMPLES=OFF >/dev/null
 cmake --build "$BUILD_DIR" -j"$(nproc 2>/dev/null || echo 2)" --target vci_bench_throughput vci_bench_chain \
-  vci_bench_lobatto_steps >/dev/null
+  vci_bench_lobatto_steps vci_bench_lobatto_nonholo >/dev/null
 
 # The Lobatto scheme's regular and impact steps (issue 26): the walled pendulum (n = 1, s = 4, h = 0.1,
 # rtol 1e-12) through the library, and the same pendulum without walls through the library and through
@@ -80,6 +80,33 @@ lobatto_table() {
     echo '```'
     echo "$lt"
     echo '```'
+    echo
+    echo "## With a nonholonomic constraint: the paper's pendulum (issue 25)"
+    echo
+    echo "The pendulum in the cylinder (n = 2, m = 1; examples/scenes/vci_scene_pendulum.f90) from the exact"
+    echo "start of docs/RESULTS.md, T = 5 s (3 impacts), \`hamiltonian\` condition, rtol 1e-14 (the results'"
+    echo "Lobatto rows), at the step sizes RESULTS.md names for s = 3, 4 (\`vci_bench_lobatto_nonholo S H\`,"
+    echo "bench/lobatto_nonholo.f90). Instructions per step: \`valgrind --tool=callgrind"
+    echo "--toggle-collect='*counted_regular_step*'\` (likewise \`'*counted_impact_step*'\`) on"
+    echo "\`vci_bench_lobatto_nonholo S H 1 run\` (one 5 s episode); times from \`vci_bench_lobatto_nonholo S H 50\`."
+    echo
+    echo "| s | h | instructions/regular step | instructions/impact step | impact/regular (instructions) | ns/regular step | ns/impact step | Newton iterations per solve |"
+    echo "|---|---|---:|---:|---:|---:|---:|---:|"
+    NEXE="$BUILD_DIR/bin/vci_bench_lobatto_nonholo"
+    for sh in "3 0.05" "3 0.02" "4 0.03" "4 0.01"; do
+      set -- $sh
+      nt=$(OPENBLAS_NUM_THREADS=1 "$NEXE" "$1" "$2" 50)
+      nc() { valgrind --tool=callgrind --callgrind-out-file=/dev/null --toggle-collect="$1" "$NEXE" "$2" "$3" 1 run 2>&1 |
+        awk '/Collected/ {print $4}'; }
+      ir=$(OPENBLAS_NUM_THREADS=1 nc '*counted_regular_step*' "$1" "$2")
+      ii=$(OPENBLAS_NUM_THREADS=1 nc '*counted_impact_step*' "$1" "$2")
+      echo "$nt" | awk -v s="$1" -v h="$2" -v ir="$ir" -v ii="$ii" '
+        /regular steps/ { for (i = 1; i <= NF; i++) { if ($i == "steps" && $(i - 1) == "regular") nr = $(i + 1) / 50
+                                                      if ($i == "steps" && $(i - 1) == "impact") ni = $(i + 1) / 50 } }
+        /ns\/regular step/ { tr = $3; ti = $6 }
+        /Newton iterations/ { it = $NF }
+        END { printf "| %s | %s | %.0f | %.0f | %.2f | %.0f | %.0f | %s |\n", s, h, ir / nr, ii / ni, (ii / ni) / (ir / nr), tr, ti, it }'
+    done
   } >"$LOBATTO_OUT"
   cat "$LOBATTO_OUT"
 }
