@@ -425,13 +425,12 @@ contains
       end function strlen
     end interface
     ok = .false.
-    s = ''
     if (.not. c_associated(p)) return
     l = int(min(strlen(p), 4096_c_size_t))
     if (l == 0) return
     call c_f_pointer(p, c, [l])
     allocate (character(len=l) :: s)
-    s = transfer(c, s)
+    s = transfer(c, s(1:l))
     ok = .true.
   end function c_string
 end module vci_capi_ensemble
