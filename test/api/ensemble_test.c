@@ -8,7 +8,9 @@
  *  bad:  NULL pointers, dead handles, struct sizes of no header, settings out of range: statuses
  *        and messages.
  *  file: the same pendulum ensemble to the ensemble HDF5 file PATH: status, members_failed, an
- *        existing file kept unless overwrite (the Python suite reads the file back). */
+ *        existing file kept unless overwrite (the Python suite reads the file back). Built with
+ *        MPI (VCI_TEST_MPI) it runs under mpirun, collective over MPI_COMM_WORLD given as its
+ *        Fortran handle; ensemble_mpi_c.sh compares the files of 1 and 2 ranks. */
 #include <math.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -17,6 +19,9 @@
 #include <string.h>
 #include "vci.h"
 #include "scenes.h"
+#ifdef VCI_TEST_MPI
+#include <mpi.h>
+#endif
 
 static int failures = 0;
 #define CHECK(c) do { if (!(c)) { printf("  line %d: CHECK(%s) failed\n", __LINE__, #c); failures++; } } while (0)
@@ -355,12 +360,20 @@ static void suite_file(const char *path) {
   vci_model model = pendulum_model();
   vci_ensemble_config c = pendulum_config();
   pendulum_starts(t0, q0, p0);
+  int comm = -1, rank = 0;
   c.stride = 50;
-  remove(path);
-  CHECK(vci_ensemble_run_file(model, &c, NP, t0, q0, p0, path, 0, -1, &failed) == VCI_OK);
+#ifdef VCI_TEST_MPI
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  comm = (int)MPI_Comm_c2f(MPI_COMM_WORLD);
+#endif
+  if (rank == 0) remove(path);
+#ifdef VCI_TEST_MPI
+  MPI_Barrier(MPI_COMM_WORLD);
+#endif
+  CHECK(vci_ensemble_run_file(model, &c, NP, t0, q0, p0, path, 0, comm, &failed) == VCI_OK);
   CHECK(failed == 1);
   /* an existing file is kept unless overwrite */
-  CHECK(vci_ensemble_run_file(model, &c, NP, t0, q0, p0, path, 0, -1, &failed) == VCI_ERR_IO);
+  CHECK(vci_ensemble_run_file(model, &c, NP, t0, q0, p0, path, 0, comm, &failed) == VCI_ERR_IO);
   last_error_has(path);
   CHECK(vci_ensemble_run_file(model, &c, NP, t0, q0, p0, path, 1, -1, &failed) == VCI_OK && failed == 1);
   vci_model_destroy(&model);
@@ -379,6 +392,10 @@ int main(int argc, char **argv) {
     printf("usage: %s run | bad | file PATH\n", argv[0]);
     return 2;
   }
+#ifdef VCI_TEST_MPI
+  int provided;
+  MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
+#endif
   if (!strcmp(argv[1], "run")) suite_run();
   else if (!strcmp(argv[1], "bad")) suite_bad();
   else if (!strcmp(argv[1], "file") && argc > 2) suite_file(argv[2]);
@@ -387,5 +404,8 @@ int main(int argc, char **argv) {
     return 2;
   }
   printf("%s: %d failure(s)\n", argv[1], failures);
+#ifdef VCI_TEST_MPI
+  MPI_Finalize();
+#endif
   return failures ? 1 : 0;
 }
