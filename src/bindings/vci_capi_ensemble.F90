@@ -363,43 +363,20 @@ contains
     type(vci_ensemble_results_t), intent(in) :: res
     type(vci_ensemble_results_c), intent(in) :: out
     integer, intent(in) :: members, n, cap
-    real(c_double), pointer :: d(:)
-    integer(c_int), pointer :: iv(:)
-    integer(c_int64_t), pointer :: lv(:)
     character(kind=c_char), pointer :: txt(:)
     integer :: j, l, len_msg
-    if (c_associated(out%status)) then
-      call c_f_pointer(out%status, iv, [members]); iv = res%status
-    end if
-    if (c_associated(out%t)) then
-      call c_f_pointer(out%t, d, [members]); d = res%t
-    end if
-    if (c_associated(out%q)) then
-      call c_f_pointer(out%q, d, [n * members]); d = reshape(res%q, [n * members])
-    end if
-    if (c_associated(out%p)) then
-      call c_f_pointer(out%p, d, [n * members]); d = reshape(res%p, [n * members])
-    end if
-    if (c_associated(out%steps)) then
-      call c_f_pointer(out%steps, lv, [members]); lv = res%steps
-    end if
-    if (c_associated(out%impacts)) then
-      call c_f_pointer(out%impacts, lv, [members]); lv = res%impacts
-    end if
-    if (c_associated(out%newton_iterations)) then
-      call c_f_pointer(out%newton_iterations, lv, [members]); lv = res%newton_iterations
-    end if
-    if (c_associated(out%energy_start)) then
-      call c_f_pointer(out%energy_start, d, [members]); d = res%energy_start
-    end if
-    if (c_associated(out%energy_end)) then
-      call c_f_pointer(out%energy_end, d, [members]); d = res%energy_end
-    end if
-    if (cap > 0 .and. c_associated(out%impact_t)) then
-      call c_f_pointer(out%impact_t, d, [cap * members]); d = reshape(res%impact_t, [cap * members])
-    end if
-    if (cap > 0 .and. c_associated(out%impact_gap)) then
-      call c_f_pointer(out%impact_gap, iv, [cap * members]); iv = reshape(res%impact_gap, [cap * members]) - 1
+    call put_i32(out%status, res%status)
+    call put_f64(out%t, res%t)
+    call put_f64(out%q, reshape(res%q, [n * members]))
+    call put_f64(out%p, reshape(res%p, [n * members]))
+    call put_i64(out%steps, res%steps)
+    call put_i64(out%impacts, res%impacts)
+    call put_i64(out%newton_iterations, res%newton_iterations)
+    call put_f64(out%energy_start, res%energy_start)
+    call put_f64(out%energy_end, res%energy_end)
+    if (cap > 0) then
+      call put_f64(out%impact_t, reshape(res%impact_t, [cap * members]))
+      call put_i32(out%impact_gap, reshape(res%impact_gap, [cap * members]) - 1)
     end if
     if (c_associated(out%messages)) then
       len_msg = int(min(out%message_size, int(huge(1) / members, c_int64_t)))
@@ -411,6 +388,36 @@ contains
       end do
     end if
   end subroutine write_results
+
+  !> values into the caller's double array at p (nothing when p is NULL).
+  subroutine put_f64(p, values)
+    type(c_ptr), intent(in) :: p
+    real(dp), intent(in) :: values(:)
+    real(c_double), pointer :: d(:)
+    if (.not. c_associated(p)) return
+    call c_f_pointer(p, d, [size(values)])
+    d = values
+  end subroutine put_f64
+
+  !> values into the caller's int array at p (nothing when p is NULL).
+  subroutine put_i32(p, values)
+    type(c_ptr), intent(in) :: p
+    integer, intent(in) :: values(:)
+    integer(c_int), pointer :: d(:)
+    if (.not. c_associated(p)) return
+    call c_f_pointer(p, d, [size(values)])
+    d = values
+  end subroutine put_i32
+
+  !> values into the caller's int64_t array at p (nothing when p is NULL).
+  subroutine put_i64(p, values)
+    type(c_ptr), intent(in) :: p
+    integer(i8), intent(in) :: values(:)
+    integer(c_int64_t), pointer :: d(:)
+    if (.not. c_associated(p)) return
+    call c_f_pointer(p, d, [size(values)])
+    d = values
+  end subroutine put_i64
 
   !> The NUL-terminated string at p as a Fortran string; false when p is NULL or the string empty.
   logical function c_string(p, s) result(ok)
