@@ -89,7 +89,8 @@ def test_python_callback_failure_stays_in_its_member():
                                 dl_dq=dl_dq, dl_dv=lambda q, v: [v[0]], gaps=lambda q: [1 - q[0], q[0] + 1])
     res = vci.Ensemble(model, H).run(40, [0.0, 0.0], [0.5, 5.0])
     assert res.status[0] == 0
-    assert res.status[1] == vci.CallbackError.status and "callback" in res.messages[1]
+    assert res.status[1] == vci.CallbackError.status and "t =  " in res.messages[1]
+    assert res.messages[1].endswith("Python callback dl_dq raised ValueError: too far")
     assert res.steps[1] < 40 and np.isfinite(res.q[1, 0])
 
 

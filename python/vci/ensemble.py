@@ -12,6 +12,7 @@ on several threads at once. Python callables hold the GIL while they run, so the
 serialised: an Ensemble of such a model runs on one thread (threads > 1 is refused with
 ArgumentError), which costs what the members cost one after another.
 """
+import re
 from typing import List, NamedTuple
 
 import numpy as np
@@ -203,7 +204,18 @@ class Ensemble:
         raw = ffi.buffer(messages)[:]
         msgs = [raw[k * _MESSAGE_SIZE:(k + 1) * _MESSAGE_SIZE].split(b"\0", 1)[0].decode("utf-8", "replace")
                 for k in range(n_members)]
+        if self.python:
+            msgs = [self._python_cause(m) for m in msgs]
         return EnsembleResult(messages=msgs, **out)
+
+    def _python_cause(self, message):
+        # members with Python callables run on this thread, so their codes are in its failure log
+        found = re.search(r"stat = (-?\d+)", message)
+        entry = self.model._log.lookup(int(found.group(1))) if found else None
+        if entry is None:
+            return message
+        name, _, last = entry
+        return f"{message}; Python callback {name} raised {last}"
 
     def run_file(self, path, nsteps, q0, v0, *, t0=0.0, start="momentum", direction=1, stride=0, chunk=0,
                  overwrite=False):
