@@ -91,10 +91,10 @@ contains
   !> const double *t0, const double *q0, const double *v0, const char *path, int overwrite,
   !> int mpi_comm, int64_t *members_failed)
   integer(c_int) function vci_ensemble_run_file_c(model, config, members, t0, q0, v0, path, overwrite, &
-                                                  mpi_comm, members_failed) bind(C, name='vci_ensemble_run_file')
+                                                  comm_handle, members_failed) bind(C, name='vci_ensemble_run_file')
     type(c_ptr), value :: model, config, t0, q0, v0, path, members_failed
     integer(c_int64_t), value :: members
-    integer(c_int), value :: overwrite, mpi_comm
+    integer(c_int), value :: overwrite, comm_handle
     character(len=*), parameter :: who = 'vci_ensemble_run_file'
     character(len=:), allocatable :: fpath
     integer(c_int64_t), pointer :: nfailed
@@ -110,7 +110,7 @@ contains
 #ifdef VCI_HAVE_HDF5
     failed = 0
     vci_ensemble_run_file_c = run_file(who, model, config, members, t0, q0, v0, fpath, overwrite /= 0, &
-                                       mpi_comm, failed)
+                                       comm_handle, failed)
     if (c_associated(members_failed)) nfailed = failed
 #else
     call set_thread_message(who//': this library was built without HDF5 (VCI_WITH_HDF5=OFF)')
@@ -121,13 +121,13 @@ contains
 #ifdef VCI_HAVE_HDF5
   !> vci_ensemble_run_file's run once its pointers are checked: prepare, then the file driver
   !> (collective over the communicator with MPI). The status, `failed` = members that failed.
-  integer function run_file(who, model, config, members, t0, q0, v0, fpath, overwrite, mpi_comm, failed) &
+  integer function run_file(who, model, config, members, t0, q0, v0, fpath, overwrite, comm_handle, failed) &
     result(stat)
     character(len=*), intent(in) :: who, fpath
     type(c_ptr), intent(in) :: model, config, t0, q0, v0
     integer(c_int64_t), intent(in) :: members
     logical, intent(in) :: overwrite
-    integer(c_int), intent(in) :: mpi_comm
+    integer(c_int), intent(in) :: comm_handle
     integer, intent(out) :: failed
     class(vci_model_factory_t), allocatable :: factory
     type(vci_ensemble_config_t) :: cfg
@@ -142,7 +142,7 @@ contains
 #ifdef VCI_HAVE_MPI
     ! -1: MPI_COMM_WORLD; else a Fortran handle (MPI_Comm_c2f)
     comm = MPI_COMM_WORLD
-    if (mpi_comm /= -1) comm%MPI_VAL = int(mpi_comm)
+    if (comm_handle /= -1) comm%MPI_VAL = int(comm_handle)
     call vci_ensemble_run_file(factory, cfg, table, fpath, stat, msg, overwrite, failed, comm)
 #else
     ! one process: the communicator is not looked at
