@@ -154,3 +154,20 @@ def test_file_holds_the_results(formula_model, tmp_path):
         assert np.array_equal(m["q"][:].reshape(len(t0), 1)[ok], res.q[ok])
         assert np.array_equal(m["p"][:].reshape(len(t0), 1)[ok], res.p[ok])
         assert np.array_equal(m["impacts"][:], res.impacts)
+
+
+def test_discrete_python_model_from_pairs():
+    """The paper's discrete L_d given as Python callables (m = 1), started from pairs (q0, q1)."""
+    model = models.paper_discrete_python()
+    h = 0.01
+    q0 = np.array([models.PAPER_Q0, models.PAPER_Q0 + [0.01, 0.0]])
+    q1 = q0 + h * models.PAPER_QDOT0
+    res = vci.Ensemble(model, h, impact_cap=4).run(150, q0, q1, start="pair")
+    for k in range(2):
+        it = vci.Integrator(model, h)
+        it.init_from_pair(0.0, q0[k], q1[k])
+        state = it.integrate(150)
+        assert res.status[k] == 0 and res.steps[k] == 150
+        assert res.t[k] == state.t
+        assert np.array_equal(res.q[k], state.q) and np.array_equal(res.p[k], state.p)
+        assert res.impacts[k] == len(it.impacts)
