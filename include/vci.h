@@ -409,6 +409,108 @@ int  vci_set_progress(vci_integrator integ, vci_progress_fn fn, double interval,
 int  vci_check_model(vci_model model, const double *q, const double *v, double h, double tol, int *passed,
                      double *worst, char *report, int size);
 
+/* ---- Ensembles (docs/ENSEMBLES.md, "From C"): many members of one model, over OpenMP threads
+ *      and, in a library built with MPI, over the ranks of a communicator ---- */
+
+/** What v0 of vci_ensemble_run is (vci_ensemble_config.start_kind). */
+enum {
+  VCI_START_PAIR = 0,     /**< v0 is q1 at t0 + h: the paper's initial pair, as vci_init_from_pair */
+  VCI_START_MOMENTUM = 1  /**< v0 is p0 at t0, as vci_init_from_momentum */
+};
+/** The status of a member that was not run (the fill value of vci_ensemble_results.status). */
+#define VCI_MEMBER_NOT_RUN (-1)
+
+/** What every member of an ensemble shares. Versioned like vci_callbacks: initialise with
+ *  VCI_ENSEMBLE_CONFIG_INIT (size and the defaults below), then set members. Every member is 8
+ *  bytes; `size` must be a whole number of them (at least up to nsteps). Members are only ever
+ *  added at the end; those beyond a caller's size keep their defaults. */
+typedef struct vci_ensemble_config {
+  size_t size;                  /**< = sizeof(vci_ensemble_config): VCI_ENSEMBLE_CONFIG_INIT */
+  double h;                     /**< step length (> 0, finite) */
+  int64_t nsteps;               /**< steps per member (>= 0) */
+  int64_t direction;            /**< +1 forward (default), -1 backward */
+  int64_t start_kind;           /**< VCI_START_PAIR (default) or VCI_START_MOMENTUM */
+  int64_t scheme;               /**< continuous model: VCI_SCHEME_LEFT, _MIDPOINT or _LOBATTO; -1 (default):
+                                     midpoint for a continuous model, and the only value for a discrete one */
+  int64_t stages;               /**< s of VCI_SCHEME_LOBATTO (1..VCI_LOBATTO_MAX_STAGES) */
+  double atol;                  /**< Newton's absolute tolerance; < 0 (default): vci_set_tolerances' default */
+  double rtol;                  /**< Newton's relative tolerance; < 0 (default): the default */
+  int64_t max_iterations;       /**< Newton iteration cap; 0 (default): the default */
+  int64_t impact_energy;        /**< VCI_IMPACT_DISCRETE or VCI_IMPACT_HAMILTONIAN; -1 (default): discrete */
+  int64_t max_impacts_per_step; /**< as vci_set_max_impacts; 0 (default): the default */
+  int64_t impact_cap;           /**< impact times kept per member (results impact_t/impact_gap); default 0 */
+  int64_t stride;               /**< vci_ensemble_run_file: keep the state every stride steps (0: none) */
+  int64_t threads;              /**< OpenMP threads; 0 (default): OMP_NUM_THREADS */
+  int64_t chunk;                /**< vci_ensemble_run_file: members a rank takes at a time (0: automatic) */
+  /* new members here */
+} vci_ensemble_config;
+
+/** Initialiser: `vci_ensemble_config c = VCI_ENSEMBLE_CONFIG_INIT;` then set h and nsteps. */
+#ifdef __cplusplus
+#define VCI_ENSEMBLE_CONFIG_INIT {sizeof(vci_ensemble_config), 0.0, 0, 1, 0, -1, 0, -1.0, -1.0, 0, -1, 0, 0, 0, 0, 0}
+#else
+#define VCI_ENSEMBLE_CONFIG_INIT {.size = sizeof(vci_ensemble_config), .direction = 1, .scheme = -1, \
+                                  .atol = -1.0, .rtol = -1.0, .impact_energy = -1}
+#endif
+
+/** Where vci_ensemble_run puts each member's results: caller-owned arrays, any of them NULL to skip
+ *  it; N = members, member k's entries at [k] (or [i + n*k], [j + impact_cap*k]). Versioned like
+ *  vci_ensemble_config (initialise with VCI_ENSEMBLE_RESULTS_INIT; 8-byte members). */
+typedef struct vci_ensemble_results {
+  size_t size;                  /**< = sizeof(vci_ensemble_results): VCI_ENSEMBLE_RESULTS_INIT */
+  int *status;                  /**< [N] VCI_OK, or the status that stopped the member */
+  double *t;                    /**< [N] time of the member's last accepted state (NaN: none) */
+  double *q;                    /**< [n*N] its configuration, q[i + n*k] */
+  double *p;                    /**< [n*N] its momentum */
+  int64_t *steps;               /**< [N] steps taken */
+  int64_t *impacts;             /**< [N] impacts found */
+  int64_t *newton_iterations;   /**< [N] Newton iterations */
+  double *energy_start;         /**< [N] H(q, p) at the start (energy callback), else E_d of the first step */
+  double *energy_end;           /**< [N] the same at the end */
+  double *impact_t;             /**< [impact_cap*N] the first impact_cap impact times (NaN beyond the last) */
+  int *impact_gap;              /**< [impact_cap*N] their gap indices, from 0 (-1 beyond the last) */
+  char *messages;               /**< [message_size*N] why member k failed ("" if not), NUL-terminated at
+                                     messages + message_size*k, truncated to message_size - 1 */
+  int64_t message_size;         /**< bytes per member in messages (>= 1 when messages is given) */
+  /* new members here */
+} vci_ensemble_results;
+
+/** Initialiser: `vci_ensemble_results r = VCI_ENSEMBLE_RESULTS_INIT;` (every array NULL). */
+#ifdef __cplusplus
+#define VCI_ENSEMBLE_RESULTS_INIT {sizeof(vci_ensemble_results), 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0}
+#else
+#define VCI_ENSEMBLE_RESULTS_INIT {.size = sizeof(vci_ensemble_results)}
+#endif
+
+/** Run `members` members of `model` (discrete, or continuous discretised by config->scheme and
+ *  stages) on OpenMP threads; member k starts from t0[k], q0[n*k .. n*k+n-1] and v0 (q1 or p0, as
+ *  config->start_kind says), each with its own copy of the model and its own integrator, and
+ *  yields what vci_integrate from that start would: bit for bit, whatever the threads. The model's
+ *  callbacks are called from several threads at once with the one `user` pointer: they must be
+ *  thread-safe (config->threads = 1 runs the members one after another on one thread).
+ *  A member that fails is recorded (results->status, messages) and does not stop the others.
+ *  Returns VCI_OK when the ensemble ran, whatever its members did; VCI_ERR_ARGUMENT: model not
+ *  live, config, t0, q0, v0 or results NULL, a struct size that is no header's (or members set
+ *  that this library does not know), members < 1 or members * n >= 2^31, h, nsteps, direction,
+ *  start_kind, scheme, stages, impact_energy or a count invalid, a scheme for a discrete model;
+ *  VCI_ERR_MEMORY. The message: vci_last_error(NULL, ...). */
+int  vci_ensemble_run(vci_model model, const vci_ensemble_config *config, int64_t members, const double *t0,
+                      const double *q0, const double *v0, const vci_ensemble_results *results);
+
+/** vci_ensemble_run writing every member's results (and, with config->stride > 0, its states every
+ *  stride steps) to the ensemble HDF5 file `path` (layout: docs/ENSEMBLES.md), as the Fortran
+ *  vci_ensemble_run_file does. In a library built with MPI (VCI_WITH_MPI) the call is collective
+ *  over the communicator mpi_comm, given as its Fortran handle (MPI_Comm_c2f(comm); -1:
+ *  MPI_COMM_WORLD; MPI must be initialised), every rank passing the same arguments; otherwise one
+ *  process runs every member and mpi_comm is not looked at. An existing file is kept (VCI_ERR_IO)
+ *  unless overwrite != 0. *members_failed (may be NULL) = members whose status is not VCI_OK.
+ *  Returns VCI_OK when every member was run and written; the statuses of vci_ensemble_run, path
+ *  NULL or empty (VCI_ERR_ARGUMENT), VCI_ERR_IO (the file, or no HDF5 in this library),
+ *  VCI_ERR_STATE (MPI not initialised). */
+int  vci_ensemble_run_file(vci_model model, const vci_ensemble_config *config, int64_t members,
+                           const double *t0, const double *q0, const double *v0, const char *path,
+                           int overwrite, int mpi_comm, int64_t *members_failed);
+
 #ifdef __cplusplus
 }
 #endif

@@ -42,7 +42,8 @@ def test_prototypes_and_constants_compile_with_the_header(tmp_path):
 def test_struct_layout_matches_the_header(tmp_path):
     lines = ['#include <stdio.h>', '#include <stddef.h>', '#include "vci.h"', 'int main(void) {']
     expected = []
-    for struct in ("vci_callbacks", "vci_lagrangian_callbacks", "vci_progress"):
+    for struct in ("vci_callbacks", "vci_lagrangian_callbacks", "vci_progress", "vci_ensemble_config",
+                   "vci_ensemble_results"):
         lines.append(f'  printf("{struct} sizeof %zu\\n", sizeof({struct}));')
         expected.append(f"{struct} sizeof {ffi.sizeof(struct)}")
         for name, field in ffi.typeof(struct).fields:
@@ -52,7 +53,7 @@ def test_struct_layout_matches_the_header(tmp_path):
     got = _compile(tmp_path, "\n".join(lines) + "\n", run=True).split("\n")
     assert [g for g in got if g] == expected
     # and the header's struct has no member that ours lacks: its size is the end of our last member
-    for struct in ("vci_callbacks", "vci_lagrangian_callbacks"):
+    for struct in ("vci_callbacks", "vci_lagrangian_callbacks", "vci_ensemble_config", "vci_ensemble_results"):
         last = ffi.typeof(struct).fields[-1][1]
         assert ffi.sizeof(struct) == last.offset + ffi.sizeof(last.type)
 

@@ -12,6 +12,7 @@ from ._lib import library_path, lib as _clib
 from .errors import (ArgumentError, CallbackError, DtypeError, FormulaError, ImpactError, InadmissibleError,
                      MemoryError_, NewtonError, NonFiniteError, OutputError, RecoverableError, StateError,
                      StoppedError, TooManyImpactsError, VciError, status_string)
+from .ensemble import Ensemble, EnsembleResult
 from .integrator import CheckReport, Integrator, Progress, State, Stats, Trajectory, check_model, impact_dtype
 from .model import DiscreteModel, LagrangianModel, Model
 

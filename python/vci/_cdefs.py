@@ -127,6 +127,41 @@ UNBOUND = {
 }
 
 
+# ---- Ensembles (vci_ensemble_run, vci_ensemble_run_file): one block, appended ----
+CONSTANTS.update({
+    "VCI_START_PAIR": 0,
+    "VCI_START_MOMENTUM": 1,
+    "VCI_MEMBER_NOT_RUN": -1,
+})
+ENSEMBLE_STRUCTS = """
+typedef struct vci_ensemble_config {
+  size_t size;
+  double h;
+  int64_t nsteps, direction, start_kind, scheme, stages;
+  double atol, rtol;
+  int64_t max_iterations, impact_energy, max_impacts_per_step, impact_cap, stride, threads, chunk;
+} vci_ensemble_config;
+
+typedef struct vci_ensemble_results {
+  size_t size;
+  int *status;
+  double *t, *q, *p;
+  int64_t *steps, *impacts, *newton_iterations;
+  double *energy_start, *energy_end, *impact_t;
+  int *impact_gap;
+  char *messages;
+  int64_t message_size;
+} vci_ensemble_results;
+"""
+STRUCTS += ENSEMBLE_STRUCTS
+DECLARATIONS += """int  vci_ensemble_run(vci_model model, const vci_ensemble_config *config, int64_t members, const double *t0,
+                      const double *q0, const double *v0, const vci_ensemble_results *results);
+int  vci_ensemble_run_file(vci_model model, const vci_ensemble_config *config, int64_t members,
+                           const double *t0, const double *q0, const double *v0, const char *path,
+                           int overwrite, int mpi_comm, int64_t *members_failed);
+"""
+
+
 def cdef_text():
     """The whole text handed to ffi.cdef (the structs need the typedefs before them)."""
     head, _, protos = DECLARATIONS.partition("int  vci_model_create_v2")

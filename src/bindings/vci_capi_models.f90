@@ -123,7 +123,9 @@ module vci_capi_models
   type, extends(vci_lagrangian_t) :: c_lagrangian_t
     type(vci_lagrangian_callbacks_c) :: cb
     type(c_ptr) :: user = c_null_ptr
-    type(vci_callback_record_t), pointer :: record => null()
+    type(vci_callback_record_t), pointer :: record => null()  !< its integrator's model copy's record, or
+    !> the model's own when `record` is not associated (an ensemble member: vci_capi_ensemble)
+    type(vci_callback_record_t) :: own_record
   contains
     procedure :: lagrangian => cl_value
     procedure :: dl_dq => cl_dl_dq
@@ -159,7 +161,9 @@ contains
     type is (c_model_t)
       record => model%record; user = model%user
     type is (c_lagrangian_t)
-      record => model%record; user = model%user
+      record => model%own_record
+      if (associated(model%record)) record => model%record
+      user = model%user
     end select
   end subroutine c_context
 
@@ -377,14 +381,17 @@ contains
     real(dp), intent(out) :: lqq(:, :), lqv(:, :), lvv(:, :)
     integer, intent(inout) :: stat
     procedure(c_lhess_fn), pointer :: f
+    type(vci_callback_record_t), pointer :: record
+    type(c_ptr) :: user
     integer :: rc
     lqq = 0.0_dp; lqv = 0.0_dp; lvv = 0.0_dp   ! defined even where a failing callback left them unwritten
     if (.not. c_associated(self%cb%hessians)) then
       call self%not_provided(stat); return
     end if
+    call c_context(self, record, user)
     call c_f_procpointer(self%cb%hessians, f)
-    rc = f(self%n, q, v, lqq, lqv, lvv, self%user)
-    call self%record%note(rc, 'the C callback hessians', all(ieee_is_finite(lqq)) .and. &
+    rc = f(self%n, q, v, lqq, lqv, lvv, user)
+    call record%note(rc, 'the C callback hessians', all(ieee_is_finite(lqq)) .and. &
                           all(ieee_is_finite(lqv)) .and. all(ieee_is_finite(lvv)), stat)
   end subroutine cl_hessians
 

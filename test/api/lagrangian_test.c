@@ -13,6 +13,7 @@
 #include <stdio.h>
 #include <string.h>
 #include "vci.h"
+#include "walls_lagrangian.h"
 
 static int failures = 0;
 #define CHECK(c) do { if (!(c)) { printf("  line %d: CHECK(%s) failed\n", __LINE__, #c); failures++; } } while (0)
@@ -21,36 +22,11 @@ static int fail_dl_dq_after = -1; /* dl_dq returns fail_code from this call on (
 static int fail_code = 0;
 static int dl_dq_calls = 0;
 
-static int l_value(int n, const double *q, const double *v, double *l, void *user) {
-  (void)n; (void)user;
-  l[0] = 0.5 * v[0] * v[0] + 9.8 * cos(q[0]);
-  return 0;
-}
 static int l_dq(int n, const double *q, const double *v, double *out, void *user) {
   (void)n; (void)v; (void)user;
   out[0] = -9.8 * sin(q[0]);
   dl_dq_calls++;
   if (fail_dl_dq_after >= 0 && dl_dq_calls > fail_dl_dq_after) return fail_code;
-  return 0;
-}
-static int l_dv(int n, const double *q, const double *v, double *out, void *user) {
-  (void)n; (void)q; (void)user;
-  out[0] = v[0];
-  return 0;
-}
-static int l_hess(int n, const double *q, const double *v, double *lqq, double *lqv, double *lvv, void *user) {
-  (void)n; (void)v; (void)user;
-  lqq[0] = -9.8 * cos(q[0]); lqv[0] = 0.0; lvv[0] = 1.0;
-  return 0;
-}
-static int walls(int n, int ng, const double *q, double *g, void *user) {
-  (void)n; (void)ng; (void)user;
-  g[0] = 1.0 - q[0]; g[1] = q[0] + 1.0;
-  return 0;
-}
-static int wall_grads(int n, int ng, const double *q, double *dg, void *user) {
-  (void)n; (void)ng; (void)q; (void)user;
-  dg[0] = -1.0; dg[1] = 1.0;
   return 0;
 }
 
