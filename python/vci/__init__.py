@@ -13,7 +13,7 @@ from .errors import (ArgumentError, CallbackError, DtypeError, FormulaError, Imp
                      MemoryError_, NewtonError, NonFiniteError, OutputError, RecoverableError, StateError,
                      StoppedError, TooManyImpactsError, VciError, status_string)
 from .integrator import CheckReport, Integrator, Progress, State, Stats, Trajectory, check_model, impact_dtype
-from .model import DiscreteModel, LagrangianModel, Model
+from .model import DiscreteModel, LagrangianModel, Model, SeparableModel
 
 
 def library_version():
