@@ -52,7 +52,7 @@ def test_formula_composition_orders_through_impacts():
         for k in range(8):
             h = 10.0 / round(10.0 / (hmax * (hmin / hmax) ** (k / 7)))
             integ = _walled_run(model, order, h)
-            assert integ.stats().impacts == 18
+            assert integ.stats.impacts == 18
             q, p = integ.q, integ.p
             hs.append(h)
             errs.append(max(abs(q[0] - theta), abs(p[0] - omega)))
