@@ -163,8 +163,8 @@ enum {
   VCI_SCHEME_LEFT = 1,     /**< L_d = h L(q, (v - q)/h): the paper's retraction, order 1 */
   VCI_SCHEME_MIDPOINT = 2, /**< L_d = h L((q + v)/2, (v - q)/h): order 2, the default for a continuous model */
   VCI_SCHEME_LOBATTO = 3,  /**< Galerkin with s + 1 Lobatto points, s = 1..VCI_LOBATTO_MAX_STAGES: order 2s, with or without constraints */
-  VCI_SCHEME_COMPOSITION = 4 /**< explicit Verlet compositions, order 2, 4, 6, 8, 10 (the stages argument): Fortran
-                                  separable models (vci_separable_t) only for now; a C model gets VCI_ERR_ARGUMENT */
+  VCI_SCHEME_COMPOSITION = 4 /**< explicit Verlet compositions, order 2, 4, 6, 8, 10 (the stages argument): separable
+                                  models only (vci_model_create_separable; another model gets VCI_ERR_ARGUMENT) */
 };
 /** The largest number of stages s of VCI_SCHEME_LOBATTO. */
 #define VCI_LOBATTO_MAX_STAGES 8
@@ -209,6 +209,53 @@ typedef struct vci_lagrangian_callbacks {
  *  vci_lagrangian_callbacks), with lagrangian, dl_dq, dl_dv required; VCI_ERR_MEMORY. */
 int  vci_model_create_lagrangian(vci_model *model, int n, int m, int ngaps, const vci_lagrangian_callbacks *cb,
                                  void *user);
+
+/* ---- Separable models (docs/C_API.md, "Separable models"): L = 1/2 qdot^T M qdot - V(q), M constant ---- */
+
+/** mass_kind of vci_model_create_separable: how `mass` holds the constant mass matrix M. */
+enum {
+  VCI_MASS_DIAGONAL = 0, /**< mass[n]: the diagonal of M (each entry > 0) */
+  VCI_MASS_DENSE = 1     /**< mass[n*n]: M column-major, symmetric positive definite */
+};
+
+/** out[0] = V(q) (the potential), out[n] = grad V(q), or out[n*n] = the Hessian of V
+ *  (out[i + n*j] = d2V/dq_i dq_j) at q[n]. */
+typedef int (*vci_potential_fn)(int n, const double *q, double *out, void *user);
+
+/** The callbacks of a separable model, a struct of its own with its own leading size (same rules as
+ *  vci_callbacks: initialise with VCI_SEPARABLE_CALLBACKS_INIT; members are only ever added at the
+ *  end). Same return contract as the other callbacks. L, its derivatives and H are derived from M
+ *  and V, so every scheme of a continuous model runs it, and VCI_SCHEME_COMPOSITION needs it. */
+typedef struct vci_separable_callbacks {
+  size_t size;                           /**< = sizeof(vci_separable_callbacks) */
+  vci_potential_fn potential;            /**< required: V(q), out[1] */
+  vci_potential_fn potential_gradient;   /**< required: grad V(q), out[n] */
+  vci_potential_fn potential_hessian;    /**< optional (NULL: the implicit schemes difference grad V) */
+  vci_gaps_fn gaps;                      /**< required iff ngaps > 0 */
+  vci_gap_grads_fn gap_gradients;        /**< required iff ngaps > 0 (the explicit impact uses it) */
+  /* new members here */
+} vci_separable_callbacks;
+
+/** Initialiser: `vci_separable_callbacks cb = VCI_SEPARABLE_CALLBACKS_INIT;` (size set, every
+ *  callback NULL), as VCI_CALLBACKS_INIT. */
+#ifdef __cplusplus
+#define VCI_SEPARABLE_CALLBACKS_INIT {sizeof(vci_separable_callbacks), 0, 0, 0, 0, 0}
+#else
+#define VCI_SEPARABLE_CALLBACKS_INIT {.size = sizeof(vci_separable_callbacks)}
+#endif
+
+/** Create a separable model L = 1/2 qdot^T M qdot - V(q) of n coordinates and ngaps walls with the
+ *  constant mass matrix M in mass (mass_kind VCI_MASS_DIAGONAL: mass[n]; VCI_MASS_DENSE: mass[n*n]),
+ *  copied with the callbacks; `user` goes to every callback. An integrator made from it uses
+ *  VCI_SCHEME_MIDPOINT until vci_set_scheme chooses another (VCI_SCHEME_COMPOSITION: the explicit
+ *  Verlet compositions, no linear solve). On failure *model = NULL.
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT: as vci_model_create (cb->size a whole number of members of a
+ *  vci_separable_callbacks), m != 0 (a separable model has no nonholonomic constraints: give such a
+ *  model with vci_model_create_lagrangian and an implicit scheme), potential or potential_gradient
+ *  NULL, gaps or gap_gradients NULL with ngaps > 0, unknown mass_kind, mass NULL, a diagonal entry
+ *  not positive and finite, a dense M not symmetric positive definite and finite; VCI_ERR_MEMORY. */
+int  vci_model_create_separable(vci_model *model, int n, int m, int ngaps, int mass_kind, const double *mass,
+                                const vci_separable_callbacks *cb, void *user);
 
 /** Choose the scheme of an integrator made from a continuous model: VCI_SCHEME_LEFT, _MIDPOINT,
  *  or _LOBATTO with `stages` = s in 1..VCI_LOBATTO_MAX_STAGES (ignored for the others). Call before

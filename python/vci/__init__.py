@@ -14,7 +14,7 @@ from .errors import (ArgumentError, CallbackError, DtypeError, FormulaError, Imp
                      StoppedError, TooManyImpactsError, VciError, status_string)
 from .ensemble import Ensemble, EnsembleResult
 from .integrator import CheckReport, Integrator, Progress, State, Stats, Trajectory, check_model, impact_dtype
-from .model import DiscreteModel, LagrangianModel, Model
+from .model import DiscreteModel, LagrangianModel, Model, SeparableModel
 
 
 def library_version():

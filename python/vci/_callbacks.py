@@ -32,6 +32,9 @@ SIGNATURES = {
     "l_value": ("vci_lagrangian_value_fn", "(q, v)", "float"),
     "l_grad": ("vci_lagrangian_grad_fn", "(q, v)", "array (n,)"),
     "l_hessians": ("vci_lagrangian_hessians_fn", "(q, v)", "(lqq, lqv, lvv), each (n, n), [i, j]"),
+    "potential": ("vci_potential_fn", "(q)", "float"),
+    "potential_grad": ("vci_potential_fn", "(q)", "array (n,)"),
+    "potential_hess": ("vci_potential_fn", "(q)", "array (n, n), [i, j] = d2V / dq_i dq_j"),
 }
 
 
@@ -183,6 +186,15 @@ def _python_callback(kind, name, fn, log, m, ngaps):
                 raise ArgumentError(f"{name} must return three arrays (lqq, lqv, lvv)")
             for dest, block in zip((lqq, lqv, lvv), blocks):
                 _put(name, _out(dest, n * n), block, (n, n), "F")
+    elif kind == "potential":
+        def body(n, q, out, user):
+            out[0] = _scalar(name, fn(_view(q, n)))
+    elif kind == "potential_grad":
+        def body(n, q, out, user):
+            _put(name, _out(out, n), fn(_view(q, n)), (n,))
+    elif kind == "potential_hess":
+        def body(n, q, out, user):
+            _put(name, _out(out, n * n), fn(_view(q, n)), (n, n), "F")
     else:  # pragma: no cover
         raise AssertionError(kind)
     return ffi.callback(SIGNATURES[kind][0], guard(body))

@@ -29,6 +29,8 @@ CONSTANTS = {
     "VCI_SCHEME_LOBATTO": 3,
     "VCI_SCHEME_COMPOSITION": 4,
     "VCI_LOBATTO_MAX_STAGES": 8,
+    "VCI_MASS_DIAGONAL": 0,
+    "VCI_MASS_DENSE": 1,
     "VCI_VERSION_MAJOR": 0,
     "VCI_VERSION_MINOR": 2,
 }
@@ -52,6 +54,7 @@ typedef int (*vci_lagrangian_value_fn)(int n, const double *q, const double *v, 
 typedef int (*vci_lagrangian_grad_fn)(int n, const double *q, const double *v, double *out, void *user);
 typedef int (*vci_lagrangian_hessians_fn)(int n, const double *q, const double *v, double *lqq, double *lqv,
                                           double *lvv, void *user);
+typedef int (*vci_potential_fn)(int n, const double *q, double *out, void *user);
 
 int  vci_model_create_v2(vci_model *model, int n, int m, int ngaps, const vci_callbacks *cb, void *user);
 int  vci_model_create_lagrangian(vci_model *model, int n, int m, int ngaps, const vci_lagrangian_callbacks *cb,
@@ -87,6 +90,8 @@ int  vci_version(void);
 int  vci_set_progress(vci_integrator integ, vci_progress_fn fn, double interval, void *user);
 int  vci_check_model(vci_model model, const double *q, const double *v, double h, double tol, int *passed,
                      double *worst, char *report, int size);
+int  vci_model_create_separable(vci_model *model, int n, int m, int ngaps, int mass_kind, const double *mass,
+                                const vci_separable_callbacks *cb, void *user);
 """
 
 #: The two callback structs, member for member (cffi needs the whole layout).
@@ -119,6 +124,13 @@ typedef struct vci_lagrangian_callbacks {
   vci_gap_grads_fn gap_gradients;
   vci_energy_fn energy;
 } vci_lagrangian_callbacks;
+
+typedef struct vci_separable_callbacks {
+  size_t size;
+  vci_potential_fn potential, potential_gradient, potential_hessian;
+  vci_gaps_fn gaps;
+  vci_gap_grads_fn gap_gradients;
+} vci_separable_callbacks;
 """
 
 #: Functions of vci.h deliberately not bound, with the reason.

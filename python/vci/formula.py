@@ -14,13 +14,15 @@ import math
 import os
 import sys
 
+import numpy as np
+
 import sympy as sp
 from sympy.core.function import AppliedUndef
 from sympy.printing.pycode import PythonCodePrinter
 
 from ._lib import ffi
 from .errors import FormulaError
-from .model import LagrangianModel
+from .model import LagrangianModel, SeparableModel
 
 # the C types of the callbacks: kind -> (C typedef, argument names)
 _KINDS = {
@@ -32,6 +34,9 @@ _KINDS = {
     "gaps": ("vci_gaps_fn", ("n", "ng", "q", "out", "user")),
     "gap_gradients": ("vci_gap_grads_fn", ("n", "ng", "q", "out", "user")),
     "energy": ("vci_energy_fn", ("n", "q", "p", "out", "user")),
+    "potential": ("vci_potential_fn", ("n", "q", "out", "user")),
+    "potential_gradient": ("vci_potential_fn", ("n", "q", "out", "user")),
+    "potential_hessian": ("vci_potential_fn", ("n", "q", "out", "user")),
 }
 
 
@@ -129,6 +134,7 @@ def _numba_compile(kind, func):
         "vci_gaps_fn": types.int32(i, i, dp, dp, v),
         "vci_gap_grads_fn": types.int32(i, i, dp, dp, v),
         "vci_energy_fn": types.int32(i, dp, dp, dp, v),
+        "vci_potential_fn": types.int32(i, dp, dp, v),
     }
     return cfunc(sigs[_KINDS[kind][0]], nopython=True, error_model="numpy")(func)
 
@@ -141,6 +147,7 @@ _SIG_NAMES = {
     "vci_gaps_fn": "(i, i, dp, dp, v)",
     "vci_gap_grads_fn": "(i, i, dp, dp, v)",
     "vci_energy_fn": "(i, dp, dp, dp, v)",
+    "vci_potential_fn": "(i, dp, dp, v)",
 }
 
 
@@ -174,7 +181,7 @@ def _cached_module(cache, sources):
 
 
 def lagrangian_model(L, q, qdot, *, forms=None, gaps=None, params=None, energy=False, hessians=True,
-                     gap_gradients=True, backend="numba", cache=None):
+                     gap_gradients=True, backend="numba", cache=None, separable=None):
     """A LagrangianModel from the sympy expression L of the coordinates q and velocities qdot.
 
     forms: the constraint one-forms, m rows of n expressions of q (row mu: omega^mu = sum_i
@@ -186,6 +193,12 @@ def lagrangian_model(L, q, qdot, *, forms=None, gaps=None, params=None, energy=F
     cache: a directory in which the numba backend keeps the generated module and numba's compiled
     code, so that building the same model again loads instead of compiling (default: the
     environment variable VCI_FORMULA_CACHE, else no cache: nothing is written).
+
+    separable: None (default) returns a SeparableModel when L = 1/2 qdot^T M qdot - V(q) with a
+    constant, positive definite M and there are no constraints (its V, grad V, Hessian of V and gap
+    gradients derived here; H is then the library's, `energy` and `gap_gradients` are not used), so
+    that scheme='composition' runs it; else a LagrangianModel. True: the SeparableModel or
+    FormulaError saying why L is not separable; False: always a LagrangianModel.
 
     The returned model has the attribute `formula` (the derived expressions and the source).
     A symbol that is neither a coordinate, a velocity nor in params raises FormulaError.
@@ -247,6 +260,14 @@ def lagrangian_model(L, q, qdot, *, forms=None, gaps=None, params=None, energy=F
     pp = sp.symbols(f"_p0:{n}", real=True)
     to_ph = dict(zip(qs, pq)) | dict(zip(vs, pv))
     Lp = L.xreplace(to_ph)
+    if separable not in (None, True, False):
+        raise FormulaError(f"separable must be None, True or False, got {separable!r}")
+    if separable is not False:
+        mass, pot, why = _separable_parts(Lp, pq, pv, m)
+        if why is None:
+            return _separable_model(L, qs, vs, gap_list, pq, pv, to_ph, mass, pot, hessians, backend, cache)
+        if separable:
+            raise FormulaError(f"separable=True but L is not 1/2 qdot^T M qdot - V(q) with M constant: {why}")
     dl_dq = [sp.diff(Lp, a) for a in pq]
     dl_dv = [sp.diff(Lp, a) for a in pv]
     outputs = {
@@ -336,3 +357,76 @@ def _hamiltonian(Lp, pq, pv, pp):
     vsub = dict(zip(pv, list(v)))
     H = sum(pp[i] * v[i] for i in range(n)) - Lp.xreplace(vsub)
     return H
+
+
+def _separable_parts(Lp, pq, pv, m):
+    """(M as floats, V, None) when Lp = 1/2 v^T M v - V(q) with M constant and positive definite and
+    m = 0; else (None, None, the reason)."""
+    import numpy as np
+    if m:
+        return None, None, "it has constraints (m > 0)"
+    n = len(pq)
+    dl_dv = sp.Matrix([sp.diff(Lp, a) for a in pv])
+    M = dl_dv.jacobian(pv)
+    if M.free_symbols:
+        return None, None, "d2L/dqdot2 depends on " + ", ".join(sorted(map(str, M.free_symbols)))
+    zero_v = {a: 0 for a in pv}
+    if any(sp.simplify(e) != 0 for e in dl_dv.xreplace(zero_v)):
+        return None, None, "dL/dqdot at qdot = 0 is not zero (terms linear in qdot)"
+    v = sp.Matrix(pv)
+    pot = sp.simplify(-(Lp - (v.T * M * v)[0, 0] / 2))
+    if pot.free_symbols & set(pv):
+        return None, None, "L - 1/2 qdot^T M qdot still depends on qdot"
+    try:
+        mass = np.array([[float(M[i, j]) for j in range(n)] for i in range(n)])
+    except TypeError:
+        return None, None, "M is not numeric"
+    if not np.all(np.isfinite(mass)) or np.any(np.linalg.eigvalsh(mass) <= 0.0):
+        return None, None, "M is not positive definite"
+    return mass, pot, None
+
+
+def _separable_model(L, qs, vs, gap_list, pq, pv, to_ph, mass, pot, hessians, backend, cache):
+    """The SeparableModel of L = 1/2 v^T M v - pot(q): V, grad V, its Hessian, the gaps and their
+    gradients derived and compiled as lagrangian_model compiles its callbacks."""
+    n = len(pq)
+    grad = [sp.diff(pot, a) for a in pq]
+    outputs = {"potential": [("out[0]", pot)],
+               "potential_gradient": [(f"out[{i}]", e) for i, e in enumerate(grad)]}
+    derived = dict(potential=pot, potential_gradient=grad)
+    if hessians:
+        hv = [[sp.diff(grad[i], pq[j]) for j in range(n)] for i in range(n)]
+        outputs["potential_hessian"] = [(f"out[{i + n * j}]", hv[i][j]) for j in range(n) for i in range(n)]
+        derived["potential_hessian"] = hv
+    ngaps = len(gap_list)
+    if ngaps:
+        gp = [g.xreplace(to_ph) for g in gap_list]
+        dg = [[sp.diff(g, pq[i]) for i in range(n)] for g in gp]
+        outputs["gaps"] = [(f"out[{j}]", g) for j, g in enumerate(gp)]
+        outputs["gap_gradients"] = [(f"out[{i + n * j}]", dg[j][i]) for j in range(ngaps) for i in range(n)]
+        derived["gap_gradients"] = dg
+    sources = {kind: _source(f"vci_{kind}", kind, outs, pq, None) for kind, outs in outputs.items()}
+    pointers = {}
+    holder = {}
+    if cache is None:
+        cache = os.environ.get("VCI_FORMULA_CACHE") or None
+    if backend == "numba" and cache:
+        pointers.update(_cached_module(os.fspath(cache), sources))
+    for kind, src in sources.items():
+        if kind in pointers:
+            continue
+        namespace = {"math": math}
+        exec(compile(src, f"<vci.formula {kind}>", "exec"), namespace)  # noqa: S102 -- our own generated code
+        func = namespace[f"vci_{kind}"]
+        if backend == "numba":
+            pointers[kind] = _numba_compile(kind, func)
+        else:
+            pointers[kind] = ffi.callback(_KINDS[kind][0], func, error=-1, onerror=_recorder(holder, kind))
+    diag = np.diag(np.diag(mass))
+    given = np.diag(mass).copy() if np.array_equal(mass, diag) else mass
+    model = SeparableModel(n, ngaps, mass=given, **pointers)
+    holder["log"] = model._log
+    back = {v: k for k, v in to_ph.items()}
+    model.formula = Formula(L=L, q=qs, qdot=vs, forms=[], gaps=gap_list, backend=backend, mass=mass,
+                            derived={k: _back(v, back) for k, v in derived.items()}, sources=sources)
+    return model

@@ -73,10 +73,16 @@ class Model:
             self.callbacks[name] = obj
         self._keep.append(user)
         handle = ffi.new("vci_model *")
-        status = getattr(lib, self._create)(handle, self.n, self.m, self.ngaps, cb, _user_pointer(user))
+        status = getattr(lib, self._create)(handle, self.n, self.m, self.ngaps, *self._create_extra(), cb,
+                                            _user_pointer(user))
         if status != 0:
             raise make_error(status, last_error(None))
         self._handle = handle
+
+    def _create_extra(self):
+        """Arguments of the create function between ngaps and the callbacks (none but for
+        SeparableModel's mass matrix)."""
+        return ()
 
     @property
     def handle(self):
@@ -166,3 +172,48 @@ class LagrangianModel(Model):
 
     def __init__(self, n, m=0, ngaps=0, *, lagrangian, dl_dq, dl_dv, user=None, **optional):
         super().__init__(n, m, ngaps, user=user, lagrangian=lagrangian, dl_dq=dl_dq, dl_dv=dl_dv, **optional)
+
+
+class SeparableModel(LagrangianModel):
+    """A separable Lagrangian L = 1/2 qdot^T M qdot - V(q) with a constant mass matrix M
+    (vci_model_create_separable). L, its derivatives and H are derived by the library, so every
+    scheme of a LagrangianModel runs it, and scheme='composition' (the explicit Verlet
+    compositions, order 2 .. 10) needs it. No constraints (m = 0).
+
+    mass: the diagonal of M (n numbers) or M itself (n x n, symmetric positive definite).
+    Callbacks (Python callables, or compiled C functions of vci.h's vci_potential_fn and wall types):
+      potential(q) -> float                V(q)                                 required
+      potential_gradient(q) -> (n,)        grad V                               required
+      potential_hessian(q) -> (n, n)       the Hessian of V                     optional
+      gaps(q) -> (ngaps,)                                                       required iff ngaps > 0
+      gap_gradients(q) -> (ngaps, n)       row j = grad g_j                     required iff ngaps > 0
+
+    vci.formula.lagrangian_model returns one when its L has this form.
+    """
+
+    _struct = "vci_separable_callbacks"
+    _create = "vci_model_create_separable"
+    kind = "separable"
+    _members = (
+        ("potential", "potential", True), ("potential_gradient", "potential_grad", True),
+        ("potential_hessian", "potential_hess", False), ("gaps", "gaps", _needs_gaps),
+        ("gap_gradients", "gap_grads", _needs_gaps),
+    )
+
+    def __init__(self, n, ngaps=0, *, mass, potential, potential_gradient, user=None, **optional):
+        import numpy as np
+        nn = _size("n", n, 1)
+        arr = np.asarray(mass, dtype=np.float64)
+        if arr.shape in ((nn,), ()) and not (arr.shape == () and nn != 1):
+            self._mass_kind, flat = 0, arr.reshape(-1)
+        elif arr.shape == (nn, nn):
+            self._mass_kind, flat = 1, arr.ravel(order="F")
+        else:
+            raise ArgumentError(f"mass must be the diagonal ({nn},) or the matrix ({nn}, {nn}), got shape {arr.shape}")
+        self.mass = arr.copy()
+        self._mass_c = ffi.new("double[]", [float(x) for x in flat])
+        Model.__init__(self, n, 0, ngaps, user=user, potential=potential, potential_gradient=potential_gradient,
+                       **optional)
+
+    def _create_extra(self):
+        return (self._mass_kind, self._mass_c)

@@ -21,6 +21,7 @@ module vci_capi
 
   public :: vci_model_create_v2, vci_model_create_v0_1, vci_model_create_lagrangian, vci_model_destroy
   public :: vci_set_scheme
+  public :: vci_model_create_separable
   public :: vci_integrator_create, vci_integrator_destroy
   public :: vci_set_tolerances, vci_set_impact_energy, vci_set_max_impacts
   public :: vci_init_from_pair, vci_init_from_momentum, vci_step, vci_integrate
@@ -30,6 +31,9 @@ module vci_capi
   public :: vci_set_impact_callback, vci_open_output, vci_open_output_every, vci_close_output
   public :: vci_append_output, vci_restore_from_file
   public :: vci_last_error, vci_status_string, vci_version
+
+  !> mass_kind of vci_model_create_separable (vci.h: VCI_MASS_DIAGONAL, VCI_MASS_DENSE)
+  integer, parameter :: VCI_MASS_DIAGONAL_C = 0, VCI_MASS_DENSE_C = 1
 
   ! NUL-terminated status strings handed out by vci_status_string: initialised at load time, read-only
   integer, parameter :: STATUS_LEN = 40
@@ -133,6 +137,100 @@ contains
     vci_model_create_lagrangian = create_model('vci_model_create_lagrangian', model, n, m, ngaps, vci_callbacks_c(), user, local)
   end function vci_model_create_lagrangian
 
+  !> int vci_model_create_separable(vci_model *model, int n, int m, int ngaps, int mass_kind,
+  !> const double *mass, const vci_separable_callbacks *cb, void *user): L = ½ q̇ᵀ M q̇ − V(q)
+  !> with a constant M (mass_kind 0: diagonal, mass[n]; 1: dense, mass[n*n] column-major).
+  !> Reads cb->size bytes of the callbacks (the rules of vci_model_create_v2). m must be 0:
+  !> constraints are not part of this kind (the explicit schemes cannot impose them).
+  integer(c_int) function vci_model_create_separable(model, n, m, ngaps, mass_kind, mass, cb, user) &
+    bind(C, name='vci_model_create_separable')
+    type(c_ptr), value :: model, mass, cb, user
+    integer(c_int), value :: n, m, ngaps, mass_kind
+    type(vci_separable_callbacks_c) :: local
+    type(c_funptr), pointer :: fps(:)
+    real(c_double), pointer :: mf(:)
+    type(c_separable_t) :: probe
+    type(c_model_t), target :: trial
+    integer(c_size_t) :: nbytes, ours
+    character(len=64) :: what
+    character(len=VCI_MSG_LEN) :: msg
+    integer :: k, i, nm, st
+    vci_model_create_separable = VCI_ERR_ARGUMENT
+    ours = c_sizeof(local)
+    ! up to potential_gradient: the required ones
+    if (.not. callbacks_usable('vci_model_create_separable', model, cb, ours, &
+                               c_sizeof(local%size) + 2 * c_sizeof(c_null_funptr), 'vci_separable_callbacks', &
+                               'VCI_SEPARABLE_CALLBACKS_INIT', nbytes)) return
+    k = int((min(nbytes, ours) - c_sizeof(local%size)) / c_sizeof(c_null_funptr))
+    call c_f_pointer(transfer(transfer(cb, 0_c_intptr_t) + c_sizeof(local%size), cb), fps, [k])
+    local = vci_separable_callbacks_c()
+    local%size = ours
+    do i = 1, k          ! one by one, as vci_model_create_lagrangian (no byte copy)
+      select case (i)
+      case (1); local%potential = fps(i)
+      case (2); local%potential_gradient = fps(i)
+      case (3); local%potential_hessian = fps(i)
+      case (4); local%gaps = fps(i)
+      case (5); local%gap_gradients = fps(i)
+      end select
+    end do
+    if (m /= 0) then
+      write (msg, '(a,i0,a)') 'vci_model_create_separable: m = ', m, ' but a separable model has no '// &
+        'nonholonomic constraints (the explicit schemes cannot impose them): give the model with '// &
+        'vci_model_create_lagrangian and use an implicit scheme'
+      call set_thread_message(msg); return
+    end if
+    what = ''
+    if (.not. c_associated(local%potential)) what = 'potential'
+    if (.not. c_associated(local%potential_gradient)) what = 'potential_gradient'
+    if (ngaps > 0 .and. .not. c_associated(local%gaps)) what = 'gaps (needed as ngaps > 0)'
+    if (ngaps > 0 .and. .not. c_associated(local%gap_gradients)) what = 'gap_gradients (needed as ngaps > 0)'
+    if (what /= '') then
+      call set_thread_message('vci_model_create_separable: callback '//trim(what)//' is NULL (potential and '// &
+                              'potential_gradient are required; gaps and gap_gradients when ngaps > 0)')
+      return
+    end if
+    if (mass_kind /= VCI_MASS_DIAGONAL_C .and. mass_kind /= VCI_MASS_DENSE_C) then
+      write (msg, '(a,i0,a)') 'vci_model_create_separable: mass_kind = ', mass_kind, &
+        ' (need VCI_MASS_DIAGONAL = 0 or VCI_MASS_DENSE = 1)'
+      call set_thread_message(msg); return
+    end if
+    if (.not. c_associated(mass)) then
+      call set_thread_message('vci_model_create_separable: the mass argument is NULL'); return
+    end if
+    if (vci_size_problem(int(n), 0, int(ngaps)) /= '') then
+      st = create_model('vci_model_create_separable', model, n, m, ngaps, vci_callbacks_c(), user)  ! its message
+      vci_model_create_separable = st; return
+    end if
+    nm = n
+    if (mass_kind == VCI_MASS_DENSE_C) nm = n * n
+    call c_f_pointer(mass, mf, [nm])
+    ! M checked once here (symmetric positive definite, finite) on a trial binding
+    trial%n = n; trial%m = 0; trial%n_gaps = ngaps
+    trial%mass_dense = mass_kind == VCI_MASS_DENSE_C
+    allocate (trial%mass(nm), stat=st)
+    if (st /= 0) then
+      call set_thread_message('vci_model_create_separable: out of memory')
+      vci_model_create_separable = VCI_ERR_MEMORY; return
+    end if
+    trial%mass = mf
+    call bind_separable(probe, trial, st)
+    if (st == VCI_ERR_MEMORY) then
+      call set_thread_message('vci_model_create_separable: out of memory')
+      vci_model_create_separable = VCI_ERR_MEMORY; return
+    else if (st /= VCI_OK) then
+      if (trial%mass_dense) then
+        call set_thread_message('vci_model_create_separable: the mass matrix is not symmetric positive definite '// &
+                                'and finite')
+      else
+        call set_thread_message('vci_model_create_separable: a diagonal mass entry is not positive and finite')
+      end if
+      return
+    end if
+    vci_model_create_separable = create_model('vci_model_create_separable', model, n, m, ngaps, vci_callbacks_c(), &
+                                              user, scb=local, mass=trial%mass, mass_dense=trial%mass_dense)
+  end function vci_model_create_separable
+
   !> The model_create entry points' first checks (`who`: the one called): model and cb not NULL;
   !> then *model = NULL. False (the thread's message says why) when the call must fail.
   logical function pointers_given(who, model, cb) result(ok)
@@ -215,12 +313,16 @@ contains
 
   !> The model_create entry points (`caller`: the one called): validate, allocate, register.
   !> With lcb: a continuous model (its callbacks already checked; fcb unused).
-  integer function create_model(caller, model, n, m, ngaps, fcb, user, lcb) result(status)
+  !> With scb, mass, mass_dense: a separable model (checked by vci_model_create_separable).
+  integer function create_model(caller, model, n, m, ngaps, fcb, user, lcb, scb, mass, mass_dense) result(status)
     character(len=*), intent(in) :: caller   !< the C entry point called, named in messages
     type(c_ptr), intent(in) :: model, user
     integer(c_int), intent(in) :: n, m, ngaps
     type(vci_callbacks_c), intent(in) :: fcb
     type(vci_lagrangian_callbacks_c), intent(in), optional :: lcb
+    type(vci_separable_callbacks_c), intent(in), optional :: scb
+    real(dp), intent(in), optional :: mass(:)
+    logical, intent(in), optional :: mass_dense
     type(c_ptr), pointer :: out
     type(c_model_t), pointer :: mp
     type(c_integrator_t), pointer :: none
@@ -239,7 +341,7 @@ contains
       return
     end if
     what = ''
-    if (.not. present(lcb)) then
+    if (.not. present(lcb) .and. .not. present(scb)) then
       if (.not. c_associated(fcb%d1_ld)) what = 'd1_ld'
       if (.not. c_associated(fcb%d2_ld)) what = 'd2_ld'
       if (.not. c_associated(fcb%d3_ld)) what = 'd3_ld'
@@ -270,6 +372,10 @@ contains
     if (present(lcb)) then
       mp%continuous = .true.
       mp%lcb = lcb
+    end if
+    if (present(scb)) then   ! (continuous too: vci_set_scheme accepts it)
+      mp%continuous = .true.; mp%separable = .true.
+      mp%scb = scb; mp%mass = mass; mp%mass_dense = mass_dense
     end if
     none => null()
     call c_f_pointer(model, out)
@@ -346,7 +452,10 @@ contains
       return
     end if
     call ip%model%record%clear()
-    if (ip%model%continuous) then
+    if (ip%model%separable) then
+      call bind_separable(ip%sep, ip%model, stat)   ! (M was checked at creation)
+      if (stat == VCI_OK) call ip%integ%create(ip%sep, real(h, dp), stat)
+    else if (ip%model%continuous) then
       ip%lag%n = ip%model%n; ip%lag%m = ip%model%m; ip%lag%n_gaps = ip%model%n_gaps
       ip%lag%cb = ip%model%lcb
       ip%lag%user = ip%model%user
@@ -1037,6 +1146,7 @@ contains
     integer(c_int), value :: size
     type(c_model_t), target :: mc
     type(c_lagrangian_t) :: lag
+    type(c_separable_t) :: sep
     type(vci_check_report_t) :: rep
     real(c_double), pointer :: qf(:), vf(:)
     integer(c_int), pointer :: passed_f
@@ -1061,7 +1171,13 @@ contains
     end if
     call mc%record%clear()
     call c_f_pointer(q, qf, [mc%n]); call c_f_pointer(v, vf, [mc%n])
-    if (mc%continuous) then
+    if (mc%separable) then
+      msg = ''
+      call bind_separable(sep, mc, stat)
+      if (stat == VCI_OK) &
+        call vci_check_model(sep, qf, vf, real(h, dp), rep, stat, msg, tol=merge(real(tol, dp), rep%tol, tol > 0))
+      if (stat /= VCI_OK .and. msg == '') msg = 'vci_check_model: the mass matrix could not be set'
+    else if (mc%continuous) then
       lag%n = mc%n; lag%m = mc%m; lag%n_gaps = mc%n_gaps
       lag%cb = mc%lcb; lag%user = mc%user; lag%record => mc%record
       call vci_check_model(lag, qf, vf, real(h, dp), rep, stat, msg, tol=merge(real(tol, dp), rep%tol, tol > 0))

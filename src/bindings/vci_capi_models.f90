@@ -13,6 +13,7 @@ module vci_capi_models
   use vci_model_base, only: vci_model_base_t
   use vci_model, only: vci_model_t
   use vci_lagrangian, only: vci_lagrangian_t
+  use vci_separable, only: vci_separable_t
   use vci_callback_adapter, only: vci_callback_record_t
   implicit none
   public
@@ -45,9 +46,26 @@ module vci_capi_models
     type(c_funptr) :: gaps = c_null_funptr, gap_gradients = c_null_funptr, energy = c_null_funptr
   end type vci_lagrangian_callbacks_c
 
+  !> Mirror of `struct vci_separable_callbacks` in vci.h (separable models: constant M, V(q)):
+  !> a leading size of its own, then the callbacks; the same growth rules as vci_callbacks_c.
+  type, bind(C) :: vci_separable_callbacks_c
+    integer(c_size_t) :: size = 0
+    type(c_funptr) :: potential = c_null_funptr, potential_gradient = c_null_funptr
+    type(c_funptr) :: potential_hessian = c_null_funptr
+    type(c_funptr) :: gaps = c_null_funptr, gap_gradients = c_null_funptr
+  end type vci_separable_callbacks_c
+
   !> The C signatures of the callbacks (vci.h); each returns 0, > 0 (recoverable) or < 0.
   !> (L, dL/dq and dL/dqdot have c_energy_fn's shape: n, q, v, out, user.)
   abstract interface
+    !> f(n, q, out, user): V(q) (out[1]), ∇V(q) (out[n]) or ∇²V(q) (out[n*n]).
+    integer(c_int) function c_q_fn(n, q, out, user) bind(C)
+      import :: c_int, c_double, c_ptr
+      integer(c_int), value :: n
+      real(c_double), intent(in) :: q(*)
+      real(c_double), intent(inout) :: out(*)
+      type(c_ptr), value :: user
+    end function c_q_fn
     integer(c_int) function c_lhess_fn(n, q, v, lqq, lqv, lvv, user) bind(C)
       import :: c_int, c_double, c_ptr
       integer(c_int), value :: n
@@ -103,6 +121,11 @@ module vci_capi_models
     type(vci_callbacks_c) :: cb
     logical :: continuous = .false.
     type(vci_lagrangian_callbacks_c) :: lcb
+    !> A separable model's handle (continuous too): its callbacks and M (mass_dense: n x n
+    !> column-major, else the diagonal), checked symmetric positive definite at creation.
+    logical :: separable = .false., mass_dense = .false.
+    type(vci_separable_callbacks_c) :: scb
+    real(dp), allocatable :: mass(:)
     type(c_ptr) :: user = c_null_ptr
     type(vci_callback_record_t) :: record
   contains
@@ -137,6 +160,21 @@ module vci_capi_models
     procedure :: energy => cl_energy
   end type c_lagrangian_t
 
+  !> The C separable model (vci_model_create_separable): extends vci_separable_t with the C
+  !> function pointers of V, ∇V, ∇²V and the walls; L, its derivatives and H are derived from M
+  !> and V by vci_separable, so every scheme runs it, the explicit compositions included.
+  type, extends(vci_separable_t) :: c_separable_t
+    type(vci_separable_callbacks_c) :: cb
+    type(c_ptr) :: user = c_null_ptr
+    type(vci_callback_record_t), pointer :: record => null()
+  contains
+    procedure :: potential => cs_potential
+    procedure :: potential_gradient => cs_gradient
+    procedure :: potential_hessian => cs_hessian
+    procedure :: gaps => cs_gaps
+    procedure :: gap_gradients => cs_gap_grads
+  end type c_separable_t
+
 contains
 
   ! ---------------------------------------------------------------------------------------------
@@ -164,6 +202,8 @@ contains
       record => model%own_record
       if (associated(model%record)) record => model%record
       user = model%user
+    class is (c_separable_t)
+      record => model%record; user = model%user
     end select
   end subroutine c_context
 
@@ -428,5 +468,86 @@ contains
     call call_qv(self, self%cb%energy, 'energy', q, p, tmp, 1, stat)
     e = tmp(1)
   end subroutine cl_energy
+
+  ! ---------------------------------------------------------------------------------------------
+  ! the C separable model: V, ∇V, ∇²V through f(n, q, out, user); the walls as the others
+
+  !> f(n, q, out, user) with nout outputs; "not provided" when NULL.
+  subroutine call_q(model, fp, name, q, out, nout, stat)
+    class(c_separable_t), intent(inout) :: model
+    type(c_funptr), intent(in) :: fp
+    character(len=*), intent(in) :: name
+    real(dp), intent(in) :: q(:)
+    integer, intent(in) :: nout
+    real(dp), intent(out) :: out(nout)
+    integer, intent(inout) :: stat
+    procedure(c_q_fn), pointer :: f
+    integer :: rc
+    out = 0.0_dp   ! defined even where a failing callback left it unwritten
+    if (.not. c_associated(fp)) then
+      call model%not_provided(stat); return
+    end if
+    call c_f_procpointer(fp, f)
+    rc = f(model%n, q, out, model%user)
+    call model%record%note(rc, 'the C callback '//name, finite1(out), stat)
+  end subroutine call_q
+
+  subroutine cs_potential(self, q, v, stat)
+    class(c_separable_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: v
+    integer, intent(inout) :: stat
+    real(dp) :: tmp(1)
+    call call_q(self, self%cb%potential, 'potential', q, tmp, 1, stat)
+    v = tmp(1)
+  end subroutine cs_potential
+
+  subroutine cs_gradient(self, q, dv, stat)
+    class(c_separable_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: dv(:)
+    integer, intent(inout) :: stat
+    call call_q(self, self%cb%potential_gradient, 'potential_gradient', q, dv, size(dv), stat)
+  end subroutine cs_gradient
+
+  subroutine cs_hessian(self, q, hv, stat)
+    class(c_separable_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: hv(:, :)
+    integer, intent(inout) :: stat
+    call call_q(self, self%cb%potential_hessian, 'potential_hessian', q, hv, size(hv), stat)
+  end subroutine cs_hessian
+
+  subroutine cs_gaps(self, q, g, stat)
+    class(c_separable_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: g(:)
+    integer, intent(inout) :: stat
+    call call_qk(self, self%cb%gaps, 'gaps', self%n_gaps, q, g, size(g), stat)
+  end subroutine cs_gaps
+
+  subroutine cs_gap_grads(self, q, dg, stat)
+    class(c_separable_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: dg(:, :)
+    integer, intent(inout) :: stat
+    call call_qk(self, self%cb%gap_gradients, 'gap_gradients', self%n_gaps, q, dg, size(dg), stat)
+  end subroutine cs_gap_grads
+
+  !> Bind sep to the handle's model mc (sizes, callbacks, user pointer, record, M): what an
+  !> integrator or the model checker drives. stat: VCI_OK, or VCI_ERR_ARGUMENT / VCI_ERR_MEMORY
+  !> from set_mass_* (M not symmetric positive definite, not finite).
+  subroutine bind_separable(sep, mc, stat)
+    type(c_separable_t), intent(inout) :: sep
+    type(c_model_t), target, intent(inout) :: mc
+    integer, intent(out) :: stat
+    sep%n = mc%n; sep%m = mc%m; sep%n_gaps = mc%n_gaps
+    sep%cb = mc%scb; sep%user = mc%user; sep%record => mc%record
+    if (mc%mass_dense) then
+      call sep%set_mass_matrix(reshape(mc%mass, [mc%n, mc%n]), stat)
+    else
+      call sep%set_mass_diagonal(mc%mass, stat)
+    end if
+  end subroutine bind_separable
 
 end module vci_capi_models

@@ -23,7 +23,7 @@ module vci_capi_registry
   use vci_checkpoint, only: vci_checkpoint_t
   use vci_progress, only: vci_progress_t, vci_progress_info_t
   use vci_integrator, only: vci_integrator_t
-  use vci_capi_models, only: c_model_t, c_lagrangian_t, c_impact_fn
+  use vci_capi_models, only: c_model_t, c_lagrangian_t, c_separable_t, c_impact_fn
   implicit none
   public
 
@@ -105,6 +105,7 @@ module vci_capi_registry
     type(c_progress_t) :: progress        !< vci_set_progress's callback
     type(c_model_t) :: model              !< this integrator's own copy of the model (and its record)
     type(c_lagrangian_t) :: lag           !< the continuous model it drives, when model%continuous
+    type(c_separable_t) :: sep            !< the separable model it drives, when model%separable
     type(c_observer_t) :: obs
     logical :: busy = .false.             !< a call on it is running (guarded by the registry lock)
     logical :: destroy_pending = .false.  !< destroyed while busy: freed when that call returns

@@ -46,7 +46,16 @@
 !>     TASK 13: OUT(1:3*N*N) = the blocks d2L/dQ dQ, d2L/dQ dV, d2L/dV dV, each N x N column-major
 !>              (block (i, j) = d2L/dx_i dy_j), one after the other                (IOPT bit 1)
 !>
-!> Both kinds:
+!> A separable L = ½ Vᵀ M V − V(Q) with a constant M (IOPT bit 16; every scheme of a continuous
+!> model, and the explicit compositions VCISCH(IH, 4, ORDER, ...); M must be 0, H is derived):
+!>
+!>     TASK 14: OUT(1)       = the potential V(Q)     15: OUT(1:N) = its gradient at Q
+!>     TASK 16: OUT(1:N*N)   = its Hessian at Q, column-major                    (IOPT bit 1)
+!>     TASK 17: OUT(1:N)     = the diagonal of M, or with IOPT bit 32 OUT(1:N*N) = M (column-major,
+!>              symmetric positive definite); called once, at VCINEW
+!>     (NG > 0 needs TASK 8, IOPT bit 2: the explicit impact uses the gap gradients)
+!>
+!> All kinds:
 !>
 !>     TASK 5: OUT(1:N*M)  = one-forms Omega(Q), column mu = omega^mu            (M > 0)
 !>     TASK 7: OUT(1:NG)   = gap functions g(Q)                                  (NG > 0)
@@ -72,6 +81,7 @@ module vci_legacy
   use vci_model_base, only: vci_model_base_t
   use vci_model, only: vci_model_t
   use vci_lagrangian, only: vci_lagrangian_t
+  use vci_separable, only: vci_separable_t
   use vci_observer, only: vci_observer_t, vci_impact_t, vci_run_info_t
   use vci_integrator, only: vci_integrator_t
   use vci_callback_adapter, only: vci_callback_record_t
@@ -89,9 +99,12 @@ module vci_legacy
   !> TASK codes of the model routine: a discrete L_d (1-4, 6), a continuous L (10-13), both (5, 7-9).
   integer, parameter, public :: TASK_D1 = 1, TASK_D2 = 2, TASK_D3 = 3, TASK_HESSIAN = 4, TASK_FORMS = 5, &
                                 TASK_DCONSTRAINT = 6, TASK_GAPS = 7, TASK_GAP_GRADS = 8, TASK_ENERGY = 9, &
-                                TASK_LAGRANGIAN = 10, TASK_DL_DQ = 11, TASK_DL_DV = 12, TASK_L_HESSIANS = 13
+                                TASK_LAGRANGIAN = 10, TASK_DL_DQ = 11, TASK_DL_DV = 12, TASK_L_HESSIANS = 13, &
+                                TASK_POTENTIAL = 14, TASK_POTENTIAL_GRAD = 15, TASK_POTENTIAL_HESSIAN = 16, &
+                                TASK_MASS = 17
   !> IOPT bits: which optional tasks the model routine supplies, and whether it is a continuous L.
-  integer, parameter, public :: IOPT_HESSIAN = 1, IOPT_GAP_GRADS = 2, IOPT_ENERGY = 4, IOPT_CONTINUOUS = 8
+  integer, parameter, public :: IOPT_HESSIAN = 1, IOPT_GAP_GRADS = 2, IOPT_ENERGY = 4, IOPT_CONTINUOUS = 8, &
+                                IOPT_SEPARABLE = 16, IOPT_DENSE_MASS = 32
   !> IERR with which the model routine answers "this TASK is not provided" (no other value means it).
   integer, parameter, public :: IERR_NOT_PROVIDED = -999
 
@@ -150,6 +163,17 @@ module vci_legacy
     procedure :: energy => ll_energy
   end type legacy_lagrangian_t
 
+  !> A separable model (L = ½ vᵀ M v − V, M constant) made of the routine (IOPT bit 16).
+  type, extends(vci_separable_t) :: legacy_separable_t
+    type(legacy_routine_t) :: routine
+  contains
+    procedure :: potential => ls_potential
+    procedure :: potential_gradient => ls_gradient
+    procedure :: potential_hessian => ls_hessian
+    procedure :: gaps => ls_gaps
+    procedure :: gap_gradients => ls_gap_grads
+  end type legacy_separable_t
+
   !> The output file of one integrator of the handle interface (VCIOUT): one run from VCIOUT to
   !> VCICLS or VCIDEL, however many VCIADV calls it spans (all one way, from one start).
   type :: legacy_output_t
@@ -180,6 +204,7 @@ module vci_legacy
     integer :: id = 0
     type(legacy_model_t), pointer :: model => null()
     type(legacy_lagrangian_t), pointer :: lag => null()
+    type(legacy_separable_t), pointer :: sep => null()
     type(vci_integrator_t), pointer :: integ => null()
     type(legacy_output_t), pointer :: out => null()   !< VCIOUT's file, if open
   end type slot_t
@@ -443,6 +468,103 @@ contains
     e = tmp(1)
   end subroutine ll_energy
 
+  ! ---------------------------------------------------------------------------------------------
+  ! the separable model: V's tasks, through the same dispatch and record (H is passed as 0)
+
+  !> One task of the separable model, with the not-provided answer marked on it.
+  subroutine ls_task(self, task, q, out, nout, stat)
+    class(legacy_separable_t), intent(inout) :: self
+    integer, intent(in) :: task, nout
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(inout) :: out(*)
+    integer, intent(inout) :: stat
+    logical :: declined
+    call call_task(self%routine, self%n, self%m, self%n_gaps, task, q, q, 0.0_dp, out, nout, stat, declined)
+    if (declined) call decline(self, stat)
+  end subroutine ls_task
+
+  subroutine ls_potential(self, q, v, stat)
+    class(legacy_separable_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: v
+    integer, intent(inout) :: stat
+    real(dp) :: tmp(1)
+    tmp = 0.0_dp
+    call ls_task(self, TASK_POTENTIAL, q, tmp, 1, stat)
+    v = tmp(1)
+  end subroutine ls_potential
+
+  subroutine ls_gradient(self, q, dv, stat)
+    class(legacy_separable_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: dv(:)
+    integer, intent(inout) :: stat
+    call ls_task(self, TASK_POTENTIAL_GRAD, q, dv, size(dv), stat)
+  end subroutine ls_gradient
+
+  subroutine ls_hessian(self, q, hv, stat)
+    class(legacy_separable_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: hv(:, :)
+    integer, intent(inout) :: stat
+    if (iand(self%routine%iopt, IOPT_HESSIAN) == 0) then
+      hv = 0.0_dp; call self%not_provided(stat); return
+    end if
+    call ls_task(self, TASK_POTENTIAL_HESSIAN, q, hv, size(hv), stat)
+  end subroutine ls_hessian
+
+  subroutine ls_gaps(self, q, g, stat)
+    class(legacy_separable_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: g(:)
+    integer, intent(inout) :: stat
+    call ls_task(self, TASK_GAPS, q, g, size(g), stat)
+  end subroutine ls_gaps
+
+  subroutine ls_gap_grads(self, q, dg, stat)
+    class(legacy_separable_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: dg(:, :)
+    integer, intent(inout) :: stat
+    call ls_task(self, TASK_GAP_GRADS, q, dg, size(dg), stat)
+  end subroutine ls_gap_grads
+
+  !> TASK 17 once: M from the routine into the separable model (diagonal, or dense with IOPT bit
+  !> 32), checked by set_mass_* (positive / symmetric positive definite, finite). stat and, on
+  !> failure, global_message say why.
+  subroutine legacy_mass(sep, stat)
+    type(legacy_separable_t), intent(inout) :: sep
+    integer, intent(out) :: stat
+    real(dp), allocatable :: mass(:)
+    integer :: n, nm, code
+    logical :: declined, dense
+    n = sep%n
+    dense = iand(sep%routine%iopt, IOPT_DENSE_MASS) /= 0
+    nm = merge(n * n, n, dense)
+    allocate (mass(nm), stat=stat)
+    if (stat /= 0) then
+      global_message = 'VCINEW: cannot allocate the mass matrix (out of memory)'
+      stat = VCI_ERR_MEMORY; return
+    end if
+    code = 0
+    call call_task(sep%routine, n, sep%m, sep%n_gaps, TASK_MASS, sep%routine%q(1:n) * 0.0_dp, &
+                   sep%routine%q(1:n) * 0.0_dp, 0.0_dp, mass, nm, code, declined)
+    if (code /= 0) then
+      write (global_message, '(a,i0)') 'VCINEW: MODEL with TASK = 17 (the mass matrix) returned IERR = ', code
+      stat = VCI_ERR_CALLBACK; return
+    end if
+    if (dense) then
+      call sep%set_mass_matrix(reshape(mass, [n, n]), stat)
+      if (stat == VCI_ERR_ARGUMENT) global_message = 'VCINEW: the mass matrix of TASK 17 is not symmetric '// &
+                                                     'positive definite and finite'
+    else
+      call sep%set_mass_diagonal(mass, stat)
+      if (stat == VCI_ERR_ARGUMENT) global_message = 'VCINEW: a diagonal mass entry of TASK 17 is not '// &
+                                                     'positive and finite'
+    end if
+    if (stat == VCI_ERR_MEMORY) global_message = 'VCINEW: cannot allocate the mass matrix (out of memory)'
+  end subroutine legacy_mass
+
   subroutine log_impact(self, impact, stat)
     class(impact_log_t), intent(inout) :: self
     type(vci_impact_t), intent(in) :: impact
@@ -511,6 +633,33 @@ contains
   ! ---------------------------------------------------------------------------------------------
   ! the handle table behind the external routines
 
+  !> IOPT bit 16's own refusals (global_message says why): with bit 8 or 4 (H is derived from M
+  !> and V), M > 0 (a separable model has no nonholonomic constraints), NG > 0 without the gap
+  !> gradients (bit 2), bit 32 without bit 16, or TASK 17's N*N beyond an integer.
+  logical function separable_refused(n, m, ng, iopt, stat) result(refused)
+    integer, intent(in) :: n, m, ng, iopt
+    integer, intent(out) :: stat
+    refused = .true.
+    stat = VCI_ERR_ARGUMENT
+    if (iand(iopt, IOPT_SEPARABLE) == 0) then
+      refused = iand(iopt, IOPT_DENSE_MASS) /= 0
+      if (refused) global_message = 'VCINEW: IOPT bit 32 (dense M) is for a separable model (bit 16)'
+    else if (iand(iopt, IOPT_CONTINUOUS + IOPT_ENERGY) /= 0) then
+      global_message = 'VCINEW: IOPT bit 16 (separable L) excludes bit 8 (general L) and bit 4 (H: it is '// &
+                       'derived from M and V)'
+    else if (m /= 0) then
+      write (global_message, '(a,i0,a)') 'VCINEW: M = ', m, ' but a separable model (IOPT bit 16) has no '// &
+        'nonholonomic constraints (the explicit schemes cannot impose them): give it as a continuous L (bit 8)'
+    else if (ng > 0 .and. iand(iopt, IOPT_GAP_GRADS) == 0) then
+      global_message = 'VCINEW: a separable model with walls (NG > 0) needs TASK 8, the gap gradients (IOPT bit 2)'
+    else if (iand(iopt, IOPT_DENSE_MASS) /= 0 .and. vci_size_problem(n, m, ng) == '' .and. &
+             int(n, i8) * n > int(huge(1), i8)) then
+      write (global_message, '(a,i0,a)') 'VCINEW: N = ', n, ' too large for TASK 17 (need N*N < 2**31)'
+    else
+      refused = .false.; stat = VCI_OK
+    end if
+  end function separable_refused
+
   !> Create model and integrator; ih > 0 on success, 0 on failure (message for VCIMSG(0, ...)).
   !> IOPT bit 8: the routine is a continuous L (scheme midpoint until VCISCH), else a discrete L_d.
   subroutine legacy_new(fn, n, m, ng, iopt, h, rpar, ipar, ih, stat)
@@ -523,11 +672,13 @@ contains
     type(legacy_routine_t) :: routine
     integer :: i
     ih = 0
-    if (iopt < 0 .or. iopt > IOPT_HESSIAN + IOPT_GAP_GRADS + IOPT_ENERGY + IOPT_CONTINUOUS) then
+    if (iopt < 0 .or. iopt > IOPT_HESSIAN + IOPT_GAP_GRADS + IOPT_ENERGY + IOPT_CONTINUOUS + IOPT_SEPARABLE + &
+        IOPT_DENSE_MASS) then
       write (global_message, '(a,i0,a)') 'VCINEW: IOPT = ', iopt, &
-        ' (need a sum of 1: Hessian, 2: gap gradients, 4: energy, 8: continuous L)'
+        ' (need a sum of 1: Hessian, 2: gap gradients, 4: energy, 8: continuous L, 16: separable L, 32: dense M)'
       stat = VCI_ERR_ARGUMENT; return
     end if
+    if (separable_refused(n, m, ng, iopt, stat)) return
     if (iand(iopt, IOPT_CONTINUOUS + IOPT_HESSIAN) == IOPT_CONTINUOUS + IOPT_HESSIAN .and. &
         vci_size_problem(n, m, ng) == '' .and. 3 * int(n, i8) * n > int(huge(1), i8)) then
       write (global_message, '(a,i0,a)') 'VCINEW: N = ', n, ' too large for TASK 13 (need 3*N*N < 2**31)'
@@ -561,7 +712,9 @@ contains
       i = size(slots) + 1
       call move_alloc(grown, slots)
     end if
-    if (iand(iopt, IOPT_CONTINUOUS) /= 0) then
+    if (iand(iopt, IOPT_SEPARABLE) /= 0) then
+      allocate (slots(i)%sep, slots(i)%integ, stat=stat)
+    else if (iand(iopt, IOPT_CONTINUOUS) /= 0) then
       allocate (slots(i)%lag, slots(i)%integ, stat=stat)
       if (stat == 0 .and. iand(iopt, IOPT_HESSIAN) /= 0 .and. vci_size_problem(n, m, ng) == '') &
         allocate (slots(i)%lag%hwork(3 * n * n), stat=stat)
@@ -573,7 +726,16 @@ contains
       call free_slot(i)
       stat = VCI_ERR_MEMORY; return
     end if
-    if (associated(slots(i)%lag)) then
+    if (associated(slots(i)%sep)) then
+      slots(i)%sep%n = n; slots(i)%sep%m = m; slots(i)%sep%n_gaps = ng
+      slots(i)%sep%routine = routine
+      stat = VCI_OK
+      if (vci_size_problem(n, m, ng) == '') call legacy_mass(slots(i)%sep, stat)
+      if (stat /= VCI_OK) then
+        call free_slot(i); return
+      end if
+      call slots(i)%integ%create(slots(i)%sep, h, stat)
+    else if (associated(slots(i)%lag)) then
       slots(i)%lag%n = n; slots(i)%lag%m = m; slots(i)%lag%n_gaps = ng
       slots(i)%lag%routine = routine
       call slots(i)%integ%create(slots(i)%lag, h, stat)
@@ -605,6 +767,7 @@ contains
     if (associated(slots(i)%integ)) deallocate (slots(i)%integ)
     if (associated(slots(i)%model)) deallocate (slots(i)%model)
     if (associated(slots(i)%lag)) deallocate (slots(i)%lag)
+    if (associated(slots(i)%sep)) deallocate (slots(i)%sep)
     slots(i)%id = 0
     if (all(slots%id == 0)) deallocate (slots)   ! nothing left behind at exit
   end subroutine free_slot
@@ -630,7 +793,9 @@ contains
   function slot_record(i) result(record)
     integer, intent(in) :: i
     type(vci_callback_record_t), pointer :: record
-    if (associated(slots(i)%lag)) then
+    if (associated(slots(i)%sep)) then
+      record => slots(i)%sep%routine%record
+    else if (associated(slots(i)%lag)) then
       record => slots(i)%lag%routine%record
     else
       record => slots(i)%model%routine%record
@@ -677,7 +842,9 @@ contains
     i = slot_of(ih)
     t = rep%tol
     if (tol > 0.0_dp) t = tol
-    if (associated(slots(i)%lag)) then
+    if (associated(slots(i)%sep)) then
+      call vci_check_model(slots(i)%sep, q, v, h, rep, stat, msg, tol=t)
+    else if (associated(slots(i)%lag)) then
       call vci_check_model(slots(i)%lag, q, v, h, rep, stat, msg, tol=t)
     else
       call vci_check_model(slots(i)%model, q, v, h, rep, stat, msg, tol=t)
@@ -741,9 +908,9 @@ contains
     integer, intent(out) :: stat
     integer :: i
     i = slot_of(ih)
-    if (.not. associated(slots(i)%lag)) then
+    if (.not. (associated(slots(i)%lag) .or. associated(slots(i)%sep))) then
       call slots(i)%integ%report_failure(VCI_ERR_ARGUMENT, 'VCISCH: the model is a discrete L_d (IOPT without '// &
-                                         'bit 8); schemes discretise a continuous L (IOPT + 8 at VCINEW)')
+                                         'bit 8 or 16); schemes discretise a continuous L (IOPT + 8 or + 16 at VCINEW)')
       stat = VCI_ERR_ARGUMENT; return
     end if
     call slots(i)%integ%set_scheme(scheme, stages, stat)
