@@ -55,7 +55,8 @@ def check_members(res, model, t0, q0, p0, **kw):
 
 @pytest.fixture(scope="module")
 def formula_model():
-    return models.walls_formula()
+    # the Lagrangian kind: the C ensemble entry refuses separable models (test_separable_refused)
+    return models.walls_formula(separable=False)
 
 
 def test_formula_ensemble_equals_single_runs(formula_model):
@@ -171,3 +172,10 @@ def test_discrete_python_model_from_pairs():
         assert res.t[k] == state.t
         assert np.array_equal(res.q[k], state.q) and np.array_equal(res.p[k], state.p)
         assert res.impacts[k] == len(it.impacts)
+
+
+def test_separable_refused():
+    sep = models.walls_formula()
+    assert isinstance(sep, vci.SeparableModel)
+    with pytest.raises(vci.VciError, match="separable"):
+        vci.Ensemble(sep, H, scheme="composition").run(NSTEPS, np.array([0.1]), np.array([1.0]), t0=np.zeros(1))

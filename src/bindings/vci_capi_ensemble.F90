@@ -186,6 +186,12 @@ contains
       return
     end if
     call mcopy%record%clear()
+    if (mcopy%separable) then
+      ! the ensemble driver builds its members from the continuous or discrete callbacks only
+      call set_thread_message(who//': a separable model (vci_model_create_separable) cannot run in an '// &
+        'ensemble yet; create the same L with vci_model_create_lagrangian')
+      return
+    end if
     if (members < 1 .or. members > int(huge(1) / max(mcopy%n, 1), c_int64_t)) then
       write (msg, '(a,i0,a)') who//': members = ', members, ' (need 1 <= members, and members * n < 2^31)'
       call set_thread_message(msg); return
