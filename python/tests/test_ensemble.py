@@ -143,7 +143,14 @@ def test_file_holds_the_results(formula_model, tmp_path):
     t0, q0, p0 = starts()
     ens = vci.Ensemble(formula_model, H, scheme="lobatto", stages=4, rtol=1e-15, impact_cap=CAP, threads=2)
     path = tmp_path / "ens.h5"
-    assert ens.run_file(path, NSTEPS, q0, p0, t0=t0, stride=50) == 1
+    try:
+        failed = ens.run_file(path, NSTEPS, q0, p0, t0=t0, stride=50)
+    except vci.StateError as err:
+        # a library built with MPI: run_file is collective and needs the caller's MPI_Init (docs/PYTHON.md);
+        # this process has none, so the documented refusal is what is checked here
+        assert "MPI is not initialised" in str(err) and not path.exists()
+        pytest.skip("library built with MPI and no MPI_Init in this process: the file part needs mpi4py")
+    assert failed == 1
     with pytest.raises(vci.OutputError):
         ens.run_file(path, NSTEPS, q0, p0, t0=t0)
     res = ens.run(NSTEPS, q0, p0, t0=t0)
