@@ -301,26 +301,10 @@ def lagrangian_model(L, q, qdot, *, forms=None, gaps=None, params=None, energy=F
         derived["energy"] = H
 
     sources = {}
-    pointers = {}
     holder = {}
-    if cache is None:
-        cache = os.environ.get("VCI_FORMULA_CACHE") or None
     for kind, outs in outputs.items():
         sources[kind] = _source(f"vci_{kind}", kind, outs, pq, pp if kind == "energy" else pv)
-    if backend == "numba" and cache:
-        pointers.update(_cached_module(os.fspath(cache), sources))
-    for kind, src in sources.items():
-        if kind in pointers:
-            continue
-        namespace = {"math": math}
-        exec(compile(src, f"<vci.formula {kind}>", "exec"), namespace)  # noqa: S102 -- our own generated code
-        func = namespace[f"vci_{kind}"]
-        if backend == "numba":
-            pointers[kind] = _numba_compile(kind, func)
-        else:
-            # an exception (math domain error, division by zero) becomes an unrecoverable failure
-            # whose message the integrator finds, as for any Python callable; cffi prints nothing
-            pointers[kind] = ffi.callback(_KINDS[kind][0], func, error=-1, onerror=_recorder(holder, kind))
+    pointers = _compile_sources(sources, backend, cache, holder)
 
     model = LagrangianModel(n, m, ngaps, **pointers)
     holder["log"] = model._log
@@ -406,8 +390,23 @@ def _separable_model(L, qs, vs, gap_list, pq, pv, to_ph, mass, pot, hessians, ba
         outputs["gap_gradients"] = [(f"out[{i + n * j}]", dg[j][i]) for j in range(ngaps) for i in range(n)]
         derived["gap_gradients"] = dg
     sources = {kind: _source(f"vci_{kind}", kind, outs, pq, None) for kind, outs in outputs.items()}
-    pointers = {}
     holder = {}
+    pointers = _compile_sources(sources, backend, cache, holder)
+    diag = np.diag(np.diag(mass))
+    given = np.diag(mass).copy() if np.array_equal(mass, diag) else mass
+    model = SeparableModel(n, ngaps, mass=given, **pointers)
+    holder["log"] = model._log
+    back = {v: k for k, v in to_ph.items()}
+    model.formula = Formula(L=L, q=qs, qdot=vs, forms=[], gaps=gap_list, backend=backend, mass=mass,
+                            derived={k: _back(v, back) for k, v in derived.items()}, sources=sources)
+    return model
+
+
+def _compile_sources(sources, backend, cache, holder):
+    """The C function pointers of the generated sources: loaded from the cache directory (numba,
+    cache or VCI_FORMULA_CACHE), else compiled with numba's cfunc, or (backend "python") cffi
+    callbacks whose exceptions go to holder's log through _recorder."""
+    pointers = {}
     if cache is None:
         cache = os.environ.get("VCI_FORMULA_CACHE") or None
     if backend == "numba" and cache:
@@ -421,12 +420,7 @@ def _separable_model(L, qs, vs, gap_list, pq, pv, to_ph, mass, pot, hessians, ba
         if backend == "numba":
             pointers[kind] = _numba_compile(kind, func)
         else:
+            # an exception (math domain error, division by zero) becomes an unrecoverable failure
+            # whose message the integrator finds, as for any Python callable; cffi prints nothing
             pointers[kind] = ffi.callback(_KINDS[kind][0], func, error=-1, onerror=_recorder(holder, kind))
-    diag = np.diag(np.diag(mass))
-    given = np.diag(mass).copy() if np.array_equal(mass, diag) else mass
-    model = SeparableModel(n, ngaps, mass=given, **pointers)
-    holder["log"] = model._log
-    back = {v: k for k, v in to_ph.items()}
-    model.formula = Formula(L=L, q=qs, qdot=vs, forms=[], gaps=gap_list, backend=backend, mass=mass,
-                            derived={k: _back(v, back) for k, v in derived.items()}, sources=sources)
-    return model
+    return pointers
