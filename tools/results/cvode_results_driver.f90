@@ -3,7 +3,8 @@
 !> two, the FPU chain 2n), and at each root the elastic impact map followed by CVodeReInit. Two variants a user would pick: Adams with the
 !> fixed-point iteration (non-stiff) and BDF with Newton and a dense difference-quotient Jacobian.
 !>
-!>   cvode_results_driver sweep FILE          tolerance sweep rtol = atol = 1e-3 .. 1e-12 -> CSV
+!>   cvode_results_driver sweep FILE [SCENE]  tolerance sweep rtol = atol = 1e-3 .. 1e-12 -> CSV
+!>                                             (SCENE: that scene only, for run_results.sh --scene)
 !>   cvode_results_driver long SCENE DIR RTOL [adams]  ellipse (1.1e5 s) or walled pendulum (6e4 s),
 !>                                             >= 10^5 impacts: |E - E0| over time
 !>
@@ -72,14 +73,16 @@ program cvode_results_driver
   real(c_double) :: rtol_long
 
   if (command_argument_count() < 2) then
-    write (error_unit, '(a)') 'usage: cvode_results_driver sweep FILE | long SCENE DIR RTOL [adams]'
+    write (error_unit, '(a)') 'usage: cvode_results_driver sweep FILE [SCENE] | long SCENE DIR RTOL [adams]'
     stop 2
   end if
   call get_command_argument(1, mode)
   call get_command_argument(2, path)
   select case (trim(mode))
   case ('sweep')
-    call sweep(trim(path))
+    arg = ''
+    if (command_argument_count() >= 3) call get_command_argument(3, arg)
+    call sweep(trim(path), trim(arg))
   case ('long')
     call get_command_argument(3, dir)
     call get_command_argument(4, arg)
@@ -215,17 +218,19 @@ contains
     max_step_of = merge(0.05_c_double, 0.0_c_double, sc == SCENE_ELLIPSE)
   end function max_step_of
 
-  subroutine sweep(file)
+  subroutine sweep(file, only_scene)
     character(len=*), intent(in) :: file
+    character(len=*), intent(in) :: only_scene   !< a scene name, or empty for every scene
     integer :: unit, k, iv, r, reps, rstat, nq, isc
     type(run_result_t) :: res
     real(rk), allocatable :: qref(:), qdref(:), tref(:)
-    real(c_double) :: tol, walls(9), cpus(9), w0, c0, e0, err_final, err_impact
+    real(c_double) :: tol, walls(MAX_REPEATS), cpus(MAX_REPEATS), w0, c0, e0, err_final, err_impact
     character(len=16) :: name
     open (newunit=unit, file=file, status='replace', action='write')
     write (unit, '(a)') 'scene,method,param,wall_median,cpu_median,reps,err_final,err_energy,err_impact,' // &
       'n_impacts,n_ref_impacts,steps,status,err_constraint'
     do isc = 1, N_SCENES
+      if (len(only_scene) > 0 .and. only_scene /= trim(scene_names(isc))) cycle
       ! the module variable the callbacks read is set, not used as the DO variable: at -O3 a DO
       ! variable may live in a register while the loop runs, and the callbacks saw a stale scene
       scene = isc
@@ -243,8 +248,7 @@ contains
             walls(r) = wall_now() - w0; cpus(r) = cpu_now() - c0
             reps = r
             if (res%status /= 0) exit
-            if (r >= 3 .and. sum(walls(1:r)) > 1.0_c_double) exit
-            if (r >= 5 .and. sum(walls(1:r)) > 0.2_c_double) exit
+            if (repeats_done(walls, r)) exit
           end do
           if (res%status /= 0) then
             write (unit, '(a,",",a,",",es10.3,",",9(a,","),i0,a)') trim(scene_names(scene)), trim(name), tol, &

@@ -12,7 +12,8 @@
 !>                                             walls), order of the dense output, event times on the
 !>                                             particle, the ellipse and the walled pendulum against
 !>                                             their exact solutions; exit status 1 if any fails
-!>   dop853_results_driver sweep FILE         tolerance sweep rtol = atol = 1e-3 .. 1e-13 -> CSV
+!>   dop853_results_driver sweep FILE [SCENE] tolerance sweep rtol = atol = 1e-3 .. 1e-13 -> CSV
+!>                                            (SCENE: that scene only, for run_results.sh --scene)
 !>   dop853_results_driver long SCENE DIR RTOL  ellipse (1.1e5 s) or walled pendulum (6e4 s)
 !>   dop853_results_driver once SCENE RTOL    one untimed run (for callgrind: --toggle-collect='*run_dop*')
 !>
@@ -52,7 +53,7 @@ program dop853_results_driver
   real(rk) :: rtol_long
 
   if (command_argument_count() < 1) then
-    write (error_unit, '(a)') 'usage: dop853_results_driver check | sweep FILE | long SCENE DIR RTOL'
+    write (error_unit, '(a)') 'usage: dop853_results_driver check | sweep FILE [SCENE] | long SCENE DIR RTOL'
     stop 2
   end if
   call get_command_argument(1, mode)
@@ -61,7 +62,9 @@ program dop853_results_driver
     call check()
   case ('sweep')
     call get_command_argument(2, path)
-    call sweep(trim(path))
+    arg = ''
+    if (command_argument_count() >= 3) call get_command_argument(3, arg)
+    call sweep(trim(path), trim(arg))
   case ('once')
     call get_command_argument(2, path)
     call get_command_argument(3, arg)
@@ -267,16 +270,18 @@ contains
     max_step_of = merge(0.05_rk, 0.0_rk, sc == SCENE_ELLIPSE)
   end function max_step_of
 
-  subroutine sweep(file)
+  subroutine sweep(file, only_scene)
     character(len=*), intent(in) :: file
+    character(len=*), intent(in) :: only_scene   !< a scene name, or empty for every scene
     integer :: unit, k, r, reps, rstat, nq, isc
     type(run_result_t) :: res
     real(rk), allocatable :: qref(:), qdref(:), tref(:)
-    real(rk) :: tol, walls(9), cpus(9), w0, c0, e0, err_final, err_impact
+    real(rk) :: tol, walls(MAX_REPEATS), cpus(MAX_REPEATS), w0, c0, e0, err_final, err_impact
     open (newunit=unit, file=file, status='replace', action='write')
     write (unit, '(a)') 'scene,method,param,wall_median,cpu_median,reps,err_final,err_energy,err_impact,' // &
       'n_impacts,n_ref_impacts,steps,status,err_constraint'
     do isc = 1, N_SCENES
+      if (len(only_scene) > 0 .and. only_scene /= trim(scene_names(isc))) cycle
       ! the module variable the callbacks read is set, not used as the DO variable: at -O3 a DO
       ! variable may live in a register while the loop runs, and the callbacks saw a stale scene
       scene = isc
@@ -292,8 +297,7 @@ contains
           walls(r) = wall_now() - w0; cpus(r) = cpu_now() - c0
           reps = r
           if (res%status /= 0) exit
-          if (r >= 3 .and. sum(walls(1:r)) > 1.0_rk) exit
-          if (r >= 5 .and. sum(walls(1:r)) > 0.2_rk) exit
+          if (repeats_done(walls, r)) exit
         end do
         if (res%status /= 0) then
           write (error_unit, '(a,es9.2,a)') trim(scene_names(scene))//' dop853 tol ', tol, ': '//trim(res%message)

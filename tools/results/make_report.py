@@ -352,6 +352,10 @@ def main(outdir, root):
       f"Versions: {meta['versions']}.\n")
     if meta.get("note"):
         w(f"Note on this run: {meta['note']}\n")
+    for e in meta.get("refreshed", []):
+        w(f"Rows of **{e['scene']}** (vci, the compiled DOP853, CVODE) rerun since: {e['date']}, vci at commit "
+          f"{e['commit']}, {e['elapsed_s']} s (`tools/results/run_results.sh --scene {e['scene']}`); the "
+          f"interpreted peers' rows, the long runs and the profile are from the full run above.\n")
     w("> **vci rows.** `vci-ld-*`: the scene's own hand-written discrete Lagrangian (the midpoint rule, "
       "second order; the nonholonomic pendulum's is the paper's first-order left-point rule). "
       "`vci-left-*`, `vci-midpoint-*`, `vci-lobattoS-*`: the library's schemes built from the scene's "
@@ -783,7 +787,9 @@ MEASURED = """\
   for each reference impact, the distance to the nearest impact the method reports; the largest.
   Siconos's Moreau–Jean does not locate impacts: the midpoint of the step that carries the
   impulse is used.
-- **Cost**: process CPU time of one run (median of 1–9 repeats; wall time in the full tables).
+- **Cost**: process CPU time of one run, the median of its timed repeats (compiled methods: repeated until
+  the repeats sum to 0.1 s, at least 9 and at most 2001 times, or to 1 s, at least 3 times — runs of
+  microseconds are timed hundreds of times; the `reps` column; wall time in the full tables).
   vci and CVODE are Fortran, timed in-process; SciPy and Siconos are timed from Python around the
   integration loop (interpreter overhead is part of what a user of them pays). The machine may be
   shared: CPU time is the measure.

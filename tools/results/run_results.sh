@@ -9,12 +9,33 @@
 # 2-core machine shared with other builds; less on an idle one).
 #
 #   tools/results/run_results.sh
+#   tools/results/run_results.sh --scene SCENE [--scene SCENE ...]
 #
+# With --scene (particle, ellipse, pendulum, pendulum_walls, fpu_walls) only that scene's compiled
+# rows are rerun (vci, the compiled DOP853, CVODE: a few minutes instead of the whole command): they
+# replace that scene's rows in the previous full run's output in $VCI_RESULTS_OUT, which must exist,
+# and the page is rewritten from it. The SciPy and Siconos rows, the long runs and the profile stay
+# from the full run (the profile is rerun with pendulum_walls, the scene it profiles); the page's
+# header names every refreshed scene with its date and commit.
 # Environment: VCI_RESULTS_BUILD (build directory, default $TMPDIR/vci-results-build),
 # VCI_RESULTS_OUT (raw CSV output, default $VCI_RESULTS_BUILD/out), VCI_RESULTS_BUDGET (seconds for
 # the whole command, default 3600: each run gets what is left; a run that exceeds it is stopped and
 # the command fails naming it, so a rerun on a slower or busier machine fails clearly, not silently).
 set -eu
+
+SCENES_ONLY=""
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --scene)
+      [ $# -ge 2 ] || { echo "run_results.sh: --scene needs a scene name" >&2; exit 2; }
+      case "$2" in
+        particle|ellipse|pendulum|pendulum_walls|fpu_walls) SCENES_ONLY="$SCENES_ONLY $2" ;;
+        *) echo "run_results.sh: unknown scene '$2' (particle, ellipse, pendulum, pendulum_walls, fpu_walls)" >&2; exit 2 ;;
+      esac
+      shift 2 ;;
+    *) echo "run_results.sh: unknown argument '$1' (usage: run_results.sh [--scene SCENE ...])" >&2; exit 2 ;;
+  esac
+done
 
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
 BUILD=${VCI_RESULTS_BUILD:-${TMPDIR:-/tmp}/vci-results-build}
@@ -68,6 +89,32 @@ cmake -S "$ROOT/tools/results" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release -DVCI_ROOT
 cmake --build "$BUILD" -j2 >"$BUILD.build.log" 2>&1 || { tail -40 "$BUILD.build.log"; exit 1; }
 [ -x "$BUILD/cvode_results_driver" ] || { echo "CVODE driver not built (see $BUILD.cmake.log)"; exit 1; }
 [ -x "$BUILD/dop853_results_driver" ] || { echo "DOP853 driver not built (see $BUILD.build.log)"; exit 1; }
+
+if [ -n "$SCENES_ONLY" ]; then
+  for f in vci_sweep.csv dop853_sweep.csv cvode_sweep.csv meta.json reference.json; do
+    [ -f "$OUT/$f" ] || { echo "run_results.sh: --scene needs a previous full run's output in $OUT (missing $f): run tools/results/run_results.sh without --scene first, or set VCI_RESULTS_OUT" >&2; exit 1; }
+  done
+  COMMIT=$(git -C "$ROOT" describe --always --dirty 2>/dev/null || echo "${VCI_RESULTS_COMMIT:-unknown}")
+  for scene in $SCENES_ONLY; do
+    PART="$OUT/part_$scene"
+    mkdir -p "$PART"
+    t_scene=$(date +%s)
+    echo "== $scene: vci step-size sweep"
+    run "vci sweep ($scene)" sh -c '"$1" sweep "$2" "" "$3" 2>"$4"' sh "$BUILD/vci_results_driver" "$PART/vci_sweep.csv" "$scene" "$PART/vci_sweep.stderr"
+    echo "== $scene: compiled DOP853 tolerance sweep"
+    run "DOP853 sweep ($scene)" "$BUILD/dop853_results_driver" sweep "$PART/dop853_sweep.csv" "$scene"
+    echo "== $scene: CVODE tolerance sweep"
+    run "CVODE sweep ($scene)" "$BUILD/cvode_results_driver" sweep "$PART/cvode_sweep.csv" "$scene"
+    if [ "$scene" = pendulum_walls ]; then
+      echo "== where the time goes (callgrind, walled pendulum): DOP853 against vci's compositions"
+      run "profile (callgrind)" "$ROOT/tools/results/profile_peers.sh" "$BUILD" "$OUT"
+    fi
+    run "merge ($scene)" $PY "$ROOT/tools/results/merge_scene_rows.py" "$OUT" "$PART" "$scene" "$COMMIT" $(( $(date +%s) - t_scene ))
+  done
+  run "the page (make_report.py)" $PY "$ROOT/tools/results/make_report.py" "$OUT" "$ROOT"
+  echo "rewrote $ROOT/docs/RESULTS.md with fresh rows of:$SCENES_ONLY in $(( $(date +%s) - START )) s (raw data: $OUT)"
+  exit 0
+fi
 
 mkdir -p "$OUT/long"
 rm -f "$OUT"/*.csv "$OUT"/*.md "$OUT"/*.txt "$OUT"/long/*.csv

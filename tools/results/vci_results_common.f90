@@ -15,8 +15,23 @@ module vci_results_common
   use vci_ref_pendulum, only: pendulum_params, pendulum_exact, pendulum_energy
   use vci_ref_pendulum_walls, only: pendulum_walls_params, pendulum_walls_exact
   use vci_ref_fpu_walls, only: fpu_walls_params, fpu_walls_run
+  use, intrinsic :: iso_c_binding, only: c_int, c_long
   implicit none
   private
+
+  !> struct timespec of Linux (tv_sec, tv_nsec), for clock_gettime
+  type, bind(c) :: timespec_t
+    integer(c_long) :: tv_sec = 0, tv_nsec = 0
+  end type timespec_t
+  interface
+    integer(c_int) function clock_gettime(clock_id, ts) bind(c, name='clock_gettime')
+      import :: c_int, timespec_t
+      integer(c_int), value :: clock_id
+      type(timespec_t), intent(out) :: ts
+    end function clock_gettime
+  end interface
+  !> Linux's CLOCK_PROCESS_CPUTIME_ID: the CPU time of every thread of the process, in nanoseconds
+  integer(c_int), parameter :: CLOCK_PROCESS_CPUTIME_ID = 2
 
   integer, parameter, public :: rk = real64
   real(rk), parameter, public :: pi = acos(-1.0_rk)
@@ -44,7 +59,9 @@ module vci_results_common
   !> Taylor steps of the FPU reference: the first is used, the second checks it.
   real(rk), parameter, public :: fpu_ref_steps(2) = [0.01_rk, 0.005_rk]
 
-  public :: initial_state, initial_momentum, reference_at, exact_energy0, impact_time_error, median
+  public :: initial_state, initial_momentum, reference_at, exact_energy0, impact_time_error, median, repeats_done
+  !> Most timed repeats of one run (the drivers' timing arrays have this size).
+  integer, parameter, public :: MAX_REPEATS = 2001
   public :: fpu_reference
   public :: wall_now, cpu_now, energy_of_velocity, pend_f
 
@@ -217,12 +234,22 @@ contains
     end do
   end function impact_time_error
 
+  !> Whether timed repeats 1 .. r of one run are enough: once they sum to 1 s (at least 3 of them)
+  !> or to 0.1 s (at least 9), or MAX_REPEATS were made. Runs of a few microseconds are thus
+  !> repeated hundreds of times, so that their median is not that of a handful of runs on a cold cache.
+  logical function repeats_done(walls, r)
+    real(rk), intent(in) :: walls(:)
+    integer, intent(in) :: r
+    repeats_done = (r >= 3 .and. sum(walls(1:r)) > 1.0_rk) .or. (r >= 9 .and. sum(walls(1:r)) > 0.1_rk) &
+                   .or. r >= min(size(walls), MAX_REPEATS)
+  end function repeats_done
+
   real(rk) function median(x)
     real(rk), intent(in) :: x(:)
     real(rk) :: y(size(x)), t
     integer :: i, j, n
     n = size(x); y = x
-    do i = 2, n          ! insertion sort: a handful of repeats
+    do i = 2, n          ! insertion sort: at most MAX_REPEATS, once per row
       t = y(i); j = i - 1
       do while (j >= 1)
         if (y(j) <= t) exit
@@ -243,7 +270,14 @@ contains
     wall_now = real(c, rk) / real(r, rk)
   end function wall_now
 
+  !> CPU time of the process in seconds, to the nanosecond (gfortran's cpu_time counts microseconds,
+  !> a tenth of a run of the particle); cpu_time where clock_gettime fails.
   real(rk) function cpu_now()
-    call cpu_time(cpu_now)
+    type(timespec_t) :: ts
+    if (clock_gettime(CLOCK_PROCESS_CPUTIME_ID, ts) == 0) then
+      cpu_now = real(ts%tv_sec, rk) + 1.0e-9_rk * real(ts%tv_nsec, rk)
+    else
+      call cpu_time(cpu_now)
+    end if
   end function cpu_now
 end module vci_results_common

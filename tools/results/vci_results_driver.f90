@@ -357,7 +357,7 @@ contains
     type(vci_integrator_t) :: integ
     type(recorder_t) :: rec
     real(dp), allocatable :: qref(:), qdref(:), tref(:)
-    real(dp) :: walls(9), cpus(9), w0, c0, e, err_final, err_impact
+    real(dp) :: walls(MAX_REPEATS), cpus(MAX_REPEATS), w0, c0, e, err_final, err_impact
     integer(i8) :: nsteps
     integer :: stat, rstat, reps, r
     character(len=VCI_MSG_LEN) :: msg
@@ -404,8 +404,7 @@ contains
       call integ%integrate(nsteps, 1, stat)
       walls(r) = wall_now() - w0; cpus(r) = cpu_now() - c0
       reps = r
-      if (r >= 3 .and. sum(walls(1:r)) > 1.0_dp) exit
-      if (r >= 5 .and. sum(walls(1:r)) > 0.2_dp) exit
+      if (repeats_done(walls, r)) exit
       if (walls(1) > 2.0_dp) exit
     end do
     write (unit, '(a,",",a,",",es10.3,",",es12.5,",",es12.5,",",i0,",",3(es12.5,","),i0,",",i0,",",i0,",",i0,",",a)') &
