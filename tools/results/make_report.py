@@ -352,10 +352,11 @@ def main(outdir, root):
       f"Versions: {meta['versions']}.\n")
     if meta.get("note"):
         w(f"Note on this run: {meta['note']}\n")
-    for e in meta.get("refreshed", []):
-        w(f"Rows of **{e['scene']}** (vci, the compiled DOP853, CVODE) rerun since: {e['date']}, vci at commit "
-          f"{e['commit']}, {e['elapsed_s']} s (`tools/results/run_results.sh --scene {e['scene']}`); the "
-          f"interpreted peers' rows, the long runs and the profile are from the full run above.\n")
+    if meta.get("refreshed"):
+        parts = [f"**{e['scene']}** {e['date']} (commit {e['commit']}, {e['elapsed_s']} s)" for e in meta["refreshed"]]
+        w("Rows rerun since by `tools/results/run_results.sh --scene SCENE` (vci, the compiled DOP853 and "
+          "CVODE of that scene, timed the same way in one run): " + "; ".join(parts) + ". The interpreted "
+          "peers' rows and the long runs are from the full run above; the profile is rerun with pendulum_walls.\n")
     w("> **vci rows.** `vci-ld-*`: the scene's own hand-written discrete Lagrangian (the midpoint rule, "
       "second order; the nonholonomic pendulum's is the paper's first-order left-point rule). "
       "`vci-left-*`, `vci-midpoint-*`, `vci-lobattoS-*`: the library's schemes built from the scene's "
@@ -852,16 +853,16 @@ through them.
 
 SUMMARY_READING = """\
 **In short** (the ratios are vci's CPU time over the peer's, over the levels 1e-4 … 1e-10 that both
-reach, from the tables above; runs under a millisecond move by tens of percent with the machine's
-load, so factors below ~1.5 are not robust):
+reach, from the tables above; runs of microseconds are timed as the median of hundreds of repeats,
+yet on a shared machine ratios within ~20 % of 1 are ties, not wins):
 
 - **Against the compiled DOP853** — what a user with a smooth, non-stiff scene and events picks —
-  vci is dearer wherever the flight is not exact: the walled pendulum {pw_dop} (vci's best there
-  are the explicit compositions of order 6 … 10; Lobatto {pw_dop_lob}), the FPU chain {fpu_dop},
-  the nonholonomic pendulum {pe_dop} (DOP853 integrates the ODE with the multiplier eliminated),
-  the particle {pa_dop} (runs of ~0.02 ms, set-up dominated). vci is cheaper on the ellipse
-  ({el_dop}): its `hamiltonian` schemes are exact there at any step (uniform gravity, exact
-  reflection), so the coarsest run wins. The instruction profile below (callgrind, run and set-up
+  the walled pendulum {pw_dop} (vci's best there are the explicit compositions; Lobatto
+  {pw_dop_lob}), the FPU chain {fpu_dop}, the nonholonomic pendulum {pe_dop} (vci: Lobatto with
+  the constraint at the nodes; DOP853 integrates the ODE with the multiplier eliminated), the
+  particle {pa_dop} (runs of ~0.01 ms, set-up dominated), the ellipse ({el_dop}: vci's
+  `hamiltonian` schemes are exact there at any step — uniform gravity, exact reflection — so the
+  coarsest run wins). The instruction profile below (callgrind, run and set-up
   only) on the walled pendulum: a composition run executes {prof_ratio} the instructions of the cheapest DOP853 run that is at
   least as accurate; {prof_share} of them locate the impacts (the composed map evaluated again
   along the root iteration, where DOP853 evaluates its dense-output polynomial), and {prof_setup}
@@ -870,7 +871,7 @@ load, so factors below ~1.5 are not robust):
 - **Against CVODE-Adams** vci's best is cheaper on the walled pendulum ({pw_cv}), the FPU chain
   ({fpu_cv}, the explicit compositions: CVODE restarts at order 1 after each of the 41 impacts),
   the ellipse ({el_cv}) and the particle ({pa_cv}). On the nonholonomic pendulum Lobatto s = 3, 4
-  (constraints at the nodes) still cost {pe_cv} CVODE-Adams's. Constraint residuals there
+  (constraints at the nodes) cost {pe_cv} CVODE-Adams's. Constraint residuals there
   (sin²θ |f θ̇ − φ̇|, largest over a run): every Lobatto run ≤ {pe_cons_lob} (the end momentum is
   projected onto the constraint), CVODE-Adams {pe_cons_cv} and DOP853 {pe_cons_dop} (they keep
   the constraint only as an invariant of the ODE, to their tolerance), `midpoint` from L
@@ -920,9 +921,8 @@ READING = """\
   first-order L_d (the scene's and `left`): Newton fails at θ near π, the step is too long for it.
   (`left` on the ellipse at h = 0.05 failed at an impact in earlier editions; it runs in this one,
   with the impact steps' new starts and fallback, docs/DESIGN.md §2.) The Lobatto rows with the
-  `hamiltonian` condition on the walled pendulum at h = 0.4 (0.7 of the ~0.55 s between impacts):
-  stage 2 finds that the reflected motion does not leave the wall, and the library refuses the
-  step; h ≤ 0.3 runs. On the FPU chain Lobatto at h ≥ 0.25 exceeds the 8 impacts allowed per
+  `hamiltonian` condition on the walled pendulum at h = 0.4 (0.7 of the ~0.55 s between impacts)
+  failed in stage 2 in earlier editions and run since issue 27 (docs/STABILITY.md). On the FPU chain Lobatto at h ≥ 0.25 exceeds the 8 impacts allowed per
   step, so its sweep starts at 0.2.
 - **Missed impacts** (the "impacts (ref)" column): the order-4 composition at its longest steps
   (walled pendulum h = 0.2, 0.3; FPU chain h = 0.1, 0.2) finds one or two impacts fewer than the

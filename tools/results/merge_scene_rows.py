@@ -5,7 +5,7 @@
 
 OUT holds a full run's output (vci_sweep.csv, dop853_sweep.csv, cvode_sweep.csv, meta.json, ...);
 PART the partial run's vci, dop853 and cvode sweep CSVs for SCENE. Rows of SCENE in OUT's three
-compiled-method CSVs are dropped and PART's appended; the interpreted peers' rows (SciPy, Siconos)
+compiled-method CSVs (and its lines in vci_sweep.stderr) are dropped and PART's appended; the interpreted peers' rows (SciPy, Siconos)
 and the long runs stay from the full run. meta.json gains a "refreshed" entry (scene, date, commit,
 seconds) that make_report.py prints, so the page says which rows are newer than its full run.
 """
@@ -38,6 +38,12 @@ def main(out, part, scene, commit="unknown", seconds="?"):
     for name in ("vci_sweep.csv", "dop853_sweep.csv", "cvode_sweep.csv"):
         old, new = merge(os.path.join(out, name), os.path.join(part, name), scene)
         print(f"{name}: {scene}: {old} rows replaced by {new}")
+    # the failed runs' messages: that scene's lines (each starts with the scene's name) replaced
+    err_full, err_part = os.path.join(out, "vci_sweep.stderr"), os.path.join(part, "vci_sweep.stderr")
+    if os.path.exists(err_full) and os.path.exists(err_part):
+        lines = [l for l in open(err_full) if not l.startswith(scene + " ")]
+        lines += list(open(err_part))
+        open(err_full, "w").writelines(lines)
     meta_path = os.path.join(out, "meta.json")
     meta = json.load(open(meta_path))
     entries = [e for e in meta.get("refreshed", []) if e.get("scene") != scene]
