@@ -5,8 +5,11 @@
 !>   vci_results_driver sweep FILE [PREFIX [SCENE]]  step-size sweep of every variant -> CSV
 !>                                         (PREFIX, SCENE: only the rows whose label starts so)
 !>   vci_results_driver richardson FILE    pendulum reference vs Richardson extrapolation of vci
-!>   vci_results_driver once SCENE LABEL H one untimed run of one row (for callgrind: the work is in
-!>                                         run_once, --toggle-collect='*run_once*')
+!>   vci_results_driver once SCENE LABEL H one untimed run of one row (for callgrind: run_once is
+!>                                         inlined at -O3; count the set-up and the run with
+!>                                         --toggle-collect='start' --toggle-collect='start.*'
+!>                                         --toggle-collect='__vci_integrator_MOD_integrate', as
+!>                                         profile_peers.sh does)
 !>   vci_results_driver long SCENE DIR     long run (>= 10^5 impacts) of the ellipse or the walled
 !>                                         pendulum at h = 1e-2: |E - E0| over time
 !>
