@@ -240,35 +240,6 @@ C
       STOP 1
       END
 C
-      SUBROUTINE CHECKI(WHAT, IVAL, IEXP, NBAD)
-      CHARACTER*(*) WHAT
-      INTEGER IVAL, IEXP, NBAD
-      IF (IVAL .NE. IEXP) THEN
-        WRITE (*, '(3A, I6, A, I6)') ' FAIL ', WHAT, ':', IVAL,
-     &    ' expected', IEXP
-        NBAD = NBAD + 1
-      END IF
-      END
-C
-      SUBROUTINE CHECKR(WHAT, VAL, EXP, TOL, NBAD)
-      CHARACTER*(*) WHAT
-      DOUBLE PRECISION VAL, EXP, TOL
-      INTEGER NBAD
-      IF (.NOT. (ABS(VAL - EXP) .LE. TOL)) THEN
-        WRITE (*, '(3A, 2ES25.17)') ' FAIL ', WHAT, ':', VAL, EXP
-        NBAD = NBAD + 1
-      END IF
-      END
-C
-      SUBROUTINE CHECKS(WHAT, MSG, PART, NBAD)
-      CHARACTER*(*) WHAT, MSG, PART
-      INTEGER NBAD
-      IF (INDEX(MSG, PART) .EQ. 0) THEN
-        WRITE (*, '(5A)') ' FAIL ', WHAT, ': no "', PART, '"'
-        NBAD = NBAD + 1
-      END IF
-      END
-C
 C     The walled pendulum as a continuous L(Q, V), V = dQ/dt. RPAR =
 C     (gravity, wall angle). IPAR(1) = 2: TASK 11 fails (IERR = -5)
 C     once Q has passed 0.5; 3: TASK 12 is not provided; 5: TASKs 13

@@ -124,35 +124,6 @@ C
       STOP 1
       END
 C
-      SUBROUTINE CHECKI(WHAT, IVAL, IEXP, NBAD)
-      CHARACTER*(*) WHAT
-      INTEGER IVAL, IEXP, NBAD
-      IF (IVAL .NE. IEXP) THEN
-        WRITE (*, '(3A, I6, A, I6)') ' FAIL ', WHAT, ':', IVAL,
-     &    ' expected', IEXP
-        NBAD = NBAD + 1
-      END IF
-      END
-C
-      SUBROUTINE CHECKR(WHAT, VAL, EXP, TOL, NBAD)
-      CHARACTER*(*) WHAT
-      DOUBLE PRECISION VAL, EXP, TOL
-      INTEGER NBAD
-      IF (.NOT. (ABS(VAL - EXP) .LE. TOL)) THEN
-        WRITE (*, '(3A, 2ES25.17)') ' FAIL ', WHAT, ':', VAL, EXP
-        NBAD = NBAD + 1
-      END IF
-      END
-C
-      SUBROUTINE CHECKS(WHAT, MSG, PART, NBAD)
-      CHARACTER*(*) WHAT, MSG, PART
-      INTEGER NBAD
-      IF (INDEX(MSG, PART) .EQ. 0) THEN
-        WRITE (*, '(5A)') ' FAIL ', WHAT, ': no "', PART, '"'
-        NBAD = NBAD + 1
-      END IF
-      END
-C
 C     The walled pendulum as a separable model: V(Q) = -G COS(Q), M =
 C     RPAR(2)-independent 1 (diagonal, or 1 x 1 dense: the same
 C     number). RPAR = (gravity, wall angle). IPAR(1) = 1: TASK 17
