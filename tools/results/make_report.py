@@ -353,7 +353,8 @@ def main(outdir, root):
     if meta.get("note"):
         w(f"Note on this run: {meta['note']}\n")
     if meta.get("refreshed"):
-        parts = [f"**{e['scene']}** {e['date']} (commit {e['commit']}, {e['elapsed_s']} s)" for e in meta["refreshed"]]
+        parts = [f"**{e['scene']}** {e['date']} (commit {e['commit']}, {e['elapsed_s']} s"
+                 + (f", load average {e['load']}" if e.get("load") else "") + ")" for e in meta["refreshed"]]
         w("Rows rerun since by `tools/results/run_results.sh --scene SCENE` (vci, the compiled DOP853 and "
           "CVODE of that scene, timed the same way in one run): " + "; ".join(parts) + ". The interpreted "
           "peers' rows and the long runs are from the full run above; the profile is rerun with pendulum_walls.\n")

@@ -1,13 +1,16 @@
 #!/usr/bin/python3
 """Replace one scene's rows in a full run's sweep CSVs by a fresh partial run's (run_results.sh --scene).
 
-    merge_scene_rows.py OUT PART SCENE [COMMIT]
+    merge_scene_rows.py OUT PART SCENE [COMMIT [SECONDS [LOAD_AT_START]]]
 
 OUT holds a full run's output (vci_sweep.csv, dop853_sweep.csv, cvode_sweep.csv, meta.json, ...);
 PART the partial run's vci, dop853 and cvode sweep CSVs for SCENE. Rows of SCENE in OUT's three
 compiled-method CSVs (and its lines in vci_sweep.stderr) are dropped and PART's appended; the interpreted peers' rows (SciPy, Siconos)
 and the long runs stay from the full run. meta.json gains a "refreshed" entry (scene, date, commit,
-seconds) that make_report.py prints, so the page says which rows are newer than its full run.
+seconds, the 1-minute load average at the start and at the end) that make_report.py prints, so the
+page says which rows are newer than its full run and how busy the machine was: the CPU-time ratios
+of runs of microseconds move with the load (the walled pendulum's best vci/DOP853 ratios were
+0.94-1.2 at a load below 1 and 0.83-2.2 beside two compiling jobs).
 """
 import csv
 import json
@@ -34,7 +37,7 @@ def merge(full_path, part_path, scene):
     return len(rows) - 1 - len(kept), len(new)
 
 
-def main(out, part, scene, commit="unknown", seconds="?"):
+def main(out, part, scene, commit="unknown", seconds="?", load_start="?"):
     for name in ("vci_sweep.csv", "dop853_sweep.csv", "cvode_sweep.csv"):
         old, new = merge(os.path.join(out, name), os.path.join(part, name), scene)
         print(f"{name}: {scene}: {old} rows replaced by {new}")
@@ -48,7 +51,8 @@ def main(out, part, scene, commit="unknown", seconds="?"):
     meta = json.load(open(meta_path))
     entries = [e for e in meta.get("refreshed", []) if e.get("scene") != scene]
     entries.append({"scene": scene, "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
-                    "commit": commit, "elapsed_s": seconds})
+                    "commit": commit, "elapsed_s": seconds,
+                    "load": f"{load_start} -> {open('/proc/loadavg').read().split()[0]}"})
     meta["refreshed"] = entries
     json.dump(meta, open(meta_path, "w"), indent=1)
 

@@ -99,6 +99,7 @@ if [ -n "$SCENES_ONLY" ]; then
     PART="$OUT/part_$scene"
     mkdir -p "$PART"
     t_scene=$(date +%s)
+    load0=$(cut -d' ' -f1 /proc/loadavg)
     echo "== $scene: vci step-size sweep"
     run "vci sweep ($scene)" sh -c '"$1" sweep "$2" "" "$3" 2>"$4"' sh "$BUILD/vci_results_driver" "$PART/vci_sweep.csv" "$scene" "$PART/vci_sweep.stderr"
     echo "== $scene: compiled DOP853 tolerance sweep"
@@ -109,7 +110,7 @@ if [ -n "$SCENES_ONLY" ]; then
       echo "== where the time goes (callgrind, walled pendulum): DOP853 against vci's compositions"
       run "profile (callgrind)" "$ROOT/tools/results/profile_peers.sh" "$BUILD" "$OUT"
     fi
-    run "merge ($scene)" $PY "$ROOT/tools/results/merge_scene_rows.py" "$OUT" "$PART" "$scene" "$COMMIT" $(( $(date +%s) - t_scene ))
+    run "merge ($scene)" $PY "$ROOT/tools/results/merge_scene_rows.py" "$OUT" "$PART" "$scene" "$COMMIT" $(( $(date +%s) - t_scene )) "$load0"
   done
   run "the page (make_report.py)" $PY "$ROOT/tools/results/make_report.py" "$OUT" "$ROOT"
   echo "rewrote $ROOT/docs/RESULTS.md with fresh rows of:$SCENES_ONLY in $(( $(date +%s) - START )) s (raw data: $OUT)"
