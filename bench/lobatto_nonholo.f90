@@ -4,7 +4,9 @@
 !> T = 5 s (3 impacts), Newton rtol 1e-14 as the results' Lobatto rows, with s stages and step h.
 !>
 !>   vci_bench_lobatto_nonholo [S [H [EPISODES [PART]]]]   (defaults 3, 0.05, 50, all; PART = run:
-!>                                                        the episodes only, for callgrind)
+!>                                                        the episodes only, for callgrind; PART =
+!>                                                        whole: whole runs timed as the results
+!>                                                        driver times them, see whole_runs)
 !>
 !> A first pass finds which steps have an impact; the episodes take those through
 !> counted_impact_step and the others through counted_regular_step (bench/step_split.f90), so that
@@ -44,6 +46,9 @@ program bench_lobatto_nonholo
   qd0 = [pi / 4.0_dp, pendulum_f(q0(1)) * pi / 4.0_dp]
   pend = pendulum_lagrangian_model()
   p0 = pend%mass * pend%length**2 * [qd0(1), sin(q0(1))**2 * qd0(2)]
+  if (part == 'whole') then
+    call whole_runs(); stop
+  end if
   call integ%create(pend, h, stat)
   if (stat == VCI_OK) call integ%set_scheme(VCI_SCHEME_LOBATTO, s, stat)
   if (stat == VCI_OK) call integ%set_tolerances(0.0_dp, 1.0e-14_dp, 30, stat)
@@ -88,6 +93,42 @@ program bench_lobatto_nonholo
     real(st%newton_iterations, dp) / max(1.0_dp, real(st%newton_solves, dp))
   write (output_unit, '(a,2es24.16)') 'final configuration ', integ%configuration()
 contains
+  !> Whole runs as tools/results/vci_results_driver times a row (create, set_scheme, tolerances,
+  !> init_from_momentum, integrate over T; CPU time by cpu_time, median of repeats until they sum to
+  !> 0.1 s, at least 9, at most 2001), at step sizes between the driver's, with the `discrete` and the
+  !> `hamiltonian` condition. One line per run: s, condition, h, steps, CPU ms, final configuration
+  !> (bench/nonholo_vs_cvode.sh compares it with the exact reference and CVODE-Adams's sweep), Newton
+  !> iterations per solve (with the polish) and impacts of the last repeat.
+  subroutine whole_runs()
+    integer, parameter :: max_rep = 2001
+    real(dp) :: cpus(max_rep), c0, c1, total
+    integer :: mode, nrep_w, stat_w
+    type(vci_integrator_t) :: w
+    do mode = 1, 2
+      total = 0.0_dp; nrep_w = 0
+      do while (nrep_w < max_rep .and. (nrep_w < 9 .or. total < 0.1_dp))
+        call cpu_time(c0)
+        call w%create(pend, h, stat_w)
+        if (stat_w == VCI_OK) call w%set_scheme(VCI_SCHEME_LOBATTO, s, stat_w)
+        if (stat_w == VCI_OK) call w%set_tolerances(0.0_dp, 1.0e-14_dp, 30, stat_w)
+        if (stat_w == VCI_OK) call w%set_impact_energy(merge(VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN, mode == 1), &
+                                                       stat_w)
+        if (stat_w == VCI_OK) call w%init_from_momentum(0.0_dp, q0, p0, stat_w)
+        if (stat_w == VCI_OK) call w%integrate(int(nsteps, i8), 1, stat_w)
+        call cpu_time(c1)
+        if (stat_w /= VCI_OK) then
+          write (output_unit, '(a)') 'lobatto_nonholo: '//w%message()
+          error stop 1
+        end if
+        nrep_w = nrep_w + 1; cpus(nrep_w) = c1 - c0; total = total + (c1 - c0)
+      end do
+      st = w%statistics()
+      write (output_unit, '(a,i0,1x,a,es12.5,i7,es13.5,i6,2es25.16,f7.3,i4)') 'whole ', s, &
+        trim(merge('discrete   ', 'hamiltonian', mode == 1)), h, nsteps, 1.0e3_dp * median(cpus(1:nrep_w)), nrep_w, &
+        w%configuration(), real(st%newton_iterations, dp) / max(1.0_dp, real(st%newton_solves, dp)), int(st%impacts)
+    end do
+  end subroutine whole_runs
+
   subroutine must(st_)
     integer, intent(in) :: st_
     if (st_ /= VCI_OK) then

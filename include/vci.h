@@ -251,7 +251,7 @@ typedef struct vci_separable_callbacks {
  *  Verlet compositions, no linear solve). On failure *model = NULL.
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: as vci_model_create (cb->size a whole number of members of a
  *  vci_separable_callbacks), m != 0 (a separable model has no nonholonomic constraints: give such a
- *  model with vci_model_create_lagrangian and an implicit scheme), potential or potential_gradient
+ *  model with vci_model_create_lagrangian and VCI_SCHEME_LOBATTO, order 2s with constraints, or midpoint), potential or potential_gradient
  *  NULL, gaps or gap_gradients NULL with ngaps > 0, unknown mass_kind, mass NULL, a diagonal entry
  *  not positive and finite, a dense M not symmetric positive definite and finite; VCI_ERR_MEMORY. */
 int  vci_model_create_separable(vci_model *model, int n, int m, int ngaps, int mass_kind, const double *mass,

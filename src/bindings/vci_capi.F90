@@ -177,7 +177,7 @@ contains
     if (m /= 0) then
       write (msg, '(a,i0,a)') 'vci_model_create_separable: m = ', m, ' but a separable model has no '// &
         'nonholonomic constraints (the explicit schemes cannot impose them): give the model with '// &
-        'vci_model_create_lagrangian and use an implicit scheme'
+        'vci_model_create_lagrangian and use lobatto (order 2s with constraints) or midpoint'
       call set_thread_message(msg); return
     end if
     what = ''

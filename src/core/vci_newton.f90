@@ -109,6 +109,12 @@ module vci_newton
     !> the scaled residual by less than reuse_contraction (or fails). Huge(1): never.
     integer :: reuse_min = vci_large_system
     real(dp) :: reuse_contraction = 0.25_dp  !< a chord step must contract the scaled residual by this
+    !> After a full Newton step that left the scaled residual above the tolerance, try one chord step
+    !> on the same factors before a new Jacobian (accepted when it reaches the tolerance or contracts
+    !> by reuse_contraction). Near the solution the first step's error is ~ the square of the start's,
+    !> so the chord step finishes where a second Jacobian and factorisation would (issue 25: Lobatto
+    !> with constraints, docs/bench/lobatto.md). Off by default; the stepper sets it per scheme.
+    logical :: chord_after_newton = .false.
     integer(i8) :: factorisations = 0     !< LU factorisations of Newton matrices so far
     logical, private :: have_lu = .false.
     integer, private :: lu_n = 0
@@ -322,6 +328,10 @@ contains
       ! a start within the tolerance is kept only when it is at about round-off (a predictor exact
       ! for the motion); otherwise one Newton step and the polish take it there, as from any start
       if (phi <= 1.0_dp .and. (it > 1 .or. factored .or. phi <= start_roundoff)) exit
+      if (self%chord_after_newton .and. it > 1 .and. factored) then
+        if (chord_step(self, sys, x, n, phi, res)) cycle
+        if (res%status /= VCI_OK) return
+      end if
       res%iterations = res%iterations + 1
       call sys%jacobian(x, self%r(1:n), self%jac(1:n, 1:n), stat)
       if (stat /= VCI_OK .and. phi <= 1.0_dp .and. .not. sys%unrecoverable) exit   ! (optional step: the start stands)
@@ -601,6 +611,38 @@ contains
   end subroutine zero_outside_band
 
   !> One chord step with the last LU factors; kept only if it does not make the residual worse.
+  !> One chord step on the factors of the last Newton matrix (chord_after_newton): true when it was
+  !> taken (the scaled residual at or below the tolerance, or contracted by reuse_contraction). A
+  !> failed evaluation or a step not taken leaves x and phi as they were (full Newton goes on), unless
+  !> the callback said unrecoverable (res%status set).
+  logical function chord_step(self, sys, x, n, phi, res) result(taken)
+    type(vci_newton_t), intent(inout) :: self
+    class(vci_system_t), intent(inout) :: sys
+    real(dp), intent(inout) :: x(:)
+    integer, intent(in) :: n
+    real(dp), intent(inout) :: phi
+    type(vci_newton_result_t), intent(inout) :: res
+    integer :: i, stat
+    real(dp) :: phit
+    taken = .false.
+    do i = 1, n
+      self%dx(i) = self%r(i) * self%rw(i)
+    end do
+    if (.not. all_finite(self%dx(1:n))) return
+    call lu_solve(self, n, self%dx)
+    self%xt(1:n) = x - self%dx(1:n)
+    if (.not. sys%admissible(self%xt(1:n))) return
+    call sys%residual(self%xt(1:n), self%rt(1:n), self%sct(1:n), stat)
+    if (stat /= VCI_OK .and. sys%unrecoverable) call fail_eval(res, stat)
+    if (stat /= VCI_OK) return
+    if (.not. (all_finite(self%rt(1:n)) .and. all_finite(self%sct(1:n)))) return
+    phit = merit(self, self%rt(1:n), self%sct(1:n))
+    if (.not. (phit <= 1.0_dp .or. phit <= self%reuse_contraction * phi)) return
+    res%iterations = res%iterations + 1
+    call accept_trial(self, n, x, phit, phi, res)
+    taken = .true.
+  end function chord_step
+
   subroutine polish_step(self, sys, x, n, phi, res)
     type(vci_newton_t), intent(inout) :: self
     class(vci_system_t), intent(inout) :: sys

@@ -419,7 +419,7 @@ contains
       end select
       if (self%model%m > 0) then
         write (self%last_message, '(a,i0,a)') 'set_scheme: composition does not support nonholonomic constraints (m = ', &
-          self%model%m, '); use left or midpoint'
+          self%model%m, '); use lobatto (order 2s with constraints) or midpoint'
         call finish(self, VCI_ERR_ARGUMENT, stat); return
       end if
     case default

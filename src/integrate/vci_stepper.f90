@@ -19,6 +19,7 @@ module vci_stepper
   use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_STAGE1, KIND_STAGE2, KIND_IMPULSE, &
                         VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN, VCI_IMPACT_BLENDED
   use vci_observer, only: vci_impact_t
+  use vci_scheme_lobatto, only: vci_scheme_lobatto_t
   use vci_settings, only: vci_settings_t, vci_solver_stats_t, vci_too_many_impacts_cause
   use vci_state, only: vci_state_t, vci_impact_buffer_t
   use vci_predictor, only: vci_predict_start
@@ -156,6 +157,13 @@ contains
     call self%newton%reserve(nx, stat)
     if (stat /= VCI_OK) return
     call self%newton%forget_factors()      ! another scheme's Jacobian is no chord matrix for this one
+    ! Lobatto with constraints: one chord step before a second Jacobian (vci_newton's
+    ! chord_after_newton; docs/bench/lobatto.md measures it)
+    self%newton%chord_after_newton = .false.
+    select type (sys => self%sys)
+    type is (vci_scheme_lobatto_t)
+      self%newton%chord_after_newton = m > 0
+    end select
     call self%configure(self%settings)
     allocate (self%x(nx), self%x_stage1(nx), self%x_saved(nx), self%x_low(nx), self%x_high(nx), self%jac(nx, nx), &
               self%rhs(nx), self%res(nx), self%res_scale(nx), self%q_start(n), self%p_start(n), self%q_end(n), &

@@ -89,6 +89,8 @@ lobatto_table() {
     echo "bench/lobatto_nonholo.f90). Instructions per step: \`valgrind --tool=callgrind"
     echo "--toggle-collect='*counted_regular_step*'\` (likewise \`'*counted_impact_step*'\`) on"
     echo "\`vci_bench_lobatto_nonholo S H 1 run\` (one 5 s episode); times from \`vci_bench_lobatto_nonholo S H 50\`."
+    echo "Newton takes one chord step on the first iteration's factors before a second Jacobian (vci_newton's"
+    echo "\`chord_after_newton\`, set for Lobatto with m > 0); iterations per solve count the chord and polishing steps."
     echo
     echo "| s | h | instructions/regular step | instructions/impact step | impact/regular (instructions) | ns/regular step | ns/impact step | Newton iterations per solve |"
     echo "|---|---|---:|---:|---:|---:|---:|---:|"
@@ -108,6 +110,8 @@ lobatto_table() {
         END { printf "| %s | %s | %.0f | %.0f | %.2f | %.0f | %.0f | %s |\n", s, h, ir / nr, ii / ni, (ii / ni) / (ir / nr), tr, ti, it }'
     done
   } >"$LOBATTO_OUT"
+  # issue 25 item 5: the same scene against CVODE-Adams at every error level (its own section)
+  BUILD_DIR="$BUILD_DIR" OUT="$LOBATTO_OUT" "$ROOT/bench/nonholo_vs_cvode.sh"
   cat "$LOBATTO_OUT"
 }
 if [ "${1:-}" = --lobatto ]; then
