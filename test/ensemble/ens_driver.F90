@@ -86,9 +86,13 @@ program ens_driver
       print '(a,i0,a)', 'rank ', rank, ': '//trim(msg)
       flush (6)
 #ifdef VCI_HAVE_MPI
-      call MPI_Barrier(MPI_COMM_WORLD, ierr)   ! every rank's status printed before finish aborts
+      ! every rank has the run's failure (the library tells all ranks): a clean MPI_Finalize, not
+      ! MPI_Abort, whose kill may drop another rank's line still on its way to mpiexec (Open MPI:
+      ! "You may or may not see output from other processes"), which made disk_full flaky
+      call MPI_Barrier(MPI_COMM_WORLD, ierr)
+      call MPI_Finalize(ierr)
 #endif
-      call finish(1)
+      error stop 1
     end if
   case ('verify')
     if (rank == 0) call verify(trim(path), partial, with_failures)
