@@ -86,13 +86,9 @@ program ens_driver
       print '(a,i0,a)', 'rank ', rank, ': '//trim(msg)
       flush (6)
 #ifdef VCI_HAVE_MPI
-      ! every rank has the run's failure (the library tells all ranks): a clean MPI_Finalize, not
-      ! MPI_Abort, whose kill may drop another rank's line still on its way to mpiexec (Open MPI:
-      ! "You may or may not see output from other processes"), which made disk_full flaky
-      call MPI_Barrier(MPI_COMM_WORLD, ierr)
-      call MPI_Finalize(ierr)
+      call MPI_Barrier(MPI_COMM_WORLD, ierr)   ! every rank's status printed before finish aborts
 #endif
-      error stop 1
+      call finish(1)
     end if
   case ('verify')
     if (rank == 0) call verify(trim(path), partial, with_failures)
