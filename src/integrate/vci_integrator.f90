@@ -71,9 +71,11 @@ module vci_integrator
     integer :: scheme_id = VCI_SCHEME_DISCRETE  !< VCI_SCHEME_*; set_scheme chooses it for a continuous model
     integer :: start_kind = 0   !< how the run started: 0 not known, 1 pair, 2 momentum, 3 a checkpoint (provenance)
     integer :: n_stages = 0                     !< s of the lobatto scheme
-    !> the run's safety-net counts before this integrator took it over (a restored checkpoint's), and
-    !> this integrator's split_steps when it did: checkpoints carry the run's counts (issue 24)
-    integer(i8) :: run_splits_before = 0_i8, run_largest_before = 0_i8, splits_at_start = 0_i8
+    !> the run's split steps before this integrator took it over (a restored checkpoint's):
+    !> checkpoints carry the run's counts (issue 24)
+    integer(i8) :: run_splits_before = 0_i8
+    integer(i8) :: run_largest_before = 0_i8   !< the run's largest split before this integrator took it over
+    integer(i8) :: splits_at_start = 0_i8      !< this integrator's split_steps when the run started or was restored
     type(vci_stepper_t) :: stepper              !< holds the scheme and the one settings object
     logical :: created = .false.      !< create has succeeded
     !> the stepper holds the midpoint retraction's scheme for lag, built by the last build_scheme
