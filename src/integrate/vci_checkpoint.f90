@@ -11,7 +11,9 @@ module vci_checkpoint
   private
 
   !> Layout version of the checkpoint (bumped whenever a field is added, removed or reordered).
-  integer, parameter, public :: VCI_CHECKPOINT_VERSION = 3
+  integer, parameter, public :: VCI_CHECKPOINT_VERSION = 4
+  !> The oldest layout version from_record still reads (its missing fields start empty: see from_record).
+  integer, parameter, public :: VCI_CHECKPOINT_OLDEST = 3
 
   !> Scalars at the head of the record: step, t0, h, step_energy, arriving_energy, arriving_direction.
   integer, parameter :: head = 6
@@ -47,6 +49,15 @@ module vci_checkpoint
     real(dp), allocatable :: factors_rw(:)           !< row weights of the factored matrix
     real(dp), allocatable :: factors_lu(:, :)        !< the LU factors (factors_n x factors_n)
     integer, allocatable :: factors_pivots(:)        !< LAPACK's pivot indices
+    !> (version 4) the run's safety-net counts up to this state: steps taken as equal sub-steps and
+    !> the most sub-steps one of them needed (vci_stats_t's split_steps, largest_split, over the run
+    !> and its restarts rather than the integrator's life)
+    integer(i8) :: split_steps = 0_i8
+    integer(i8) :: largest_split = 0_i8   !< (version 4) see split_steps
+    !> (version 4) the scheme's Newton start memory (Lobatto with constraints: the last regular
+    !> step's stage and multiplier polynomials), opaque here; empty: none (the scheme starts as after
+    !> an initialisation). Not in the flat record (its size is the scheme's): start_record.
+    real(dp), allocatable :: start(:)
   contains
     !> the checkpoint as one float64 vector (what outputs store)
     procedure :: to_record
@@ -56,6 +67,10 @@ module vci_checkpoint
     procedure :: factors_record
     !> take the factors from such a vector, if it belongs to this checkpoint's step
     procedure :: from_factors_record
+    !> the scheme's start memory as one float64 vector (stored beside the record)
+    procedure :: start_record
+    !> take the start memory from such a vector, if it belongs to this checkpoint's step
+    procedure :: from_start_record
     !> the time of the checkpoint's state, t0 + step h
     procedure :: time => checkpoint_time
   end type vci_checkpoint_t
@@ -64,10 +79,16 @@ module vci_checkpoint
 
 contains
 
-  !> Length of the flat record of a model with n coordinates and m constraints.
-  pure integer function vci_checkpoint_record_size(n, m)
+  !> Length of the flat record of a model with n coordinates and m constraints, in layout `version`
+  !> (default: this library's).
+  pure integer function vci_checkpoint_record_size(n, m, version)
     integer, intent(in) :: n, m
+    integer, intent(in), optional :: version
     vci_checkpoint_record_size = head + 5 * n + 3 * m + 1
+    if (present(version)) then
+      if (version < 4) return
+    end if
+    vci_checkpoint_record_size = vci_checkpoint_record_size + 2   ! (version 4) split_steps, largest_split
   end function vci_checkpoint_record_size
 
   !> The time of the checkpoint's state.
@@ -78,24 +99,39 @@ contains
 
   !> The checkpoint as one float64 vector [step, t0, h, step_energy, arriving_energy,
   !> arriving_direction, q(n), p(n), velocity(n), lambda(m), then (version 2) velocity_before(n),
-  !> lambda_before(m), lambda_before2(m), predictor_depth, then (version 3) position_lo(n)] (integers
-  !> are exact in float64), so that an output writes it in one piece. The version is stored beside it by the output.
+  !> lambda_before(m), lambda_before2(m), predictor_depth, then (version 3) position_lo(n), then
+  !> (version 4) split_steps, largest_split] (integers are exact in float64: counts below 2^53), so
+  !> that an output writes it in one piece. The version is stored beside it by the output.
   pure function to_record(self) result(rec)
     class(vci_checkpoint_t), intent(in) :: self
     real(dp), allocatable :: rec(:)
     rec = [real(self%step, dp), self%t0, self%h, self%step_energy, self%arriving_energy, &
            real(self%arriving_direction, dp), self%q, self%p, self%velocity, self%lambda, &
-           self%velocity_before, self%lambda_before, self%lambda_before2, real(self%predictor_depth, dp), self%position_lo]
+           self%velocity_before, self%lambda_before, self%lambda_before2, real(self%predictor_depth, dp), self%position_lo, &
+           real(self%split_steps, dp), real(self%largest_split, dp)]
   end function to_record
 
-  !> Rebuild from a record of `version` written by to_record for sizes n, m.
+  !> Rebuild from a record of `version` written by to_record for sizes n, m. Versions from
+  !> VCI_CHECKPOINT_OLDEST on are read; a version-3 record has no split counts (0) and comes without
+  !> the scheme's start memory, so a constrained Lobatto run continues from it to solver tolerance,
+  !> not bit for bit (docs/DESIGN.md, "Restart bit for bit"). A newer version is refused.
   subroutine from_record(self, rec, n, m, version, stat)
     class(vci_checkpoint_t), intent(inout) :: self
     real(dp), intent(in) :: rec(:)
     integer, intent(in) :: n, m, version
     integer, intent(out) :: stat
+    integer :: o
     stat = VCI_ERR_ARGUMENT
-    if (version /= VCI_CHECKPOINT_VERSION .or. size(rec) /= vci_checkpoint_record_size(n, m)) return
+    if (version < VCI_CHECKPOINT_OLDEST .or. version > VCI_CHECKPOINT_VERSION) return
+    if (size(rec) /= vci_checkpoint_record_size(n, m, version)) return
+    o = head + 5 * n + 3 * m + 1
+    self%split_steps = 0_i8; self%largest_split = 0_i8
+    if (version >= 4) then
+      if (.not. (rec(o + 1) >= 0.0_dp .and. rec(o + 1) <= 2.0_dp**53 .and. rec(o + 2) >= 0.0_dp .and. &
+                 rec(o + 2) <= 2.0_dp**31)) return
+      self%split_steps = nint(rec(o + 1), i8); self%largest_split = nint(rec(o + 2), i8)
+    end if
+    if (allocated(self%start)) deallocate (self%start)
     self%version = version
     self%step = nint(rec(1), i8); self%t0 = rec(2); self%h = rec(3)
     self%step_energy = rec(4); self%arriving_energy = rec(5); self%arriving_direction = nint(rec(6))
@@ -153,6 +189,39 @@ contains
     self%factors_n = nf
     stat = VCI_OK
   end subroutine from_factors_record
+
+  !> The scheme's start memory as one float64 vector [step, length, start(length)] (the step ties it
+  !> to its checkpoint; length 0: none).
+  pure function start_record(self) result(rec)
+    class(vci_checkpoint_t), intent(in) :: self
+    real(dp), allocatable :: rec(:)
+    if (allocated(self%start)) then
+      rec = [real(self%step, dp), real(size(self%start), dp), self%start]
+    else
+      rec = [real(self%step, dp), 0.0_dp]
+    end if
+  end function start_record
+
+  !> Take the start memory from a record of start_record, if it belongs to this checkpoint's step and
+  !> is well formed (the scheme checks its size and values when restored); else none (the restart
+  !> is then correct, not bitwise). stat: VCI_ERR_ARGUMENT when the record was refused.
+  subroutine from_start_record(self, rec, stat)
+    class(vci_checkpoint_t), intent(inout) :: self
+    real(dp), intent(in) :: rec(:)
+    integer, intent(out) :: stat
+    integer :: st
+    if (allocated(self%start)) deallocate (self%start)
+    stat = VCI_ERR_ARGUMENT
+    if (size(rec) < 2) return
+    if (rec(1) /= real(self%step, dp) .or. rec(2) /= real(size(rec) - 2, dp)) return
+    stat = VCI_OK
+    if (size(rec) == 2) return
+    allocate (self%start(size(rec) - 2), stat=st)
+    if (st /= 0) then
+      stat = VCI_ERR_ARGUMENT; return
+    end if
+    self%start = rec(3:)
+  end subroutine from_start_record
 
   !> A checkpoint that knows only a state (t, q, p, lambda) and the step length, as read from an
   !> output that stores no checkpoint: index 0 at t, no solver memory (like init_from_momentum).

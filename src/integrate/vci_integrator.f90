@@ -71,6 +71,11 @@ module vci_integrator
     integer :: scheme_id = VCI_SCHEME_DISCRETE  !< VCI_SCHEME_*; set_scheme chooses it for a continuous model
     integer :: start_kind = 0   !< how the run started: 0 not known, 1 pair, 2 momentum, 3 a checkpoint (provenance)
     integer :: n_stages = 0                     !< s of the lobatto scheme
+    !> the run's split steps before this integrator took it over (a restored checkpoint's):
+    !> checkpoints carry the run's counts (issue 24)
+    integer(i8) :: run_splits_before = 0_i8
+    integer(i8) :: run_largest_before = 0_i8   !< the run's largest split before this integrator took it over
+    integer(i8) :: splits_at_start = 0_i8      !< this integrator's split_steps when the run started or was restored
     type(vci_stepper_t) :: stepper              !< holds the scheme and the one settings object
     logical :: created = .false.      !< create has succeeded
     !> the stepper holds the midpoint retraction's scheme for lag, built by the last build_scheme
@@ -561,6 +566,7 @@ contains
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
     call self%stepper%forget_factors()   ! a new run solves as a fresh integrator would
+    call start_run_counts(self, 0_i8, 0_i8)
     call self%stepper%pair_momentum(q0, q1, self%state%h, self%state%p, self%state%step_energy, stat)
     if (stat /= VCI_OK) then
       self%last_message = 'init_from_pair: '//trim(self%stepper%failure_cause())
@@ -591,6 +597,7 @@ contains
     self%state%step_energy = ieee_value(1.0_dp, ieee_quiet_nan)
     self%state%arriving_direction = 0
     call self%stepper%forget_factors()
+    call start_run_counts(self, 0_i8, 0_i8)
     self%initialized = .true.; self%start_kind = 2
     call finish(self, VCI_OK, stat)
   end subroutine init_from_momentum
@@ -911,11 +918,27 @@ contains
   function checkpoint(self) result(cp)
     class(vci_integrator_t), intent(in) :: self
     type(vci_checkpoint_t) :: cp
+    type(vci_solver_stats_t) :: solver
     cp = self%state%to_checkpoint()
     allocate (cp%position_lo(size(self%state%q)))
     call self%stepper%position_carry(self%state%q, cp%position_lo)
     call self%stepper%factors_to_checkpoint(cp)
+    solver = self%stepper%solver_stats()
+    cp%split_steps = self%run_splits_before + (solver%split_steps - self%splits_at_start)
+    cp%largest_split = self%run_largest_before
+    ! (the integrator's largest split is over its life: it is the run's when this run split at all)
+    if (solver%split_steps > self%splits_at_start) cp%largest_split = max(cp%largest_split, solver%largest_split)
   end function checkpoint
+
+  !> A run starts: its safety-net counts so far (a checkpoint's, or none) and this integrator's now.
+  subroutine start_run_counts(self, splits, largest)
+    class(vci_integrator_t), intent(inout) :: self
+    integer(i8), intent(in) :: splits, largest
+    type(vci_solver_stats_t) :: solver
+    solver = self%stepper%solver_stats()
+    self%run_splits_before = splits; self%run_largest_before = largest
+    self%splits_at_start = solver%split_steps
+  end subroutine start_run_counts
 
   !> Continue from a checkpoint taken with the same model and step length.
   subroutine restore(self, cp, stat)
@@ -941,6 +964,7 @@ contains
       if (size(cp%position_lo) == self%model%n) call self%stepper%restore_position_carry(self%state%q, cp%position_lo)
     end if
     call self%stepper%factors_from_checkpoint(cp)
+    call start_run_counts(self, max(0_i8, cp%split_steps), max(0_i8, cp%largest_split))
     self%initialized = .true.; self%start_kind = 3
     call finish(self, VCI_OK, stat)
   end subroutine restore

@@ -279,17 +279,23 @@ contains
     if (allocated(self%sys)) call self%sys%restore_position_carry(q, lo)
   end subroutine restore_position_carry
 
-  !> Newton's kept factors into a checkpoint (none when they cannot be copied: the restored run is
-  !> then correct but not bitwise the same), so that the next steps of a restored run solve from the
+  !> Newton's kept factors and the scheme's start memory into a checkpoint (no factors when they
+  !> cannot be copied: the restored run is then correct but not bitwise the same), so that the next steps of a restored run solve from the
   !> same factors as the uninterrupted one (docs/DESIGN.md, "Restart bit for bit").
   subroutine factors_to_checkpoint(self, cp)
     class(vci_stepper_t), intent(in) :: self
     type(vci_checkpoint_t), intent(inout) :: cp
     integer :: st
     call self%newton%kept_factors(cp%factors_n, cp%factors_key, cp%factors_rw, cp%factors_lu, cp%factors_pivots, st)
+    ! and the scheme's start memory (Lobatto with constraints: its last step's polynomials)
+    if (allocated(cp%start)) deallocate (cp%start)
+    if (allocated(self%sys)) then
+      call self%sys%start_memory(cp%start)
+      if (size(cp%start) == 0) deallocate (cp%start)
+    end if
   end subroutine factors_to_checkpoint
 
-  !> The checkpoint's factors (or none) become Newton's kept ones.
+  !> The checkpoint's factors (or none) become Newton's kept ones, its start memory (or none) the scheme's.
   subroutine factors_from_checkpoint(self, cp)
     class(vci_stepper_t), intent(inout) :: self
     type(vci_checkpoint_t), intent(in) :: cp
@@ -297,12 +303,20 @@ contains
     if (cp%factors_n > 0 .and. allocated(cp%factors_rw) .and. allocated(cp%factors_lu) .and. &
         allocated(cp%factors_pivots)) &
       call self%newton%keep_factors(cp%factors_n, cp%factors_key, cp%factors_rw, cp%factors_lu, cp%factors_pivots)
+    if (allocated(self%sys)) then
+      if (allocated(cp%start)) then
+        call self%sys%restore_start_memory(cp%start)
+      else
+        call self%sys%restore_start_memory([real(dp) ::])
+      end if
+    end if
   end subroutine factors_from_checkpoint
 
-  !> A new run: no factors of an earlier one (a re-initialised integrator runs as a fresh one).
+  !> A new run: no factors or start memory of an earlier one (a re-initialised integrator runs as a fresh one).
   subroutine forget_factors(self)
     class(vci_stepper_t), intent(inout) :: self
     call self%newton%forget_factors()
+    if (allocated(self%sys)) call self%sys%restore_start_memory([real(dp) ::])   ! nor its start memory
   end subroutine forget_factors
 
   subroutine use_model_derivatives(self, mixed_hessian, gap_gradients, constraint_jacobian, energy, gap_gradient)

@@ -26,7 +26,7 @@ module vci_hdf5_output
   use vci_limits, only: vci_size_problem
   use vci_observer, only: vci_observer_t, vci_run_info_t, vci_impact_t
   use vci_h5_io
-  use vci_checkpoint, only: vci_checkpoint_t, vci_checkpoint_from_state, VCI_CHECKPOINT_VERSION
+  use vci_checkpoint, only: vci_checkpoint_t, vci_checkpoint_from_state, VCI_CHECKPOINT_VERSION, VCI_CHECKPOINT_OLDEST
   use vci_checkpoint, only: vci_checkpoint_record_size
   use vci_integrator, only: vci_scheme_name
   implicit none
@@ -410,9 +410,10 @@ contains
         trim(vci_int_text(VCI_CHECKPOINT_VERSION))//' (written by a newer vci: continue it with that one)')
       stat = VCI_ERR_IO; return
     end if
-    if (self%cp_version /= VCI_CHECKPOINT_VERSION) return   ! an older layout: the last row serves
+    ! a layout older than from_record reads: the last row serves
+    if (self%cp_version < VCI_CHECKPOINT_OLDEST) return
     n = self%n
-    allocate (rec(1 + vci_checkpoint_record_size(n, self%m)), qr(n, 1), pr(n, 1), stat=st)
+    allocate (rec(1 + vci_checkpoint_record_size(n, self%m, self%cp_version)), qr(n, 1), pr(n, 1), stat=st)
     if (st /= 0) return
     s = VCI_OK
     call h5io_get_vector(self%g_cp, 'record', rec, s, self%message, self%path)
@@ -928,6 +929,8 @@ contains
     ! Newton's kept factors beside it (tied to it by the step: a kill between the two writes leaves
     ! factors of another step, which the reader ignores)
     call h5io_put_vector(self%g_cp, 'factors', cp%factors_record(), stat, self%message, self%path)
+    ! (version 4) the scheme's start memory likewise
+    call h5io_put_vector(self%g_cp, 'start', cp%start_record(), stat, self%message, self%path)
   end subroutine put_checkpoint
 
   !> /checkpoint/factors into cp (Newton's kept factors, vci_checkpoint: factors_record), when it is
@@ -956,6 +959,33 @@ contains
     call h5io_get_vector(r%g_cp, 'factors', rec, s, scratch, r%path)
     if (s == VCI_OK) call cp%from_factors_record(rec, s)
   end subroutine get_factors
+
+  !> /checkpoint/start into cp (the scheme's start memory, vci_checkpoint: start_record), when it is
+  !> there, of cp's step and of a size a scheme can have (Lobatto s <= 8: 1 + 9 n + 8 m values);
+  !> else cp has none and the next step starts as after an initialisation (a constrained Lobatto
+  !> run then continues to solver tolerance, not bit for bit; files of layout 3 have none).
+  subroutine get_start(r, cp)
+    type(vci_hdf5_writer_t), intent(inout) :: r
+    type(vci_checkpoint_t), intent(inout) :: cp
+    integer(hid_t) :: dset
+    integer(i8) :: length
+    integer :: err, e2, s, st
+    logical :: ex
+    real(dp), allocatable :: rec(:)
+    character(len=VCI_MSG_LEN) :: scratch
+    call h5lexists_f(r%g_cp, 'start', ex, err)
+    if (err /= 0 .or. .not. ex) return
+    call h5dopen_f(r%g_cp, 'start', dset, err)
+    if (err /= 0) return
+    s = VCI_OK
+    length = h5io_rows(dset, 'start', 0, s, scratch, r%path)
+    call h5dclose_f(dset, e2)
+    if (s /= VCI_OK .or. length < 2_i8 .or. length > 3_i8 + 9_i8 * r%n + 8_i8 * r%m) return
+    allocate (rec(length), stat=st)
+    if (st /= 0) return
+    call h5io_get_vector(r%g_cp, 'start', rec, s, scratch, r%path)
+    if (s == VCI_OK) call cp%from_start_record(rec, s)
+  end subroutine get_start
 
   !> The state a restart from PATH starts with, as a checkpoint for `integ%restore`. With a
   !> /checkpoint group (written when the driver handed checkpoints over) the restart is bitwise; without one
@@ -1003,6 +1033,7 @@ contains
       call cp%from_record(rec(2:), n, r%m, r%cp_version, s)
       use_cp = s == VCI_OK
       if (use_cp) call get_factors(r, cp)
+      if (use_cp) call get_start(r, cp)
     end if
     if (.not. use_cp .and. stat == VCI_OK) then
       allocate (row(max(r%n, r%m, 1), 3), stat=st)

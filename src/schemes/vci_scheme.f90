@@ -95,6 +95,8 @@ module vci_scheme
     procedure :: clear_failure
     procedure :: position_carry
     procedure :: restore_position_carry
+    procedure :: start_memory
+    procedure :: restore_start_memory
     procedure :: needs_pair_solve
     procedure :: endpoint_direction
     procedure :: put_quadratic_start
@@ -470,6 +472,21 @@ contains
     class(vci_scheme_t), intent(inout) :: self
     real(dp), intent(in) :: q(:), lo(:)
   end subroutine restore_position_carry
+
+  !> Newton's start memory beyond the state (a checkpoint carries it: a restart continues bit for
+  !> bit): none here (mem of size 0); Lobatto with constraints keeps its last step's polynomials.
+  subroutine start_memory(self, mem)
+    class(vci_scheme_t), intent(in) :: self
+    real(dp), allocatable, intent(out) :: mem(:)
+    allocate (mem(0))
+  end subroutine start_memory
+
+  !> Start from memory mem (from start_memory of the same scheme and model); one this scheme cannot
+  !> have had, or size 0, is none: the next step starts as after an initialisation.
+  subroutine restore_start_memory(self, mem)
+    class(vci_scheme_t), intent(inout) :: self
+    real(dp), intent(in) :: mem(:)
+  end subroutine restore_start_memory
 
   !> Forget which callback failed last (a new solve starts).
   subroutine clear_failure(self)

@@ -76,6 +76,9 @@ module vci_scheme_lobatto
     procedure :: endpoint_direction
     procedure :: put_quadratic_start
     procedure :: put_multiplier_history
+    ! (issue 24) the polynomial start in checkpoints
+    procedure :: start_memory => lobatto_start_memory
+    procedure :: restore_start_memory => lobatto_restore_start
   end type vci_scheme_lobatto_t
 
 contains
@@ -777,6 +780,35 @@ contains
     self%poly_dh = real(self%dir, dp) * tau
     self%have_poly = .true.
   end subroutine keep_polynomial
+
+  !> The polynomial start's memory for a checkpoint: [poly_dh, ypoly(n, 0:s), lpoly(m, 0:s-1)]
+  !> when there is one (m > 0, after a regular step), else nothing.
+  subroutine lobatto_start_memory(self, mem)
+    class(vci_scheme_lobatto_t), intent(in) :: self
+    real(dp), allocatable, intent(out) :: mem(:)
+    if (self%m > 0 .and. self%have_poly) then
+      mem = [self%poly_dh, reshape(self%ypoly, [size(self%ypoly)]), reshape(self%lpoly, [size(self%lpoly)])]
+    else
+      allocate (mem(0))
+    end if
+  end subroutine lobatto_start_memory
+
+  !> Take the polynomial start from lobatto_start_memory's vector if it has this scheme's size and
+  !> finite values; else none (the quadratic start, as after an initialisation).
+  subroutine lobatto_restore_start(self, mem)
+    class(vci_scheme_lobatto_t), intent(inout) :: self
+    real(dp), intent(in) :: mem(:)
+    integer :: ny
+    self%have_poly = .false.; self%poly_used = .false.
+    if (self%m == 0 .or. .not. allocated(self%ypoly)) return
+    ny = size(self%ypoly)
+    if (size(mem) /= 1 + ny + size(self%lpoly)) return
+    if (.not. all(abs(mem) <= huge(1.0_dp)) .or. mem(1) == 0.0_dp) return   ! finite, a step made it
+    self%poly_dh = mem(1)
+    self%ypoly = reshape(mem(2:1 + ny), shape(self%ypoly))
+    self%lpoly = reshape(mem(2 + ny:), shape(self%lpoly))
+    self%have_poly = .true.
+  end subroutine lobatto_restore_start
 
   !> l_i(u) = prod_(k /= i) (u - c_k) / (c_i - c_k): the Lagrange weight of node i at u.
   pure real(dp) function lagrange_weight(c, i, u) result(w)

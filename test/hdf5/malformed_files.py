@@ -103,6 +103,12 @@ CASES = [
     ("checkpoint version 1 (older)", ELL, lambda f: f["checkpoint"].attrs.__setitem__("version", np.int32(1)), "row"),
     ("checkpoint version 999 (newer)", ELL,
      lambda f: f["checkpoint"].attrs.__setitem__("version", np.int32(999)), "refuse"),
+    # layout 3 (before the split counts and /checkpoint/start): still read, at the row's t
+    ("checkpoint layout 3 (older, read)", PEN,
+     lambda f: (f["checkpoint"].attrs.__setitem__("version", np.int32(3)),
+                replace(f, "checkpoint/record", f["checkpoint/record"][:-2]), f.__delitem__("checkpoint/start")), "row"),
+    ("checkpoint/start wrong length", PEN, lambda f: replace(f, "checkpoint/start", np.zeros(9)), "row"),
+    ("checkpoint/start length NaN", PEN, lambda f: f["checkpoint/start"].__setitem__(1, np.nan), "row"),
     ("checkpoint version a string", ELL,
      lambda f: f["checkpoint"].attrs.__setitem__("version", np.bytes_(b"3")), "row"),
 ]
