@@ -11,7 +11,8 @@ program vci_long_steps_table
   real(dp), parameter :: ladders(n_h, LONG_SCENES) = reshape([ &
     0.05_dp, 0.1_dp, 0.2_dp, 0.3_dp, 0.4_dp, 0.5_dp, 0.6_dp, 0.8_dp, 1.0_dp, &
     0.05_dp, 0.1_dp, 0.2_dp, 0.3_dp, 0.4_dp, 0.5_dp, 0.6_dp, 0.8_dp, 1.0_dp, &
-    0.02_dp, 0.05_dp, 0.1_dp, 0.15_dp, 0.2_dp, 0.25_dp, 0.3_dp, 0.4_dp, 0.5_dp], [n_h, LONG_SCENES])
+    0.02_dp, 0.05_dp, 0.1_dp, 0.15_dp, 0.2_dp, 0.25_dp, 0.3_dp, 0.4_dp, 0.5_dp, &
+    0.05_dp, 0.1_dp, 0.2_dp, 0.3_dp, 0.4_dp, 0.5_dp, 0.6_dp, 0.8_dp, 1.0_dp], [n_h, LONG_SCENES])
   integer, parameter :: schemes(n_schemes) = [VCI_SCHEME_MIDPOINT, VCI_SCHEME_LOBATTO, VCI_SCHEME_LOBATTO, &
                                               VCI_SCHEME_LOBATTO]
   integer, parameter :: stages(n_schemes) = [1, 2, 3, 4]
