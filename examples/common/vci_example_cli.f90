@@ -59,6 +59,7 @@ module vci_example_cli
     procedure :: on_start => s_start
     procedure :: on_step => s_step
     procedure :: on_impact => s_impact
+    procedure :: on_split => s_split
     procedure :: on_finish => s_finish
     procedure :: keeps_checkpoints => s_keeps_checkpoints
     procedure :: wants_checkpoint => s_wants_checkpoint
@@ -611,6 +612,14 @@ contains
       ' t=', impact%t, ' wall=', impact%gap, ' alpha=', impact%alpha, ' impulse=', impact%impulse
     if (associated(self%next)) call self%next%on_impact(impact, stat)
   end subroutine s_impact
+
+  subroutine s_split(self, step, parts, stat)
+    class(summary_observer_t), intent(inout) :: self
+    integer(i8), intent(in) :: step
+    integer, intent(in) :: parts
+    integer, intent(inout) :: stat
+    if (associated(self%next)) call self%next%on_split(step, parts, stat)
+  end subroutine s_split
 
   subroutine s_finish(self, status, message, stat)
     class(summary_observer_t), intent(inout) :: self

@@ -71,6 +71,7 @@ module vci_capi_registry
     procedure :: on_start => obs_start
     procedure :: on_step => obs_step
     procedure :: on_impact => obs_impact
+    procedure :: on_split => obs_split
     procedure :: on_finish => obs_finish
     procedure :: keeps_checkpoints => obs_keeps_checkpoints
     procedure :: wants_checkpoint => obs_wants_checkpoint
@@ -390,6 +391,19 @@ contains
       call unlock_io()
     end if
   end subroutine obs_impact
+
+  ! a step the safety net split: the output records it (HDF5 attribute split_steps, CSV comment)
+  subroutine obs_split(self, step, parts, stat)
+    class(c_observer_t), intent(inout) :: self
+    integer(i8), intent(in) :: step
+    integer, intent(in) :: parts
+    integer, intent(inout) :: stat
+    if (allocated(self%output)) then
+      call lock_io()
+      call self%output%on_split(step, parts, stat)
+      call unlock_io()
+    end if
+  end subroutine obs_split
 
   ! checkpoints go to the output (HDF5 stores them: restarts from its file continue bit for bit)
   pure logical function obs_keeps_checkpoints(self)

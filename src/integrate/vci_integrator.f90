@@ -761,6 +761,8 @@ contains
     stat = VCI_OK
     if (present(observer)) then
       ostat = 0
+      if (self%stepper%last_step_parts() > 1) &
+        call observer%on_split(self%state%k - direction, self%stepper%last_step_parts(), ostat)
       do i = 1, self%impacts%count
         call observer%on_impact(self%impacts%records(i), ostat)
       end do

@@ -63,6 +63,9 @@ module vci_observer
     procedure :: on_step => default_on_step
     !> An impact inside the step that is about to be reported by on_step.
     procedure :: on_impact => default_on_impact
+    !> The step that is about to be reported (its impacts, then on_step) was taken as `parts` equal
+    !> sub-steps by the safety net (set_step_splits); not called for a step taken whole.
+    procedure :: on_split => default_on_split
     !> The run ended with `status` (VCI_OK or an error) and its message.
     procedure :: on_finish => default_on_finish
     !> Does this observer store checkpoints, so that a run continues from its output bit for bit? (default: no)
@@ -100,6 +103,15 @@ contains
     type(vci_impact_t), intent(in) :: impact
     integer, intent(inout) :: stat
   end subroutine default_on_impact
+
+  !> The step from index `step` that is about to be reported was taken as `parts` equal sub-steps
+  !> (the safety net, set_step_splits); not called for a step taken whole.
+  subroutine default_on_split(self, step, parts, stat)
+    class(vci_observer_t), intent(inout) :: self
+    integer(i8), intent(in) :: step
+    integer, intent(in) :: parts
+    integer, intent(inout) :: stat
+  end subroutine default_on_split
 
   !> Does this observer store checkpoints (vci_checkpoint), so that a run continues from its output
   !> bit for bit? No, unless an output says so.

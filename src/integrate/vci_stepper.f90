@@ -49,6 +49,7 @@ module vci_stepper
     logical :: fused = .true.                       !< try the scheme's fused regular-step solve first
     character(len=VCI_MSG_LEN) :: cause = ''       !< why the last step failed
     real(dp) :: last_residual = 0.0_dp              !< scaled residual of the last Newton solve
+    integer :: last_parts = 1                       !< equal sub-steps the last step took (1: whole)
     ! Workspace, sized once by setup. Unknown vectors (the scheme's layout, up to the largest system):
     real(dp), allocatable :: x(:)             !< the unknowns Newton works on
     real(dp), allocatable :: x_stage1(:)      !< stage 1's solution for the first wall reached
@@ -107,6 +108,7 @@ module vci_stepper
     procedure :: factors_from_checkpoint
     procedure :: forget_factors
     procedure :: advance
+    procedure :: last_step_parts
     procedure :: use_explicit
     procedure :: explicit_steps
     procedure :: pair_momentum
@@ -344,6 +346,7 @@ contains
     real(dp) :: arriving
     if (state%arriving_direction /= dir) state%arriving_energy = ieee_value(1.0_dp, ieee_quiet_nan)
     arriving = state%arriving_energy     ! a failed attempt may have changed it
+    self%last_parts = 1
     call take_step(self, state, dir, impacts, stat)
     if (stat /= VCI_OK .and. self%settings%max_step_splits >= 2) then
       if (stat == VCI_ERR_NEWTON .or. stat == VCI_ERR_IMPACT .or. stat == VCI_ERR_TOO_MANY_IMPACTS) &
@@ -371,6 +374,12 @@ contains
   !> outcome is in q_new, p_new, lambda_new, e_new (E_d of the last part), impacts holds the parts'
   !> impacts (alpha as a fraction of the whole step), the statistics count the step. When every
   !> split fails: the first attempt's status, its cause and what the finest split met.
+  !> Equal sub-steps the last step advance took (1: whole; > 1: the safety net split it).
+  pure integer function last_step_parts(self)
+    class(vci_stepper_t), intent(in) :: self
+    last_step_parts = self%last_parts
+  end function last_step_parts
+
   subroutine split_step(self, state, dir, arriving, impacts, stat)
     type(vci_stepper_t), intent(inout) :: self
     type(vci_state_t), intent(inout) :: state
@@ -425,6 +434,7 @@ contains
         state%arriving_energy = self%part%arriving_energy
         self%stats%split_steps = self%stats%split_steps + 1
         self%stats%largest_split = max(self%stats%largest_split, int(parts, i8))
+        self%last_parts = parts
         stat = VCI_OK
         return
       end if

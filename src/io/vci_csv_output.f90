@@ -20,6 +20,8 @@ module vci_csv_output
     integer :: n = 0                            !< configuration size of the run
     integer :: m = 0                            !< constraints of the run
     character(len=VCI_MSG_LEN) :: message = ''  !< what went wrong, naming the file
+    integer(i8) :: split_steps = 0              !< steps of this run the safety net split
+    integer :: largest_split = 0                !< most equal sub-steps of one of them
   contains
     !> Open FILE (and FILE.impacts.csv) for writing; stat = VCI_ERR_IO with a message if impossible.
     procedure :: open => csv_open
@@ -29,6 +31,8 @@ module vci_csv_output
     procedure :: on_step => csv_step
     !> Write an impact to the impact file.
     procedure :: on_impact => csv_impact
+    !> Count a step the safety net split (the last line of FILE says how many).
+    procedure :: on_split => csv_split
     !> Close both files.
     procedure :: on_finish => csv_finish
     !> No: CSV holds the state, not the solver memory a bitwise restart needs (vci_checkpoint).
@@ -75,6 +79,7 @@ contains
       stat = VCI_ERR_IO; return
     end if
     self%n = info%n; self%m = info%m
+    self%split_steps = 0; self%largest_split = 0
     head = 'step,t'
     do i = 1, info%n
       head = head//',q'//itoa(i)
@@ -115,11 +120,23 @@ contains
       impact%alpha, impact%gap, impact%impulse, impact%energy_before, impact%energy_after, impact%condition
   end subroutine csv_impact
 
+  subroutine csv_split(self, step, parts, stat)
+    class(vci_csv_writer_t), intent(inout) :: self
+    integer(i8), intent(in) :: step
+    integer, intent(in) :: parts
+    integer, intent(inout) :: stat
+    self%split_steps = self%split_steps + 1
+    self%largest_split = max(self%largest_split, parts)
+  end subroutine csv_split
+
   subroutine csv_finish(self, status, message, stat)
     class(vci_csv_writer_t), intent(inout) :: self
     integer, intent(in) :: status
     character(len=*), intent(in) :: message
     integer, intent(inout) :: stat
+    ! only when the net split a step: files of runs without splits keep their old layout
+    if (self%opened .and. self%split_steps > 0) write (self%unit, '(a,i0,a,i0)') &
+      '# split steps: ', self%split_steps, ', most sub-steps: ', self%largest_split
     if (status /= VCI_OK) write (self%unit, '(a)') '# stopped: '//message
     if (self%opened) close (self%unit)
     if (self%opened) close (self%impact_unit)

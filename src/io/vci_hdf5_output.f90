@@ -73,6 +73,8 @@ module vci_hdf5_output
     logical, private :: started = .false., flush_pending = .false.
     real(dp), private :: h = 0.0_dp
     integer(i8), private :: rows = 0, steps = 0, impacts = 0   ! already in the file
+    integer(i8), private :: split_steps = 0   ! steps the safety net split (attribute split_steps)
+    integer, private :: largest_split = 0     ! most equal sub-steps of one (attribute largest_split)
     integer(i8), private :: row_start = 0, step0 = 0           ! row and integrator index of the start state
     ! file index (steps of h from row 0) of the start state, and of the last row on disk
     integer(i8), private :: base = 0, last_index = 0
@@ -102,6 +104,8 @@ module vci_hdf5_output
     procedure :: on_step => w_step
     !> Buffer an impact.
     procedure :: on_impact => w_impact
+    !> Count a step the safety net split (attributes split_steps, largest_split, at each flush).
+    procedure :: on_split => w_split
     !> The run ended: write what is buffered, the status and its message, and close the file.
     procedure :: on_finish => w_finish
     !> Yes: every flush stores the checkpoint of its last row, so a restart is bitwise.
@@ -308,6 +312,12 @@ contains
     if (.not. (ieee_is_finite(self%h) .and. self%h > 0.0_dp)) then
       call fail(self, 'attribute h is not a positive finite step length', stat); return
     end if
+    ! split counts: absent in files written before them (0: as if none was split)
+    self%split_steps = 0; self%largest_split = 0
+    call h5aexists_f(self%file, 'split_steps', ex, err)
+    if (err == 0 .and. ex) call h5io_get_attr(self%file, 'split_steps', self%split_steps, stat, self%message, self%path)
+    call h5aexists_f(self%file, 'largest_split', ex, err)
+    if (err == 0 .and. ex) call h5io_get_attr(self%file, 'largest_split', self%largest_split, stat, self%message, self%path)
     ! every: absent in files written before it existed (every state stored)
     self%every = 1
     call h5aexists_f(self%file, 'every', ex, err)
@@ -543,6 +553,7 @@ contains
     self%n = info%n; self%m = info%m; self%n_gaps = info%n_gaps
     self%direction = info%direction; self%h = info%h
     self%rows = 0; self%steps = 0; self%impacts = 0; self%row_start = 0; self%base = 0; self%last_index = 0
+    self%split_steps = 0; self%largest_split = 0
     call h5io_put_attr(self%file, 'direction', trim(merge('forward ', 'backward', info%direction > 0)), stat, &
         self%message, self%path)
     call h5io_put_attr(self%file, 'h', info%h, stat, self%message, self%path)
@@ -760,6 +771,17 @@ contains
   !> A step belongs in the file only if it continues its last state: the next index in the file's
   !> direction, at the time that index has (t = t0 + index h, up to rounding). Stepping the other
   !> way, or from a state the driver was re-initialised with, is refused (VCI_ERR_IO): /t would
+  !> A step the safety net split: counted; the attributes split_steps and largest_split are written
+  !> with steps_completed at every flush (the steps counted are those flushed with it).
+  subroutine w_split(self, step, parts, stat)
+    class(vci_hdf5_writer_t), intent(inout) :: self
+    integer(i8), intent(in) :: step
+    integer, intent(in) :: parts
+    integer, intent(inout) :: stat
+    self%split_steps = self%split_steps + 1
+    self%largest_split = max(self%largest_split, parts)
+  end subroutine w_split
+
   !> turn back, /impacts/step would name wrong rows and the new start would be missing.
   logical function continues_run(self, step, t, stat) result(ok)
     type(vci_hdf5_writer_t), intent(inout) :: self
@@ -896,6 +918,8 @@ contains
       if (self%cp%step == self%last_step) call put_checkpoint(self, self%cp, stat)
       self%have_cp = .false.
     end if
+    call h5io_put_attr(self%file, 'split_steps', self%split_steps, stat, self%message, self%path)
+    call h5io_put_attr(self%file, 'largest_split', self%largest_split, stat, self%message, self%path)
     call h5io_put_attr(self%file, 'steps_completed', self%steps, stat, self%message, self%path)
     if (stat /= VCI_OK) return
     call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)

@@ -6,10 +6,15 @@
 !> Scenes:
 !> - LONG_PENDULUM: the walled pendulum of examples/pendulum_walls (theta'' = -9.8 sin theta,
 !>   walls at |theta| = 1, theta(0) = 0, theta'(0) = 4) to t = 10; exact reference
-!>   vci_ref_pendulum_quad (quadrature).
+!>   vci_ref_pendulum_walls (Jacobi elliptic functions, quad precision; without walls the free
+!>   pendulum librates, turning at 1.385 rad).
 !> - LONG_KEPLER_CIRCLE: Kepler (L = |v|^2/2 + 1/|q|, a = 1, e = 0.5, from pericentre) inside the
 !>   circle |q| <= 1.2 centred on the attracting centre, to t = 20; exact reference in closed form
 !>   (kepler_circle_exact: the reflection mirrors the orbit about the line through the impact).
+!> - LONG_KEPLER_WALL: the same orbit's start below the straight wall q2 <= kepler_wall_w (not
+!>   through the centre: every impact changes the orbit), to t = 20; reference in closed form
+!>   (vci_kepler_wall: Kepler's equation between impacts, the wall crossing solved in the
+!>   eccentric anomaly; checked against quad-precision RK4 in test_kepler_wall_reference).
 !> - LONG_FPU: the FPU-beta chain between walls (n = 32, beta = 1, |x_i| <= 0.6, the start of
 !>   tools/results) to t = 2; reference: the quad-precision event-driven Taylor method
 !>   (test/support/vci_ref_fpu_walls.f90, step 0.01).
@@ -18,16 +23,19 @@ module vci_long_cases
   use vci_test_kepler, only: kepler_t, kepler_exact
   use vci_scene_pendulum_walls, only: pendulum_walls_model
   use vci_scene_fpu_walls, only: fpu_walls_lagrangian_model
-  use vci_ref_pendulum_quad, only: pendulum_quad_t, pendulum_quad_state
+  use vci_ref_pendulum_walls, only: pendulum_walls_params, pendulum_walls_exact
+  use vci_kepler_wall, only: kepler_wall_t, kepler_wall_exact
   use vci_ref_fpu_walls, only: fpu_walls_params, fpu_walls_run
   implicit none
   private
 
-  integer, parameter, public :: LONG_PENDULUM = 1, LONG_KEPLER_CIRCLE = 2, LONG_FPU = 3
-  integer, parameter, public :: LONG_SCENES = 3
+  integer, parameter, public :: LONG_PENDULUM = 1, LONG_KEPLER_CIRCLE = 2, LONG_FPU = 3, LONG_KEPLER_WALL = 4
+  integer, parameter, public :: LONG_SCENES = 4
   character(len=24), parameter, public :: long_scene_name(LONG_SCENES) = &
-    [character(len=24) :: 'walled pendulum', 'Kepler in a circle', 'FPU chain n = 32']
-  real(dp), parameter, public :: long_t_final(LONG_SCENES) = [10.0_dp, 20.0_dp, 2.0_dp]
+    [character(len=24) :: 'walled pendulum', 'Kepler in a circle', 'FPU chain n = 32', 'Kepler below a wall']
+  real(dp), parameter, public :: long_t_final(LONG_SCENES) = [10.0_dp, 20.0_dp, 2.0_dp, 20.0_dp]
+  !> The straight wall's height in LONG_KEPLER_WALL.
+  real(dp), parameter, public :: kepler_wall_w = 0.1_dp
 
   real(dp), parameter :: kepler_e = 0.5_dp, kepler_radius = 1.2_dp
   integer, parameter :: fpu_n = 32
@@ -49,7 +57,7 @@ module vci_long_cases
     real(dp) :: error = huge(1.0_dp)   !< max |q - q_ref|, |p - p_ref| at the end (huge: did not finish)
   end type long_run_t
 
-  public :: long_run, kepler_circle_exact
+  public :: long_run, kepler_circle_exact, long_start
 
 contains
 
@@ -121,13 +129,13 @@ contains
     class(vci_lagrangian_t), allocatable, target :: model
     type(vci_integrator_t) :: integ
     type(vci_stats_t) :: stats
-    type(pendulum_quad_t) :: pq
+    type(pendulum_walls_params) :: pw
+    real(dp) :: times(1)
     real(dp), allocatable :: q0(:), p0(:), qr(:), pr(:), q(:), p(:)
     integer(i8) :: k, nsteps
-    integer :: stat, i, nimp
-    real(dp) :: th, om, pi, w
+    integer :: stat, nimp
+    real(dp) :: th, om, w, pmin
     logical :: with_walls
-    pi = acos(-1.0_dp)
     with_walls = .true.
     if (present(walls)) with_walls = walls
     w = fpu_w
@@ -135,7 +143,6 @@ contains
     select case (scene)
     case (LONG_PENDULUM)
       allocate (model, source=pendulum_walls_model(with_walls))
-      q0 = [0.0_dp]; p0 = [4.0_dp]
     case (LONG_KEPLER_CIRCLE)
       if (with_walls) then
         allocate (kepler_circle_t :: model)
@@ -144,16 +151,22 @@ contains
         allocate (kepler_t :: model)
       end if
       model%n = 2
-      allocate (q0(2), p0(2))
-      call kepler_exact(kepler_e, 0.0_dp, q0, p0)
+    case (LONG_KEPLER_WALL)
+      if (with_walls) then
+        allocate (kepler_wall_t :: model)
+        select type (model)
+        type is (kepler_wall_t)
+          model%w = kepler_wall_w
+        end select
+        model%n_gaps = 1
+      else
+        allocate (kepler_t :: model)
+      end if
+      model%n = 2
     case default
       allocate (model, source=fpu_walls_lagrangian_model(fpu_n, fpu_beta, w))
-      allocate (q0(fpu_n), p0(fpu_n))
-      do i = 1, fpu_n
-        q0(i) = 0.4_dp * fpu_w * sin(2 * pi * i / (fpu_n + 1))
-        p0(i) = 1.2_dp * sin(3 * pi * i / (fpu_n + 1)) + 0.8_dp * sin(pi * i / (fpu_n + 1))
-      end do
     end select
+    call long_start(scene, q0, p0)
     call integ%create(model, h, stat)
     if (stat == VCI_OK) call integ%set_scheme(scheme, stages, stat)
     if (stat == VCI_OK) call integ%set_step_splits(splits, stat)
@@ -177,13 +190,19 @@ contains
     allocate (qr(size(q)), pr(size(q)))
     select case (scene)
     case (LONG_PENDULUM)
-      ! without walls: a wall at 3 rad, beyond the swing (1.39 rad), is never met
-      pq%k = 9.8_dp; pq%theta_wall = merge(1.0_dp, 3.0_dp, with_walls); pq%theta0 = 0.0_dp; pq%omega0 = 4.0_dp
-      call pendulum_quad_state(pq, r%t_end, th, om)
+      ! without walls: the free pendulum (it librates, turning at 1.385 rad)
+      if (with_walls) pw%theta_w = 1.0_dp
+      call pendulum_walls_exact(pw, q0(1), p0(1), r%t_end, th, om, nimp)
       qr = [th]; pr = [om]
     case (LONG_KEPLER_CIRCLE)
       if (with_walls) then
         call kepler_circle_exact(kepler_e, kepler_radius, r%t_end, qr, pr)
+      else
+        call kepler_exact(kepler_e, r%t_end, qr, pr)
+      end if
+    case (LONG_KEPLER_WALL)
+      if (with_walls) then
+        call kepler_wall_exact(kepler_wall_w, q0, p0, r%t_end, qr, pr, nimp, times, pmin)
       else
         call kepler_exact(kepler_e, r%t_end, qr, pr)
       end if
@@ -192,4 +211,26 @@ contains
     end select
     r%error = max(maxval(abs(q - qr)), maxval(abs(p - pr)))
   end subroutine long_run
+
+  !> The start of a scene (both Kepler scenes: the pericentre of a = 1, e = 0.5).
+  subroutine long_start(scene, q0, p0)
+    integer, intent(in) :: scene
+    real(dp), allocatable, intent(out) :: q0(:), p0(:)
+    real(dp) :: pi
+    integer :: i
+    pi = acos(-1.0_dp)
+    select case (scene)
+    case (LONG_PENDULUM)
+      q0 = [0.0_dp]; p0 = [4.0_dp]
+    case (LONG_KEPLER_CIRCLE, LONG_KEPLER_WALL)
+      allocate (q0(2), p0(2))
+      call kepler_exact(kepler_e, 0.0_dp, q0, p0)
+    case default
+      allocate (q0(fpu_n), p0(fpu_n))
+      do i = 1, fpu_n
+        q0(i) = 0.4_dp * fpu_w * sin(2 * pi * i / (fpu_n + 1))
+        p0(i) = 1.2_dp * sin(3 * pi * i / (fpu_n + 1)) + 0.8_dp * sin(pi * i / (fpu_n + 1))
+      end do
+    end select
+  end subroutine long_start
 end module vci_long_cases

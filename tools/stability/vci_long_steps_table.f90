@@ -1,5 +1,6 @@
 !> The "Long steps" table of docs/STABILITY.md (issue 27): per scene and scheme, the largest step
-!> of a ladder that runs to the end (every shorter one too) without walls (the free flight), with
+!> of a ladder that runs to the end with no failure status (every shorter one too) without walls
+!> (the free flight), with
 !> walls and the safety net off, and with walls and the net on (default bound 16), with the error
 !> against the reference there and the steps the net took. Same runners as test_stab_long_steps
 !> (test/stability/vci_long_cases.f90). `vci_long_steps_table -v` also prints every run.
@@ -11,7 +12,8 @@ program vci_long_steps_table
   real(dp), parameter :: ladders(n_h, LONG_SCENES) = reshape([ &
     0.05_dp, 0.1_dp, 0.2_dp, 0.3_dp, 0.4_dp, 0.5_dp, 0.6_dp, 0.8_dp, 1.0_dp, &
     0.05_dp, 0.1_dp, 0.2_dp, 0.3_dp, 0.4_dp, 0.5_dp, 0.6_dp, 0.8_dp, 1.0_dp, &
-    0.02_dp, 0.05_dp, 0.1_dp, 0.15_dp, 0.2_dp, 0.25_dp, 0.3_dp, 0.4_dp, 0.5_dp], [n_h, LONG_SCENES])
+    0.02_dp, 0.05_dp, 0.1_dp, 0.15_dp, 0.2_dp, 0.25_dp, 0.3_dp, 0.4_dp, 0.5_dp, &
+    0.05_dp, 0.1_dp, 0.2_dp, 0.3_dp, 0.4_dp, 0.5_dp, 0.6_dp, 0.8_dp, 1.0_dp], [n_h, LONG_SCENES])
   integer, parameter :: schemes(n_schemes) = [VCI_SCHEME_MIDPOINT, VCI_SCHEME_LOBATTO, VCI_SCHEME_LOBATTO, &
                                               VCI_SCHEME_LOBATTO]
   integer, parameter :: stages(n_schemes) = [1, 2, 3, 4]
@@ -45,8 +47,8 @@ program vci_long_steps_table
           if (verbose) write (*, '(a,a,a,f5.2,a,i0,a,i0,a,es9.2,a,i0,a,i0,a,a)') trim(long_scene_name(scene)), ' ', &
             scheme_label(is), ladders(ih, scene), ' mode ', mode, ' status ', r%status, ' error ', r%error, &
             ' split ', r%split_steps, ' / ', r%largest_split, ' ', trim(r%message(1:200))
-          ! runs: to the end, and within 1 of the reference (a bounded, not a blown-up, motion)
-          if (r%status == VCI_OK .and. r%error < 1.0_dp) then
+          ! runs: to the end with no failure status (the error says how good the motion is there)
+          if (r%status == VCI_OK .and. r%error < huge(1.0_dp)) then
             best(mode) = ih; err(mode) = r%error
             if (mode == 3) splits = r%split_steps * 1000 + r%largest_split
           else
