@@ -24,6 +24,7 @@ module vci_scene_fpu_walls
     logical :: band_hessians = .false.
     !> supply hessians (the dense blocks); off: "not provided" (the library differences them)
     logical :: dense_hessians = .true.
+    integer :: band_calls = 0   !< calls of hessians_band that computed (the tests count them)
     !> a deliberate mistake for the tests of the bandwidth check: L_qq(1, 3) = this (0: none)
     real(dp) :: stray = 0.0_dp
   contains
@@ -227,6 +228,7 @@ contains
     if (.not. self%band_hessians) then
       call self%not_provided(stat); return
     end if
+    self%band_calls = self%band_calls + 1
     n = size(q)
     k = 1.0_dp + 3.0_dp * self%beta * stretches(q)**2
     do i = 1, n

@@ -330,7 +330,8 @@ contains
         select type (sch)
         type is (vci_scheme_discrete_t)
           call sch%setup(self%retraction, stat)
-          call sch%use_derivatives(mixed_hessian=self%lag_hessians)
+          ! (the model's banded Hessians serve the mixed Hessian too: vci_retraction's band_hessians)
+          call sch%use_derivatives(mixed_hessian=self%lag_hessians .or. self%retraction%band_hessians)
         end select
       end if
       if (stat /= 0) stat = VCI_ERR_MEMORY
