@@ -8,7 +8,7 @@ C     only (TASK 18, IOPT 78, VCIBND(IH, 1, 0)): the same impacts and
 C     the same end state to 1E-9 (each solve meets rtol 1E-12). 2. the
 C     band declared 0 with the check (VCIBND(IH, 0, 1)): VCIINM fails
 C     with ISTAT = 1 and VCIMSG names L_qq(2, 1). Stops with code 1 if
-C     anything is off.
+C     anything is off. CHECKI, CHECKR, CHECKS: checks77.f.
       PROGRAM CHAINB
       IMPLICIT NONE
       EXTERNAL CBMOD
@@ -89,10 +89,7 @@ C     2. band 0 with the debug check: refused at the start
       CALL CHECKI('VCIINM with band 0', ISTAT, 1, NBAD)
       CALL VCIMSG(IH, MSG)
       WRITE (*, '(2A)') ' ', MSG(1:150)
-      IF (INDEX(MSG, 'L_qq(2, 1) =') .EQ. 0) THEN
-        WRITE (*, '(A)') ' FAIL the message does not name L_qq(2, 1)'
-        NBAD = NBAD + 1
-      END IF
+      CALL CHECKS('VCIMSG names the entry', MSG, 'L_qq(2, 1) =', NBAD)
       CALL VCIDEL(IH)
 C     3. bit 64 without a continuous L is refused
       CALL VCINEW(CBMOD, N, M, NG, 64 + 2, H, RPAR, IPAR, IH, ISTAT)
@@ -194,26 +191,5 @@ C       H(Q, P) with P in V
         OUT(1) = S
       ELSE
         IERR = -999
-      END IF
-      END
-C
-      SUBROUTINE CHECKI(WHAT, IVAL, IEXP, NBAD)
-      CHARACTER*(*) WHAT
-      INTEGER IVAL, IEXP, NBAD
-      IF (IVAL .NE. IEXP) THEN
-        WRITE (*, '(3A, I6, A, I6)') ' FAIL ', WHAT, ':', IVAL,
-     &    ' expected', IEXP
-        NBAD = NBAD + 1
-      END IF
-      END
-C
-      SUBROUTINE CHECKR(WHAT, VAL, EXP, TOL, NBAD)
-      CHARACTER*(*) WHAT
-      DOUBLE PRECISION VAL, EXP, TOL
-      INTEGER NBAD
-      IF (.NOT. (ABS(VAL - EXP) .LE. TOL)) THEN
-        WRITE (*, '(3A, ES12.4, A, ES12.4)') ' FAIL ', WHAT, ':', VAL,
-     &    ' expected', EXP
-        NBAD = NBAD + 1
       END IF
       END
