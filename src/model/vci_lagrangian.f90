@@ -59,11 +59,13 @@ module vci_lagrangian
   !> Workspace for differenced Hessians and the Legendre inversion (sized once, never per step).
   type, public :: vci_lagrangian_work_t
     logical :: has_hessians = .false.
-    !> the model's hessians_band is used (with hessian_bandwidth >= 0): lqq, lqv, lvv then hold
-    !> band storage with bw extra rows for the LU's fill-in, (3 bw + 1) x n
+    !> the model's hessians_band is used (with hessian_bandwidth >= 0): lqq, lqv hold its band
+    !> storage, (2 bw + 1) x n, and lvv the velocity block's with bw rows for the LU's fill-in above
+    !> it, (3 bw + 1) x n (the Legendre inversion factorises it in place)
     logical :: has_band_hessians = .false.
     integer :: code = 0   !< stat of the last callback that failed here (its sign: recoverable or not)
     real(dp), allocatable :: qp(:), vp(:), fp(:), fm(:), w(:), dw(:), lv(:), lvv(:, :), lqq(:, :), lqv(:, :)
+    real(dp), allocatable :: bvv(:, :)   !< hessians_band's velocity block, (2 bw + 1) x n (else 1 x 1)
     integer, allocatable :: ipiv(:)
   end type vci_lagrangian_work_t
 
@@ -97,14 +99,15 @@ contains
   end subroutine not_provided_hessians_band
 
   !> Size the workspace for n coordinates; band (optional, >= 0): the Hessian blocks come from
-  !> hessians_band with that half-bandwidth, so they are (3 bw + 1) x n, not n x n (work%has_band_hessians).
+  !> hessians_band with that half-bandwidth, so they are (2 bw + 1) x n (lvv: 3 bw + 1 rows), not
+  !> n x n (work%has_band_hessians).
   !> stat /= 0: out of memory.
   subroutine lagrangian_work_setup(work, n, stat, band)
     type(vci_lagrangian_work_t), intent(inout) :: work
     integer, intent(in) :: n
     integer, intent(out) :: stat
     integer, intent(in), optional :: band
-    integer :: rows
+    integer :: rows, rows_vv
     ! array by array: after an allocate that failed part-way some are allocated and some not
     if (allocated(work%qp)) deallocate (work%qp)
     if (allocated(work%vp)) deallocate (work%vp)
@@ -117,22 +120,30 @@ contains
     if (allocated(work%lqq)) deallocate (work%lqq)
     if (allocated(work%lqv)) deallocate (work%lqv)
     if (allocated(work%ipiv)) deallocate (work%ipiv)
-    rows = n
+    if (allocated(work%bvv)) deallocate (work%bvv)
+    rows = n; rows_vv = n
     work%has_band_hessians = .false.
     if (present(band)) then
       if (band >= 0) then
-        rows = 3 * band + 1
+        rows = 2 * band + 1; rows_vv = 3 * band + 1
         work%has_band_hessians = .true.
       end if
     end if
     allocate (work%qp(n), work%vp(n), work%fp(n), work%fm(n), work%w(n), work%dw(n), work%lv(n), &
-              work%lvv(rows, n), work%lqq(rows, n), work%lqv(rows, n), work%ipiv(n), stat=stat)
+              work%lvv(rows_vv, n), work%lqq(rows, n), work%lqv(rows, n), work%ipiv(n), stat=stat)
+    if (stat == 0) then
+      if (work%has_band_hessians) then
+        allocate (work%bvv(rows, n), stat=stat)
+      else
+        allocate (work%bvv(1, 1), stat=stat)
+      end if
+    end if
   end subroutine lagrangian_work_setup
 
-  !> The model's banded Hessian blocks at (q, v) into rows bw + 1 .. 3 bw + 1 of lqq, lqv, lvv
-  !> ((3 bw + 1) x n: entry (i, j) at row 2 bw + 1 + i - j, the storage vci_banded factorises; the
-  !> top bw rows are left for its fill-in). stat: VCI_OK, VCI_ERR_CALLBACK (code in work%code) or
-  !> VCI_ERR_NONFINITE.
+  !> The model's banded Hessian blocks at (q, v) in band storage, each (2 bw + 1) x n (contiguous:
+  !> the callback writes them in place, entry (i, j) at row bw + 1 + i - j); the slots outside the
+  !> matrix are zeroed, whatever the callback left there. stat: VCI_OK, VCI_ERR_CALLBACK (code in
+  !> work%code) or VCI_ERR_NONFINITE.
   subroutine lagrangian_band_hessians(lag, work, q, v, bw, lqq, lqv, lvv, stat)
     class(vci_lagrangian_t), intent(inout) :: lag
     type(vci_lagrangian_work_t), intent(inout) :: work
@@ -143,28 +154,28 @@ contains
     integer :: s
     stat = VCI_OK
     s = 0
-    call lag%hessians_band(q, v, bw, lqq(bw + 1:3 * bw + 1, :), lqv(bw + 1:3 * bw + 1, :), &
-                           lvv(bw + 1:3 * bw + 1, :), s)
+    call lag%hessians_band(q, v, bw, lqq, lqv, lvv, s)
     if (s /= 0) then
       work%code = s
       stat = VCI_ERR_CALLBACK; return
     end if
     call zero_corners(lqq); call zero_corners(lqv); call zero_corners(lvv)
-    if (.not. (finite_matrix(lqq(bw + 1:, :)) .and. finite_matrix(lqv(bw + 1:, :)) .and. &
-               finite_matrix(lvv(bw + 1:, :)))) stat = VCI_ERR_NONFINITE
+    if (.not. (finite_matrix(lqq) .and. finite_matrix(lqv) .and. finite_matrix(lvv))) stat = VCI_ERR_NONFINITE
   contains
-    !> The storage outside the n x n matrix (rows of columns 1..bw above it, of the last bw below
-    !> it) and the fill-in rows: zero, whatever the callback left there.
+    !> Rows i = j - bw .. 0 of the first bw columns and i = n + 1 .. j + bw of the last bw (O(bw^2)).
     subroutine zero_corners(ab)
       real(dp), intent(inout) :: ab(:, :)
-      integer :: j, n
+      integer :: i, j, n
       n = size(ab, 2)
-      ab(1:bw, :) = 0.0_dp
       do j = 1, min(bw, n)
-        ab(bw + 1:2 * bw + 1 - j, j) = 0.0_dp          ! rows i = j - bw .. 0
+        do i = 1, bw + 1 - j
+          ab(i, j) = 0.0_dp
+        end do
       end do
       do j = max(1, n - bw + 1), n
-        ab(2 * bw + 2 + n - j:3 * bw + 1, j) = 0.0_dp  ! rows i = n + 1 .. j + bw
+        do i = bw + 2 + n - j, 2 * bw + 1
+          ab(i, j) = 0.0_dp
+        end do
       end do
     end subroutine zero_corners
   end subroutine lagrangian_band_hessians
@@ -258,8 +269,7 @@ contains
     end if
     call lag%clear_not_provided()
     s = 0
-    call lag%hessians_band(q, v, bw, band%lqq(1:2 * bw + 1, :), band%lqv(1:2 * bw + 1, :), &
-                           band%lvv(1:2 * bw + 1, :), s)
+    call lag%hessians_band(q, v, bw, band%lqq, band%lqv, band%bvv, s)
     if (lag%answered_not_provided()) then     ! no banded callback: the Newton matrices' check only
       call lag%clear_not_provided(); return
     end if
@@ -273,7 +283,7 @@ contains
         qk(i) = q(i) + 0.05_dp * k * max(abs(q(i)), 1.0_dp) * sin(1.7_dp * i + k)
         vk(i) = v(i) + 0.05_dp * k * max(abs(v(i)), 1.0_dp) * cos(0.9_dp * i - k)
       end do
-      call lagrangian_band_hessians(lag, band, qk, vk, bw, band%lqq, band%lqv, band%lvv, stat)
+      call lagrangian_band_hessians(lag, band, qk, vk, bw, band%lqq, band%lqv, band%bvv, stat)
       if (stat /= VCI_OK) then
         why = 'hessians_band failed or returned NaN/Inf in the check of the declared bandwidth'
         return
@@ -325,9 +335,9 @@ contains
     real(dp) function band_entry(b, i, j)
       integer, intent(in) :: b, i, j
       select case (b)
-      case (1); band_entry = band%lqq(2 * bw + 1 + i - j, j)
-      case (2); band_entry = band%lqv(2 * bw + 1 + i - j, j)
-      case default; band_entry = band%lvv(2 * bw + 1 + i - j, j)
+      case (1); band_entry = band%lqq(bw + 1 + i - j, j)
+      case (2); band_entry = band%lqv(bw + 1 + i - j, j)
+      case default; band_entry = band%bvv(bw + 1 + i - j, j)
       end select
     end function band_entry
     character(len=60) function source()
@@ -338,6 +348,23 @@ contains
       end if
     end function source
   end subroutine lagrangian_check_band
+
+  !> lu(1:bw, :) = 0, lu(bw + 1:3 bw + 1, :) = b: band storage (2 bw + 1 rows) with the rows
+  !> band_lu needs for its fill-in.
+  pure subroutine fill_in_rows(bw, b, lu)
+    integer, intent(in) :: bw
+    real(dp), intent(in) :: b(:, :)
+    real(dp), intent(inout) :: lu(:, :)
+    integer :: i, j
+    do j = 1, size(b, 2)
+      do i = 1, bw
+        lu(i, j) = 0.0_dp
+      end do
+      do i = 1, 2 * bw + 1
+        lu(bw + i, j) = b(i, j)
+      end do
+    end do
+  end subroutine fill_in_rows
 
   !> No NaN or Inf in a: one test on the sum (3 n^2 calls of ieee_is_finite cost 38 % of a chain's
   !> impact steps at n = 128, docs/bench/chain.md), each entry only when the sum is not finite.
@@ -439,9 +466,11 @@ contains
       if (it > 1 .and. maxval(abs(work%dw(1:n))) <= 4.0_dp * epsilon(1.0_dp) * max(size_p, &
           maxval(abs(work%lv(1:n))), tiny(1.0_dp))) exit
       if (work%has_band_hessians) then      ! (the velocity block's band LU: O(n bw^2), no n x n array)
+        ! the velocity block into rows bw + 1 .. 3 bw + 1 of lvv, bw zero rows above it for the fill-in
         call lagrangian_band_hessians(lag, work, q, work%w(1:n), lag%hessian_bandwidth, work%lqq, work%lqv, &
-                                      work%lvv, stat)
+                                      work%bvv, stat)
         if (stat /= VCI_OK) return
+        call fill_in_rows(lag%hessian_bandwidth, work%bvv, work%lvv)
         if (.not. all(ieee_is_finite(work%dw(1:n)))) then
           stat = VCI_ERR_NONFINITE; return
         end if

@@ -29,7 +29,7 @@ module vci_retraction
     integer :: rule = RETRACTION_MIDPOINT
     logical :: has_model_energy = .false.
     !> the model's banded Hessians are used (hessians_band, with a declared bandwidth): lqq, lqv,
-    !> lvv are then band storage, (3 bw + 1) x n, entry (i, j) at row 2 bw + 1 + i - j
+    !> lvv are then band storage, (2 bw + 1) x n, entry (i, j) at row bw + 1 + i - j
     logical :: band_hessians = .false.
     type(vci_lagrangian_work_t) :: work
     real(dp), allocatable, private :: pt(:), w(:), lq(:), lv(:), lqq(:, :), lqv(:, :), lvv(:, :), om(:, :)
@@ -82,8 +82,8 @@ contains
     allocate (self%pt(n), self%w(n), self%lq(n), self%lv(n), self%om(n, max(1, lag%m)), stat=stat)
     if (stat /= 0) return
     if (self%band_hessians) then
-      allocate (self%lqq(3 * self%hessian_bandwidth + 1, n), self%lqv(3 * self%hessian_bandwidth + 1, n), &
-                self%lvv(3 * self%hessian_bandwidth + 1, n), stat=stat)
+      allocate (self%lqq(2 * self%hessian_bandwidth + 1, n), self%lqv(2 * self%hessian_bandwidth + 1, n), &
+                self%lvv(2 * self%hessian_bandwidth + 1, n), stat=stat)
     else
       allocate (self%lqq(n, n), self%lqv(n, n), self%lvv(n, n), stat=stat)
     end if
@@ -237,13 +237,13 @@ contains
   end subroutine banded_mixed_block
 
   !> banded_mixed_block from the blocks in band storage (hessians_band): entry (i, j) of a block
-  !> at row k + i - j, k = 2 bw + 1; L_vq(i, j) = L_qv(j, i) at row k + j - i of column i.
+  !> at row k + i - j, k = bw + 1; L_vq(i, j) = L_qv(j, i) at row k + j - i of column i.
   subroutine band_stored_mixed_block(self, h, hess)
     class(vci_retraction_model_t), intent(inout) :: self
     real(dp), intent(in) :: h
     real(dp), intent(inout) :: hess(:, :)
     integer :: i, j, n, bw, k
-    n = size(hess, 1); bw = self%hessian_bandwidth; k = 2 * bw + 1
+    n = size(hess, 1); bw = self%hessian_bandwidth; k = bw + 1
     do j = 1, n
       do i = max(1, j - bw), min(n, j + bw)
         if (self%rule == RETRACTION_LEFT) then
