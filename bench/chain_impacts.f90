@@ -4,8 +4,9 @@
 !> start of docs/RESULTS.md's chain (x_i = 0.24 sin(2 pi i/(n+1)), v_i = 1.2 sin(3 pi i/(n+1)) +
 !> 0.8 sin(pi i/(n+1))). Every step is timed on its own and classed as regular (no impact) or impact
 !> step; medians of each, their ratio, LU factorisations per step of each class, the peak resident
-!> memory's growth over the run. Arguments: `banded` (declare the chain's bandwidth 1) and the n to
-!> run (default 32 128 256). Not a test: tools/bench/run_chain.sh runs it with OpenBLAS on one thread.
+!> memory's growth over the run and at its end. Arguments: `banded` (declare the chain's bandwidth 1),
+!> `bandcb` (that and the model's hessians_band: no n x n Hessian block), `steps=K` (only the first K
+!> steps) and the n to run (default 32 128 256). Not a test: tools/bench/run_chain.sh runs it with OpenBLAS on one thread.
 
 program bench_chain_impacts
   use, intrinsic :: iso_fortran_env, only: output_unit
@@ -20,17 +21,22 @@ program bench_chain_impacts
   real(dp), allocatable :: q0(:), p0(:), treg(:), timp(:)
   integer, allocatable :: ns(:)
   real(dp) :: pi, rss0, rss1
-  logical :: banded
+  logical :: banded, bandcb
+  integer :: max_steps
   character(len=32) :: arg
   real(dp), parameter :: h = 0.01_dp, t_end = 2.0_dp
   pi = acos(-1.0_dp)
-  banded = .false.
+  banded = .false.; bandcb = .false.; max_steps = huge(1)
   narg = command_argument_count()
   allocate (ns(0)); nn = 0
   do ia = 1, narg
     call get_command_argument(ia, arg)
     if (trim(arg) == 'banded') then
       banded = .true.
+    else if (trim(arg) == 'bandcb') then
+      banded = .true.; bandcb = .true.
+    else if (arg(1:6) == 'steps=') then
+      read (arg(7:), *) max_steps
     else
       read (arg, *) k
       ns = [ns, k]
@@ -38,8 +44,8 @@ program bench_chain_impacts
   end do
   if (size(ns) == 0) ns = [32, 128, 256]
   write (output_unit, '(a)') '| n | band | steps | impact steps | impacts | regular step (us) | impact step (us) '// &
-    '| impact / regular | LU per regular step | LU per impact step | memory growth (MB) |'
-  write (output_unit, '(a)') '|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|'
+    '| impact / regular | LU per regular step | LU per impact step | memory growth (MB) | peak memory (MB) |'
+  write (output_unit, '(a)') '|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|'
   do i = 1, size(ns)
     n = ns(i)
     model = fpu_walls_lagrangian_model(n, 1.0_dp, 0.6_dp)
@@ -48,10 +54,11 @@ program bench_chain_impacts
       q0(k) = 0.24_dp * sin(2.0_dp * pi * real(k, dp) / real(n + 1, dp))
       p0(k) = 1.2_dp * sin(3.0_dp * pi * real(k, dp) / real(n + 1, dp)) + 0.8_dp * sin(pi * real(k, dp) / real(n + 1, dp))
     end do
-    nsteps = nint(t_end / h)
+    nsteps = min(nint(t_end / h), max_steps)
     allocate (treg(nsteps), timp(nsteps))
     rss0 = peak_rss_mb()
     if (banded) call model%declare_bandwidth(1)
+    model%band_hessians = bandcb
     call integ%create(model, h, stat)
     if (stat == VCI_OK) call integ%set_scheme(VCI_SCHEME_MIDPOINT, 1, stat)
     if (stat == VCI_OK) call integ%set_impact_energy(VCI_IMPACT_HAMILTONIAN, stat)
@@ -82,9 +89,10 @@ program bench_chain_impacts
     rss1 = peak_rss_mb()
     imp_total = st1%impacts
     write (output_unit, '("| ",i0," | ",a," | ",i0," | ",i0," | ",i0," | ",f10.2," | ",f10.2," | ",f7.2," | ",f6.2,' // &
-      '" | ",f6.2," | ",f7.1," |")') n, merge('1    ', 'dense', banded), nsteps, nimp, imp_total, &
+      '" | ",f6.2," | ",f7.1," | ",f7.1," |")') n, trim(merge(merge('1, cb', '1    ', bandcb), 'dense', banded)), &
+      nsteps, nimp, imp_total, &
       1.0e6_dp * median(treg(1:nreg)), 1.0e6_dp * median(timp(1:nimp)), median(timp(1:nimp)) / median(treg(1:nreg)), &
-      real(f_reg, dp) / max(nreg, 1), real(f_imp, dp) / max(nimp, 1), rss1 - rss0
+      real(f_reg, dp) / max(nreg, 1), real(f_imp, dp) / max(nimp, 1), rss1 - rss0, rss1
     deallocate (q0, p0, treg, timp)
   end do
 contains

@@ -178,6 +178,12 @@ typedef int (*vci_lagrangian_grad_fn)(int n, const double *q, const double *v, d
 typedef int (*vci_lagrangian_hessians_fn)(int n, const double *q, const double *v, double *lqq, double *lqv,
                                           double *lvv, void *user);
 
+/** The three Hessian blocks on a declared band |i - j| <= bw (vci_model_declare_bandwidth) in
+ *  LAPACK band storage, each (2 bw + 1) x n column-major: lqq[(bw + i - j) + (2*bw + 1)*j] =
+ *  d2L/dq_i dq_j for |i - j| <= bw (0-based i, j), and so lqv, lvv; the other slots are ignored. */
+typedef int (*vci_lagrangian_band_hessians_fn)(int n, int bw, const double *q, const double *v, double *lqq,
+                                               double *lqv, double *lvv, void *user);
+
 /** The callbacks of a continuous model, a struct of its own with its own leading size (same
  *  rules as vci_callbacks: initialise with VCI_LAGRANGIAN_CALLBACKS_INIT; members are only ever
  *  added at the end). Same return contract and conventions as the discrete callbacks. */
@@ -191,13 +197,15 @@ typedef struct vci_lagrangian_callbacks {
   vci_gaps_fn gaps;                             /**< required iff ngaps > 0 */
   vci_gap_grads_fn gap_gradients;               /**< optional (NULL: differenced) */
   vci_energy_fn energy;                         /**< optional H(q, p) (NULL: Legendre inversion of dl_dv) */
+  vci_lagrangian_band_hessians_fn hessians_band; /**< optional, used with a declared bandwidth by
+                                                      VCI_SCHEME_LEFT and _MIDPOINT (no n x n block) */
   /* new members here */
 } vci_lagrangian_callbacks;
 
 /** Initialiser: `vci_lagrangian_callbacks cb = VCI_LAGRANGIAN_CALLBACKS_INIT;` (size set, every
  *  callback NULL), as VCI_CALLBACKS_INIT. */
 #ifdef __cplusplus
-#define VCI_LAGRANGIAN_CALLBACKS_INIT {sizeof(vci_lagrangian_callbacks), 0, 0, 0, 0, 0, 0, 0, 0}
+#define VCI_LAGRANGIAN_CALLBACKS_INIT {sizeof(vci_lagrangian_callbacks), 0, 0, 0, 0, 0, 0, 0, 0, 0}
 #else
 #define VCI_LAGRANGIAN_CALLBACKS_INIT {.size = sizeof(vci_lagrangian_callbacks)}
 #endif
@@ -209,6 +217,16 @@ typedef struct vci_lagrangian_callbacks {
  *  vci_lagrangian_callbacks), with lagrangian, dl_dq, dl_dv required; VCI_ERR_MEMORY. */
 int  vci_model_create_lagrangian(vci_model *model, int n, int m, int ngaps, const vci_lagrangian_callbacks *cb,
                                  void *user);
+
+/** Declare the Hessian blocks of a model banded (docs/DESIGN.md, "Structured Newton matrices"):
+ *  entries with |i - j| > bw vanish (L_qq, L_qv, L_vv of a continuous model; D1 D2 L_d of a
+ *  discrete one); bw < 0: dense again (the default). The left, midpoint and discrete schemes then
+ *  factorise their Newton matrices in band storage, and a continuous model's hessians_band (if
+ *  given) replaces the n x n blocks. check != 0: the debug check (O(n^2)): the band against the
+ *  dense Hessians (or differences) at the start, and every Newton matrix, reported as
+ *  VCI_ERR_ARGUMENT with a message naming the entry. Applies to integrators created afterwards.
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT: not a live model handle, or a separable model. */
+int  vci_model_declare_bandwidth(vci_model model, int bw, int check);
 
 /* ---- Separable models (docs/C_API.md, "Separable models"): L = 1/2 qdot^T M qdot - V(q), M constant ---- */
 

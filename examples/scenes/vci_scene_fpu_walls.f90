@@ -20,10 +20,18 @@ module vci_scene_fpu_walls
   type, extends(vci_lagrangian_t), public :: fpu_walls_lagrangian_t
     real(dp) :: beta = 1.0_dp, w = 0.6_dp
     logical :: one_wall_gradient = .true.   !< supply gap_gradient (one wall's gradient, O(n))
+    !> supply hessians_band (the blocks in band storage, bandwidth 1); off: "not provided"
+    logical :: band_hessians = .false.
+    !> supply hessians (the dense blocks); off: "not provided" (the library differences them)
+    logical :: dense_hessians = .true.
+    integer :: band_calls = 0   !< calls of hessians_band that computed (the tests count them)
+    !> a deliberate mistake for the tests of the bandwidth check: L_qq(1, 3) = this (0: none)
+    real(dp) :: stray = 0.0_dp
   contains
     procedure :: lagrangian => fl_lagrangian, dl_dq => fl_dl_dq, dl_dv => fl_dl_dv, hessians => fl_hessians
     procedure :: gaps => fl_gaps, gap_gradients => fl_gap_grads, energy => fl_energy
     procedure :: gap_gradient => fl_gap_grad
+    procedure :: hessians_band => fl_hessians_band
   end type fpu_walls_lagrangian_t
 
   public :: fpu_walls_model, fpu_walls_lagrangian_model
@@ -188,9 +196,12 @@ contains
     integer, intent(inout) :: stat
     real(dp) :: k(0:size(q))
     integer :: i, n
+    lqq = 0.0_dp; lqv = 0.0_dp; lvv = 0.0_dp
+    if (.not. self%dense_hessians) then
+      call self%not_provided(stat); return
+    end if
     n = size(q)
     k = 1.0_dp + 3.0_dp * self%beta * stretches(q)**2
-    lqq = 0.0_dp; lqv = 0.0_dp; lvv = 0.0_dp
     do i = 1, n
       lqq(i, i) = -(k(i - 1) + k(i))
       if (i < n) then
@@ -199,7 +210,36 @@ contains
       end if
       lvv(i, i) = 1.0_dp
     end do
+    if (n >= 3) lqq(1, 3) = self%stray
   end subroutine fl_hessians
+
+  !> fl_hessians' blocks in band storage ((2 bw + 1) x n, entry (i, j) at row bw + 1 + i - j):
+  !> O(n) numbers where fl_hessians writes 3 n^2. The chain's band is 1; a wider declared band
+  !> gets zeros in its outer diagonals.
+  subroutine fl_hessians_band(self, q, v, bw, lqq, lqv, lvv, stat)
+    class(fpu_walls_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    integer, intent(in) :: bw
+    real(dp), intent(out) :: lqq(:, :), lqv(:, :), lvv(:, :)
+    integer, intent(inout) :: stat
+    real(dp) :: k(0:size(q))
+    integer :: i, n
+    lqq = 0.0_dp; lqv = 0.0_dp; lvv = 0.0_dp
+    if (.not. self%band_hessians) then
+      call self%not_provided(stat); return
+    end if
+    self%band_calls = self%band_calls + 1
+    n = size(q)
+    k = 1.0_dp + 3.0_dp * self%beta * stretches(q)**2
+    do i = 1, n
+      lqq(bw + 1, i) = -(k(i - 1) + k(i))
+      if (i < n .and. bw >= 1) then   ! (a band of 0 cannot hold them: the tests' mistake)
+        lqq(bw, i + 1) = k(i)         ! (i, i + 1)
+        lqq(bw + 2, i) = k(i)         ! (i + 1, i)
+      end if
+      lvv(bw + 1, i) = 1.0_dp
+    end do
+  end subroutine fl_hessians_band
 
   subroutine fl_gaps(self, q, g, stat)
     class(fpu_walls_lagrangian_t), intent(inout) :: self

@@ -54,6 +54,8 @@ typedef int (*vci_lagrangian_value_fn)(int n, const double *q, const double *v, 
 typedef int (*vci_lagrangian_grad_fn)(int n, const double *q, const double *v, double *out, void *user);
 typedef int (*vci_lagrangian_hessians_fn)(int n, const double *q, const double *v, double *lqq, double *lqv,
                                           double *lvv, void *user);
+typedef int (*vci_lagrangian_band_hessians_fn)(int n, int bw, const double *q, const double *v, double *lqq,
+                                               double *lqv, double *lvv, void *user);
 typedef int (*vci_potential_fn)(int n, const double *q, double *out, void *user);
 
 int  vci_model_create_v2(vci_model *model, int n, int m, int ngaps, const vci_callbacks *cb, void *user);
@@ -61,6 +63,7 @@ int  vci_model_create_lagrangian(vci_model *model, int n, int m, int ngaps, cons
                                  void *user);
 int  vci_set_scheme(vci_integrator integ, int scheme, int stages);
 void vci_model_destroy(vci_model *model);
+int  vci_model_declare_bandwidth(vci_model model, int bw, int check);
 int  vci_integrator_create(vci_integrator *integ, vci_model model, double h);
 void vci_integrator_destroy(vci_integrator *integ);
 int  vci_set_tolerances(vci_integrator integ, double atol, double rtol, int max_iterations);
@@ -123,6 +126,7 @@ typedef struct vci_lagrangian_callbacks {
   vci_gaps_fn gaps;
   vci_gap_grads_fn gap_gradients;
   vci_energy_fn energy;
+  vci_lagrangian_band_hessians_fn hessians_band;
 } vci_lagrangian_callbacks;
 
 typedef struct vci_separable_callbacks {

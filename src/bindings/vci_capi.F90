@@ -120,6 +120,7 @@ contains
       case (6); local%gaps = fps(i)
       case (7); local%gap_gradients = fps(i)
       case (8); local%energy = fps(i)
+      case (9); local%hessians_band = fps(i)
       end select
     end do
     what = ''
@@ -390,6 +391,34 @@ contains
     status = VCI_OK
   end function create_model
 
+  !> int vci_model_declare_bandwidth(vci_model model, int bw, int check): the model's Hessian blocks
+  !> vanish outside |i - j| <= bw (bw < 0: dense again); check != 0: the debug check of the band.
+  !> Integrators created from the model afterwards use it (those made before keep their copy).
+  integer(c_int) function vci_model_declare_bandwidth(model, bw, check) bind(C, name='vci_model_declare_bandwidth')
+    type(c_ptr), value :: model
+    integer(c_int), value :: bw, check
+    integer :: i
+    vci_model_declare_bandwidth = VCI_ERR_ARGUMENT
+    call lock_registry()
+    i = find_live(model, KIND_MODEL)
+    if (i > 0) then
+      if (slots(i)%model%separable) then
+        i = -1
+      else
+        call slots(i)%model%declare_bandwidth(int(bw), check=check /= 0)
+      end if
+    end if
+    call unlock_registry()
+    if (i == 0) then
+      call set_thread_message('vci_model_declare_bandwidth: not a live model handle'); return
+    else if (i < 0) then
+      call set_thread_message('vci_model_declare_bandwidth: a separable model has no declared bandwidth '// &
+                              '(give its potential_hessian; the band is for vci_model_create and '// &
+                              'vci_model_create_lagrangian models)'); return
+    end if
+    vci_model_declare_bandwidth = VCI_OK
+  end function vci_model_declare_bandwidth
+
   !> void vci_model_destroy(vci_model *model): NULL-safe, sets *model = NULL. Integrators made
   !> from the model keep their own copy of it.
   subroutine vci_model_destroy(model) bind(C, name='vci_model_destroy')
@@ -460,6 +489,7 @@ contains
       ip%lag%cb = ip%model%lcb
       ip%lag%user = ip%model%user
       ip%lag%record => ip%model%record
+      call ip%lag%declare_bandwidth(ip%model%hessian_bandwidth, check=ip%model%check_bandwidth)
       call ip%integ%create(ip%lag, real(h, dp), stat)
     else
       call ip%integ%create(ip%model, real(h, dp), stat)

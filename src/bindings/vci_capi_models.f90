@@ -44,6 +44,7 @@ module vci_capi_models
     type(c_funptr) :: lagrangian = c_null_funptr, dl_dq = c_null_funptr, dl_dv = c_null_funptr
     type(c_funptr) :: hessians = c_null_funptr, constraint_forms = c_null_funptr
     type(c_funptr) :: gaps = c_null_funptr, gap_gradients = c_null_funptr, energy = c_null_funptr
+    type(c_funptr) :: hessians_band = c_null_funptr   !< added after 0.2 (at the end)
   end type vci_lagrangian_callbacks_c
 
   !> Mirror of `struct vci_separable_callbacks` in vci.h (separable models: constant M, V(q)):
@@ -73,6 +74,14 @@ module vci_capi_models
       real(c_double), intent(inout) :: lqq(*), lqv(*), lvv(*)
       type(c_ptr), value :: user
     end function c_lhess_fn
+    !> f(n, bw, q, v, lqq, lqv, lvv, user): the Hessian blocks in band storage, each (2 bw + 1) x n.
+    integer(c_int) function c_lhess_band_fn(n, bw, q, v, lqq, lqv, lvv, user) bind(C)
+      import :: c_int, c_double, c_ptr
+      integer(c_int), value :: n, bw
+      real(c_double), intent(in) :: q(*), v(*)
+      real(c_double), intent(inout) :: lqq(*), lqv(*), lvv(*)
+      type(c_ptr), value :: user
+    end function c_lhess_band_fn
     integer(c_int) function c_ld_grad_fn(n, q, v, h, out, user) bind(C)
       import :: c_int, c_double, c_ptr
       integer(c_int), value :: n
@@ -154,6 +163,7 @@ module vci_capi_models
     procedure :: dl_dq => cl_dl_dq
     procedure :: dl_dv => cl_dl_dv
     procedure :: hessians => cl_hessians
+    procedure :: hessians_band => cl_hessians_band
     procedure :: constraint_forms => cl_forms
     procedure :: gaps => cl_gaps
     procedure :: gap_gradients => cl_gap_grads
@@ -434,6 +444,28 @@ contains
     call record%note(rc, 'the C callback hessians', all(ieee_is_finite(lqq)) .and. &
                           all(ieee_is_finite(lqv)) .and. all(ieee_is_finite(lvv)), stat)
   end subroutine cl_hessians
+
+  !> The banded blocks ((2 bw + 1) x n each, band storage) from the C callback hessians_band.
+  subroutine cl_hessians_band(self, q, v, bw, lqq, lqv, lvv, stat)
+    class(c_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    integer, intent(in) :: bw
+    real(dp), intent(out) :: lqq(:, :), lqv(:, :), lvv(:, :)
+    integer, intent(inout) :: stat
+    procedure(c_lhess_band_fn), pointer :: f
+    type(vci_callback_record_t), pointer :: record
+    type(c_ptr) :: user
+    integer :: rc
+    lqq = 0.0_dp; lqv = 0.0_dp; lvv = 0.0_dp   ! defined even where a failing callback left them unwritten
+    if (.not. c_associated(self%cb%hessians_band)) then
+      call self%not_provided(stat); return
+    end if
+    call c_context(self, record, user)
+    call c_f_procpointer(self%cb%hessians_band, f)
+    rc = f(self%n, bw, q, v, lqq, lqv, lvv, user)
+    call record%note(rc, 'the C callback hessians_band', all(ieee_is_finite(lqq)) .and. &
+                          all(ieee_is_finite(lqv)) .and. all(ieee_is_finite(lvv)), stat)
+  end subroutine cl_hessians_band
 
   subroutine cl_forms(self, q, omega, stat)
     class(c_lagrangian_t), intent(inout) :: self

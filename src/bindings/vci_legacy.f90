@@ -23,6 +23,7 @@
 !>     VCIOUT(IH, PATH, IAPP, ISTAT)                             HDF5 output of later steps (IAPP 1: append)
 !>     VCICLS(IH, ISTAT)                                         finish the output file
 !>     VCIRST(IH, PATH, ISTAT)                                   restart from an HDF5 file's last state
+!>     VCIBND(IH, IBW, ICHK, ISTAT)                              Hessians banded with half-bandwidth IBW
 !>
 !> The model routine (one EXTERNAL, selecting what to compute by TASK as MINPACK's FCN does
 !> with IFLAG):
@@ -45,6 +46,9 @@
 !>     TASK 11: OUT(1:N)     = dL/dQ(Q, V)            12: OUT(1:N) = dL/dV(Q, V)
 !>     TASK 13: OUT(1:3*N*N) = the blocks d2L/dQ dQ, d2L/dQ dV, d2L/dV dV, each N x N column-major
 !>              (block (i, j) = d2L/dx_i dy_j), one after the other                (IOPT bit 1)
+!>     TASK 18: OUT(1:3*(2*IBW+1)*N) = the same blocks on the band |i - j| <= IBW that VCIBND
+!>              declared, each in LAPACK band storage ((2*IBW+1) x N column-major, entry (i, j)
+!>              in row IBW+1+i-j of column j), one after the other                (IOPT bit 64)
 !>
 !> A separable L = ½ Vᵀ M V − V(Q) with a constant M (IOPT bit 16; every scheme of a continuous
 !> model, and the explicit compositions VCISCH(IH, 4, ORDER, ...); M must be 0, H is derived):
@@ -94,17 +98,17 @@ module vci_legacy
 
   public :: vci_legacy_model_fn, legacy_new, legacy_get, legacy_after, legacy_delete, legacy_advance, legacy_message
   public :: legacy_set_scheme, legacy_init, legacy_check, legacy_size
-  public :: legacy_open_output, legacy_close_output, legacy_restore
+  public :: legacy_open_output, legacy_close_output, legacy_restore, legacy_bandwidth
 
   !> TASK codes of the model routine: a discrete L_d (1-4, 6), a continuous L (10-13), both (5, 7-9).
   integer, parameter, public :: TASK_D1 = 1, TASK_D2 = 2, TASK_D3 = 3, TASK_HESSIAN = 4, TASK_FORMS = 5, &
                                 TASK_DCONSTRAINT = 6, TASK_GAPS = 7, TASK_GAP_GRADS = 8, TASK_ENERGY = 9, &
                                 TASK_LAGRANGIAN = 10, TASK_DL_DQ = 11, TASK_DL_DV = 12, TASK_L_HESSIANS = 13, &
                                 TASK_POTENTIAL = 14, TASK_POTENTIAL_GRAD = 15, TASK_POTENTIAL_HESSIAN = 16, &
-                                TASK_MASS = 17
+                                TASK_MASS = 17, TASK_L_HESSIANS_BAND = 18
   !> IOPT bits: which optional tasks the model routine supplies, and whether it is a continuous L.
   integer, parameter, public :: IOPT_HESSIAN = 1, IOPT_GAP_GRADS = 2, IOPT_ENERGY = 4, IOPT_CONTINUOUS = 8, &
-                                IOPT_SEPARABLE = 16, IOPT_DENSE_MASS = 32
+                                IOPT_SEPARABLE = 16, IOPT_DENSE_MASS = 32, IOPT_BAND_HESSIANS = 64
   !> IERR with which the model routine answers "this TASK is not provided" (no other value means it).
   integer, parameter, public :: IERR_NOT_PROVIDED = -999
 
@@ -152,11 +156,13 @@ module vci_legacy
   type, extends(vci_lagrangian_t) :: legacy_lagrangian_t
     type(legacy_routine_t) :: routine
     real(dp), allocatable :: hwork(:)   !< OUT of TASK 13 (3 n^2), when IOPT has bit 1
+    real(dp), allocatable :: bwork(:)   !< OUT of TASK 18 (3 (2 bw + 1) n), when IOPT has bit 64
   contains
     procedure :: lagrangian => ll_value
     procedure :: dl_dq => ll_dl_dq
     procedure :: dl_dv => ll_dl_dv
     procedure :: hessians => ll_hessians
+    procedure :: hessians_band => ll_hessians_band
     procedure :: constraint_forms => ll_forms
     procedure :: gaps => ll_gaps
     procedure :: gap_gradients => ll_gap_grads
@@ -425,6 +431,37 @@ contains
     lvv = reshape(self%hwork(2 * nn + 1:3 * nn), [self%n, self%n])
   end subroutine ll_hessians
 
+  !> TASK 18: the three blocks in band storage one after the other in OUT(1:3*(2*bw+1)*N).
+  subroutine ll_hessians_band(self, q, v, bw, lqq, lqv, lvv, stat)
+    class(legacy_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    integer, intent(in) :: bw
+    real(dp), intent(out) :: lqq(:, :), lqv(:, :), lvv(:, :)
+    integer, intent(inout) :: stat
+    integer :: nb, st
+    logical :: declined
+    lqq = 0.0_dp; lqv = 0.0_dp; lvv = 0.0_dp
+    if (iand(self%routine%iopt, IOPT_BAND_HESSIANS) == 0 .or. bw < 0) then
+      call self%not_provided(stat); return
+    end if
+    nb = (2 * bw + 1) * self%n
+    if (allocated(self%bwork)) then
+      if (size(self%bwork) /= 3 * nb) deallocate (self%bwork)
+    end if
+    if (.not. allocated(self%bwork)) then
+      allocate (self%bwork(3 * nb), stat=st)
+      if (st /= 0) then
+        stat = -1; return        ! (unrecoverable: the step stops, naming hessians)
+      end if
+    end if
+    call call_task(self%routine, self%n, self%m, self%n_gaps, TASK_L_HESSIANS_BAND, q, v, 0.0_dp, self%bwork, &
+                   3 * nb, stat, declined)
+    if (declined) call decline(self, stat)
+    lqq = reshape(self%bwork(1:nb), [2 * bw + 1, self%n])
+    lqv = reshape(self%bwork(nb + 1:2 * nb), [2 * bw + 1, self%n])
+    lvv = reshape(self%bwork(2 * nb + 1:3 * nb), [2 * bw + 1, self%n])
+  end subroutine ll_hessians_band
+
   subroutine ll_forms(self, q, omega, stat)
     class(legacy_lagrangian_t), intent(inout) :: self
     real(dp), intent(in) :: q(:)
@@ -673,9 +710,14 @@ contains
     integer :: i
     ih = 0
     if (iopt < 0 .or. iopt > IOPT_HESSIAN + IOPT_GAP_GRADS + IOPT_ENERGY + IOPT_CONTINUOUS + IOPT_SEPARABLE + &
-        IOPT_DENSE_MASS) then
+        IOPT_DENSE_MASS + IOPT_BAND_HESSIANS) then
       write (global_message, '(a,i0,a)') 'VCINEW: IOPT = ', iopt, &
-        ' (need a sum of 1: Hessian, 2: gap gradients, 4: energy, 8: continuous L, 16: separable L, 32: dense M)'
+        ' (need a sum of 1: Hessian, 2: gap gradients, 4: energy, 8: continuous L, 16: separable L, 32: dense M,'// &
+        ' 64: banded Hessians)'
+      stat = VCI_ERR_ARGUMENT; return
+    end if
+    if (iand(iopt, IOPT_BAND_HESSIANS) /= 0 .and. iand(iopt, IOPT_CONTINUOUS + IOPT_SEPARABLE) /= IOPT_CONTINUOUS) then
+      global_message = 'VCINEW: IOPT bit 64 (TASK 18, banded Hessians of L) needs a continuous L (bit 8, not 16)'
       stat = VCI_ERR_ARGUMENT; return
     end if
     if (separable_refused(n, m, ng, iopt, stat)) return
@@ -916,6 +958,30 @@ contains
     call slots(i)%integ%set_scheme(scheme, stages, stat)
     if (stat /= VCI_OK) call slots(i)%integ%report_failure(stat, 'VCISCH: '//trim(slots(i)%integ%message_text()))
   end subroutine legacy_set_scheme
+
+  !> VCIBND: declare the model's Hessians banded (bw < 0: dense) with the debug check when check,
+  !> then rebuild the current scheme with it (so before VCIINP / VCIINM, as VCISCH).
+  subroutine legacy_bandwidth(ih, bw, check, stat)
+    integer, intent(in) :: ih, bw
+    logical, intent(in) :: check
+    integer, intent(out) :: stat
+    integer :: i
+    i = slot_of(ih)
+    if (associated(slots(i)%sep)) then
+      call slots(i)%integ%report_failure(VCI_ERR_ARGUMENT, 'VCIBND: a separable model (IOPT bit 16) has no '// &
+                                         'declared bandwidth')
+      stat = VCI_ERR_ARGUMENT; return
+    end if
+    if (associated(slots(i)%lag)) then
+      call slots(i)%lag%declare_bandwidth(bw, check)
+    else
+      call slots(i)%model%declare_bandwidth(bw, check)
+    end if
+    associate (integ => slots(i)%integ)
+      call integ%set_scheme(integ%scheme(), integ%stages(), stat)
+      if (stat /= VCI_OK) call integ%report_failure(stat, 'VCIBND: '//trim(integ%message_text()))
+    end associate
+  end subroutine legacy_bandwidth
 
   !> Free the integrator named ih (no-op if none); ih becomes 0.
   subroutine legacy_delete(ih)
@@ -1184,6 +1250,23 @@ subroutine vcisch(ih, isch, nstg, istat)
   call legacy_set_scheme(ih, isch, nstg, istat)
   call legacy_after(ih, istat)
 end subroutine vcisch
+
+!> Declare the model's Hessians banded with half-bandwidth IBW (IBW < 0: dense again); ICHK /= 0:
+!> the debug check (the band against the dense Hessians or differences at the start, and every
+!> Newton matrix). The current scheme is rebuilt with it: call before VCIINP / VCIINM.
+subroutine vcibnd(ih, ibw, ichk, istat)
+  use vci_status, only: VCI_OK
+  use vci_integrator, only: vci_integrator_t
+  use vci_legacy, only: legacy_get, legacy_bandwidth, legacy_after
+  implicit none
+  integer, intent(in) :: ih, ibw, ichk
+  integer, intent(out) :: istat
+  type(vci_integrator_t), pointer :: integ
+  call legacy_get(ih, 'VCIBND', integ, istat)
+  if (istat /= VCI_OK) return
+  call legacy_bandwidth(ih, ibw, ichk /= 0, istat)
+  call legacy_after(ih, istat)
+end subroutine vcibnd
 
 !> Start from Q0 at T0 and Q1 at T0 + H: the state becomes (T0 + H, Q1, D2 L_d(Q0, Q1, H)).
 subroutine vciinp(ih, t0, q0, q1, istat)

@@ -39,6 +39,8 @@ module vci_banded
   end type vci_banded_lu_t
 
   public :: outside_band
+  !> The band block's own LU and solve (also the banded Legendre inversion's, vci_lagrangian).
+  public :: band_lu, band_solve
 
 contains
 

@@ -15,7 +15,7 @@ module vci_integrator
   use vci_message, only: vci_set_message, vci_int_text, vci_real_text
   use vci_model_base, only: vci_model_base_t
   use vci_model, only: vci_model_t
-  use vci_lagrangian, only: vci_lagrangian_t
+  use vci_lagrangian, only: vci_lagrangian_t, lagrangian_check_band
   use vci_limits, only: vci_size_problem
   use vci_settings, only: vci_settings_t, vci_solver_stats_t, vci_default_max_impacts
   use vci_state, only: vci_state_t, vci_impact_buffer_t
@@ -203,7 +203,10 @@ contains
     self%discrete => null()
     self%lag => model
     ! which procedures the model supplies (the values at these probe points are discarded)
-    allocate (q(model%n), v(model%n), hq(model%n, model%n), hv(model%n, model%n), hw(model%n, model%n), stat=ierr)
+    allocate (q(model%n), v(model%n), stat=ierr)
+    if (ierr == 0 .and. .not. supplies_band_hessians(model)) &
+      allocate (hq(model%n, model%n), hv(model%n, model%n), hw(model%n, model%n), stat=ierr)
+    if (ierr == 0 .and. .not. allocated(hq)) allocate (hq(model%n, 1), stat=ierr)
     if (ierr /= 0) then
       self%last_message = 'create: cannot allocate the probes of the model (out of memory)'
       call finish(self, VCI_ERR_MEMORY, stat); return
@@ -221,13 +224,35 @@ contains
                      ' (L, dL/dq and dL/dqdot are required)'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
-    call model%clear_not_provided(); s = 0; call model%hessians(q, v, hq, hv, hw, s)
-    self%lag_hessians = .not. model%answered_not_provided()
+    self%lag_hessians = .false.
+    if (.not. supplies_band_hessians(model)) then   ! (else no n x n probe: the band's schemes use the band)
+      call model%clear_not_provided(); s = 0; call model%hessians(q, v, hq, hv, hw, s)
+      self%lag_hessians = .not. model%answered_not_provided()
+    end if
     call model%clear_not_provided(); s = 0; call model%energy(q, v, e, s)
     self%lag_energy = .not. model%answered_not_provided()
     self%scheme_id = VCI_SCHEME_MIDPOINT; self%n_stages = 1
     call build_scheme(self, 'create', stat)
   end subroutine create_continuous
+
+  !> A continuous model with a declared bandwidth (and no debug check) that supplies hessians_band:
+  !> the `left` and `midpoint` schemes use it alone, and the Lobatto scheme differences its
+  !> Hessians, so its dense hessians are never probed (that probe alone is 3 n^2 numbers).
+  logical function supplies_band_hessians(model) result(yes)
+    class(vci_lagrangian_t), intent(inout) :: model
+    real(dp), allocatable :: z(:), b1(:, :), b2(:, :), b3(:, :)
+    integer :: s, bw
+    yes = .false.
+    bw = model%hessian_bandwidth
+    if (bw < 0 .or. model%check_bandwidth) return
+    allocate (z(model%n), b1(2 * bw + 1, model%n), b2(2 * bw + 1, model%n), b3(2 * bw + 1, model%n), stat=s)
+    if (s /= 0) return
+    z = 0.0_dp
+    call model%clear_not_provided(); s = 0
+    call model%hessians_band(z, z, bw, b1, b2, b3, s)
+    yes = .not. model%answered_not_provided()
+    call model%clear_not_provided()
+  end function supplies_band_hessians
 
   !> Checks and state common to both kinds of model.
   subroutine bind_sizes(self, model, h, stat)
@@ -310,7 +335,8 @@ contains
         select type (sch)
         type is (vci_scheme_discrete_t)
           call sch%setup(self%retraction, stat)
-          call sch%use_derivatives(mixed_hessian=self%lag_hessians)
+          ! (the model's banded Hessians serve the mixed Hessian too: vci_retraction's band_hessians)
+          call sch%use_derivatives(mixed_hessian=self%lag_hessians .or. self%retraction%band_hessians)
         end select
       end if
       if (stat /= 0) stat = VCI_ERR_MEMORY
@@ -632,7 +658,8 @@ contains
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
     ! optional procedures: each is probed once (vci_model_base: not_provided)
-    allocate (hess(n, n), omega(n, max(1, self%model%m)), g(self%model%n_gaps), w(self%model%m), &
+    allocate (hess(n, merge(n, 1, associated(self%discrete))), omega(n, max(1, self%model%m)), &
+              g(self%model%n_gaps), w(self%model%m), &
               cjo(self%model%m, n), dg1(n), &
               dg(n, self%model%n_gaps), w2(self%model%n_gaps), stat=s)
     if (s /= 0) then
@@ -643,6 +670,14 @@ contains
       call self%model%clear_not_provided(); s = 0
       call self%discrete%mixed_hessian(q0, v0, self%state%h, hess, s)
       call self%stepper%use_model_derivatives(mixed_hessian=.not. self%model%answered_not_provided())
+    end if
+    if (associated(self%lag) .and. self%model%check_bandwidth) then
+      ! the debug check of a declared band: hessians_band against the dense blocks (vci_lagrangian)
+      call lagrangian_check_band(self%lag, q0, v0, self%last_message, s)
+      if (s /= VCI_OK) then
+        self%last_message = who//': '//trim(self%last_message)
+        call finish(self, s, stat); return
+      end if
     end if
     if (self%model%m > 0) then
       call self%model%clear_not_provided(); s = 0

@@ -12,9 +12,10 @@
 module vci_lagrangian
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use vci_kinds, only: dp
-  use vci_status, only: VCI_OK, VCI_ERR_CALLBACK, VCI_ERR_NONFINITE, VCI_ERR_NEWTON
+  use vci_status, only: VCI_OK, VCI_ERR_CALLBACK, VCI_ERR_NONFINITE, VCI_ERR_NEWTON, VCI_ERR_ARGUMENT, VCI_ERR_MEMORY
   use vci_model_base, only: vci_model_base_t
   use vci_lapack, only: dgetrf, dgetrs
+  use vci_banded, only: band_lu, band_solve
   implicit none
   private
 
@@ -30,6 +31,10 @@ module vci_lagrangian
     procedure(l_partial), deferred :: dl_dv
     !> lqq(i, j) = d2L/dq_i dq_j, lqv(i, j) = d2L/dq_i dv_j, lvv(i, j) = d2L/dv_i dv_j (each n x n).
     procedure :: hessians => not_provided_hessians
+    !> The same blocks on a declared band |i - j| <= bw only, in LAPACK band storage (each
+    !> (2 bw + 1) x n): lqq(bw + 1 + i - j, j) = d2L/dq_i dq_j, and so lqv, lvv. Optional; with a
+    !> declared bandwidth the `left` and `midpoint` schemes then keep no n x n Hessian block.
+    procedure :: hessians_band => not_provided_hessians_band
   end type vci_lagrangian_t
 
   abstract interface
@@ -54,12 +59,18 @@ module vci_lagrangian
   !> Workspace for differenced Hessians and the Legendre inversion (sized once, never per step).
   type, public :: vci_lagrangian_work_t
     logical :: has_hessians = .false.
+    !> the model's hessians_band is used (with hessian_bandwidth >= 0): lqq, lqv hold its band
+    !> storage, (2 bw + 1) x n, and lvv the velocity block's with bw rows for the LU's fill-in above
+    !> it, (3 bw + 1) x n (the Legendre inversion factorises it in place)
+    logical :: has_band_hessians = .false.
     integer :: code = 0   !< stat of the last callback that failed here (its sign: recoverable or not)
     real(dp), allocatable :: qp(:), vp(:), fp(:), fm(:), w(:), dw(:), lv(:), lvv(:, :), lqq(:, :), lqv(:, :)
+    real(dp), allocatable :: bvv(:, :)   !< hessians_band's velocity block, (2 bw + 1) x n (else 1 x 1)
     integer, allocatable :: ipiv(:)
   end type vci_lagrangian_work_t
 
   public :: lagrangian_work_setup, lagrangian_hessians, lagrangian_energy, lagrangian_hamiltonian
+  public :: lagrangian_band_hessians, lagrangian_check_band
 
   real(dp), parameter :: fd_rel = 6.0e-6_dp   ! ~ eps**(1/3): central differences
 
@@ -75,11 +86,28 @@ contains
     call self%not_provided(stat)
   end subroutine not_provided_hessians
 
-  !> Size the workspace for n coordinates; stat /= 0: out of memory.
-  subroutine lagrangian_work_setup(work, n, stat)
+  !> The banded blocks (band storage, (2 bw + 1) x n each) on |i - j| <= bw.
+  subroutine not_provided_hessians_band(self, q, v, bw, lqq, lqv, lvv, stat)
+    class(vci_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    integer, intent(in) :: bw
+    real(dp), intent(out) :: lqq(:, :), lqv(:, :), lvv(:, :)
+    integer, intent(inout) :: stat
+    lqq = 0.0_dp; lqv = 0.0_dp; lvv = 0.0_dp
+    if (bw < 0) return
+    call self%not_provided(stat)
+  end subroutine not_provided_hessians_band
+
+  !> Size the workspace for n coordinates; band (optional, >= 0): the Hessian blocks come from
+  !> hessians_band with that half-bandwidth, so they are (2 bw + 1) x n (lvv: 3 bw + 1 rows), not
+  !> n x n (work%has_band_hessians).
+  !> stat /= 0: out of memory.
+  subroutine lagrangian_work_setup(work, n, stat, band)
     type(vci_lagrangian_work_t), intent(inout) :: work
     integer, intent(in) :: n
     integer, intent(out) :: stat
+    integer, intent(in), optional :: band
+    integer :: rows, rows_vv
     ! array by array: after an allocate that failed part-way some are allocated and some not
     if (allocated(work%qp)) deallocate (work%qp)
     if (allocated(work%vp)) deallocate (work%vp)
@@ -92,9 +120,65 @@ contains
     if (allocated(work%lqq)) deallocate (work%lqq)
     if (allocated(work%lqv)) deallocate (work%lqv)
     if (allocated(work%ipiv)) deallocate (work%ipiv)
+    if (allocated(work%bvv)) deallocate (work%bvv)
+    rows = n; rows_vv = n
+    work%has_band_hessians = .false.
+    if (present(band)) then
+      if (band >= 0) then
+        rows = 2 * band + 1; rows_vv = 3 * band + 1
+        work%has_band_hessians = .true.
+      end if
+    end if
     allocate (work%qp(n), work%vp(n), work%fp(n), work%fm(n), work%w(n), work%dw(n), work%lv(n), &
-              work%lvv(n, n), work%lqq(n, n), work%lqv(n, n), work%ipiv(n), stat=stat)
+              work%lvv(rows_vv, n), work%lqq(rows, n), work%lqv(rows, n), work%ipiv(n), stat=stat)
+    if (stat == 0) then
+      if (work%has_band_hessians) then
+        allocate (work%bvv(rows, n), stat=stat)
+      else
+        allocate (work%bvv(1, 1), stat=stat)
+      end if
+    end if
   end subroutine lagrangian_work_setup
+
+  !> The model's banded Hessian blocks at (q, v) in band storage, each (2 bw + 1) x n (contiguous:
+  !> the callback writes them in place, entry (i, j) at row bw + 1 + i - j); the slots outside the
+  !> matrix are zeroed, whatever the callback left there. stat: VCI_OK, VCI_ERR_CALLBACK (code in
+  !> work%code) or VCI_ERR_NONFINITE.
+  subroutine lagrangian_band_hessians(lag, work, q, v, bw, lqq, lqv, lvv, stat)
+    class(vci_lagrangian_t), intent(inout) :: lag
+    type(vci_lagrangian_work_t), intent(inout) :: work
+    real(dp), intent(in) :: q(:), v(:)
+    integer, intent(in) :: bw
+    real(dp), intent(inout) :: lqq(:, :), lqv(:, :), lvv(:, :)
+    integer, intent(out) :: stat
+    integer :: s
+    stat = VCI_OK
+    s = 0
+    call lag%hessians_band(q, v, bw, lqq, lqv, lvv, s)
+    if (s /= 0) then
+      work%code = s
+      stat = VCI_ERR_CALLBACK; return
+    end if
+    call zero_corners(lqq); call zero_corners(lqv); call zero_corners(lvv)
+    if (.not. (finite_matrix(lqq) .and. finite_matrix(lqv) .and. finite_matrix(lvv))) stat = VCI_ERR_NONFINITE
+  contains
+    !> Rows i = j - bw .. 0 of the first bw columns and i = n + 1 .. j + bw of the last bw (O(bw^2)).
+    subroutine zero_corners(ab)
+      real(dp), intent(inout) :: ab(:, :)
+      integer :: i, j, n
+      n = size(ab, 2)
+      do j = 1, min(bw, n)
+        do i = 1, bw + 1 - j
+          ab(i, j) = 0.0_dp
+        end do
+      end do
+      do j = max(1, n - bw + 1), n
+        do i = bw + 2 + n - j, 2 * bw + 1
+          ab(i, j) = 0.0_dp
+        end do
+      end do
+    end subroutine zero_corners
+  end subroutine lagrangian_band_hessians
 
   !> The three Hessian blocks at (q, v): the model's own when it has them (work%has_hessians), else
   !> central differences of dl_dq and dl_dv. stat: VCI_OK, VCI_ERR_CALLBACK (the callback's own code
@@ -150,6 +234,137 @@ contains
       lvv(:, i) = (work%fp(1:n) - work%fm(1:n)) / (2.0_dp * d)
     end do
   end subroutine lagrangian_hessians
+
+  !> The debug check of a declared bandwidth (check_bandwidth) for a model with hessians_band: at
+  !> (q, v) and two points near it, the banded blocks against the dense ones (the model's hessians,
+  !> else central differences of dl_dq and dl_dv): a nonzero of the dense blocks outside the band, or
+  !> a band entry that differs, fails with why naming the block, the entry and both values.
+  !> Tolerance: 1e-10 of the blocks' largest entry (at least 1) against the model's own dense
+  !> Hessians (both exact: round-off), 1e-6 against differences (their error, eps^(2/3) relative,
+  !> times the third derivatives' size). O(n^2) memory and n^2 callbacks' work: a debug check.
+  !> stat: VCI_OK (also when the model has no hessians_band: nothing to check), VCI_ERR_ARGUMENT
+  !> (why says which entry), VCI_ERR_CALLBACK or VCI_ERR_NONFINITE (a callback failed: why says so),
+  !> VCI_ERR_MEMORY.
+  subroutine lagrangian_check_band(lag, q, v, why, stat)
+    class(vci_lagrangian_t), intent(inout) :: lag
+    real(dp), intent(in) :: q(:), v(:)
+    character(len=*), intent(out) :: why
+    integer, intent(out) :: stat
+    type(vci_lagrangian_work_t) :: band, dense
+    real(dp), allocatable :: dq(:, :), dv(:, :), dw(:, :), qk(:), vk(:)
+    character(len=3), parameter :: names(3) = ['qq', 'qv', 'vv']
+    integer :: n, bw, k, s, i, j, b
+    real(dp) :: tol, scale, x, y
+    logical :: exact
+    why = ''
+    n = size(q); bw = lag%hessian_bandwidth
+    stat = VCI_OK
+    if (bw < 0) return
+    call lagrangian_work_setup(band, n, s, band=bw)
+    if (s == 0) call lagrangian_work_setup(dense, n, s)
+    if (s == 0) allocate (dq(n, n), dv(n, n), dw(n, n), qk(n), vk(n), stat=s)
+    if (s /= 0) then
+      why = 'cannot allocate the check of the declared bandwidth (out of memory)'
+      stat = VCI_ERR_MEMORY; return
+    end if
+    call lag%clear_not_provided()
+    s = 0
+    call lag%hessians_band(q, v, bw, band%lqq, band%lqv, band%bvv, s)
+    if (lag%answered_not_provided()) then     ! no banded callback: the Newton matrices' check only
+      call lag%clear_not_provided(); return
+    end if
+    call lag%clear_not_provided(); s = 0
+    call lag%hessians(q, v, dq, dv, dw, s)
+    dense%has_hessians = .not. lag%answered_not_provided()
+    call lag%clear_not_provided()
+    exact = dense%has_hessians
+    do k = 0, 2
+      do i = 1, n                  ! (q, v), then two points near it
+        qk(i) = q(i) + 0.05_dp * k * max(abs(q(i)), 1.0_dp) * sin(1.7_dp * i + k)
+        vk(i) = v(i) + 0.05_dp * k * max(abs(v(i)), 1.0_dp) * cos(0.9_dp * i - k)
+      end do
+      call lagrangian_band_hessians(lag, band, qk, vk, bw, band%lqq, band%lqv, band%bvv, stat)
+      if (stat /= VCI_OK) then
+        why = 'hessians_band failed or returned NaN/Inf in the check of the declared bandwidth'
+        return
+      end if
+      call lagrangian_hessians(lag, dense, qk, vk, dq, dv, dw, stat)
+      if (stat /= VCI_OK) then
+        why = 'the dense Hessians (hessians, or differences of dl_dq and dl_dv) failed or returned NaN/Inf'// &
+              ' in the check of the declared bandwidth'
+        return
+      end if
+      do b = 1, 3
+        scale = 1.0_dp
+        do j = 1, n
+          do i = 1, n
+            scale = max(scale, abs(block(b, i, j)))
+          end do
+        end do
+        tol = merge(1.0e-10_dp, 1.0e-6_dp, exact) * scale
+        do j = 1, n
+          do i = 1, n
+            y = block(b, i, j)
+            if (abs(i - j) > bw) then
+              if (abs(y) > tol) then
+                write (why, '(a,i0,a,i0,a,es10.3,a,i0,a)') 'L_'//trim(names(b))//'(', i, ', ', j, ') = ', y, &
+                  ' lies outside the declared Hessian bandwidth ', bw, ' ('//trim(source())//')'
+                stat = VCI_ERR_ARGUMENT; return
+              end if
+            else
+              x = band_entry(b, i, j)
+              if (abs(x - y) > tol) then
+                write (why, '(a,i0,a,i0,a,es10.3,a,es10.3,a)') 'hessians_band gives L_'//trim(names(b))//'(', i, &
+                  ', ', j, ') = ', x, ' where ', y, ' is expected ('//trim(source())//')'
+                stat = VCI_ERR_ARGUMENT; return
+              end if
+            end if
+          end do
+        end do
+      end do
+    end do
+  contains
+    real(dp) function block(b, i, j)
+      integer, intent(in) :: b, i, j
+      select case (b)
+      case (1); block = dq(i, j)
+      case (2); block = dv(i, j)
+      case default; block = dw(i, j)
+      end select
+    end function block
+    real(dp) function band_entry(b, i, j)
+      integer, intent(in) :: b, i, j
+      select case (b)
+      case (1); band_entry = band%lqq(bw + 1 + i - j, j)
+      case (2); band_entry = band%lqv(bw + 1 + i - j, j)
+      case default; band_entry = band%bvv(bw + 1 + i - j, j)
+      end select
+    end function band_entry
+    character(len=60) function source()
+      if (exact) then
+        source = 'the model''s dense hessians'
+      else
+        source = 'central differences of dl_dq and dl_dv'
+      end if
+    end function source
+  end subroutine lagrangian_check_band
+
+  !> lu(1:bw, :) = 0, lu(bw + 1:3 bw + 1, :) = b: band storage (2 bw + 1 rows) with the rows
+  !> band_lu needs for its fill-in.
+  pure subroutine fill_in_rows(bw, b, lu)
+    integer, intent(in) :: bw
+    real(dp), intent(in) :: b(:, :)
+    real(dp), intent(inout) :: lu(:, :)
+    integer :: i, j
+    do j = 1, size(b, 2)
+      do i = 1, bw
+        lu(i, j) = 0.0_dp
+      end do
+      do i = 1, 2 * bw + 1
+        lu(bw + i, j) = b(i, j)
+      end do
+    end do
+  end subroutine fill_in_rows
 
   !> No NaN or Inf in a: one test on the sum (3 n^2 calls of ieee_is_finite cost 38 % of a chain's
   !> impact steps at n = 128, docs/bench/chain.md), each entry only when the sum is not finite.
@@ -250,17 +465,33 @@ contains
       work%dw(1:n) = work%lv(1:n) - p
       if (it > 1 .and. maxval(abs(work%dw(1:n))) <= 4.0_dp * epsilon(1.0_dp) * max(size_p, &
           maxval(abs(work%lv(1:n))), tiny(1.0_dp))) exit
-      call lagrangian_hessians(lag, work, q, work%w(1:n), work%lqq, work%lqv, work%lvv, stat)
-      if (stat /= VCI_OK) return
-      ! differenced blocks of huge but finite values can overflow: nothing non-finite goes to LAPACK
-      if (.not. (all(ieee_is_finite(work%lvv)) .and. all(ieee_is_finite(work%dw(1:n))))) then
-        stat = VCI_ERR_NONFINITE; return
+      if (work%has_band_hessians) then      ! (the velocity block's band LU: O(n bw^2), no n x n array)
+        ! the velocity block into rows bw + 1 .. 3 bw + 1 of lvv, bw zero rows above it for the fill-in
+        call lagrangian_band_hessians(lag, work, q, work%w(1:n), lag%hessian_bandwidth, work%lqq, work%lqv, &
+                                      work%bvv, stat)
+        if (stat /= VCI_OK) return
+        call fill_in_rows(lag%hessian_bandwidth, work%bvv, work%lvv)
+        if (.not. all(ieee_is_finite(work%dw(1:n)))) then
+          stat = VCI_ERR_NONFINITE; return
+        end if
+        call band_lu(n, lag%hessian_bandwidth, work%lvv, work%ipiv, info)
+        if (info /= 0) then
+          stat = VCI_ERR_NEWTON; return
+        end if
+        call band_solve(n, lag%hessian_bandwidth, work%lvv, work%ipiv, work%dw(1:n))
+      else
+        call lagrangian_hessians(lag, work, q, work%w(1:n), work%lqq, work%lqv, work%lvv, stat)
+        if (stat /= VCI_OK) return
+        ! differenced blocks of huge but finite values can overflow: nothing non-finite goes to LAPACK
+        if (.not. (all(ieee_is_finite(work%lvv)) .and. all(ieee_is_finite(work%dw(1:n))))) then
+          stat = VCI_ERR_NONFINITE; return
+        end if
+        call dgetrf(n, n, work%lvv, n, work%ipiv, info)
+        if (info /= 0) then
+          stat = VCI_ERR_NEWTON; return
+        end if
+        call dgetrs('N', n, 1, work%lvv, n, work%ipiv, work%dw, n, info)
       end if
-      call dgetrf(n, n, work%lvv, n, work%ipiv, info)
-      if (info /= 0) then
-        stat = VCI_ERR_NEWTON; return
-      end if
-      call dgetrs('N', n, 1, work%lvv, n, work%ipiv, work%dw, n, info)
       work%w(1:n) = work%w(1:n) - work%dw(1:n)
       if (.not. all(ieee_is_finite(work%w(1:n)))) then
         stat = VCI_ERR_NONFINITE; return

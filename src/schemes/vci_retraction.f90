@@ -18,7 +18,7 @@ module vci_retraction
   use vci_status, only: VCI_OK, VCI_ERR_CALLBACK
   use vci_model, only: vci_model_t
   use vci_lagrangian, only: vci_lagrangian_t, vci_lagrangian_work_t, lagrangian_work_setup, &
-                            lagrangian_hessians, lagrangian_hamiltonian
+                            lagrangian_hessians, lagrangian_hamiltonian, lagrangian_band_hessians
   implicit none
   private
 
@@ -28,6 +28,9 @@ module vci_retraction
     class(vci_lagrangian_t), pointer :: lag => null()
     integer :: rule = RETRACTION_MIDPOINT
     logical :: has_model_energy = .false.
+    !> the model's banded Hessians are used (hessians_band, with a declared bandwidth): lqq, lqv,
+    !> lvv are then band storage, (2 bw + 1) x n, entry (i, j) at row bw + 1 + i - j
+    logical :: band_hessians = .false.
     type(vci_lagrangian_work_t) :: work
     real(dp), allocatable, private :: pt(:), w(:), lq(:), lv(:), lqq(:, :), lqv(:, :), lvv(:, :), om(:, :)
   contains
@@ -54,9 +57,18 @@ contains
     self%n = lag%n; self%m = lag%m; self%n_gaps = lag%n_gaps
     self%hessian_bandwidth = lag%hessian_bandwidth; self%check_bandwidth = lag%check_bandwidth
     n = lag%n
-    call lagrangian_work_setup(self%work, n, stat)
+    self%band_hessians = .false.
+    if (lag%hessian_bandwidth >= 0) then
+      call probe_band_hessians(self, lag, stat)
+      if (stat /= 0) return
+    end if
+    if (self%band_hessians) then
+      call lagrangian_work_setup(self%work, n, stat, band=lag%hessian_bandwidth)
+    else
+      call lagrangian_work_setup(self%work, n, stat)
+    end if
     if (stat /= 0) return
-    self%work%has_hessians = has_hessians
+    self%work%has_hessians = has_hessians .or. self%band_hessians
     self%has_model_energy = has_energy
     ! array by array: after an allocate that failed part-way some are allocated and some not
     if (allocated(self%pt)) deallocate (self%pt)
@@ -67,9 +79,33 @@ contains
     if (allocated(self%lqv)) deallocate (self%lqv)
     if (allocated(self%lvv)) deallocate (self%lvv)
     if (allocated(self%om)) deallocate (self%om)
-    allocate (self%pt(n), self%w(n), self%lq(n), self%lv(n), self%lqq(n, n), self%lqv(n, n), self%lvv(n, n), &
-              self%om(n, max(1, lag%m)), stat=stat)
+    allocate (self%pt(n), self%w(n), self%lq(n), self%lv(n), self%om(n, max(1, lag%m)), stat=stat)
+    if (stat /= 0) return
+    if (self%band_hessians) then
+      allocate (self%lqq(2 * self%hessian_bandwidth + 1, n), self%lqv(2 * self%hessian_bandwidth + 1, n), &
+                self%lvv(2 * self%hessian_bandwidth + 1, n), stat=stat)
+    else
+      allocate (self%lqq(n, n), self%lqv(n, n), self%lvv(n, n), stat=stat)
+    end if
   end subroutine bind
+
+  !> Does the model supply hessians_band? One call at q = v = 0 into band-sized arrays (its values
+  !> are discarded; a failure there still means "supplied"). stat /= 0: out of memory.
+  subroutine probe_band_hessians(self, lag, stat)
+    class(vci_retraction_model_t), intent(inout) :: self
+    class(vci_lagrangian_t), intent(inout) :: lag
+    integer, intent(out) :: stat
+    real(dp), allocatable :: z(:), bq(:, :), bv(:, :), bw2(:, :)
+    integer :: s, bw
+    bw = lag%hessian_bandwidth
+    allocate (z(lag%n), bq(2 * bw + 1, lag%n), bv(2 * bw + 1, lag%n), bw2(2 * bw + 1, lag%n), stat=stat)
+    if (stat /= 0) return
+    z = 0.0_dp
+    call lag%clear_not_provided(); s = 0
+    call lag%hessians_band(z, z, bw, bq, bv, bw2, s)
+    self%band_hessians = .not. lag%answered_not_provided()
+    call lag%clear_not_provided()
+  end subroutine probe_band_hessians
 
   !> The evaluation point and velocity of the segment (q, v, h).
   subroutine point_velocity(self, q, v, h)
@@ -157,6 +193,16 @@ contains
     real(dp), intent(out) :: hess(:, :)
     integer, intent(inout) :: stat
     integer :: s
+    if (self%band_hessians) then     ! (the band only, whatever the debug check: the rest is zero)
+      call lagrangian_band_hessians(self%lag, self%work, self%pt, self%w, self%hessian_bandwidth, &
+                                    self%lqq, self%lqv, self%lvv, s)
+      if (s /= VCI_OK) then
+        stat = failure_code(self, s); return
+      end if
+      if (self%check_bandwidth) hess = 0.0_dp   ! (Newton's matrix is then not zeroed on the band alone)
+      call band_stored_mixed_block(self, h, hess)
+      return
+    end if
     call lagrangian_hessians(self%lag, self%work, self%pt, self%w, self%lqq, self%lqv, self%lvv, s)
     if (s /= VCI_OK) then
       stat = failure_code(self, s); return
@@ -189,6 +235,26 @@ contains
       end do
     end do
   end subroutine banded_mixed_block
+
+  !> banded_mixed_block from the blocks in band storage (hessians_band): entry (i, j) of a block
+  !> at row k + i - j, k = bw + 1; L_vq(i, j) = L_qv(j, i) at row k + j - i of column i.
+  subroutine band_stored_mixed_block(self, h, hess)
+    class(vci_retraction_model_t), intent(inout) :: self
+    real(dp), intent(in) :: h
+    real(dp), intent(inout) :: hess(:, :)
+    integer :: i, j, n, bw, k
+    n = size(hess, 1); bw = self%hessian_bandwidth; k = bw + 1
+    do j = 1, n
+      do i = max(1, j - bw), min(n, j + bw)
+        if (self%rule == RETRACTION_LEFT) then
+          hess(i, j) = self%lqv(k + i - j, j) - self%lvv(k + i - j, j) / h
+        else
+          hess(i, j) = 0.25_dp * h * self%lqq(k + i - j, j) + 0.5_dp * (self%lqv(k + i - j, j) - &
+                       self%lqv(k + j - i, i)) - self%lvv(k + i - j, j) / h
+        end if
+      end do
+    end do
+  end subroutine band_stored_mixed_block
 
   subroutine constraint_forms(self, q, omega, stat)
     class(vci_retraction_model_t), intent(inout) :: self

@@ -147,7 +147,7 @@ contains
     class(vci_scheme_discrete_t), intent(inout) :: self
     class(vci_model_t), target, intent(inout) :: model
     integer, intent(out) :: stat
-    integer :: n, m, nx
+    integer :: n, m, nx, nf
     call self%setup_common(model, stat)
     if (stat /= 0) return
     self%model => model
@@ -165,7 +165,10 @@ contains
                                         self%start_lo, self%end_key, self%end_lo, self%kin, self%cjo, self%sizes, &
                                         self%fjac, self%flu, self%fr, self%fsc, self%frt, self%fsct, self%fxt, &
                                         self%fdx, self%frw, self%fx0, self%fpiv, self%gg1)
-    allocate (self%fjac(n + m, n + m), self%flu(n + m, n + m), self%fr(n + m), self%fsc(n + m), &
+    ! the fused solve's matrices only for the small systems it takes (vci_large_system; else 1 x 1:
+    ! a chain of n = 4096 kept two n x n arrays here, one of them zeroed and so resident)
+    nf = merge(n + m, 1, n + m < vci_large_system)
+    allocate (self%fjac(nf, nf), self%flu(nf, nf), self%fr(n + m), self%fsc(n + m), &
               self%frt(n + m), self%fsct(n + m), self%fxt(n + m), self%fdx(n + m), self%frw(n + m), &
               self%fx0(n + m), self%fpiv(n + m), stat=stat)
     if (stat /= 0) return

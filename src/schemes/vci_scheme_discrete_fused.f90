@@ -32,7 +32,7 @@ contains
     self%flu_kept = .false.
     nx = size(x)
     if (self%kind /= KIND_SUBSTEP .or. nx /= self%n + self%m .or. .not. fusable(self) .or. &
-        nx > nw%small_lu_max .or. nx >= nw%reuse_min) return
+        nx > nw%small_lu_max .or. nx >= nw%reuse_min .or. nx > size(self%fjac, 1)) return
     self%fx0 = x
     self%jac_known = .false.
     iterations = 0

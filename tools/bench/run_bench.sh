@@ -10,6 +10,8 @@
 #   tools/bench/run_bench.sh                 # full run (~30 s), writes docs/bench/throughput.md
 #   tools/bench/run_bench.sh --quick         # short repeats, for a smoke test
 #   tools/bench/run_bench.sh --lobatto       # only the Lobatto steps (docs/bench/lobatto.md)
+#   tools/bench/run_bench.sh --chain-scaling # only the banded chain against n = 32 .. 4096 with fitted
+#                                            # exponents (docs/bench/chain_scaling.md, ~10 min)
 #   BUILD_DIR=/tmp/b tools/bench/run_bench.sh
 #
 # Compare ratios within one run only: absolute times move with the machine and its load.
@@ -116,6 +118,14 @@ lobatto_table() {
 }
 if [ "${1:-}" = --lobatto ]; then
   lobatto_table
+  exit 0
+fi
+chain_scaling() {   # the banded FPU chain against n (issue 28): tools/bench/run_chain_scaling.sh
+  OUT="$(dirname "$OUT")/chain_scaling.md" BUILD_DIR="$BUILD_DIR" sh "$ROOT/tools/bench/run_chain_scaling.sh" >/dev/null
+  cat "$(dirname "$OUT")/chain_scaling.md"
+}
+if [ "${1:-}" = --chain-scaling ]; then
+  chain_scaling
   exit 0
 fi
 
@@ -373,6 +383,7 @@ awk -v cmd="tools/bench/run_bench.sh${*:+ $*}" '
 } >>"$OUT"
 lobatto_table
 BUILD_DIR="$BUILD_DIR" sh "$ROOT/tools/bench/run_chain.sh" || status=$?   # the chain's impact steps (docs/bench/chain.md)
+chain_scaling || status=$?
 if [ "$status" -ne 0 ]; then
   echo "run_bench.sh: benchmark failed (status $status); see the trajectory check in $OUT" >&2
 fi
