@@ -3,7 +3,7 @@
 !> stiffness 0.5 between particles i and i + L, L = n / 8: each Hessian row has 5 nonzeros, but
 !> the band that holds them has half-width L. Midpoint from L, the `hamiltonian` impact condition,
 !> h = 0.01, from docs/RESULTS.md's chain start. Every step is timed on its own and classed as
-!> regular or impact step (medians). Arguments: dense | banded | sparse, the number of steps, then
+!> regular or impact step (medians; each step's class on stderr). Arguments: dense | banded | sparse, the number of steps, then
 !> the n to run. Not a test: docs/bench/sparse.md gives the command (OpenBLAS on one thread).
 module bench_sparse_chain_model
   use vci, only: dp
@@ -73,6 +73,7 @@ end module bench_sparse_chain_model
 program bench_sparse_chain
   use, intrinsic :: iso_fortran_env, only: output_unit
   use vci
+  use, intrinsic :: iso_fortran_env, only: error_unit
   use bench_sparse_chain_model, only: long_range_chain_t
   implicit none
   type(long_range_chain_t), target :: model
@@ -138,6 +139,7 @@ program bench_sparse_chain
         write (output_unit, '(a,i0,a)') 'n = ', n, ' failed: '//integ%message(); stop 1
       end if
       st1 = integ%statistics()
+      write (error_unit, '(a,i0,a,i0,a,l1)') 'step ', n, ' ', k, ' impact ', st1%impacts > st0%impacts
       if (st1%impacts > st0%impacts) then
         nimp = nimp + 1; timp(nimp) = real(c1 - c0, dp) / real(rate, dp)
       else
