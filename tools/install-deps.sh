@@ -2,7 +2,7 @@
 # Install, from Debian's archive, whatever vci's build, tests and demos need and is missing.
 # Usage: tools/install-deps.sh [extra packages...]. Runs apt-get only when something is missing.
 set -euo pipefail
-packages=(cmake make gfortran gcc liblapack-dev libblas-dev libhdf5-dev hdf5-tools pkg-config python3
+packages=(cmake make gfortran gcc liblapack-dev libblas-dev libsuitesparse-dev libhdf5-dev hdf5-tools pkg-config python3
           python3-numpy python3-h5py python3-matplotlib python3-cffi python3-numba python3-sympy python3-pytest
           valgrind doxygen
           openmpi-bin libopenmpi-dev libhdf5-openmpi-dev libasan8 libubsan1 libtsan2 "$@")

@@ -19,6 +19,7 @@ module vci
                         NEWTON_MAX_ITERATIONS, NEWTON_NO_DESCENT, NEWTON_SINGULAR, NEWTON_EVALUATION, &
                         NEWTON_NONFINITE, NEWTON_STRUCTURE
   use vci_csv_output, only: vci_csv_writer_t
+  use vci_sparse, only: vci_sparse_pattern_t, vci_sparse_available => sparse_available
   implicit none
   public
   !> Library version: major*10000 + minor*100 + patch (as vci_version() in C).

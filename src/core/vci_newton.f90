@@ -18,6 +18,7 @@ module vci_newton
   use vci_lapack, only: dgetrf, dgetrs, dgelsd
   use vci_kernels, only: equilibrate, scaled_merit, small_lu, small_lu_solve, pivots_regular
   use vci_banded, only: vci_banded_lu_t, outside_band
+  use vci_sparse, only: vci_sparse_lu_t, vci_sparse_pattern_t, outside_pattern, pattern_rows
   implicit none
   private
 
@@ -57,6 +58,8 @@ module vci_newton
     procedure :: reuse_key => never_reuse
     !> The Jacobian's structure: a banded leading block and a dense border (default: dense).
     procedure :: structure => no_structure
+    !> A declared sparse pattern of the leading block instead (default: none; vci_sparse).
+    procedure :: sparse_structure => no_sparse_structure
   end type vci_system_t
 
   abstract interface
@@ -129,6 +132,11 @@ module vci_newton
     logical, private :: lu_banded = .false.        !< the kept/last factors are band's, not lu's
     integer, private :: snb = 0, sbw = -1          !< the posed system's block and half-bandwidth
     logical, private :: scheck = .false.           !< check the band on every Newton matrix
+    !> Sparse LU of a declared pattern (vci_sparse, KLU): the posed system's block, its pattern
+    type(vci_sparse_lu_t), private :: sparse
+    logical, private :: lu_sparse = .false.        !< the kept/last factors are sparse's
+    integer, private :: ssp = 0                    !< the posed system's sparse block (0: none)
+    type(vci_sparse_pattern_t), pointer, private :: spat => null()
   contains
     !> Allocate workspace for systems of up to nmax unknowns (call once, outside the step loop).
     procedure :: reserve
@@ -163,6 +171,17 @@ contains
     logical, intent(out) :: check
     nb = 0; bw = -1; check = .false.
   end subroutine no_structure
+
+  !> A declared sparse pattern of the leading block: unknowns 1..nb with the pattern pat (a pointer
+  !> into the model), the others a dense border; check: verify the pattern on every matrix.
+  !> pat null or nb = 0: none (the default).
+  subroutine no_sparse_structure(self, nb, pat, check)
+    class(vci_system_t), intent(inout) :: self
+    integer, intent(out) :: nb
+    type(vci_sparse_pattern_t), pointer, intent(out) :: pat
+    logical, intent(out) :: check
+    nb = 0; pat => null(); check = .false.
+  end subroutine no_sparse_structure
 
   logical function always_admissible(self, x)
     class(vci_system_t), intent(inout) :: self
@@ -218,7 +237,7 @@ contains
     integer, allocatable, intent(out) :: ipiv(:)
     integer, intent(out) :: stat
     nf = 0; key = 0.0_dp; stat = VCI_OK
-    if (.not. self%have_lu .or. self%lu_banded) return   ! (band factors: the continued run refactorises)
+    if (.not. self%have_lu .or. self%lu_banded .or. self%lu_sparse) return   ! (band/sparse factors: the continued run refactorises)
     allocate (rw(self%lu_n), lu(self%lu_n, self%lu_n), ipiv(self%lu_n), stat=stat)
     if (stat /= 0) then
       stat = VCI_ERR_MEMORY; return
@@ -241,7 +260,7 @@ contains
     if (any(ipiv < 1) .or. any(ipiv > nf)) return
     if (.not. (all_finite(rw) .and. all_finite(lu))) return     ! (from a file: nothing non-finite to LAPACK)
     self%rw(1:nf) = rw; self%lu(1:nf, 1:nf) = lu; self%ipiv(1:nf) = ipiv
-    self%lu_banded = .false.
+    self%lu_banded = .false.; self%lu_sparse = .false.
     self%lu_n = nf; self%lu_key = key
     self%have_lu = .true.
   end subroutine keep_factors
@@ -263,6 +282,8 @@ contains
     if (allocated(self%rw)) deallocate (self%rw)
     if (allocated(self%work)) deallocate (self%work)
     if (allocated(self%iwork)) deallocate (self%iwork)
+    call self%sparse%reset()
+    self%lu_sparse = .false.
     self%capacity = 0
     self%have_lu = .false.
   end subroutine release
@@ -286,6 +307,8 @@ contains
     if (n >= self%reuse_min) key = sys%reuse_key()
     call sys%structure(self%snb, self%sbw, self%scheck)
     if (self%snb > n .or. self%sbw < 0) self%snb = 0
+    self%ssp = 0
+    if (self%snb == 0) call sparse_posed(self, sys, n)
     call sys%residual(x, self%r(1:n), self%sc(1:n), stat)
     if (stat /= VCI_OK) then
       call fail_eval(res, stat); return
@@ -469,6 +492,24 @@ contains
         end if
       end if
     end if
+    if (nb == 0 .and. present(structured_as)) then
+      ! a declared sparse pattern: a is dense in memory (all entries written), factorised sparsely
+      call sparse_posed(self, structured_as, n)
+      if (self%ssp > 0) then
+        if (pattern_rows(n, self%ssp, self%spat, a, size(a, 1), self%rw) <= huge(1.0_dp)) then
+          call self%sparse%factor(n, self%ssp, self%spat, a, size(a, 1), self%rw, info)
+          if (info == 0) then
+            do i = 1, n
+              b(i) = b(i) * self%rw(i)
+            end do
+            call self%sparse%solve(b(1:n))
+            self%lu_sparse = .true.
+            if (all_finite(b(1:n))) return
+            b(1:n) = self%rt(1:n)
+          end if
+        end if
+      end if
+    end if
     self%lu(1:n, 1:n) = a(1:n, 1:n)
     if (nb > 0 .and. .not. chk) call zero_outside_band(nb, bw, self%lu, self%capacity)
     call lu_factor(self, n, info)
@@ -503,6 +544,10 @@ contains
       ! a singular band block or Schur complement (or no workspace): the dense path below decides,
       ! on the matrix with its zeros outside the band written (the assembly wrote the band alone)
       if (.not. self%scheck) call zero_outside_band(self%snb, self%sbw, self%jac, self%capacity)
+    else if (self%ssp > 0) then
+      call sparse_direction(self, n, factored, res)
+      if (factored .or. res%reason /= NEWTON_CONVERGED) return
+      ! singular (or no KLU, no memory): the dense path below decides, on the full matrix
     end if
     ! rows equilibrated by their largest entry; jac keeps the equilibrated matrix for the fallback
     call equilibrate(n, self%capacity, self%jac, self%lu, self%r, self%dx, self%rw)
@@ -564,6 +609,53 @@ contains
     factored = all(ieee_is_finite(self%dx(1:n)))
     self%lu_banded = factored
   end subroutine structured_direction
+
+  !> The system's declared sparse pattern, if it has one that fits n unknowns: ssp, spat, scheck.
+  subroutine sparse_posed(self, sys, n)
+    type(vci_newton_t), intent(inout) :: self
+    class(vci_system_t), intent(inout) :: sys
+    integer, intent(in) :: n
+    integer :: nb
+    logical :: chk
+    self%ssp = 0
+    call sys%sparse_structure(nb, self%spat, chk)
+    if (.not. associated(self%spat)) return
+    if (nb < 1 .or. nb > n .or. self%spat%n /= nb) return
+    self%ssp = nb; self%scheck = chk
+  end subroutine sparse_posed
+
+  !> Newton direction for a system with a declared sparse pattern (vci_sparse): rows equilibrated
+  !> by their largest entry in the pattern and the border, the bordered matrix factorised by KLU.
+  !> factored false: fall back to the dense path (jac untouched); res%reason NEWTON_STRUCTURE when
+  !> the debug check finds a nonzero outside the pattern.
+  subroutine sparse_direction(self, n, factored, res)
+    type(vci_newton_t), intent(inout) :: self
+    integer, intent(in) :: n
+    logical, intent(out) :: factored
+    type(vci_newton_result_t), intent(inout) :: res
+    integer :: i, j, info
+    real(dp) :: total
+    factored = .false.
+    if (self%scheck) then
+      call outside_pattern(self%ssp, self%spat, self%jac, self%capacity, i, j)
+      if (i > 0) then
+        res%reason = NEWTON_STRUCTURE; res%bad_row = i; res%bad_col = j; return
+      end if
+    end if
+    total = pattern_rows(n, self%ssp, self%spat, self%jac, self%capacity, self%rw)
+    do i = 1, n
+      self%dx(i) = self%r(i) * self%rw(i)
+    end do
+    if (.not. (total <= huge(1.0_dp) .and. all_finite(self%dx(1:n)))) return
+    call self%sparse%factor(n, self%ssp, self%spat, self%jac, self%capacity, self%rw, info)
+    if (info /= 0) return
+    self%factorisations = self%factorisations + 1
+    self%structured_factorisations = self%structured_factorisations + 1
+    call self%sparse%solve(self%dx(1:n))
+    factored = all(ieee_is_finite(self%dx(1:n)))
+    self%lu_sparse = factored
+    self%lu_banded = .false.
+  end subroutine sparse_direction
 
   !> rw(i) = 1 / the largest |a(i, j)| of row i over the band and the border (the entries outside the
   !> band are zero); returns the sum of those maxima (not finite: a NaN or Inf in the matrix).
@@ -678,7 +770,7 @@ contains
     type(vci_newton_t), intent(inout) :: self
     integer, intent(in) :: n
     integer, intent(out) :: info
-    self%lu_banded = .false.
+    self%lu_banded = .false.; self%lu_sparse = .false.
     if (n <= self%small_lu_max) then
       call small_lu(n, self%lu, self%ipiv, info)
     else
@@ -694,6 +786,8 @@ contains
     integer :: info
     if (self%lu_banded) then
       call self%band%solve(b(1:n))
+    else if (self%lu_sparse) then
+      call self%sparse%solve(b(1:n))
     else if (n <= self%small_lu_max) then
       call small_lu_solve(n, self%lu, self%ipiv, b)
     else

@@ -17,6 +17,7 @@ module vci_integrator
   use vci_model, only: vci_model_t
   use vci_lagrangian, only: vci_lagrangian_t, lagrangian_check_band
   use vci_limits, only: vci_size_problem
+  use vci_sparse, only: sparse_available
   use vci_settings, only: vci_settings_t, vci_solver_stats_t, vci_default_max_impacts
   use vci_state, only: vci_state_t, vci_impact_buffer_t
   use vci_stepper, only: vci_stepper_t
@@ -298,6 +299,7 @@ contains
     integer :: rule
     type(vci_settings_t) :: settings
     stat = VCI_OK
+    if (.not. pattern_usable(self, who, stat)) return
     ! A composition steps explicitly; its stepper's scheme (for the stepper's other queries) is
     ! the midpoint retraction's, which create built already: only the composition is attached
     ! (half of the set-up's instructions were this second build, docs/DESIGN.md §9).
@@ -393,6 +395,32 @@ contains
   end subroutine attach_composition
 
   !> The scheme could not be built (its message is set): the integrator keeps its model but cannot
+  !> A declared sparse Hessian pattern (issue 28) needs the sparse solver and must fit the model;
+  !> else VCI_ERR_ARGUMENT with a message saying why (false: stat is set, the scheme not built).
+  logical function pattern_usable(self, who, stat) result(ok)
+    class(vci_integrator_t), intent(inout) :: self
+    character(len=*), intent(in) :: who
+    integer, intent(out) :: stat
+    ok = .true.; stat = VCI_OK
+    if (.not. associated(self%model)) return
+    if (self%model%hessian_pattern%n == 0 .and. self%model%pattern_status == 0) return
+    ok = .false.
+    if (.not. sparse_available()) then
+      self%last_message = who//': the model declares a sparse Hessian pattern but vci was built without '// &
+        'the sparse solver (CMake option VCI_SPARSE=ON, SuiteSparse KLU: Debian libsuitesparse-dev)'
+    else if (self%model%pattern_status /= 0) then
+      self%last_message = who//': the declared Hessian pattern is invalid: '//trim(self%model%pattern_message)
+    else if (self%model%hessian_pattern%n /= self%model%n) then
+      write (self%last_message, '(a,i0,a,i0,a)') who//': the declared Hessian pattern has ', &
+        self%model%hessian_pattern%n, ' columns, the model n = ', self%model%n, ''
+    else if (self%model%hessian_bandwidth >= 0) then
+      self%last_message = who//': the model declares both a Hessian bandwidth and a sparse pattern; declare one'
+    else
+      ok = .true.; return
+    end if
+    call scheme_failed(self, VCI_ERR_ARGUMENT, stat)
+  end function pattern_usable
+
   !> be initialised or stepped until a set_scheme succeeds (the stepper may hold part of a workspace).
   subroutine scheme_failed(self, status, stat)
     class(vci_integrator_t), intent(inout) :: self

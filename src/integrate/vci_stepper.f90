@@ -621,9 +621,9 @@ contains
       call explain_newton(self, nx)
     case (NEWTON_NONFINITE)
       self%cause = what//': residual or Newton matrix not finite (callback values overflow)'
-    case (NEWTON_STRUCTURE)      ! (the debug check of a declared Hessian bandwidth)
+    case (NEWTON_STRUCTURE)      ! (the debug check of a declared Hessian bandwidth or pattern)
       call vci_set_message(self%cause, what//': the Newton matrix has a nonzero at ('//trim(vci_int_text(res%bad_row))// &
-        ', '//trim(vci_int_text(res%bad_col))//') outside the Hessian bandwidth the model declared')
+        ', '//trim(vci_int_text(res%bad_col))//') outside the Hessian bandwidth the model declared, or its sparse pattern')
     case (NEWTON_EVALUATION)
       if (stat == VCI_ERR_NONFINITE) then
         self%cause = what//': callback '//trim(self%sys%failed_callback)//' returned NaN or Inf'

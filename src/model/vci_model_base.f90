@@ -12,6 +12,7 @@
 !> Every procedure receives `stat` preset to 0 and never stops the program.
 module vci_model_base
   use vci_kinds, only: dp
+  use vci_sparse, only: vci_sparse_pattern_t, make_pattern
   implicit none
   private
 
@@ -27,11 +28,19 @@ module vci_model_base
     !> With a declared band: check every Newton matrix for a nonzero outside it (a debug check,
     !> O(n^2) per factorisation); the solve then fails with a message naming the entry.
     logical :: check_bandwidth = .false.
+    !> Declared sparse pattern of the Hessian blocks (declare_pattern; n = 0: none): the schemes
+    !> then factorise their Newton matrices by sparse LU (vci_sparse, SuiteSparse KLU).
+    type(vci_sparse_pattern_t) :: hessian_pattern
+    logical :: check_pattern = .false.          !< verify the pattern on every Newton matrix (debug)
+    integer :: pattern_status = 0               !< 0, or 1 when the last declare_pattern was invalid
+    character(len=160) :: pattern_message = ''  !< why the last declared pattern was invalid
     logical, private :: declined = .false.   !< an optional procedure answered "not provided"
   contains
     !> Declare the Hessian blocks banded with half-bandwidth bw (bw < 0: dense); check (optional):
     !> verify the band on every Newton matrix (debug).
     procedure, non_overridable :: declare_bandwidth
+    !> Declare the Hessian blocks sparse with a pattern in compressed columns (issue 28).
+    procedure, non_overridable :: declare_pattern
     !> Called by an optional procedure the model does not supply, instead of computing: marks "not provided".
     procedure, non_overridable :: not_provided
     !> Start a probe: forget any earlier "not provided".
@@ -63,6 +72,26 @@ contains
     self%check_bandwidth = .false.
     if (present(check)) self%check_bandwidth = check
   end subroutine declare_bandwidth
+
+  !> Declare the sparse pattern of the Hessian blocks (L_qq, L_qv, L_vv of L, or D1 D2 L_d) in
+  !> compressed columns: column j's nonzero rows are rowind(colptr(j) : colptr(j + 1) - 1) (1-based,
+  !> any order; the pattern is made symmetric and given its diagonal). Entries outside it must be
+  !> zero. Needs a build with VCI_SPARSE (SuiteSparse KLU): without it, or with an invalid pattern,
+  !> creating an integrator for the model fails with VCI_ERR_ARGUMENT and a message saying why.
+  !> check (optional, default false): verify the pattern on every Newton matrix (debug, O(n^2)).
+  !> An empty colptr (size 0) withdraws the declaration.
+  subroutine declare_pattern(self, colptr, rowind, check)
+    class(vci_model_base_t), intent(inout) :: self
+    integer, intent(in) :: colptr(:), rowind(:)
+    logical, intent(in), optional :: check
+    self%check_pattern = .false.
+    if (present(check)) self%check_pattern = check
+    self%pattern_status = 0; self%pattern_message = ''
+    self%hessian_pattern = vci_sparse_pattern_t()
+    if (size(colptr) == 0) return
+    call make_pattern(size(colptr) - 1, colptr, rowind, self%hessian_pattern, self%pattern_status, self%pattern_message)
+    if (self%pattern_status /= 0) self%pattern_status = 1
+  end subroutine declare_pattern
 
   !> Called by an optional procedure the model does not supply (the defaults below, or an adapter
   !> whose callback is absent) instead of computing: marks the answer as "not provided" and sets

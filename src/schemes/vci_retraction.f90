@@ -56,6 +56,8 @@ contains
     self%rule = rule
     self%n = lag%n; self%m = lag%m; self%n_gaps = lag%n_gaps
     self%hessian_bandwidth = lag%hessian_bandwidth; self%check_bandwidth = lag%check_bandwidth
+    self%hessian_pattern = lag%hessian_pattern; self%check_pattern = lag%check_pattern
+    self%pattern_status = lag%pattern_status; self%pattern_message = lag%pattern_message
     n = lag%n
     self%band_hessians = .false.
     if (lag%hessian_bandwidth >= 0) then

@@ -19,6 +19,7 @@ module vci_scheme_discrete
   use vci_model, only: vci_model_t
   use vci_retraction, only: vci_retraction_model_t, RETRACTION_LEFT
   use vci_newton, only: vci_large_system, vci_newton_t, vci_newton_result_t
+  use vci_sparse, only: vci_sparse_pattern_t
   use vci_kernels, only: momentum_terms, kinetic_and_floor, jacobian_sizes, band_jacobian_sizes
   use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_STAGE1, KIND_STAGE2, KIND_IMPULSE, KIND_PAIR, &
                         VCI_IMPACT_HAMILTONIAN, vci_fd_rel
@@ -77,6 +78,7 @@ module vci_scheme_discrete
     procedure :: substep_sensitivity
     procedure :: use_derivatives
     procedure :: structure => banded_structure
+    procedure :: sparse_structure => declared_pattern
     procedure :: position_carry => discrete_position_carry
     procedure :: restore_position_carry => discrete_restore_carry
   end type vci_scheme_discrete_t
@@ -112,6 +114,20 @@ contains
     if (self%base%hessian_bandwidth < 0) return
     nb = self%n; bw = self%base%hessian_bandwidth; check = self%base%check_bandwidth
   end subroutine banded_structure
+
+  !> Newton's view with a declared sparse Hessian pattern (vci_sparse): the position unknowns
+  !> x(1:n) form a block with the Hessians' pattern (D1 D2 L_d, and the retraction's Jacobian, is a
+  !> sum of the Hessian blocks and their transposes), the multipliers, alpha or mu its dense border.
+  subroutine declared_pattern(self, nb, pat, check)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    integer, intent(out) :: nb
+    type(vci_sparse_pattern_t), pointer, intent(out) :: pat
+    logical, intent(out) :: check
+    nb = 0; pat => null(); check = .false.
+    if (self%kind == KIND_IMPULSE .or. .not. associated(self%base)) return
+    if (self%base%hessian_pattern%n /= self%n .or. self%base%hessian_bandwidth >= 0) return
+    nb = self%n; pat => self%base%hessian_pattern; check = self%base%check_pattern
+  end subroutine declared_pattern
 
   !> The model's mixed Hessian, discrete constraint Jacobian and gap gradients (each differenced
   !> when the model does not supply it).
