@@ -17,7 +17,7 @@ module vci_kernels
   public :: band_jacobian_sizes
   public :: momentum_terms, kinetic_and_floor, jacobian_sizes, equilibrate, scaled_merit, small_lu, small_lu_solve
   public :: substep_rows, substep_direction, pivots_regular
-  public :: lobatto_nodes, lobatto_forces, lobatto_blocks
+  public :: lobatto_nodes, lobatto_forces, lobatto_blocks, total_of
 
 contains
 
@@ -336,22 +336,22 @@ contains
     end do
   end subroutine lobatto_nodes
 
-  !> The Lobatto scheme's node forces F_j = tau b_j lq_j + dir sum_i b_i d(i, j) lv_i (j = 0..s) and
-  !> fs(:, j) the sum of their terms' sizes.
-  pure subroutine lobatto_forces(n, s, tau, dsign, b, d, lq, lv, f, fs)
+  !> The Lobatto scheme's node forces F_j = tau b_j lq_j + dir sum_i bd(i, j) lv_i (j = 0..s) and
+  !> fs(:, j) the sum of their terms' sizes; bd(i, j) = b_i d(i, j), the rule's, formed once (dir = +-1
+  !> times it is the product dir b_i d(i, j) to the bit).
+  pure subroutine lobatto_forces(n, s, tau, dsign, b, bd, lq, lv, f, fs)
     integer, intent(in) :: n, s
-    real(dp), intent(in) :: tau, dsign, b(0:s), d(0:s, 0:s), lq(n, 0:s), lv(n, 0:s)
+    real(dp), intent(in) :: tau, dsign, b(0:s), bd(0:s, 0:s), lq(n, 0:s), lv(n, 0:s)
     real(dp), intent(out) :: f(n, 0:s), fs(n, 0:s)
     integer :: i, j, l
-    real(dp) :: w, t, ts
+    real(dp) :: t, ts
     do j = 0, s
       do l = 1, n
         t = tau * b(j) * lq(l, j)
         ts = abs(t)
         do i = 0, s
-          w = dsign * b(i) * d(i, j)
-          t = t + w * lv(l, i)
-          ts = ts + abs(w) * abs(lv(l, i))
+          t = t + (dsign * bd(i, j)) * lv(l, i)
+          ts = ts + abs(bd(i, j)) * abs(lv(l, i))
         end do
         f(l, j) = t
         fs(l, j) = ts
@@ -395,4 +395,18 @@ contains
       end do
     end do
   end subroutine lobatto_blocks
+
+  !> The sum of a(1:m) (finite exactly when every element is, barring overflow of the sum, which
+  !> callers treat as non-finite): one test for a whole array of callback values, explicit-shape so
+  !> that it compiles to a plain loop where sum() over a polymorphic object's component did not
+  !> (570 instructions for three 5-element sums in the Lobatto Jacobian; docs/bench/lobatto.md).
+  pure real(dp) function total_of(m, a) result(t)
+    integer, intent(in) :: m
+    real(dp), intent(in) :: a(m)
+    integer :: i
+    t = 0.0_dp
+    do i = 1, m
+      t = t + a(i)
+    end do
+  end function total_of
 end module vci_kernels

@@ -32,7 +32,7 @@ module vci_scheme_lobatto
                             lagrangian_hessians, lagrangian_hamiltonian
   use vci_lobatto_rule, only: vci_lobatto_rule_t, lobatto_rule, VCI_LOBATTO_MAX_STAGES
   use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_STAGE1, KIND_STAGE2, KIND_IMPULSE, KIND_PAIR, vci_fd_rel
-  use vci_kernels, only: lobatto_nodes, lobatto_forces, lobatto_blocks
+  use vci_kernels, only: lobatto_nodes, lobatto_forces, lobatto_blocks, total_of
   implicit none
   private
 
@@ -46,6 +46,7 @@ module vci_scheme_lobatto
     real(dp), allocatable, private :: hqq(:, :, :), hqv(:, :, :), hvv(:, :, :), g(:), dg(:, :), tmp(:)
     real(dp), allocatable, private :: jscale(:)
     real(dp), allocatable, private :: wdd(:, :, :)   ! b_i D_ij D_ik (i = 0..s, j = 0..s-1, k = 1..s)
+    real(dp), allocatable, private :: wbd(:, :)      ! b_i D_ij (the forces' weights)
     ! the point of the last evaluation (evaluate): the Jacobian and the end momentum that follow a
     ! residual at the same point take its node values instead of calling the model again
     real(dp), allocatable, private :: x_eval(:), a_eval(:)
@@ -112,14 +113,14 @@ contains
     nx = s * n + s * lag%m + 1
     if (allocated(self%y)) deallocate (self%y, self%v, self%lq, self%lv, self%lval, self%f, self%fs, self%hqq, &
                                        self%hqv, self%hvv, self%g, self%dg, self%tmp, self%jscale, self%x_eval, &
-                                       self%a_eval, self%wdd)
+                                       self%a_eval, self%wdd, self%wbd)
     if (allocated(self%om)) deallocate (self%om, self%lam, self%wmom, self%ctv, self%dctv, self%dol, self%op, &
                                         self%omm, self%qd, self%kkt, self%krhs, self%pbar, self%wv, self%kpiv, &
                                         self%nuw, self%osz, self%ypoly, self%lpoly, self%exq, self%exl)
     allocate (self%y(n, 0:s), self%v(n, 0:s), self%lq(n, 0:s), self%lv(n, 0:s), self%lval(0:s), self%f(n, 0:s), &
               self%fs(n, 0:s), self%hqq(n, n, 0:s), self%hqv(n, n, 0:s), self%hvv(n, n, 0:s), &
               self%g(max(1, lag%n_gaps)), self%dg(n, max(1, lag%n_gaps)), self%tmp(n), self%jscale(nx), &
-              self%x_eval(nx), self%a_eval(n), self%wdd(0:s, 0:s - 1, s), stat=stat)
+              self%x_eval(nx), self%a_eval(n), self%wdd(0:s, 0:s - 1, s), self%wbd(0:s, 0:s), stat=stat)
     if (stat /= 0) then
       stat = VCI_ERR_MEMORY; return
     end if
@@ -130,6 +131,11 @@ contains
         do i = 0, s
           self%wdd(i, j, k) = self%rule%b(i) * self%rule%d(i, j) * self%rule%d(i, k)
         end do
+      end do
+    end do
+    do j = 0, s
+      do i = 0, s
+        self%wbd(i, j) = self%rule%b(i) * self%rule%d(i, j)
       end do
     end do
     if (lag%m > 0) then
@@ -375,8 +381,8 @@ contains
         end if
       end if
     end do
-    call lobatto_forces(n, s, tau, dsign, self%rule%b, self%rule%d, self%lq, self%lv, self%f, self%fs)
-    total = sum(self%fs)
+    call lobatto_forces(n, s, tau, dsign, self%rule%b, self%wbd, self%lq, self%lv, self%f, self%fs)
+    total = total_of(n * (s + 1), self%fs)
     if (values) total = total + sum(abs(self%lval))
     if (.not. (total <= huge(1.0_dp))) then
       ! which callback: the first non-finite value, in the order they were called
@@ -562,7 +568,7 @@ contains
     real(dp), intent(in) :: x(:), r(:)
     real(dp), intent(inout) :: jac(:, :)
     integer, intent(out) :: stat
-    integer :: n, s, i, j, k, last, nx, c0, a1, m, l, k0, ro, c
+    integer :: n, s, i, j, k, last, nx, c0, a1, m, l, k0, ro, c, nh
     real(dp) :: tau, dsign, rs, wgt, acc
     n = self%n; s = self%s; m = self%m; last = s * n + s * m + 1
     nx = self%unknowns(self%kind)
@@ -581,7 +587,9 @@ contains
           stat = VCI_ERR_CALLBACK; return
         end if
       end do
-      if (.not. (abs(sum(self%hqq)) + abs(sum(self%hqv)) + abs(sum(self%hvv)) <= huge(1.0_dp))) then
+      nh = n * n * (s + 1)
+      if (.not. (abs(total_of(nh, self%hqq)) + abs(total_of(nh, self%hqv)) + abs(total_of(nh, self%hvv)) <= &
+                 huge(1.0_dp))) then
         if (.not. (all(abs(self%hqq) <= huge(1.0_dp)) .and. all(abs(self%hqv) <= huge(1.0_dp)) .and. &
                    all(abs(self%hvv) <= huge(1.0_dp)))) then
           stat = VCI_ERR_NONFINITE
