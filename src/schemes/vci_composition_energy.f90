@@ -29,7 +29,7 @@ module vci_composition_energy
 
   !> Scratch of the energy evaluations (allocated once, at setup: no allocation at impacts).
   type, public :: vci_composition_energy_t
-    real(dp), allocatable :: q(:), p(:), dv(:), v(:), pplus(:)
+    real(dp), allocatable :: q(:), p(:), dv(:), v(:), pplus(:)   !< stage state, ∇V, M⁻¹p̄, the trial p⁺
     integer :: failed_stat = 0      !< the callback's own code on VCI_ERR_CALLBACK
     integer :: maps = 0             !< composed maps evaluated (statistics)
   contains
