@@ -304,7 +304,8 @@ void vci_integrator_destroy(vci_integrator *integ);
  *  rtol >= 1 (any iterate would pass), max_iterations < 1; VCI_ERR_STATE: busy. */
 int  vci_set_tolerances(vci_integrator integ, double atol, double rtol, int max_iterations);
 
-/** Impact energy condition, VCI_IMPACT_DISCRETE (default) or VCI_IMPACT_HAMILTONIAN.
+/** Impact energy condition, VCI_IMPACT_DISCRETE (default) or VCI_IMPACT_HAMILTONIAN. The explicit
+ *  compositions (VCI_SCHEME_COMPOSITION) use hamiltonian until this chooses one (docs/SCHEMES.md).
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, unknown mode, or hamiltonian without the energy
  *  callback; VCI_ERR_STATE: busy. */
 int  vci_set_impact_energy(vci_integrator integ, int mode);

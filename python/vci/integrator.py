@@ -124,18 +124,19 @@ class Integrator:
     """Integrate a model with step h.
 
     Integrator(model, h, scheme=None, stages=None, rtol=1e-12, atol=0.0, max_iterations=30,
-               impact_energy='discrete', max_impacts=None, on_impact=None)
+               impact_energy=None, max_impacts=None, on_impact=None)
 
     scheme ('left', 'midpoint', 'lobatto' with stages = s in 1..8, 'composition' with stages = the
     order) is for a LagrangianModel only (default 'midpoint'); 'composition' takes only the library's
-    separable models, so a Python model gets ArgumentError from the library. impact_energy 'hamiltonian' keeps H(q, p) at impacts.
+    separable models, so a Python model gets ArgumentError from the library. impact_energy 'hamiltonian' keeps H(q, p) at impacts;
+    None (default) is the library's default: 'discrete', except 'composition', which keeps 'hamiltonian' unless asked.
     max_impacts bounds the impacts of one step (default: the library's max(16, 4 ngaps)). on_impact(record)
     is called at each impact with a record of impact_dtype; every impact is also kept in
     `impacts` (cleared by the next init_*).
     """
 
     def __init__(self, model, h, *, scheme=None, stages=None, rtol=1e-12, atol=0.0, max_iterations=30,
-                 impact_energy="discrete", max_impacts=None, on_impact=None):
+                 impact_energy=None, max_impacts=None, on_impact=None):
         if not isinstance(model, Model):
             raise ArgumentError(f"model must be a vci DiscreteModel or LagrangianModel, got {type(model).__name__}")
         self.model = model  # keeps its callbacks alive
@@ -161,7 +162,7 @@ class Integrator:
         elif isinstance(model, LagrangianModel):
             self.scheme = ("midpoint", None)
         self.set_tolerances(rtol=rtol, atol=atol, max_iterations=max_iterations)
-        if impact_energy != "discrete":
+        if impact_energy is not None:
             self.set_impact_energy(impact_energy)
         if max_impacts is not None:
             self._check(lib.vci_set_max_impacts(self._h[0], int(max_impacts)))

@@ -23,10 +23,11 @@ module vci_explicit_step
   use vci_status
   use vci_message, only: vci_set_message, vci_int_text
   use vci_composition, only: vci_composition_t
+  use vci_composition_energy, only: vci_composition_energy_t
   use vci_separable, only: vci_separable_t
   use vci_observer, only: vci_impact_t
   use vci_state, only: vci_impact_buffer_t, vci_state_t
-  use vci_scheme, only: VCI_IMPACT_HAMILTONIAN
+  use vci_scheme, only: VCI_IMPACT_HAMILTONIAN, VCI_IMPACT_DISCRETE
   use vci_settings, only: vci_too_many_impacts_cause
   implicit none
   private
@@ -49,6 +50,11 @@ module vci_explicit_step
     real(dp), allocatable :: g_start(:), g_end(:), g_trial(:), grads(:, :), sorted(:), g_samples(:, :)
     integer, allocatable :: order(:)
     integer(i8) :: root_maps = 0      !< composed maps evaluated by stage 1 (statistics)
+    !> Stage 2's condition (the integrator's setting, set by the stepper before each step):
+    !> VCI_IMPACT_HAMILTONIAN (the mirror, closed form) or VCI_IMPACT_DISCRETE (vci_composition_energy)
+    integer :: condition = VCI_IMPACT_HAMILTONIAN
+    type(vci_composition_energy_t) :: energy   !< the discrete condition's E_d and its scratch
+    integer(i8) :: fallbacks = 0      !< discrete-condition impacts that kept the mirror (a graze)
   contains
     procedure :: setup => explicit_setup
     procedure :: advance => explicit_advance
@@ -81,6 +87,8 @@ contains
     if (stat /= 0) then
       stat = VCI_ERR_MEMORY; return
     end if
+    call self%energy%setup(n, stat)
+    if (stat /= VCI_OK) return
     ! the internal stage ends inside (0, 1), in increasing time (the last one is the step's end)
     k = 0
     do i = 1, s
@@ -181,8 +189,8 @@ contains
     real(dp), contiguous, intent(out) :: q_new(:), p_new(:)   ! (contiguous: no packing check per step)
     character(len=*), intent(inout) :: cause
     integer, intent(out) :: stat
-    real(dp) :: tau, elapsed, alpha, best, mu, e_before
-    integer :: j, jbest
+    real(dp) :: tau, elapsed, alpha, best, mu, e_before, e_after, residual
+    integer :: j, jbest, condition
     self%max_impacts = max_impacts
     impacts%count = 0
     if (self%ng == 0) then                  ! no walls: the composed map straight into the result
@@ -245,8 +253,20 @@ contains
         return
       end if
       mu = -2.0_dp * dot_product(self%qe, self%pt) / mu
+      condition = VCI_IMPACT_HAMILTONIAN
+      if (self%condition == VCI_IMPACT_DISCRETE) then   ! E_d of the arriving sub-step = E_d of the leaving one
+        call discrete_condition(self, jbest, dir, best * tau, h - (elapsed + best * tau), mu, e_before, e_after, &
+                                residual, condition, stat)
+        if (stat /= VCI_OK) then
+          call fail(self, 'stage 2 (discrete energy condition)', stat, cause); return
+        end if
+      end if
       elapsed = elapsed + best * tau
-      call record(self, impacts, dir, h, t, elapsed, jbest, mu, e_before, stat)
+      if (condition == VCI_IMPACT_DISCRETE) then
+        call record(self, impacts, dir, h, t, elapsed, jbest, mu, e_before, stat, condition, e_after, residual)
+      else
+        call record(self, impacts, dir, h, t, elapsed, jbest, mu, e_before, stat)
+      end if
       if (stat /= VCI_OK) then
         call fail(self, 'impact record', stat, cause); return
       end if
@@ -256,6 +276,34 @@ contains
     end do
     call copy(self%n, self%qe, q_new); call copy(self%n, self%pe, p_new)
   end subroutine move
+
+  !> Stage 2 under the discrete condition (vci_composition_energy): e_before = E_d of the arriving
+  !> sub-step (from (a, pa) over `before`), mu from the mirror to the root of E_d of the leaving
+  !> sub-step (from (qt, pt + μ∇g) over `after`) = e_before. condition: VCI_IMPACT_DISCRETE, or
+  !> VCI_IMPACT_HAMILTONIAN when no root contracts near the mirror (a graze: the mirror is kept,
+  !> e_before is then H(q̃, p⁻) as the Hamiltonian condition records it, and it is counted).
+  subroutine discrete_condition(self, j, dir, before, after, mu, e_before, e_after, residual, condition, stat)
+    type(vci_explicit_t), intent(inout) :: self
+    integer, intent(in) :: j, dir
+    real(dp), intent(in) :: before, after
+    real(dp), intent(inout) :: mu, e_before
+    real(dp), intent(out) :: e_after, residual
+    integer, intent(out) :: condition, stat
+    real(dp) :: e_arrive
+    logical :: solved
+    condition = VCI_IMPACT_HAMILTONIAN; e_after = e_before; residual = 0.0_dp
+    call self%energy%step_energy(self%map, self%a, self%pa, dir * before, e_arrive, stat)
+    if (stat == VCI_OK) call self%energy%discrete_impulse(self%map, self%qt, self%pt, self%grads(:, j), dir * after, &
+                                                           e_arrive, mu, e_after, residual, solved, stat)
+    if (stat /= VCI_OK) then
+      self%map%failed_stat = self%energy%failed_stat; return
+    end if
+    if (solved) then
+      condition = VCI_IMPACT_DISCRETE; e_before = e_arrive
+    else
+      self%fallbacks = self%fallbacks + 1
+    end if
+  end subroutine discrete_condition
 
   !> Stage 1 for wall j on the sub-step of length tau from (a, pa): alpha = the fraction at which
   !> the composed map first reaches g_j = 0, or 2 when it does not within the sub-step (nor before
@@ -531,12 +579,16 @@ contains
   end subroutine callback_status
 
   !> The impact just resolved (the wall point in qt, p⁻ in pt), as the other schemes record it.
-  subroutine record(self, impacts, dir, h, t, elapsed, j, mu, e_before, stat)
+  !> With condition (VCI_IMPACT_DISCRETE): e_before, e_after are the sub-steps' E_d, residual
+  !> the energy row's |E_d⁺ − E_d⁻| relative to the energy's size.
+  subroutine record(self, impacts, dir, h, t, elapsed, j, mu, e_before, stat, condition, e_discrete_after, residual)
     type(vci_explicit_t), intent(inout) :: self
     type(vci_impact_buffer_t), intent(inout) :: impacts
     integer, intent(in) :: dir, j
     real(dp), intent(in) :: h, t, elapsed, mu, e_before
     integer, intent(out) :: stat
+    integer, intent(in), optional :: condition
+    real(dp), intent(in), optional :: e_discrete_after, residual
     real(dp) :: e_after
     stat = VCI_OK
     if (impacts%count >= size(impacts%records)) then
@@ -561,6 +613,11 @@ contains
       imp%leave_rate = real(dir, dp) * dot_product(self%grads(:, j), self%qe)
       imp%stage1_residual = 0.0_dp
       imp%stage2_residual = 0.0_dp
+      if (present(condition)) then
+        imp%condition = condition
+        imp%energy_after = e_discrete_after
+        imp%stage2_residual = residual / (16.0_dp * epsilon(1.0_dp))   ! (<= 1: within 16 ulps of the energy)
+      end if
     end associate
   end subroutine record
 

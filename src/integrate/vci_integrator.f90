@@ -560,6 +560,7 @@ contains
     end if
     settings = self%stepper%current_settings()
     settings%impact_energy = mode
+    settings%impact_energy_chosen = .true.
     call self%stepper%configure(settings)
     call finish(self, VCI_OK, stat)
   end subroutine set_impact_energy
@@ -1044,6 +1045,9 @@ contains
     info%n = self%model%n; info%m = self%model%m; info%n_gaps = self%model%n_gaps
     info%direction = direction; info%h = self%state%h; info%t0 = self%time(); info%step0 = self%state%k
     info%impact_energy = settings%impact_energy
+    ! the compositions keep the hamiltonian condition unless it was chosen (vci_stepper's explicit_condition)
+    if (self%scheme_id == VCI_SCHEME_COMPOSITION .and. .not. settings%impact_energy_chosen) &
+      info%impact_energy = VCI_IMPACT_HAMILTONIAN
     info%scheme = self%scheme_id; info%stages = self%n_stages
     info%rtol = settings%rtol; info%atol = settings%atol; info%max_impacts = settings%max_impacts_per_step
     info%start = self%start_kind

@@ -17,6 +17,9 @@ module vci_settings
     integer :: max_impacts_per_step = 16
     logical :: max_impacts_chosen = .false. !< set_max_impacts chose it (create keeps it then)
     integer :: impact_energy = VCI_IMPACT_DISCRETE  !< VCI_IMPACT_DISCRETE or VCI_IMPACT_HAMILTONIAN
+    !> set_impact_energy chose it: the explicit compositions follow it then, else keep the hamiltonian
+    !> condition (docs/SCHEMES.md, "The discrete condition for the compositions")
+    logical :: impact_energy_chosen = .false.
     !> The safety net (docs/DESIGN.md §2, "Steps that cannot be solved"): a step whose impacts or
     !> Newton fail is retried as 2, 4, ... equal sub-steps of the same scheme, up to this many;
     !> 1 turns the net off (the step then fails with its own status).
