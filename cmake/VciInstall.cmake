@@ -124,6 +124,11 @@ if(_mod)
 else()
   list(APPEND _vci_private_libs ${LAPACK_LIBRARIES})
 endif()
+# SuiteSparse KLU (VCI_SPARSE): Debian ships no .pc file for it; by name (a static link of libvci
+# needs it, a shared one finds it through libvci's own DT_NEEDED)
+if(VCI_SPARSE)
+  list(APPEND _vci_private_libs ${VCI_KLU_LIBRARY})
+endif()
 # HDF5: the C library through its .pc file, the Fortran library beside it by name
 if(VCI_WITH_HDF5)
   set(_hdf5_c "")
