@@ -10,6 +10,7 @@
 program bench_chain_n
   use, intrinsic :: iso_fortran_env, only: output_unit
   use vci
+  use vci_bench_stats, only: median
   use vci_lapack, only: dgetrf
   use vci_scene_fpu_walls, only: fpu_walls_lagrangian_t, fpu_walls_lagrangian_model
   implicit none
@@ -79,21 +80,6 @@ program bench_chain_n
   write (output_unit, '(a,f5.2,a,f5.2,a)') 'Fitted over n = 32 ... 256: time per step ~ n^', slope_s, &
     ', one dgetrf ~ n^', slope_l, '.'
 contains
-  real(dp) function median(x)
-    real(dp), intent(in) :: x(:)
-    real(dp) :: y(size(x)), t
-    integer :: i, j
-    y = x
-    do i = 2, size(y)
-      t = y(i); j = i - 1
-      do while (j >= 1)
-        if (y(j) <= t) exit
-        y(j + 1) = y(j); j = j - 1
-      end do
-      y(j + 1) = t
-    end do
-    median = y((size(y) + 1) / 2)
-  end function median
   real(dp) function fit(x, y)        ! least-squares slope of log y against log x
     real(dp), intent(in) :: x(:), y(:)
     real(dp) :: lx(size(x)), ly(size(x))

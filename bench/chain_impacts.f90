@@ -11,6 +11,7 @@
 program bench_chain_impacts
   use, intrinsic :: iso_fortran_env, only: output_unit
   use vci
+  use vci_bench_stats, only: median
   use vci_scene_fpu_walls, only: fpu_walls_lagrangian_t, fpu_walls_lagrangian_model
   implicit none
   type(fpu_walls_lagrangian_t), target :: model
@@ -96,23 +97,6 @@ program bench_chain_impacts
     deallocate (q0, p0, treg, timp)
   end do
 contains
-  real(dp) function median(x)
-    real(dp), intent(in) :: x(:)
-    real(dp) :: y(size(x)), t
-    integer :: i, j
-    median = 0.0_dp
-    if (size(x) == 0) return
-    y = x
-    do i = 2, size(y)
-      t = y(i); j = i - 1
-      do while (j >= 1)
-        if (y(j) <= t) exit
-        y(j + 1) = y(j); j = j - 1
-      end do
-      y(j + 1) = t
-    end do
-    median = y((size(y) + 1) / 2)
-  end function median
   !> Peak resident memory (VmHWM of /proc/self/status) in MB; 0 where that file is absent.
   real(dp) function peak_rss_mb()
     integer :: u, ios, kb

@@ -17,6 +17,7 @@
 program bench_lobatto_nonholo
   use, intrinsic :: iso_fortran_env, only: output_unit
   use vci
+  use vci_bench_stats, only: median
   use vci_scene_pendulum, only: pendulum_lagrangian_t, pendulum_lagrangian_model, pendulum_f
   use vci_bench_split, only: counted_regular_step, counted_impact_step
   implicit none
@@ -137,19 +138,4 @@ contains
     end if
   end subroutine must
 
-  real(dp) function median(t)
-    real(dp), intent(in) :: t(:)
-    real(dp) :: u(size(t)), x
-    integer :: i, j
-    u = t
-    do i = 2, size(u)
-      x = u(i); j = i - 1
-      do while (j >= 1)
-        if (u(j) <= x) exit
-        u(j + 1) = u(j); j = j - 1
-      end do
-      u(j + 1) = x
-    end do
-    median = u((size(u) + 1) / 2)
-  end function median
 end program bench_lobatto_nonholo

@@ -73,6 +73,7 @@ end module bench_sparse_chain_model
 program bench_sparse_chain
   use, intrinsic :: iso_fortran_env, only: output_unit
   use vci
+  use vci_bench_stats, only: median
   use, intrinsic :: iso_fortran_env, only: error_unit
   use bench_sparse_chain_model, only: long_range_chain_t
   implicit none
@@ -154,21 +155,4 @@ program bench_sparse_chain
     call model%declare_pattern([integer ::], [integer ::])
   end do
 contains
-  real(dp) function median(x)
-    real(dp), intent(in) :: x(:)
-    real(dp) :: y(size(x)), t
-    integer :: i, j
-    median = 0.0_dp
-    if (size(x) == 0) return
-    y = x
-    do i = 2, size(y)
-      t = y(i); j = i - 1
-      do while (j >= 1)
-        if (y(j) <= t) exit
-        y(j + 1) = y(j); j = j - 1
-      end do
-      y(j + 1) = t
-    end do
-    median = y((size(y) + 1) / 2)
-  end function median
 end program bench_sparse_chain

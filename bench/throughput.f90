@@ -40,6 +40,7 @@ end module vci_bench_impact_log
 program throughput
   use, intrinsic :: iso_fortran_env, only: int64, error_unit, output_unit
   use vci
+  use vci_bench_stats, only: median
   use vci_scene_particle, only: particle_t, particle_on_floor
   use vci_scene_ellipse, only: ellipse_t, ellipse_model
   use vci_scene_pendulum, only: pendulum_t, pendulum_model
@@ -411,25 +412,6 @@ contains
     close (u)
   end function read_status_kb
 
-  real(dp) function median(x)
-    real(dp), intent(in) :: x(:)
-    real(dp) :: y(size(x)), t
-    integer :: i, j, n
-    n = size(x); y = x
-    do i = 2, n
-      t = y(i); j = i - 1
-      do while (j >= 1)
-        if (y(j) <= t) exit
-        y(j + 1) = y(j); j = j - 1
-      end do
-      y(j + 1) = t
-    end do
-    if (mod(n, 2) == 1) then
-      median = y((n + 1) / 2)
-    else
-      median = 0.5_dp * (y(n / 2) + y(n / 2 + 1))
-    end if
-  end function median
 
   subroutine report()
     real(dp) :: med(n_scenes, n_var), spread
