@@ -56,7 +56,7 @@ module vci_scheme
     real(dp), allocatable :: a(:), pa(:), omega(:, :), grad(:), gscale(:)
     real(dp), allocatable :: b_target(:) !< KIND_PAIR: the given end of the segment
     real(dp) :: e_minus = 0.0_dp         !< E_d of the arriving sub-step, or H(qt, p_minus)
-    character(len=32) :: failed_callback = ''   !< which callback failed in the last evaluation
+    character(len=48) :: failed_callback = ''   !< which callback failed in the last evaluation
     integer :: failed_stat = 0           !< the stat that callback set (> 0 recoverable, < 0 not)
     real(dp), allocatable :: pplus(:)
     !> Stage 2's blended energy row (pose_blend, blended_row; docs/BACKWARD.md, "A reversible energy
