@@ -352,7 +352,15 @@ contains
     hi = -1.0_dp
     do k = 1, nk
       c = self%sorted(k)
-      if (c >= limit) return                   ! a wall already found comes first
+      if (c >= limit) then
+        ! A wall already found comes first, unless this one is crossed between its last admissible
+        ! sample and that wall's point: the gap there on the true map decides (samples are sparse,
+        ! Verlet has none inside a step; without this the earlier crossing was reflected late).
+        if (.not. have_lo .or. on_wall) return
+        call gap_on_map(self, j, dir, limit * tau, g, stat)
+        if (stat /= VCI_OK .or. .not. g < 0.0_dp) return
+        hi = limit; ghi = g; exit
+      end if
       if (k < nk .and. have_lo) then
         if (on_wall .or. self%g_samples(j, k) >= 0.0_dp) cycle   ! admissible sample: no need of the true map
       end if
