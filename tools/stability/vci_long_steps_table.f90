@@ -5,7 +5,8 @@
 !> against the reference there and the steps the net took. Same runners as test_stab_long_steps
 !> (test/stability/vci_long_cases.f90). The last column: the largest h up to which every run with the
 !> net on ends within 0.1 of the reference (a run with status 0 can be far off: read the errors).
-!> `vci_long_steps_table -v` also prints every run.
+!> `vci_long_steps_table -v` also prints every run (status, error, |H - H0| for the Kepler scenes,
+!> impacts, steps split).
 program vci_long_steps_table
   use vci
   use vci_long_cases
@@ -47,9 +48,10 @@ program vci_long_steps_table
           case (2); call long_run(scene, schemes(is), stages(is), ladders(ih, scene), 1, r)
           case (3); call long_run(scene, schemes(is), stages(is), ladders(ih, scene), 16, r)
           end select
-          if (verbose) write (*, '(a,a,a,f5.2,a,i0,a,i0,a,es9.2,a,i0,a,i0,a,a)') trim(long_scene_name(scene)), ' ', &
-            scheme_label(is), ladders(ih, scene), ' mode ', mode, ' status ', r%status, ' error ', r%error, &
-            ' split ', r%split_steps, ' / ', r%largest_split, ' ', trim(r%message(1:200))
+          if (verbose) write (*, '(a,a,a,f5.2,a,i0,a,i0,a,es9.2,a,es9.2,a,i0,a,i0,a,i0,a,a)') trim(long_scene_name(scene)), &
+            ' ', scheme_label(is), ladders(ih, scene), ' mode ', mode, ' status ', r%status, ' error ', r%error, &
+            ' |H - H0| ', r%energy_error, ' impacts ', r%impacts, ' split ', r%split_steps, ' / ', r%largest_split, ' ', &
+            trim(r%message(1:200))
           ! runs: to the end with no failure status (the error says how good the motion is there)
           if (r%status == VCI_OK .and. r%error < huge(1.0_dp)) then
             best(mode) = ih; err(mode) = r%error
