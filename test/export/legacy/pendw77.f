@@ -132,6 +132,7 @@ C     the safety net (issue 27, VCISPL, VCINET): midpoint at h = 0.8
 C     (h omega = 2.5) meets a step Newton cannot solve at t = 4; off
 C     (MAXSPL = 1) the run stops there with ISTAT = 4, on (default 16)
 C     it reaches t = 10.4 in 13 steps, some split in 2 or more parts
+C     (4 steps in 2 parts measured)
       IPAR(1) = 0
       DO 15 K = 1, 2
         CALL VCINEW(PWMOD, N, M, NG, 8, 0.8D0, RPAR, IPAR, IH, ISTAT)
