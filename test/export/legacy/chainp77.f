@@ -8,7 +8,8 @@ C     and end state to 1E-9 (each solve meets rtol 1E-12); 2. the
 C     pattern withdrawn (NNZ = -1): the dense run bit for bit; 3. the
 C     diagonal alone with the check: the run fails with ISTAT = 1 and
 C     VCIMSG names the entry (2, 1); 4. bad patterns (ICOLP(N+1) not
-C     NNZ + 1, ICOLP(1) not 1, a row outside 1..N, rows not increasing)
+C     NNZ + 1, ICOLP(1) not 1, a row outside 1..N, rows unsorted or
+C     repeated)
 C     refused with ISTAT = 1 and a message naming the array element.
 C     Without it: VCIPAT refuses with ISTAT = 1 naming VCI_SPARSE, and
 C     NNZ = -1 is accepted. The last line says which branch ran (the
@@ -162,6 +163,12 @@ C     4. bad patterns, on the same handle
       CALL CHECKI('VCIPAT unsorted', ISTAT, 1, NBAD)
       CALL CHECKS('VCIMSG: unsorted', MSG, 'the rows of column 2 are '
      &  // 'not strictly increasing at IROW(5)', NBAD)
+      IROW(5) = IROW(4)
+      CALL VCIPAT(IH, NNZ, ICOLP, IROW, 0, ISTAT)
+      CALL VCIMSG(IH, MSG)
+      CALL CHECKI('VCIPAT repeated row', ISTAT, 1, NBAD)
+      CALL CHECKS('VCIMSG: repeated', MSG, 'the rows of column 2 are '
+     &  // 'not strictly increasing at IROW(5) = 3', NBAD)
       CALL VCIDEL(IH)
       IF (NBAD .GT. 0) STOP 1
       WRITE (*, '(A)') ' sparse runs checked'
