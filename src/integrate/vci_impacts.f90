@@ -39,7 +39,9 @@ contains
       ! wall, is sampled; a whole step that ends admissible only when the parabola through the
       ! previous step's start says it may come near a wall (gap evaluations only: may_poke).
       poked = 0
-      if (impacts%count > 0 .or. any(self%gaps_end(1:self%ng) < 0.0_dp)) then
+      if (.not. self%settings%poke_samples) then
+        continue                          ! (off by default: set_poke_samples)
+      else if (impacts%count > 0 .or. any(self%gaps_end(1:self%ng) < 0.0_dp)) then
         call find_poke(self, tau, 0, poked, p_lo, p_hi, p_glo, p_ghi, stat)
       else if (may_poke(self, state, dir, tau, stat)) then
         call find_poke(self, tau, 0, poked, p_lo, p_hi, p_glo, p_ghi, stat)
@@ -325,6 +327,7 @@ contains
         call set_cause(self, 'gap evaluation'); return
       end if
       if (self%gaps_end(j) >= 0.0_dp) then
+        if (.not. self%settings%poke_samples) return
         ! the motion may still pass wall j and come back within the sub-step (find_poke)
         call find_poke(self, tau, j, poked, lo, hi, glo, ghi, stat)
         if (stat /= VCI_OK .or. poked /= j) return
@@ -375,6 +378,7 @@ contains
     integer, intent(out) :: stat
     real(dp) :: g_prev(self%ng), lam(self%m), s, f, best
     integer :: nm, k, jj, st
+    logical :: screened
     nm = self%nsub
     poked = 0; lo = 0.0_dp; hi = 1.0_dp; glo = 0.0_dp; ghi = 0.0_dp
     self%x_full(1:nm) = self%x(1:nm)
@@ -385,6 +389,36 @@ contains
     call self%sys%get_multipliers(self%x_full, lam)
     call self%sys%put_endpoint(self%x_low, self%q_start, self%q_start)
     call self%sys%put_multipliers(self%x_low, lam)
+    ! The screen: one solve at s = 1/2 and the parabola through the start, that point and the end,
+    ! its bend doubled for a margin, at s = 1/8 .. 7/8 (gap evaluations). Only where it comes below
+    ! a wall that the end is not beyond is the trajectory sampled (most impacts: one solve here).
+    self%x(1:nm) = 0.5_dp * (self%x_low(1:nm) + self%x_full(1:nm))
+    call substep(self, self%q_start, self%p_start, 0.5_dp * tau, st)
+    if (st /= VCI_OK) then
+      if (self%sys%unrecoverable) stat = st
+      self%x(1:nm) = self%x_full(1:nm)
+      return
+    end if
+    call self%sys%get_endpoint(self%x, self%q_guess)
+    self%q_guess = self%q_guess - 0.5_dp * (self%q_start + self%q_end)   ! the bend at s = 1/2
+    screened = .false.
+    do k = 1, POKE_SAMPLES
+      s = real(k, dp) / real(POKE_SAMPLES + 1, dp)
+      self%q_trial = self%q_start + s * (self%q_end - self%q_start) + 8.0_dp * s * (1.0_dp - s) * self%q_guess
+      call self%sys%eval_gaps(self%q_trial, self%gaps_trial(1:self%ng), stat)
+      if (stat /= VCI_OK) then
+        call set_cause(self, 'gap evaluation inside the sub-step'); self%x(1:nm) = self%x_full(1:nm); return
+      end if
+      do jj = 1, self%ng
+        if (self%gaps_trial(jj) < 0.0_dp .and. self%gaps_end(jj) >= 0.0_dp .and. (only == 0 .or. jj == only)) &
+          screened = .true.
+      end do
+      if (screened) exit
+    end do
+    if (.not. screened) then
+      self%x(1:nm) = self%x_full(1:nm)
+      return
+    end if
     do k = 1, POKE_SAMPLES
       s = real(k, dp) / real(POKE_SAMPLES + 1, dp)
       self%x(1:nm) = self%x_low(1:nm) + (s - lo) / (1.0_dp - lo) * (self%x_full(1:nm) - self%x_low(1:nm))
@@ -421,32 +455,35 @@ contains
   end subroutine find_poke
 
   !> Might the whole step (no impact so far, its end admissible) pass a wall and come back? The
-  !> screen before find_poke's solves: the parabola through the previous step's start, this step's
-  !> start and its end, q(s) = chord(s) - s (1 - s) (d - d_prev) (d, d_prev: this and the previous
-  !> step's displacement), with its bend doubled for a margin, tested at s = 1/8 .. 7/8 (gap
-  !> evaluations only). Without a previous regular step in this direction (the run's first step,
-  !> after an impact or a reversal) the step is sampled.
+  !> screen before find_poke's solves, by gap evaluations only: the parabola through the previous
+  !> step's start, this step's start a and its end b has its bend B = -(d - d_prev)/4 at s = 1/2
+  !> (d, d_prev: this and the previous step's displacement); with the bend doubled for a margin, a
+  !> linear g along it stays above min(g(a), g(b), g(c)) + min(0, g(c + 2B) - g(c)), c = (a + b)/2,
+  !> and the step is sampled where that bound is negative. Without a previous regular step in this
+  !> direction (the run's first step, after an impact or a reversal) find_poke's own screen decides.
   logical function may_poke(self, state, dir, tau, stat)
     type(vci_stepper_t), intent(inout) :: self
     type(vci_state_t), intent(in) :: state
     integer, intent(in) :: dir
     real(dp), intent(in) :: tau
     integer, intent(out) :: stat
-    integer :: k
-    real(dp) :: s
+    integer :: j
+    real(dp) :: gc(self%ng)
     stat = VCI_OK
     may_poke = .true.
     if (state%predictor_depth * dir <= 0) return
-    do k = 1, POKE_SAMPLES
-      s = real(k, dp) / real(POKE_SAMPLES + 1, dp)
-      ! (q_end - q_start) - dir tau velocity: the second difference of the three positions
-      self%q_trial = self%q_start + s * (self%q_end - self%q_start) &
-                     - 2.0_dp * s * (1.0_dp - s) * ((self%q_end - self%q_start) - real(dir, dp) * tau * state%velocity)
-      call self%sys%eval_gaps(self%q_trial, self%gaps_trial(1:self%ng), stat)
-      if (stat /= VCI_OK) then
-        call set_cause(self, 'gap evaluation inside the step'); return
-      end if
-      if (any(self%gaps_trial(1:self%ng) < 0.0_dp)) return
+    ! (gaps_start and gaps_trial as scratch: an impact that follows evaluates them again)
+    call self%sys%eval_gaps(self%q_start, self%gaps_start(1:self%ng), stat)
+    self%q_trial = 0.5_dp * (self%q_start + self%q_end)
+    if (stat == VCI_OK) call self%sys%eval_gaps(self%q_trial, gc, stat)
+    ! c + 2B; the second difference d - d_prev = (q_end - q_start) - dir tau velocity
+    self%q_trial = self%q_trial - 0.5_dp * ((self%q_end - self%q_start) - real(dir, dp) * tau * state%velocity)
+    if (stat == VCI_OK) call self%sys%eval_gaps(self%q_trial, self%gaps_trial(1:self%ng), stat)
+    if (stat /= VCI_OK) then
+      call set_cause(self, 'gap evaluation inside the step'); return
+    end if
+    do j = 1, self%ng
+      if (min(self%gaps_start(j), self%gaps_end(j), gc(j)) + min(0.0_dp, self%gaps_trial(j) - gc(j)) < 0.0_dp) return
     end do
     may_poke = .false.
   end function may_poke
@@ -770,7 +807,7 @@ contains
     if (stat /= VCI_OK) return
     call self%sys%get_endpoint(self%x, self%q_trial)
     num = dot_product(self%sys%grad, self%q_trial - self%q_wall)
-    if (.not. num < 0.0_dp) then
+    if (.not. num < 0.0_dp .and. self%settings%poke_samples) then
       call poke_departure(self, tau2, num, stat)
       if (stat /= VCI_OK) return
     end if
