@@ -107,6 +107,7 @@ module vci_integrator
     procedure :: set_impact_energy
     !> Bound on impacts resolved inside one step (default max(16, 4 n_gaps): vci_default_max_impacts).
     procedure :: set_max_impacts
+    !> Sample sub-steps inside for walls poked within one (off by default; docs/BACKWARD.md).
     procedure :: set_poke_samples
     !> The safety net: retry a failed step as up to max_splits equal sub-steps (1: off).
     procedure :: set_step_splits
