@@ -24,6 +24,9 @@ module vci_settings
     !> Newton fail is retried as 2, 4, ... equal sub-steps of the same scheme, up to this many;
     !> 1 turns the net off (the step then fails with its own status).
     integer :: max_step_splits = 16
+    !> Sample sub-steps inside for a wall poked within one (docs/BACKWARD.md, "A wall poked within
+    !> one sub-step"): set_poke_samples; off by default (cost, and under-resolved stiff motion)
+    logical :: poke_samples = .false.
   end type vci_settings_t
 
   public :: vci_default_max_impacts, vci_too_many_impacts_cause
