@@ -35,6 +35,7 @@ contains
         nx > nw%small_lu_max .or. nx >= nw%reuse_min .or. nx > size(self%fjac, 1)) return
     self%fx0 = x
     self%jac_known = .false.
+    self%l_known = .false.     ! (as forget_jacobian)
     iterations = 0
     factored = .false.
     call fused_residual(self, x, self%fr, self%fsc, phi, nw%atol, ok)
@@ -150,6 +151,16 @@ contains
     stat = 0
     if (self%increments) then
       call self%ret%d1s_inc(self%a, x(1:n), self%tau, self%dir, self%d1, stat)
+    else if (self%has_fused .and. self%dir > 0) then
+      call ld_at(self, self%a, x(1:n), self%tau, stat)
+      do i = 1, n
+        self%d1(i) = self%ld1(i)
+      end do
+    else if (self%has_fused) then
+      call ld_at(self, x(1:n), self%a, self%tau, stat)
+      do i = 1, n
+        self%d1(i) = -self%ld2(i)
+      end do
     else if (self%dir > 0) then
       call self%model%d1(self%a, x(1:n), self%tau, self%d1, stat)
     else
@@ -190,6 +201,17 @@ contains
     if (self%increments) then
       self%hess = 0.0_dp      ! (a declared band is written alone; fused systems are small)
       call self%ret%jacobian_inc(self%a, x(1:n), self%tau, self%dir, self%hess, stat)
+    else if (self%has_fused) then      ! the residual at x came before: its call's Hessian
+      if (self%dir > 0) then
+        call ld_at(self, self%a, x(1:n), self%tau, stat)
+      else
+        call ld_at(self, x(1:n), self%a, self%tau, stat)
+      end if
+      do j = 1, n
+        do i = 1, n
+          self%hess(i, j) = self%lhess(i, j)
+        end do
+      end do
     else if (self%dir > 0) then
       call self%model%mixed_hessian(self%a, x(1:n), self%tau, self%hess, stat)
     else
