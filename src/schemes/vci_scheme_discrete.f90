@@ -160,27 +160,40 @@ contains
     class(vci_scheme_discrete_t), intent(inout) :: self
     real(dp), intent(in) :: q(:), v(:), h
     integer, intent(out) :: stat
-    integer :: i
-    logical :: same
     stat = 0
     if (self%l_known .and. h == self%lh) then
-      same = .true.
-      do i = 1, self%n
-        if (q(i) /= self%lq(i) .or. v(i) /= self%lv(i)) then
-          same = .false.; exit
-        end if
-      end do
-      if (same) return
+      if (same_point(self%n, q, v, self%lq, self%lv)) return
     end if
     self%l_known = .false.
     call self%model%ld_fused(q, v, h, self%ld1, self%ld2, self%ld3, self%lhess, stat)
     if (stat /= 0) return
-    do i = 1, self%n
-      self%lq(i) = q(i); self%lv(i) = v(i)
-    end do
+    call keep_point(self%n, q, v, self%lq, self%lv)
     self%lh = h
     self%l_known = .true.
   end subroutine ld_at
+
+  !> (q, v) == (lq, v) element by element (explicit shapes: no descriptors at n = 2 or 3).
+  pure logical function same_point(n, q, v, lq, lv)
+    integer, intent(in) :: n
+    real(dp), intent(in) :: q(n), v(n), lq(n), lv(n)
+    integer :: i
+    same_point = .false.
+    do i = 1, n
+      if (q(i) /= lq(i) .or. v(i) /= lv(i)) return
+    end do
+    same_point = .true.
+  end function same_point
+
+  !> lq = q, lv = v (a plain loop: at n = 2 or 3 a memcpy call costs more).
+  pure subroutine keep_point(n, q, v, lq, lv)
+    integer, intent(in) :: n
+    real(dp), intent(in) :: q(n), v(n)
+    real(dp), intent(out) :: lq(n), lv(n)
+    integer :: i
+    do i = 1, n
+      lq(i) = q(i); lv(i) = v(i)
+    end do
+  end subroutine keep_point
 
   !> The low part of q kept by get_endpoint when q is the last endpoint it returned, else zero.
   subroutine discrete_position_carry(self, q, lo)

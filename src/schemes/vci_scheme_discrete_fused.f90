@@ -201,11 +201,15 @@ contains
     if (self%increments) then
       self%hess = 0.0_dp      ! (a declared band is written alone; fused systems are small)
       call self%ret%jacobian_inc(self%a, x(1:n), self%tau, self%dir, self%hess, stat)
-    else if (self%has_fused) then      ! the residual at x came before: its call's Hessian
-      if (self%dir > 0) then
-        call ld_at(self, self%a, x(1:n), self%tau, stat)
-      else
-        call ld_at(self, x(1:n), self%a, self%tau, stat)
+    else if (self%has_fused) then
+      ! the residual at x came just before (fused_substep): its call's Hessian is kept (l_known);
+      ! ld_at only when it is not
+      if (.not. self%l_known) then
+        if (self%dir > 0) then
+          call ld_at(self, self%a, x(1:n), self%tau, stat)
+        else
+          call ld_at(self, x(1:n), self%a, self%tau, stat)
+        end if
       end if
       do j = 1, n
         do i = 1, n
