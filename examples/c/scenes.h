@@ -78,8 +78,8 @@ static int ellipse_energy(int n, const double *q, const double *p, double *en, v
 }
 
 /* D1, D2, D3 and the Hessian in one call (vci_callbacks.ld_fused), the arithmetic of the four above. */
-static int ellipse_fused(int n, const double *q, const double *v, double h, double *d1, double *d2, double *d3,
-                         double *hess, void *user) {
+static inline int ellipse_fused(int n, const double *q, const double *v, double h, double *d1, double *d2, double *d3,
+                                double *hess, void *user) {
   const ellipse_params *e = (const ellipse_params *)user;
   double in = ellipse_inertia(e), w0 = v[0] - q[0], w1 = v[1] - q[1], w2 = v[2] - q[2];
   int i;
@@ -167,8 +167,8 @@ static int pendulum_hessian(int n, const double *q, const double *v, double h, d
 }
 
 /* D1, D2, D3 and the Hessian in one call, one sine and cosine (vci_callbacks.ld_fused). */
-static int pendulum_fused(int n, const double *q, const double *v, double h, double *d1, double *d2, double *d3,
-                          double *hess, void *user) {
+static inline int pendulum_fused(int n, const double *q, const double *v, double h, double *d1, double *d2, double *d3,
+                                 double *hess, void *user) {
   const pendulum_params *P = (const pendulum_params *)user;
   double ml2 = P->mass * P->length * P->length, s = sin(q[0]), c = cos(q[0]), w0 = v[0] - q[0], w1 = v[1] - q[1];
   (void)n;
