@@ -40,10 +40,10 @@ module vci_scheme_discrete
     logical :: has_hessian = .false.
     logical :: has_constraint_jacobian = .false.   !< the model's d omega_d (user L_d only)
     !> The model's fused callback (vci_model_t%ld_fused) replaces d1, d2, d3 and mixed_hessian
-    !> (user L_d only); its values at the last point (lq, lv, lh) are kept, so the residual, the
-    !> Jacobian and the new momentum at one point cost one call (issue 26)
+    !> (user L_d only); its values at the last point (lkey = (q_i, v_i) pairs, lh) are kept, so the
+    !> residual, the Jacobian and the new momentum at one point cost one call (issue 26)
     logical :: has_fused = .false.
-    real(dp), allocatable, private :: lq(:), lv(:), ld1(:), ld2(:), lhess(:, :)
+    real(dp), allocatable, private :: lkey(:, :), ld1(:), ld2(:), lhess(:, :)
     real(dp), private :: lh = 0.0_dp, ld3 = 0.0_dp
     logical, private :: l_known = .false.
     real(dp), allocatable, private :: cjo(:, :)   !< the model's d omega_d(a, b) / db
@@ -162,36 +162,37 @@ contains
     integer, intent(out) :: stat
     stat = 0
     if (self%l_known .and. h == self%lh) then
-      if (same_point(self%n, q, v, self%lq, self%lv)) return
+      if (same_point(self%n, q, v, self%lkey)) return
     end if
     self%l_known = .false.
     call self%model%ld_fused(q, v, h, self%ld1, self%ld2, self%ld3, self%lhess, stat)
     if (stat /= 0) return
-    call keep_point(self%n, q, v, self%lq, self%lv)
+    call keep_point(self%n, q, v, self%lkey)
     self%lh = h
     self%l_known = .true.
   end subroutine ld_at
 
-  !> (q, v) == (lq, v) element by element (explicit shapes: no descriptors at n = 2 or 3).
-  pure logical function same_point(n, q, v, lq, lv)
+  !> (q, v) == the kept point, element by element (explicit shapes: no descriptors at n = 2 or 3).
+  pure logical function same_point(n, q, v, key)
     integer, intent(in) :: n
-    real(dp), intent(in) :: q(n), v(n), lq(n), lv(n)
+    real(dp), intent(in) :: q(n), v(n), key(2, n)
     integer :: i
     same_point = .false.
     do i = 1, n
-      if (q(i) /= lq(i) .or. v(i) /= lv(i)) return
+      if (q(i) /= key(1, i) .or. v(i) /= key(2, i)) return
     end do
     same_point = .true.
   end function same_point
 
-  !> lq = q, lv = v (a plain loop: at n = 2 or 3 a memcpy call costs more).
-  pure subroutine keep_point(n, q, v, lq, lv)
+  !> key = the pairs (q_i, v_i), interleaved: two separate arrays made gfortran -O3 turn the loop
+  !> into two memcpy calls, which at n = 2 or 3 cost more than the copy (callgrind, pendulum).
+  pure subroutine keep_point(n, q, v, key)
     integer, intent(in) :: n
     real(dp), intent(in) :: q(n), v(n)
-    real(dp), intent(out) :: lq(n), lv(n)
+    real(dp), intent(out) :: key(2, n)
     integer :: i
     do i = 1, n
-      lq(i) = q(i); lv(i) = v(i)
+      key(1, i) = q(i); key(2, i) = v(i)
     end do
   end subroutine keep_point
 
@@ -237,7 +238,7 @@ contains
                                         self%start_lo, self%end_key, self%end_lo, self%kin, self%cjo, self%sizes, &
                                         self%fjac, self%flu, self%fr, self%fsc, self%frt, self%fsct, self%fxt, &
                                         self%fdx, self%frw, self%fx0, self%fpiv, self%gg1, &
-                                        self%lq, self%lv, self%ld1, self%ld2, self%lhess)
+                                        self%lkey, self%ld1, self%ld2, self%lhess)
     ! the fused solve's matrices only for the small systems it takes (vci_large_system; else 1 x 1:
     ! a chain of n = 4096 kept two n x n arrays here, one of them zeroed and so resident)
     nf = merge(n + m, 1, n + m < vci_large_system)
@@ -250,7 +251,7 @@ contains
               self%d1(n), self%hess(n, n), self%g(max(1, model%n_gaps)), self%bb(n), self%start_key(n), self%start_lo(n), &
               self%end_key(n), self%end_lo(n), self%kin(n), &
               self%rp(nx), self%rm(nx), self%sp(nx), self%sm(nx), self%xp(nx), self%jscale(nx), &
-              self%jabs(nx, nx), self%lq(n), self%lv(n), self%ld1(n), self%ld2(n), self%lhess(n, n), stat=stat)
+              self%jabs(nx, nx), self%lkey(2, n), self%ld1(n), self%ld2(n), self%lhess(n, n), stat=stat)
     if (stat /= 0) return
     self%l_known = .false.
     self%jscale = 0.0_dp

@@ -211,11 +211,6 @@ contains
           call ld_at(self, x(1:n), self%a, self%tau, stat)
         end if
       end if
-      do j = 1, n
-        do i = 1, n
-          self%hess(i, j) = self%lhess(i, j)
-        end do
-      end do
     else if (self%dir > 0) then
       call self%model%mixed_hessian(self%a, x(1:n), self%tau, self%hess, stat)
     else
@@ -224,7 +219,9 @@ contains
     if (stat /= 0) then
       call note_if_unrecoverable(self, stat, 'mixed Hessian'); return
     end if
-    if (self%increments .or. self%dir > 0) then
+    if (self%has_fused .and. .not. self%increments) then
+      call kept_hessian_block(n, self%dir, self%lhess, self%fjac)   ! (no copy through hess)
+    else if (self%increments .or. self%dir > 0) then
       do j = 1, n
         do i = 1, n
           self%fjac(i, j) = self%hess(i, j)
@@ -263,6 +260,28 @@ contains
     end do
     ok = .true.
   end subroutine fused_jacobian
+
+  !> The position block of fjac from the fused callback's kept mixed Hessian: itself forward,
+  !> minus its transpose backward (explicit shapes: fjac is (n + m) x (n + m), lhess n x n).
+  subroutine kept_hessian_block(n, dir, lhess, fjac)
+    integer, intent(in) :: n, dir
+    real(dp), intent(in) :: lhess(n, n)
+    real(dp), intent(inout) :: fjac(:, :)
+    integer :: i, j
+    if (dir > 0) then
+      do j = 1, n
+        do i = 1, n
+          fjac(i, j) = lhess(i, j)
+        end do
+      end do
+    else
+      do j = 1, n
+        do i = 1, n
+          fjac(i, j) = -lhess(j, i)
+        end do
+      end do
+    end if
+  end subroutine kept_hessian_block
 
   !> A callback's failure in the fused solve: a recoverable one (stat > 0) is left to the general
   !> path, which solves again and backs off; an unrecoverable one (stat < 0) is noted like the
