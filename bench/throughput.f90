@@ -197,6 +197,12 @@ contains
     end do
     pendf(2)%analytic_hessian = .false.
     part(2)%analytic_hessian = .false.; ell(2)%analytic_hessian = .false.; pend(2)%analytic_hessian = .false.
+    ! the examples' models: D1, D2, D3 and the Hessian in one call (ld_fused; the analytic variant
+    ! only). VCI_BENCH_SEPARATE=1: one callback per quantity, to measure what the fused callback saves
+    call get_environment_variable('VCI_BENCH_SEPARATE', env, status=stat)
+    if (.not. (stat == 0 .and. env == '1')) then
+      ell(1)%fused_callback = .true.; pend(1)%fused_callback = .true.; pendf(1)%fused_callback = .true.
+    end if
     epar = ellipse_par_t(mass=ell(1)%mass, grav=ell(1)%grav, a=ell(1)%a, b=ell(1)%b)
     ppar = pendulum_par_t(mass=pend(1)%mass, grav=pend(1)%grav, length=pend(1)%length, radius=pend(1)%radius)
     ppar_free = ppar; ppar_free%radius = pendf(1)%radius

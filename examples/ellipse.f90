@@ -17,6 +17,7 @@ program ellipse
   else
     model = ellipse_model()
     model%analytic_hessian = opts%analytic_hessian
+    model%fused_callback = .true.     ! D1, D2, D3 and the Hessian in one call (vci_model_t%ld_fused)
     call run_example('ellipse', model, opts, init)
   end if
 contains

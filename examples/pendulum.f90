@@ -19,6 +19,7 @@ program pendulum
   else
     model = pendulum_model()
     model%analytic_hessian = opts%analytic_hessian
+    model%fused_callback = .true.     ! D1, D2, D3 and the Hessian in one call (vci_model_t%ld_fused)
     call run_example('pendulum', model, opts, init)
   end if
 contains

@@ -107,6 +107,13 @@ typedef int (*vci_gap_grads_fn)(int n, int ngaps, const double *q, double *dg /*
                                 void *user);
 /** e[0] = H(q, p), a step-independent energy (normally the Hamiltonian); q[n], p[n]. */
 typedef int (*vci_energy_fn)(int n, const double *q, const double *p, double *e /* [1] */, void *user);
+/** Everything a Newton iteration needs of L_d at (q[n], v[n], h) in one call (issue 26):
+ *  d1[n] = D1 L_d, d2[n] = D2 L_d, d3[0] = D3 L_d, hess[n*n] = d2 L_d / dq dv (hess[i + n*j] =
+ *  d2 L_d / dq_i dv_j), the values d1_ld, d2_ld, d3_ld and mixed_hessian return; shared work (sines,
+ *  cosines) is done once. The library keeps the last point's values: a residual, the Newton matrix
+ *  and the new momentum at one point cost one call. */
+typedef int (*vci_ld_fused_fn)(int n, const double *q, const double *v, double h, double *d1, double *d2,
+                               double *d3 /* [1] */, double *hess, void *user);
 /** Called for each impact: time t, fraction alpha of the step, gap_index j (0-based, the index into
  *  g[] of vci_gaps_fn), the configuration q[n] on the wall and the normal impulse (p after minus p
  *  before = impulse * grad g_j, forward time). Nonzero return (either sign): VCI_ERR_CALLBACK, but
@@ -130,13 +137,16 @@ typedef struct vci_callbacks {
   vci_energy_fn energy;                                     /**< optional; needed by VCI_IMPACT_HAMILTONIAN */
   /** optional (NULL: differenced): jac[mu + m*i] = d omega_d^mu / d other_i at (base, other, h) */
   vci_dconstraint_fn discrete_constraint_jacobian;
+  /** optional (NULL: d1_ld, d2_ld, d3_ld, mixed_hessian called one by one): all four in one call;
+   *  it replaces mixed_hessian in the solves (issue 26) */
+  vci_ld_fused_fn ld_fused;
   /* new members here */
 } vci_callbacks;
 
 /** Initialiser: `vci_callbacks cb = VCI_CALLBACKS_INIT;` (size set, every callback NULL). The C form
  *  is designated (no -Wmissing-field-initializers warning); the C++ one lists every member. */
 #ifdef __cplusplus
-#define VCI_CALLBACKS_INIT {sizeof(vci_callbacks), 0, 0, 0, 0, 0, 0, 0, 0, 0, 0}
+#define VCI_CALLBACKS_INIT {sizeof(vci_callbacks), 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0}
 #else
 #define VCI_CALLBACKS_INIT {.size = sizeof(vci_callbacks)}
 #endif

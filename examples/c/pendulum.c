@@ -25,6 +25,7 @@ int main(int argc, char **argv) {
   int count = 0, status;
   char msg[512];
 
+  cb.ld_fused = pendulum_fused; /* D1, D2, D3 and the Hessian in one call */
   status = vci_model_create(&model, 2, 1, 1, &cb, &par);
   if (status == VCI_OK) status = vci_integrator_create(&integ, model, h);
   if (status == VCI_OK) status = vci_set_tolerances(integ, 0.0, 1e-12, 30);

@@ -77,7 +77,28 @@ static int ellipse_energy(int n, const double *q, const double *p, double *en, v
   return 0;
 }
 
-/* All of the ellipse's callbacks (the optional ones included). */
+/* D1, D2, D3 and the Hessian in one call (vci_callbacks.ld_fused), the arithmetic of the four above. */
+static inline int ellipse_fused(int n, const double *q, const double *v, double h, double *d1, double *d2, double *d3,
+                                double *hess, void *user) {
+  const ellipse_params *e = (const ellipse_params *)user;
+  double in = ellipse_inertia(e), w0 = v[0] - q[0], w1 = v[1] - q[1], w2 = v[2] - q[2];
+  int i;
+  d1[0] = -in * w0 / h;
+  d1[1] = -e->mass * w1 / h;
+  d1[2] = -e->mass * w2 / h - 0.5 * h * e->mass * e->grav;
+  d2[0] = in * w0 / h;
+  d2[1] = e->mass * w1 / h;
+  d2[2] = e->mass * w2 / h - 0.5 * h * e->mass * e->grav;
+  d3[0] = -0.5 * (in * w0 * w0 + e->mass * (w1 * w1 + w2 * w2)) / (h * h) - 0.5 * e->mass * e->grav * (q[2] + v[2]);
+  for (i = 0; i < n * n; ++i) hess[i] = 0.0;
+  hess[0 + 3 * 0] = -in / h;
+  hess[1 + 3 * 1] = -e->mass / h;
+  hess[2 + 3 * 2] = -e->mass / h;
+  return 0;
+}
+
+/* All of the ellipse's callbacks (the optional ones included; not ld_fused, which the examples add:
+ * tests replace single callbacks of this set). */
 static vci_callbacks ellipse_callbacks(void) {
   vci_callbacks cb = VCI_CALLBACKS_INIT;
   cb.d1_ld = ellipse_d1; cb.d2_ld = ellipse_d2; cb.d3_ld = ellipse_d3;
@@ -140,6 +161,24 @@ static int pendulum_hessian(int n, const double *q, const double *v, double h, d
   (void)n;
   hess[0 + 2 * 0] = -ml2 / h;
   hess[0 + 2 * 1] = 2.0 * ml2 * (v[1] - q[1]) * s * c / h;
+  hess[1 + 2 * 0] = 0.0;
+  hess[1 + 2 * 1] = -ml2 * s * s / h;
+  return 0;
+}
+
+/* D1, D2, D3 and the Hessian in one call, one sine and cosine (vci_callbacks.ld_fused). */
+static inline int pendulum_fused(int n, const double *q, const double *v, double h, double *d1, double *d2, double *d3,
+                                 double *hess, void *user) {
+  const pendulum_params *P = (const pendulum_params *)user;
+  double ml2 = P->mass * P->length * P->length, s = sin(q[0]), c = cos(q[0]), w0 = v[0] - q[0], w1 = v[1] - q[1];
+  (void)n;
+  d1[0] = -ml2 * w0 / h + ml2 * w1 * w1 * s * c / h + h * P->mass * P->grav * P->length * s;
+  d1[1] = -ml2 * w1 * s * s / h;
+  d2[0] = ml2 * w0 / h;
+  d2[1] = ml2 * w1 * s * s / h;
+  d3[0] = -0.5 * P->mass * P->length * P->length * (w0 * w0 + w1 * w1 * s * s) / (h * h) - P->mass * P->grav * P->length * c;
+  hess[0 + 2 * 0] = -ml2 / h;
+  hess[0 + 2 * 1] = 2.0 * ml2 * w1 * s * c / h;
   hess[1 + 2 * 0] = 0.0;
   hess[1 + 2 * 1] = -ml2 * s * s / h;
   return 0;

@@ -9,8 +9,12 @@ module vci_scene_ellipse
   type, extends(vci_model_t), public :: ellipse_t
     real(dp) :: mass = 1.0_dp, grav = 9.8_dp, a = 1.0_dp, b = 0.5_dp
     logical :: analytic_hessian = .true.
+    !> supply ld_fused (D1, D2, D3 and the Hessian in one call; with analytic_hessian only). Off by
+    !> default (tests override d1 alone to make it fail); the examples and the benchmark turn it on
+    logical :: fused_callback = .false.
   contains
     procedure :: d1, d2, d3, mixed_hessian, gaps, gap_gradients, energy
+    procedure :: ld_fused
     procedure :: inertia
   end type ellipse_t
 
@@ -82,6 +86,32 @@ contains
     hess(2, 2) = -self%mass / h
     hess(3, 3) = -self%mass / h
   end subroutine mixed_hessian
+
+  !> d1, d2, d3 and mixed_hessian in one call, with the same arithmetic (same bits).
+  subroutine ld_fused(self, q, v, h, d1, d2, d3, hess, stat)
+    class(ellipse_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:), h
+    real(dp), intent(out) :: d1(:), d2(:), d3, hess(:, :)
+    integer, intent(inout) :: stat
+    real(dp) :: in, w1, w2, w3, fall
+    if (.not. (self%fused_callback .and. self%analytic_hessian)) then
+      call self%not_provided(stat); return
+    end if
+    in = self%inertia()
+    w1 = v(1) - q(1); w2 = v(2) - q(2); w3 = v(3) - q(3)
+    fall = 0.5_dp * h * self%mass * self%grav
+    d1(1) = -in * w1 / h
+    d1(2) = -self%mass * w2 / h
+    d1(3) = -self%mass * w3 / h - fall
+    d2(1) = in * w1 / h
+    d2(2) = self%mass * w2 / h
+    d2(3) = self%mass * w3 / h - fall
+    d3 = -0.5_dp * (in * w1**2 + self%mass * (w2**2 + w3**2)) / h**2 - 0.5_dp * self%mass * self%grav * (q(3) + v(3))
+    hess = 0.0_dp
+    hess(1, 1) = -in / h
+    hess(2, 2) = -self%mass / h
+    hess(3, 3) = -self%mass / h
+  end subroutine ld_fused
 
   subroutine gaps(self, q, g, stat)
     class(ellipse_t), intent(inout) :: self

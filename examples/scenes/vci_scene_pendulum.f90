@@ -15,8 +15,12 @@ module vci_scene_pendulum
   type, extends(vci_model_t), public :: pendulum_t
     real(dp) :: mass = 1.0_dp, grav = 9.8_dp, length = 2.0_dp, radius = 1.5_dp
     logical :: analytic_hessian = .true.   !< supply the mixed Hessian and the constraint Jacobian (else differenced)
+    !> supply ld_fused (D1, D2, D3 and the Hessian in one call, one sine and cosine; with analytic_hessian
+    !> only). Off by default (tests override d1 alone); the examples and the benchmark turn it on
+    logical :: fused_callback = .false.
   contains
     procedure :: d1, d2, d3, mixed_hessian, constraint_forms, discrete_constraint, gaps, gap_gradients, energy
+    procedure :: ld_fused
     procedure :: discrete_constraint_jacobian
   end type pendulum_t
 
@@ -93,6 +97,29 @@ contains
     hess(2, 1) = 0.0_dp
     hess(2, 2) = -ml2 * s**2 / h
   end subroutine mixed_hessian
+
+  !> d1, d2, d3 and mixed_hessian in one call, one sine and cosine, the same arithmetic (same bits).
+  subroutine ld_fused(self, q, v, h, d1, d2, d3, hess, stat)
+    class(pendulum_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:), h
+    real(dp), intent(out) :: d1(:), d2(:), d3, hess(:, :)
+    integer, intent(inout) :: stat
+    real(dp) :: ml2, s, c, w1, w2
+    if (.not. (self%fused_callback .and. self%analytic_hessian)) then
+      call self%not_provided(stat); return
+    end if
+    ml2 = self%mass * self%length**2; s = sin(q(1)); c = cos(q(1))
+    w1 = v(1) - q(1); w2 = v(2) - q(2)
+    d1(1) = -ml2 * w1 / h + ml2 * w2**2 * s * c / h + h * self%mass * self%grav * self%length * s
+    d1(2) = -ml2 * w2 * s**2 / h
+    d2(1) = ml2 * w1 / h
+    d2(2) = ml2 * w2 * s**2 / h
+    d3 = -0.5_dp * self%mass * self%length**2 * (w1**2 + w2**2 * s**2) / h**2 - self%mass * self%grav * self%length * c
+    hess(1, 1) = -ml2 / h
+    hess(1, 2) = 2.0_dp * ml2 * w2 * s * c / h
+    hess(2, 1) = 0.0_dp
+    hess(2, 2) = -ml2 * s**2 / h
+  end subroutine ld_fused
 
   subroutine constraint_forms(self, q, omega, stat)
     class(pendulum_t), intent(inout) :: self

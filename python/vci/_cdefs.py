@@ -111,6 +111,7 @@ typedef struct vci_callbacks {
   vci_gap_grads_fn gap_gradients;
   vci_energy_fn energy;
   vci_dconstraint_fn discrete_constraint_jacobian;
+  int (*ld_fused)(int, const double *, const double *, double, double *, double *, double *, double *, void *);
 } vci_callbacks;
 
 typedef struct vci_progress {

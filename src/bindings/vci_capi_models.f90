@@ -28,6 +28,7 @@ module vci_capi_models
     type(c_funptr) :: discrete_constraint = c_null_funptr, gaps = c_null_funptr
     type(c_funptr) :: gap_gradients = c_null_funptr, energy = c_null_funptr
     type(c_funptr) :: discrete_constraint_jacobian = c_null_funptr   !< added after 0.2.0 (at the end)
+    type(c_funptr) :: ld_fused = c_null_funptr   !< added in issue 26 (at the end)
   end type vci_callbacks_c
 
   !> The callbacks as vci.h 0.1.0 laid them out (nine pointers, no size): what binaries built
@@ -90,6 +91,14 @@ module vci_capi_models
       real(c_double), intent(inout) :: out(*)
       type(c_ptr), value :: user
     end function c_ld_grad_fn
+    integer(c_int) function c_ld_fused_fn(n, q, v, h, d1, d2, d3, hess, user) bind(C)
+      import :: c_int, c_double, c_ptr
+      integer(c_int), value :: n
+      real(c_double), intent(in) :: q(*), v(*)
+      real(c_double), value :: h
+      real(c_double), intent(inout) :: d1(*), d2(*), d3(*), hess(*)
+      type(c_ptr), value :: user
+    end function c_ld_fused_fn
     integer(c_int) function c_forms_fn(n, m, q, omega, user) bind(C)
       import :: c_int, c_double, c_ptr
       integer(c_int), value :: n, m
@@ -145,6 +154,7 @@ module vci_capi_models
     procedure :: constraint_forms => cm_forms
     procedure :: discrete_constraint => cm_dconstraint
     procedure :: discrete_constraint_jacobian => cm_dconstraint_jacobian
+    procedure :: ld_fused => cm_ld_fused
     procedure :: gaps => cm_gaps
     procedure :: gap_gradients => cm_gap_grads
     procedure :: energy => cm_energy
@@ -323,6 +333,37 @@ contains
     integer, intent(inout) :: stat
     call call_qvh(self, self%cb%mixed_hessian, 'mixed_hessian', q, v, h, hess, size(hess), stat)
   end subroutine cm_hessian
+
+  subroutine cm_ld_fused(self, q, v, h, d1, d2, d3, hess, stat)
+    class(c_model_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:), h
+    real(dp), intent(out) :: d1(:), d2(:), d3, hess(:, :)
+    integer, intent(inout) :: stat
+    call call_fused(self, q, v, h, d1, d2, d3, hess, self%n, stat)
+  end subroutine cm_ld_fused
+
+  !> The fused L_d callback (explicit shapes: no temporaries); outputs zeroed first, NULL is "not
+  !> provided", the return code and the finiteness of all four outputs go to the callback record.
+  subroutine call_fused(self, q, v, h, d1, d2, d3, hess, n, stat)
+    class(c_model_t), intent(inout) :: self
+    integer, intent(in) :: n
+    real(dp), intent(in) :: q(n), v(n), h
+    real(dp), intent(out) :: d1(n), d2(n), d3, hess(n * n)
+    integer, intent(inout) :: stat
+    procedure(c_ld_fused_fn), pointer :: f
+    real(dp) :: e(1)
+    integer :: rc
+    d1 = 0.0_dp; d2 = 0.0_dp; d3 = 0.0_dp; hess = 0.0_dp
+    if (.not. c_associated(self%cb%ld_fused)) then
+      call self%not_provided(stat); return
+    end if
+    call c_f_procpointer(self%cb%ld_fused, f)
+    e(1) = 0.0_dp
+    rc = f(n, q, v, h, d1, d2, e, hess, self%user)
+    d3 = e(1)
+    call self%record%note(rc, 'the C callback ld_fused', &
+                          finite1(d1) .and. finite1(d2) .and. finite1(e) .and. finite1(hess), stat)
+  end subroutine call_fused
 
   subroutine cm_forms(self, q, omega, stat)
     class(c_model_t), intent(inout) :: self

@@ -46,6 +46,9 @@
 !>     TASK 3: OUT(1)      = D3 L_d(Q, V, H)
 !>     TASK 4: OUT(1:N*N)  = d2 L_d/dQ_i dV_j at (Q, V, H), column-major        (IOPT bit 1)
 !>     TASK 6: OUT(1:M)    = omega_d(Q, V, H) with Q the base, V the other point (M > 0)
+!>     TASK 19: OUT(1:2*N+1+N*N) = D1 L_d, D2 L_d, D3 L_d and the TASK 4 matrix, one after the
+!>              other, in one call (shared sines and cosines computed once; it replaces TASKs 1-4
+!>              in the solves)                                               (IOPT bit 128)
 !>
 !> A continuous Lagrangian L(Q, V), V the velocity (IOPT bit 8; the library discretises it by the
 !> scheme VCISCH chooses, midpoint by default; H is passed as 0):
@@ -81,8 +84,8 @@
 !> answers "this TASK is not provided": on the library's probe of an optional TASK it does without
 !> it (differences it, or uses the Legendre inversion for H), on a required TASK VCINEW fails with
 !> ISTAT = 1 naming it, and anywhere else it is an unrecoverable failure. IOPT declares the optional
-!> tasks the routine supplies (sum of 1: Hessian(s), 2: gap gradients, 4: energy) and the kind of
-!> model (8: continuous); the routine is never called for an optional task IOPT leaves out. ISTAT
+!> tasks the routine supplies (sum of 1: Hessian(s), 2: gap gradients, 4: energy, 64: TASK 18,
+!> 128: TASK 19) and the kind of model (8: continuous, 16: separable, 32: its dense M); the routine is never called for an optional task IOPT leaves out. ISTAT
 !> takes the values of the C enum (0 ok, 1 argument, 2 callback, 3 non-finite, 4 Newton, 5 impact,
 !> 6 too many impacts, 7 inadmissible, 8 I/O, 9 call out of order).
 module vci_legacy
@@ -115,10 +118,11 @@ module vci_legacy
                                 TASK_DCONSTRAINT = 6, TASK_GAPS = 7, TASK_GAP_GRADS = 8, TASK_ENERGY = 9, &
                                 TASK_LAGRANGIAN = 10, TASK_DL_DQ = 11, TASK_DL_DV = 12, TASK_L_HESSIANS = 13, &
                                 TASK_POTENTIAL = 14, TASK_POTENTIAL_GRAD = 15, TASK_POTENTIAL_HESSIAN = 16, &
-                                TASK_MASS = 17, TASK_L_HESSIANS_BAND = 18
+                                TASK_MASS = 17, TASK_L_HESSIANS_BAND = 18, TASK_LD_FUSED = 19
   !> IOPT bits: which optional tasks the model routine supplies, and whether it is a continuous L.
   integer, parameter, public :: IOPT_HESSIAN = 1, IOPT_GAP_GRADS = 2, IOPT_ENERGY = 4, IOPT_CONTINUOUS = 8, &
-                                IOPT_SEPARABLE = 16, IOPT_DENSE_MASS = 32, IOPT_BAND_HESSIANS = 64
+                                IOPT_SEPARABLE = 16, IOPT_DENSE_MASS = 32, IOPT_BAND_HESSIANS = 64, &
+                                IOPT_LD_FUSED = 128
   !> IERR with which the model routine answers "this TASK is not provided" (no other value means it).
   integer, parameter, public :: IERR_NOT_PROVIDED = -999
 
@@ -150,11 +154,13 @@ module vci_legacy
   !> A discrete model (L_d) made of the routine.
   type, extends(vci_model_t) :: legacy_model_t
     type(legacy_routine_t) :: routine
+    real(dp), allocatable :: fwork(:)   !< OUT of TASK 19 (2 n + 1 + n^2), when IOPT has bit 128
   contains
     procedure :: d1 => lm_d1
     procedure :: d2 => lm_d2
     procedure :: d3 => lm_d3
     procedure :: mixed_hessian => lm_hessian
+    procedure :: ld_fused => lm_ld_fused
     procedure :: constraint_forms => lm_forms
     procedure :: discrete_constraint => lm_dconstraint
     procedure :: gaps => lm_gaps
@@ -328,6 +334,30 @@ contains
     end if
     call lm_task(self, TASK_HESSIAN, q, v, h, hess, size(hess), stat)
   end subroutine lm_hessian
+
+  !> TASK 19: D1, D2, D3 and the mixed Hessian in one call, unpacked from OUT.
+  subroutine lm_ld_fused(self, q, v, h, d1, d2, d3, hess, stat)
+    class(legacy_model_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:), h
+    real(dp), intent(out) :: d1(:), d2(:), d3, hess(:, :)
+    integer, intent(inout) :: stat
+    integer :: n, i, j
+    n = self%n
+    d1 = 0.0_dp; d2 = 0.0_dp; d3 = 0.0_dp; hess = 0.0_dp
+    if (iand(self%routine%iopt, IOPT_LD_FUSED) == 0 .or. .not. allocated(self%fwork)) then
+      call self%not_provided(stat); return
+    end if
+    call lm_task(self, TASK_LD_FUSED, q, v, h, self%fwork, size(self%fwork), stat)
+    do i = 1, n
+      d1(i) = self%fwork(i); d2(i) = self%fwork(n + i)
+    end do
+    d3 = self%fwork(2 * n + 1)
+    do j = 1, n
+      do i = 1, n
+        hess(i, j) = self%fwork(2 * n + 1 + i + n * (j - 1))
+      end do
+    end do
+  end subroutine lm_ld_fused
 
   subroutine lm_forms(self, q, omega, stat)
     class(legacy_model_t), intent(inout) :: self
@@ -720,10 +750,20 @@ contains
     integer :: i
     ih = 0
     if (iopt < 0 .or. iopt > IOPT_HESSIAN + IOPT_GAP_GRADS + IOPT_ENERGY + IOPT_CONTINUOUS + IOPT_SEPARABLE + &
-        IOPT_DENSE_MASS + IOPT_BAND_HESSIANS) then
+        IOPT_DENSE_MASS + IOPT_BAND_HESSIANS + IOPT_LD_FUSED) then
       write (global_message, '(a,i0,a)') 'VCINEW: IOPT = ', iopt, &
         ' (need a sum of 1: Hessian, 2: gap gradients, 4: energy, 8: continuous L, 16: separable L, 32: dense M,'// &
-        ' 64: banded Hessians)'
+        ' 64: banded Hessians, 128: fused L_d)'
+      stat = VCI_ERR_ARGUMENT; return
+    end if
+    if (iand(iopt, IOPT_LD_FUSED) /= 0 .and. iand(iopt, IOPT_CONTINUOUS + IOPT_SEPARABLE) /= 0) then
+      global_message = 'VCINEW: IOPT bit 128 (TASK 19, a discrete L_d''s fused task) with bit 8 or 16 '// &
+                       '(a continuous or separable L)'
+      stat = VCI_ERR_ARGUMENT; return
+    end if
+    if (iand(iopt, IOPT_LD_FUSED) /= 0 .and. vci_size_problem(n, m, ng) == '' .and. &
+        2 * int(n, i8) + 1 + int(n, i8) * n > int(huge(1), i8)) then
+      write (global_message, '(a,i0,a)') 'VCINEW: N = ', n, ' too large for TASK 19 (need 2*N+1+N*N < 2**31)'
       stat = VCI_ERR_ARGUMENT; return
     end if
     if (iand(iopt, IOPT_BAND_HESSIANS) /= 0 .and. iand(iopt, IOPT_CONTINUOUS + IOPT_SEPARABLE) /= IOPT_CONTINUOUS) then
@@ -772,6 +812,8 @@ contains
         allocate (slots(i)%lag%hwork(3 * n * n), stat=stat)
     else
       allocate (slots(i)%model, slots(i)%integ, stat=stat)
+      if (stat == 0 .and. iand(iopt, IOPT_LD_FUSED) /= 0 .and. vci_size_problem(n, m, ng) == '') &
+        allocate (slots(i)%model%fwork(2 * n + 1 + n * n), stat=stat)
     end if
     if (stat /= 0) then
       global_message = 'VCINEW: cannot allocate the model (out of memory)'

@@ -683,7 +683,8 @@ contains
     integer, intent(out) :: stat
     real(dp), intent(in), optional :: q1(:)   !< second configuration of a pair: must be admissible too
     integer :: n, s, j
-    real(dp), allocatable :: g(:), omega(:, :), hess(:, :), w(:), dg(:, :), w2(:), cjo(:, :), dg1(:)
+    real(dp), allocatable :: g(:), omega(:, :), hess(:, :), w(:), dg(:, :), w2(:), cjo(:, :), dg1(:), fd(:, :)
+    real(dp) :: fe
     self%initialized = .false.
     if (.not. self%created) then
       self%last_message = who//': create the integrator first'
@@ -707,7 +708,7 @@ contains
     ! optional procedures: each is probed once (vci_model_base: not_provided)
     allocate (hess(n, merge(n, 1, associated(self%discrete))), omega(n, max(1, self%model%m)), &
               g(self%model%n_gaps), w(self%model%m), &
-              cjo(self%model%m, n), dg1(n), &
+              cjo(self%model%m, n), dg1(n), fd(n, 2), &
               dg(n, self%model%n_gaps), w2(self%model%n_gaps), stat=s)
     if (s /= 0) then
       self%last_message = who//': cannot allocate the probes of the model (out of memory)'
@@ -717,6 +718,9 @@ contains
       call self%model%clear_not_provided(); s = 0
       call self%discrete%mixed_hessian(q0, v0, self%state%h, hess, s)
       call self%stepper%use_model_derivatives(mixed_hessian=.not. self%model%answered_not_provided())
+      call self%model%clear_not_provided(); s = 0
+      call self%discrete%ld_fused(q0, v0, self%state%h, fd(:, 1), fd(:, 2), fe, hess, s)
+      call self%stepper%use_model_derivatives(fused=.not. self%model%answered_not_provided())
     end if
     if (associated(self%lag) .and. self%model%check_bandwidth) then
       ! the debug check of a declared band: hessians_band against the dense blocks (vci_lagrangian)

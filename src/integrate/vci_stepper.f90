@@ -326,14 +326,16 @@ contains
     if (allocated(self%sys)) call self%sys%restore_start_memory([real(dp) ::])   ! nor its start memory
   end subroutine forget_factors
 
-  subroutine use_model_derivatives(self, mixed_hessian, gap_gradients, constraint_jacobian, energy, gap_gradient)
+  subroutine use_model_derivatives(self, mixed_hessian, gap_gradients, constraint_jacobian, energy, gap_gradient, &
+                                   fused)
     class(vci_stepper_t), intent(inout) :: self
     logical, intent(in), optional :: mixed_hessian, gap_gradients, constraint_jacobian
     logical, intent(in), optional :: energy   !< the model has H(q, p) (the discrete condition's fallback)
     logical, intent(in), optional :: gap_gradient   !< the model has one wall's gradient (gap_gradient)
+    logical, intent(in), optional :: fused    !< the model has the fused L_d callback (vci_model_t%ld_fused)
     if (present(energy)) self%has_energy = energy
     if (present(gap_gradient)) self%sys%has_gap_gradient = gap_gradient
-    call self%sys%use_derivatives(mixed_hessian, gap_gradients, constraint_jacobian)
+    call self%sys%use_derivatives(mixed_hessian, gap_gradients, constraint_jacobian, fused)
   end subroutine use_model_derivatives
 
   !> One step of length state%h in direction dir (+1/-1) from the state, through its impacts.

@@ -35,6 +35,9 @@ module vci_model
     procedure :: discrete_constraint => not_provided_dconstraint
     !> d omega_d / d other (m x n); optional, else differenced
     procedure :: discrete_constraint_jacobian => not_provided_dconstraint_jacobian
+    !> D1, D2, D3 L_d and the mixed Hessian at one point in one call (optional; issue 26): the
+    !> scheme then asks for nothing else of L_d, so shared work (sines, cosines) is done once
+    procedure :: ld_fused => not_provided_fused
   end type vci_model_t
 
   abstract interface
@@ -90,4 +93,20 @@ contains
     jac = 0.0_dp
     call self%not_provided(stat)
   end subroutine not_provided_dconstraint_jacobian
+
+  !> Everything a Newton iteration of a sub-step needs of L_d at (q, v, h), in one call:
+  !> d1 = D1 L_d, d2 = D2 L_d (R^n), d3 = D3 L_d = dL_d/dh, hess(i, j) = d2 L_d / dq_i dv_j (n x n),
+  !> the same values d1, d2, d3 and mixed_hessian return (bit for bit when the arithmetic is the
+  !> same: the trajectories then are). Optional: a model that overrides it must also supply a
+  !> Hessian here (it replaces mixed_hessian in the solves); the separate procedures stay required
+  !> (the model checker and the probes call them). The scheme keeps the last point's values, so a
+  !> residual, the Jacobian and the new momentum at one point cost one call.
+  subroutine not_provided_fused(self, q, v, h, d1, d2, d3, hess, stat)
+    class(vci_model_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:), h
+    real(dp), intent(out) :: d1(:), d2(:), d3, hess(:, :)
+    integer, intent(inout) :: stat
+    d1 = 0.0_dp; d2 = 0.0_dp; d3 = 0.0_dp; hess = 0.0_dp
+    call self%not_provided(stat)
+  end subroutine not_provided_fused
 end module vci_model

@@ -450,11 +450,12 @@ contains
   end subroutine configure_impacts
 
   !> Which optional model derivatives to use: the gap gradients (else differenced); the mixed
-  !> Hessian and the discrete constraint's Jacobian of a closed-form L_d matter only to schemes that
-  !> have them (they override).
-  subroutine use_derivatives(self, mixed_hessian, gap_gradients, constraint_jacobian)
+  !> Hessian, the discrete constraint's Jacobian and the fused L_d callback of a closed-form L_d
+  !> matter only to schemes that have them (they override).
+  subroutine use_derivatives(self, mixed_hessian, gap_gradients, constraint_jacobian, fused)
     class(vci_scheme_t), intent(inout) :: self
     logical, intent(in), optional :: mixed_hessian, gap_gradients, constraint_jacobian
+    logical, intent(in), optional :: fused   !< the model's ld_fused (vci_model_t)
     if (present(gap_gradients)) self%has_gap_gradients = gap_gradients
   end subroutine use_derivatives
 

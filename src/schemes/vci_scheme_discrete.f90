@@ -27,7 +27,7 @@ module vci_scheme_discrete
   private
   ! for the fused solve's submodule: gfortran gives private module procedures local linkage, which a
   ! submodule in another file cannot reach (not part of the library's API: `use vci` omits them)
-  public :: constraint_block
+  public :: constraint_block, ld_at
 
   type, extends(vci_scheme_t), public :: vci_scheme_discrete_t
     class(vci_model_t), pointer :: model => null()
@@ -39,6 +39,13 @@ module vci_scheme_discrete
     logical, private :: have_end = .false.
     logical :: has_hessian = .false.
     logical :: has_constraint_jacobian = .false.   !< the model's d omega_d (user L_d only)
+    !> The model's fused callback (vci_model_t%ld_fused) replaces d1, d2, d3 and mixed_hessian
+    !> (user L_d only); its values at the last point (lkey = (q_i, v_i) pairs, lh) are kept, so the
+    !> residual, the Jacobian and the new momentum at one point cost one call (issue 26)
+    logical :: has_fused = .false.
+    real(dp), allocatable, private :: lkey(:, :), ld1(:), ld2(:), lhess(:, :)
+    real(dp), private :: lh = 0.0_dp, ld3 = 0.0_dp
+    logical, private :: l_known = .false.
     real(dp), allocatable, private :: cjo(:, :)   !< the model's d omega_d(a, b) / db
     real(dp), allocatable, private :: d1(:), hess(:, :), g(:), rp(:), rm(:), sp(:), sm(:), xp(:), bb(:)
     real(dp), allocatable, private :: gg1(:)   !< the wall's gap gradient at stage 1's b (its Jacobian's last row)
@@ -131,13 +138,63 @@ contains
 
   !> The model's mixed Hessian, discrete constraint Jacobian and gap gradients (each differenced
   !> when the model does not supply it).
-  subroutine use_derivatives(self, mixed_hessian, gap_gradients, constraint_jacobian)
+  !> fused: the model's ld_fused, which brings its own mixed Hessian (has_hessian follows: give
+  !> mixed_hessian before fused, as the driver's probe does).
+  subroutine use_derivatives(self, mixed_hessian, gap_gradients, constraint_jacobian, fused)
     class(vci_scheme_discrete_t), intent(inout) :: self
-    logical, intent(in), optional :: mixed_hessian, gap_gradients, constraint_jacobian
+    logical, intent(in), optional :: mixed_hessian, gap_gradients, constraint_jacobian, fused
     if (present(gap_gradients)) self%has_gap_gradients = gap_gradients
     if (present(mixed_hessian)) self%has_hessian = mixed_hessian
     if (present(constraint_jacobian)) self%has_constraint_jacobian = constraint_jacobian
+    if (present(fused)) then
+      self%has_fused = fused .and. .not. self%increments
+      self%has_hessian = self%has_hessian .or. self%has_fused
+    end if
+    self%l_known = .false.
   end subroutine use_derivatives
+
+  !> The fused callback's values at (q, v, h) into ld1, ld2, ld3, lhess: kept from the last call
+  !> when it was at the same point (a failed call is not kept, so it is called again, as a separate
+  !> callback would be). stat: the callback's own (checked by the caller, on the values it takes).
+  subroutine ld_at(self, q, v, h, stat)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:), h
+    integer, intent(out) :: stat
+    stat = 0
+    if (self%l_known .and. h == self%lh) then
+      if (same_point(self%n, q, v, self%lkey)) return
+    end if
+    self%l_known = .false.
+    call self%model%ld_fused(q, v, h, self%ld1, self%ld2, self%ld3, self%lhess, stat)
+    if (stat /= 0) return
+    call keep_point(self%n, q, v, self%lkey)
+    self%lh = h
+    self%l_known = .true.
+  end subroutine ld_at
+
+  !> (q, v) == the kept point, element by element (explicit shapes: no descriptors at n = 2 or 3).
+  pure logical function same_point(n, q, v, key)
+    integer, intent(in) :: n
+    real(dp), intent(in) :: q(n), v(n), key(2, n)
+    integer :: i
+    same_point = .false.
+    do i = 1, n
+      if (q(i) /= key(1, i) .or. v(i) /= key(2, i)) return
+    end do
+    same_point = .true.
+  end function same_point
+
+  !> key = the pairs (q_i, v_i), interleaved: two separate arrays made gfortran -O3 turn the loop
+  !> into two memcpy calls, which at n = 2 or 3 cost more than the copy (callgrind, pendulum).
+  pure subroutine keep_point(n, q, v, key)
+    integer, intent(in) :: n
+    real(dp), intent(in) :: q(n), v(n)
+    real(dp), intent(out) :: key(2, n)
+    integer :: i
+    do i = 1, n
+      key(1, i) = q(i); key(2, i) = v(i)
+    end do
+  end subroutine keep_point
 
   !> The low part of q kept by get_endpoint when q is the last endpoint it returned, else zero.
   subroutine discrete_position_carry(self, q, lo)
@@ -180,7 +237,8 @@ contains
                                         self%xp, self%jscale, self%jabs, self%bb, self%start_key, &
                                         self%start_lo, self%end_key, self%end_lo, self%kin, self%cjo, self%sizes, &
                                         self%fjac, self%flu, self%fr, self%fsc, self%frt, self%fsct, self%fxt, &
-                                        self%fdx, self%frw, self%fx0, self%fpiv, self%gg1)
+                                        self%fdx, self%frw, self%fx0, self%fpiv, self%gg1, &
+                                        self%lkey, self%ld1, self%ld2, self%lhess)
     ! the fused solve's matrices only for the small systems it takes (vci_large_system; else 1 x 1:
     ! a chain of n = 4096 kept two n x n arrays here, one of them zeroed and so resident)
     nf = merge(n + m, 1, n + m < vci_large_system)
@@ -193,8 +251,9 @@ contains
               self%d1(n), self%hess(n, n), self%g(max(1, model%n_gaps)), self%bb(n), self%start_key(n), self%start_lo(n), &
               self%end_key(n), self%end_lo(n), self%kin(n), &
               self%rp(nx), self%rm(nx), self%sp(nx), self%sm(nx), self%xp(nx), self%jscale(nx), &
-              self%jabs(nx, nx), stat=stat)
+              self%jabs(nx, nx), self%lkey(2, n), self%ld1(n), self%ld2(n), self%lhess(n, n), stat=stat)
     if (stat /= 0) return
+    self%l_known = .false.
     self%jscale = 0.0_dp
     ! (a large banded system reads jabs on the band and the border only: untouched pages stay unmapped)
     if (model%hessian_bandwidth < 0 .or. model%check_bandwidth .or. nx <= vci_large_system) self%jabs = 0.0_dp
@@ -329,6 +388,12 @@ contains
     stat = 0
     if (self%increments) then
       call self%ret%d1s_inc(a, b, tau, self%dir, out, stat)
+    else if (self%has_fused .and. self%dir > 0) then
+      call ld_at(self, a, b, tau, stat)
+      out = self%ld1
+    else if (self%has_fused) then
+      call ld_at(self, b, a, tau, stat)
+      out = -self%ld2
     else if (self%dir > 0) then
       call self%model%d1(a, b, tau, out, stat)
     else
@@ -374,6 +439,12 @@ contains
       else
         call self%ret%pout_inc(a, x(1:self%n), tau, self%dir, p, stat)
       end if
+    else if (self%has_fused .and. self%dir > 0) then
+      call ld_at(self, a, x(1:self%n), tau, stat)
+      p = self%ld2
+    else if (self%has_fused) then
+      call ld_at(self, x(1:self%n), a, tau, stat)
+      p = -self%ld1
     else if (self%dir > 0) then
       call self%model%d2(a, x(1:self%n), tau, p, stat)
     else
@@ -455,6 +526,12 @@ contains
     if (self%increments) then
       call self%ret%energy_inc(a, x(1:self%n), tau, self%dir, e, stat)
       e = -e
+    else if (self%has_fused .and. self%dir > 0) then
+      call ld_at(self, a, x(1:self%n), tau, stat)
+      e = self%ld3
+    else if (self%has_fused) then
+      call ld_at(self, x(1:self%n), a, tau, stat)
+      e = self%ld3
     else if (self%dir > 0) then
       call self%model%d3(a, x(1:self%n), tau, e, stat)
     else
@@ -716,6 +793,13 @@ contains
     end if
     if (self%increments) then
       call self%ret%jacobian_inc(self%a, x(1:n), tau, self%dir, self%hess, stat)
+    else if (self%has_fused) then
+      if (self%dir > 0) then
+        call ld_at(self, self%a, x(1:n), tau, stat)
+      else
+        call ld_at(self, x(1:n), self%a, tau, stat)
+      end if
+      self%hess = self%lhess
     else if (self%dir > 0) then
       call self%model%mixed_hessian(self%a, x(1:n), tau, self%hess, stat)
     else
@@ -792,6 +876,7 @@ contains
   subroutine forget_jacobian(self)
     class(vci_scheme_discrete_t), intent(inout) :: self
     self%jac_known = .false.
+    self%l_known = .false.   ! (a model changed between solves is asked again)
   end subroutine forget_jacobian
 
   !> b_j, both layouts.

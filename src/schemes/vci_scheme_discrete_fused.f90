@@ -35,6 +35,7 @@ contains
         nx > nw%small_lu_max .or. nx >= nw%reuse_min .or. nx > size(self%fjac, 1)) return
     self%fx0 = x
     self%jac_known = .false.
+    self%l_known = .false.     ! (as forget_jacobian)
     iterations = 0
     factored = .false.
     call fused_residual(self, x, self%fr, self%fsc, phi, nw%atol, ok)
@@ -150,6 +151,16 @@ contains
     stat = 0
     if (self%increments) then
       call self%ret%d1s_inc(self%a, x(1:n), self%tau, self%dir, self%d1, stat)
+    else if (self%has_fused .and. self%dir > 0) then
+      call ld_at(self, self%a, x(1:n), self%tau, stat)
+      do i = 1, n
+        self%d1(i) = self%ld1(i)
+      end do
+    else if (self%has_fused) then
+      call ld_at(self, x(1:n), self%a, self%tau, stat)
+      do i = 1, n
+        self%d1(i) = -self%ld2(i)
+      end do
     else if (self%dir > 0) then
       call self%model%d1(self%a, x(1:n), self%tau, self%d1, stat)
     else
@@ -190,6 +201,16 @@ contains
     if (self%increments) then
       self%hess = 0.0_dp      ! (a declared band is written alone; fused systems are small)
       call self%ret%jacobian_inc(self%a, x(1:n), self%tau, self%dir, self%hess, stat)
+    else if (self%has_fused) then
+      ! the residual at x came just before (fused_substep): its call's Hessian is kept (l_known);
+      ! ld_at only when it is not
+      if (.not. self%l_known) then
+        if (self%dir > 0) then
+          call ld_at(self, self%a, x(1:n), self%tau, stat)
+        else
+          call ld_at(self, x(1:n), self%a, self%tau, stat)
+        end if
+      end if
     else if (self%dir > 0) then
       call self%model%mixed_hessian(self%a, x(1:n), self%tau, self%hess, stat)
     else
@@ -198,7 +219,9 @@ contains
     if (stat /= 0) then
       call note_if_unrecoverable(self, stat, 'mixed Hessian'); return
     end if
-    if (self%increments .or. self%dir > 0) then
+    if (self%has_fused .and. .not. self%increments) then
+      call kept_hessian_block(n, self%dir, self%lhess, self%fjac)   ! (no copy through hess)
+    else if (self%increments .or. self%dir > 0) then
       do j = 1, n
         do i = 1, n
           self%fjac(i, j) = self%hess(i, j)
@@ -237,6 +260,28 @@ contains
     end do
     ok = .true.
   end subroutine fused_jacobian
+
+  !> The position block of fjac from the fused callback's kept mixed Hessian: itself forward,
+  !> minus its transpose backward (explicit shapes: fjac is (n + m) x (n + m), lhess n x n).
+  subroutine kept_hessian_block(n, dir, lhess, fjac)
+    integer, intent(in) :: n, dir
+    real(dp), intent(in) :: lhess(n, n)
+    real(dp), intent(inout) :: fjac(:, :)
+    integer :: i, j
+    if (dir > 0) then
+      do j = 1, n
+        do i = 1, n
+          fjac(i, j) = lhess(i, j)
+        end do
+      end do
+    else
+      do j = 1, n
+        do i = 1, n
+          fjac(i, j) = -lhess(j, i)
+        end do
+      end do
+    end if
+  end subroutine kept_hessian_block
 
   !> A callback's failure in the fused solve: a recoverable one (stat > 0) is left to the general
   !> path, which solves again and backs off; an unrecoverable one (stat < 0) is noted like the

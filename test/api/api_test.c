@@ -1445,13 +1445,102 @@ static void suite_abi(void) {
 }
 
 /* ================================================================================================ */
+/* The fused callback (vci_callbacks.ld_fused, issue 26): D1, D2, D3 and the Hessian in one call. The
+ * scenes' fused callbacks do the arithmetic of the separate ones, so the runs are the same bits; a
+ * fused callback that fails or returns NaN where the separate ones do gives the same status at the
+ * same step. fused_mode: 0 as given, 1 fail (return 3), 2 NaN in D1, once x passes 1. */
+static int fused_mode = 0, fused_calls = 0;
+
+static int beyond_x1(const double *q, const double *v) { return q[1] > 1.0 || v[1] > 1.0; }
+
+static int spoiled_d1(int n, const double *q, const double *v, double h, double *out, void *user) {
+  int rc = ellipse_d1(n, q, v, h, out, user);
+  if (fused_mode == 1 && beyond_x1(q, v)) return 3;
+  if (fused_mode == 2 && beyond_x1(q, v)) out[0] = NAN;
+  return rc;
+}
+
+static int spoiled_fused(int n, const double *q, const double *v, double h, double *d1, double *d2, double *d3,
+                         double *hess, void *user) {
+  int rc = ellipse_fused(n, q, v, h, d1, d2, d3, hess, user);
+  ++fused_calls;
+  if (fused_mode == 1 && beyond_x1(q, v)) return 3;
+  if (fused_mode == 2 && beyond_x1(q, v)) d1[0] = NAN;
+  return rc;
+}
+
+static void suite_fused(void) {
+  vci_callbacks sep = ellipse_callbacks(), fus = ellipse_callbacks();
+  vci_model ms = NULL, mf = NULL;
+  vci_integrator is, inf;
+  double ts, tf, qs[3], qf[3], ps[3], pf[3];
+  int mode, ss, sf, i;
+  pendulum_params ppar = pendulum_default;
+  double p0[2], p1[2], pq[2][2], pp[2][2], pt[2];
+
+  /* the ellipse, forward 200 steps (2 impacts) and back: the same bits */
+  fused_mode = 0; fused_calls = 0;
+  sep.d1_ld = spoiled_d1; fus.d1_ld = spoiled_d1; fus.ld_fused = spoiled_fused;
+  is = make_ellipse(&ms, &sep, 1e-2);
+  inf = make_ellipse(&mf, &fus, 1e-2);
+  CHECK_STATUS(vci_integrate(is, 200, 1), VCI_OK);
+  CHECK_STATUS(vci_integrate(inf, 200, 1), VCI_OK);
+  CHECK_STATUS(vci_integrate(is, 150, -1), VCI_OK);
+  CHECK_STATUS(vci_integrate(inf, 150, -1), VCI_OK);
+  vci_get_state(is, &ts, qs, ps);
+  vci_get_state(inf, &tf, qf, pf);
+  CHECK(fused_calls > 0);
+  CHECK(ts == tf && memcmp(qs, qf, sizeof qs) == 0 && memcmp(ps, pf, sizeof ps) == 0);
+  vci_integrator_destroy(&is); vci_integrator_destroy(&inf);
+  vci_model_destroy(&ms); vci_model_destroy(&mf);
+
+  /* failures: the same status at the same step, the same last state */
+  for (mode = 1; mode <= 2; ++mode) {
+    fused_mode = 0;
+    is = make_ellipse(&ms, &sep, 1e-2);
+    inf = make_ellipse(&mf, &fus, 1e-2);
+    fused_mode = mode;
+    ss = vci_integrate(is, 200, 1);
+    sf = vci_integrate(inf, 200, 1);
+    CHECK(ss == (mode == 1 ? VCI_ERR_CALLBACK : VCI_ERR_NONFINITE));
+    CHECK(sf == ss);
+    if (mode == 1) CHECK_MESSAGE(inf, "the C callback ld_fused returned 3");
+    vci_get_state(is, &ts, qs, ps);
+    vci_get_state(inf, &tf, qf, pf);
+    CHECK(ts == tf && ts > 0.4 && ts < 0.6);
+    CHECK(memcmp(qs, qf, sizeof qs) == 0);
+    vci_integrator_destroy(&is); vci_integrator_destroy(&inf);
+    vci_model_destroy(&ms); vci_model_destroy(&mf);
+  }
+  fused_mode = 0;
+
+  /* the pendulum (m = 1, 3 impacts in 5 s): the same bits */
+  pendulum_initial_pair(1e-3, p0, p1);
+  for (i = 0; i < 2; ++i) {
+    vci_callbacks cb = pendulum_callbacks();
+    vci_model model = NULL;
+    vci_integrator integ = NULL;
+    if (i == 1) cb.ld_fused = pendulum_fused;
+    CHECK_STATUS(vci_model_create(&model, 2, 1, 1, &cb, &ppar), VCI_OK);
+    CHECK_STATUS(vci_integrator_create(&integ, model, 1e-3), VCI_OK);
+    CHECK_STATUS(vci_set_tolerances(integ, 0.0, 1e-12, 30), VCI_OK);
+    CHECK_STATUS(vci_init_from_pair(integ, 0.0, p0, p1), VCI_OK);
+    CHECK_STATUS(vci_integrate(integ, 4999, 1), VCI_OK);
+    vci_get_state(integ, &pt[i], pq[i], pp[i]);
+    vci_integrator_destroy(&integ);
+    vci_model_destroy(&model);
+  }
+  CHECK(pt[0] == pt[1] && memcmp(pq[0], pq[1], sizeof pq[0]) == 0 && memcmp(pp[0], pp[1], sizeof pp[0]) == 0);
+}
+
+/* ================================================================================================ */
 int main(int argc, char **argv) {
   static const struct { const char *name; void (*run)(void); } suites[] = {
       {"version", suite_version},     {"handles", suite_handles},   {"arguments", suite_arguments},
       {"callbacks", suite_callbacks}, {"ellipse", suite_ellipse},   {"hamiltonian", suite_hamiltonian},
       {"pendulum", suite_pendulum},   {"output", suite_output},     {"erratic", suite_erratic},
       {"limits", suite_limits},       {"contract", suite_contract}, {"status", suite_status},
-      {"abi", suite_abi},             {"restart", suite_restart}};
+      {"abi", suite_abi},             {"restart", suite_restart},   {"fused", suite_fused}};
   size_t i, n = sizeof suites / sizeof suites[0];
   int ran = 0;
   atexit(exit_guard);

@@ -148,10 +148,12 @@ if [ "${CALLGRIND:-1}" != 0 ] && command -v valgrind >/dev/null 2>&1; then
     echo "(episodes: particle and ellipse 20, pendulum 2). Ratios: library / closed-form hand loop (the floor),"
     echo "library / same-algorithm hand loop (the yardstick). The last columns: the library with analytic H on"
     echo "its general Newton path only (\`VCI_BENCH_GENERAL=1\`: no fused regular-step solve), and what the fused"
-    echo "solve (src/schemes/vci_scheme_discrete_fused.f90) leaves of it."
+    echo "solve (src/schemes/vci_scheme_discrete_fused.f90) leaves of it. The library with analytic H uses the"
+    echo "scenes' fused L_d callback (ld_fused: D1, D2, D3 and the Hessian in one call, issue 26); the last two"
+    echo "columns: the same with one callback per quantity (\`VCI_BENCH_SEPARATE=1\`), and what the fused callback leaves of it."
     echo
-    echo "| scene | library, analytic H | library, differenced H | closed-form loop | same-algorithm loop | analytic / closed form | analytic / same alg. | differenced / same alg. | analytic H, general path | fused / general |"
-    echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+    echo "| scene | library, analytic H | library, differenced H | closed-form loop | same-algorithm loop | analytic / closed form | analytic / same alg. | differenced / same alg. | analytic H, general path | fused / general | analytic H, separate callbacks | fused callback / separate |"
+    echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
     for spec in particle:300:20 ellipse:200:20 pendulum:4999:2 ellipse-free:200:20 pendulum-free:4999:2; do
       name=${spec%%:*}; rest=${spec#*:}; nst=${rest%%:*}; eps=${rest#*:}
       set_counts=""
@@ -164,8 +166,11 @@ if [ "${CALLGRIND:-1}" != 0 ] && command -v valgrind >/dev/null 2>&1; then
       ir=$(VCI_BENCH_GENERAL=1 valgrind --tool=callgrind --callgrind-out-file=/dev/null --toggle-collect='*run_timed*' \
              "$EXE" --profile "$name" 1 "$eps" 2>&1 | awk '/Collected/ {print $4}')
       set_counts="$set_counts $(( ir / (nst * eps) ))"
-      echo "$set_counts" | awk -v s="$name" '{ if ($4 > 0) printf "| %s | %d | %d | %d | %d | %.1f | %.2f | %.2f | %d | %.2f |\n", s, $1, $2, $3, $4, $1/$3, $1/$4, $2/$4, $5, $1/$5;
-                                               else printf "| %s | %d | %d | %d | n/a | %.1f | n/a | n/a | %d | %.2f |\n", s, $1, $2, $3, $1/$3, $5, $1/$5 }'
+      ir=$(VCI_BENCH_SEPARATE=1 valgrind --tool=callgrind --callgrind-out-file=/dev/null --toggle-collect='*run_timed*' \
+             "$EXE" --profile "$name" 1 "$eps" 2>&1 | awk '/Collected/ {print $4}')
+      set_counts="$set_counts $(( ir / (nst * eps) ))"
+      echo "$set_counts" | awk -v s="$name" '{ if ($4 > 0) printf "| %s | %d | %d | %d | %d | %.1f | %.2f | %.2f | %d | %.2f | %d | %.2f |\n", s, $1, $2, $3, $4, $1/$3, $1/$4, $2/$4, $5, $1/$5, $6, $1/$6;
+                                               else printf "| %s | %d | %d | %d | n/a | %.1f | n/a | n/a | %d | %.2f | %d | %.2f |\n", s, $1, $2, $3, $1/$3, $5, $1/$5, $6, $1/$6 }'
     done
     echo
   } >"$CG"

@@ -65,6 +65,34 @@ C         passes copies, so the run is the one above, bit for bit
      &              NBAD)
     6 CONTINUE
 C
+C     1c. The fused task (IOPT bit 128: TASK 19 gives D1, D2, D3 and
+C         the Hessian in one call, the same arithmetic): the run of 1,
+C         bit for bit; and IPAR(1) = 1 makes TASK 19 fail as TASK 1
+      CALL VCIRUN(ELLMOD, N, M, NG, 3 + 128, H, T0, Q0, Q1, 200, T, Q,
+     &            P, NIMP, TIMP, LTIMP, RPAR, IPAR, ISTAT, MSG)
+      CALL CHECKI('fused task: status', ISTAT, 0, NBAD)
+      CALL CHECKI('fused task: impacts', NIMP, 2, NBAD)
+      CALL CHECKR('fused task: final time', T, TR, 0.0D0, NBAD)
+      DO 7 I = 1, N
+        CALL CHECKR('fused task: same Q', Q(I), QR(I), 0.0D0, NBAD)
+        CALL CHECKR('fused task: same P', P(I), PR(I), 0.0D0, NBAD)
+    7 CONTINUE
+      IPAR(1) = 1
+      CALL VCIRUN(ELLMOD, N, M, NG, 3 + 128, H, T0, Q0, Q1, 200, T, Q,
+     &            P, NIMP, TIMP, LTIMP, RPAR, IPAR, ISTAT, MSG)
+      IPAR(1) = 0
+      CALL CHECKI('fused task failing', ISTAT, 2, NBAD)
+      IF (INDEX(MSG, 'TASK = 19') .EQ. 0) THEN
+        WRITE (*, *) 'FAIL: the message does not name TASK = 19'
+        NBAD = NBAD + 1
+      END IF
+      CALL VCIRUN(ELLMOD, N, M, NG, 8 + 128, H, T0, Q0, Q1, 200, T, Q,
+     &            P, NIMP, TIMP, LTIMP, RPAR, IPAR, ISTAT, MSG)
+      CALL CHECKI('TASK 19 with a continuous L', ISTAT, 1, NBAD)
+      CALL VCIRUN(ELLMOD, N, M, NG, 3 + 16 + 128, H, T0, Q0, Q1, 200,
+     &            T, Q, P, NIMP, TIMP, LTIMP, RPAR, IPAR, ISTAT, MSG)
+      CALL CHECKI('TASK 19 with a separable L', ISTAT, 1, NBAD)
+C
 C     2. The handle interface, differenced Jacobians (IOPT = 0):
 C        forward 200 steps, then backward to the pair
       CALL VCINEW(ELLMOD, N, M, NG, 0, H, RPAR, IPAR, IH, ISTAT)
@@ -137,7 +165,8 @@ C
 C
 C     The ellipse: q = (theta, x, y), midpoint L_d with gravity, floor
 C     g = y - phi(theta). RPAR = (mass, gravity, a, b). IPAR(1) = 1
-C     makes TASK 1 fail (to test the error path); IPAR(2) = 1 makes it
+C     makes TASK 1 and 19 fail (to test the error path); TASK 19 is
+C     TASKs 1 to 4 in one call (IOPT bit 128); IPAR(2) = 1 makes it
 C     overwrite every input argument after answering (ELLBAD).
       SUBROUTINE ELLMOD(TASK, N, M, NG, Q, V, H, OUT, RPAR, IPAR, IERR)
       IMPLICIT NONE
@@ -172,6 +201,26 @@ C     overwrite every input argument after answering (ELLBAD).
         OUT(1) = -AI / H
         OUT(5) = -AM / H
         OUT(9) = -AM / H
+      ELSE IF (TASK .EQ. 19) THEN
+        IF (IPAR(1) .EQ. 1) THEN
+          IERR = 3
+          RETURN
+        END IF
+        OUT(1) = -AI * (V(1) - Q(1)) / H
+        OUT(2) = -AM * (V(2) - Q(2)) / H
+        OUT(3) = -AM * (V(3) - Q(3)) / H - 0.5D0 * H * AM * G
+        OUT(4) = AI * (V(1) - Q(1)) / H
+        OUT(5) = AM * (V(2) - Q(2)) / H
+        OUT(6) = AM * (V(3) - Q(3)) / H - 0.5D0 * H * AM * G
+        OUT(7) = -0.5D0 * (AI * (V(1) - Q(1))**2 + AM * ((V(2) - Q(2))
+     &     **2 + (V(3) - Q(3))**2)) / H**2 - 0.5D0 * AM * G * (Q(3)
+     &     + V(3))
+        DO 20 I = 8, 16
+          OUT(I) = 0.0D0
+   20   CONTINUE
+        OUT(8) = -AI / H
+        OUT(12) = -AM / H
+        OUT(16) = -AM / H
       ELSE IF (TASK .EQ. 7) THEN
         S = SIN(Q(1))
         C = COS(Q(1))

@@ -92,9 +92,10 @@ C        answered "not provided") is refused by VCINEW, naming it
       CALL CHECKS('no dL/dv names dl_dv', MSG, 'dl_dv', NBAD)
       CALL CHECKS('no dL/dv names TASK 12', MSG, 'TASK = 12', NBAD)
       IPAR(1) = 0
-C     unknown IOPT bits (16 and 32 are the separable model's, sepw77.f)
-      CALL VCINEW(PWMOD, N, M, NG, 64, H, RPAR, IPAR, IH, ISTAT)
-      CALL CHECKI('VCINEW with IOPT = 64', ISTAT, 1, NBAD)
+C     unknown IOPT bits (16, 32: separable, sepw77.f; 64: banded
+C     Hessians, chainb77.f; 128: the fused TASK 19, ellipse77.f)
+      CALL VCINEW(PWMOD, N, M, NG, 256, H, RPAR, IPAR, IH, ISTAT)
+      CALL CHECKI('VCINEW with IOPT = 256', ISTAT, 1, NBAD)
 C     unknown scheme, stages out of range (the model stays usable)
       CALL VCINEW(PWMOD, N, M, NG, 8, H, RPAR, IPAR, IH, ISTAT)
       CALL CHECKI('VCINEW', ISTAT, 0, NBAD)
