@@ -18,6 +18,7 @@ module vci_newton
   use vci_lapack, only: dgetrf, dgetrs, dgelsd
   use vci_kernels, only: equilibrate, scaled_merit, small_lu, small_lu_solve, pivots_regular
   use vci_banded, only: vci_banded_lu_t, outside_band
+  use vci_bordered, only: vci_bordered_t
   implicit none
   private
 
@@ -57,6 +58,8 @@ module vci_newton
     procedure :: reuse_key => never_reuse
     !> The Jacobian's structure: a banded leading block and a dense border (default: dense).
     procedure :: structure => no_structure
+    !> Unknowns at the end that border the rest (1: an impact stage's alpha or mu; default 0).
+    procedure :: border => no_border
   end type vci_system_t
 
   abstract interface
@@ -129,6 +132,21 @@ module vci_newton
     logical, private :: lu_banded = .false.        !< the kept/last factors are band's, not lu's
     integer, private :: snb = 0, sbw = -1          !< the posed system's block and half-bandwidth
     logical, private :: scheck = .false.           !< check the band on every Newton matrix
+    !> Systems that declare a border of one unknown (an impact's stage 1 and 2) and no band: the
+    !> block is factorised alone and the border eliminated by its Schur complement (vci_bordered).
+    !> False: the whole matrix is factorised (the comparison path of the tests and benchmarks).
+    logical :: bordered = .true.
+    !> Systems of more than reuse_min unknowns keep the block's factors across the iterations of one
+    !> bordered solve (a chord on the block; the border is the current Jacobian's) while each step
+    !> contracts the scaled residual by reuse_contraction; false: refactorise it at every iteration.
+    logical :: border_chord = .true.
+    integer(i8) :: bordered_directions = 0         !< Newton directions by bordering
+    type(vci_bordered_t), private :: bord          !< the block's factors and the border
+    logical, private :: lu_bordered = .false.      !< the last factors are bord's
+    logical, private :: block_stale = .true.       !< refactorise the bordered block at the next direction
+    integer, private :: nbord = 0                  !< the posed system's border (0 or 1)
+    logical, private :: block_reused = .false.     !< the last bordered direction used an earlier block
+    integer, private :: znb = 0, zbw = -1          !< bordered off: a declared band to zero before the dense LU
   contains
     !> Allocate workspace for systems of up to nmax unknowns (call once, outside the step loop).
     procedure :: reserve
@@ -163,6 +181,12 @@ contains
     logical, intent(out) :: check
     nb = 0; bw = -1; check = .false.
   end subroutine no_structure
+
+  !> Unknowns at the end of x that border the rest: none unless the system says so.
+  integer function no_border(self)
+    class(vci_system_t), intent(inout) :: self
+    no_border = 0
+  end function no_border
 
   logical function always_admissible(self, x)
     class(vci_system_t), intent(inout) :: self
@@ -218,7 +242,7 @@ contains
     integer, allocatable, intent(out) :: ipiv(:)
     integer, intent(out) :: stat
     nf = 0; key = 0.0_dp; stat = VCI_OK
-    if (.not. self%have_lu .or. self%lu_banded) return   ! (band factors: the continued run refactorises)
+    if (.not. self%have_lu .or. self%lu_banded .or. self%lu_bordered) return   ! (band factors: the continued run refactorises)
     allocate (rw(self%lu_n), lu(self%lu_n, self%lu_n), ipiv(self%lu_n), stat=stat)
     if (stat /= 0) then
       stat = VCI_ERR_MEMORY; return
@@ -241,7 +265,7 @@ contains
     if (any(ipiv < 1) .or. any(ipiv > nf)) return
     if (.not. (all_finite(rw) .and. all_finite(lu))) return     ! (from a file: nothing non-finite to LAPACK)
     self%rw(1:nf) = rw; self%lu(1:nf, 1:nf) = lu; self%ipiv(1:nf) = ipiv
-    self%lu_banded = .false.
+    self%lu_banded = .false.; self%lu_bordered = .false.
     self%lu_n = nf; self%lu_key = key
     self%have_lu = .true.
   end subroutine keep_factors
@@ -286,6 +310,14 @@ contains
     if (n >= self%reuse_min) key = sys%reuse_key()
     call sys%structure(self%snb, self%sbw, self%scheck)
     if (self%snb > n .or. self%sbw < 0) self%snb = 0
+    self%nbord = 0; self%block_stale = .true.; self%znb = 0
+    if (.not. self%bordered .and. self%snb > 0 .and. .not. self%scheck) then
+      if (sys%border() > 0) then      ! the comparison path: the whole stage matrix, densely
+        self%znb = self%snb; self%zbw = self%sbw; self%snb = 0
+      end if
+    end if
+    if (self%bordered .and. self%snb == 0 .and. n >= 2) self%nbord = sys%border()
+    if (self%nbord /= 1) self%nbord = 0
     call sys%residual(x, self%r(1:n), self%sc(1:n), stat)
     if (stat /= VCI_OK) then
       call fail_eval(res, stat); return
@@ -377,6 +409,9 @@ contains
       end do
       if (ib > self%max_backtracks) then
         if (phi <= 1.0_dp) exit
+        if (self%lu_bordered .and. self%block_reused) then
+          self%block_stale = .true.; cycle     ! a chord direction: retry with the current block
+        end if
         ! a callback that failed (or gave NaN) at the trial points is the cause, not the descent
         if (trial_stat /= VCI_OK) then
           call fail_eval(res, trial_stat); return
@@ -385,6 +420,8 @@ contains
         res%status = VCI_ERR_NEWTON
         return
       end if
+      ! a chord on the bordered block that stopped contracting: a new block at the next iteration
+      if (self%lu_bordered .and. .not. (phit <= self%reuse_contraction * phi)) self%block_stale = .true.
       call accept_trial(self, n, x, phit, phi, res)
     end do
 
@@ -458,6 +495,7 @@ contains
     if (nb > 0) then
       if (band_rows(self, n, nb, bw, a, size(a, 1)) <= huge(1.0_dp)) then
         call self%band%factor(n, nb, bw, a, size(a, 1), self%rw, info)
+        self%lu_bordered = .false.
         if (info == 0) then
           do i = 1, n
             b(i) = b(i) * self%rw(i)
@@ -497,6 +535,10 @@ contains
     logical, intent(out) :: factored
     type(vci_newton_result_t), intent(inout) :: res
     integer :: i, info, rank
+    if (self%nbord == 1) then
+      call bordered_direction(self, n, factored)
+      if (factored) return
+    end if
     if (self%snb > 0) then
       call structured_direction(self, n, factored, res)
       if (factored .or. res%reason /= NEWTON_CONVERGED) return
@@ -504,6 +546,7 @@ contains
       ! on the matrix with its zeros outside the band written (the assembly wrote the band alone)
       if (.not. self%scheck) call zero_outside_band(self%snb, self%sbw, self%jac, self%capacity)
     end if
+    if (self%znb > 0) call zero_outside_band(self%znb, self%zbw, self%jac, self%capacity)
     ! rows equilibrated by their largest entry; jac keeps the equilibrated matrix for the fallback
     call equilibrate(n, self%capacity, self%jac, self%lu, self%r, self%dx, self%rw)
     factored = .false.
@@ -531,6 +574,42 @@ contains
     if (info /= 0 .or. .not. all(ieee_is_finite(self%dx(1:n)))) res%reason = NEWTON_SINGULAR
   end subroutine newton_direction
 
+  !> Newton direction for a system bordered by its last unknown (vci_bordered): the block
+  !> jac(1:n-1, 1:n-1) factorised when stale (else its factors from an earlier iteration of this
+  !> solve: a chord on the block), the current border eliminated. factored false: the whole
+  !> matrix is factorised instead (singular block, cancelling Schur complement, NaN/Inf: the dense
+  !> path reports those). rw = 1: the bordered solve equilibrates the block's rows itself.
+  subroutine bordered_direction(self, n, factored)
+    type(vci_newton_t), intent(inout) :: self
+    integer, intent(in) :: n
+    logical, intent(out) :: factored
+    integer :: info
+    factored = .false.
+    self%block_reused = .true.
+    ! (the chord only from reuse_min unknowns: below, a factorisation costs less than the extra
+    ! iterations a chord takes, each with its residual and Jacobian)
+    if (self%block_stale .or. .not. self%border_chord .or. n <= self%reuse_min .or. &
+        .not. self%bord%block_ok .or. self%bord%ni /= n - 1) then
+      call self%bord%factor_block(n - 1, self%jac, self%capacity, self%small_lu_max, info)
+      if (info /= 0) return
+      self%factorisations = self%factorisations + 1
+      self%block_stale = .false.; self%block_reused = .false.
+    end if
+    call self%bord%border(self%jac, self%capacity, info)
+    if (info /= 0) then
+      self%block_stale = .true.; return
+    end if
+    self%rw(1:n) = 1.0_dp
+    self%dx(1:n) = self%r(1:n)
+    call self%bord%solve(self%dx(1:n))
+    factored = all(ieee_is_finite(self%dx(1:n)))
+    if (.not. factored) then
+      self%block_stale = .true.; return
+    end if
+    self%lu_banded = .false.; self%lu_bordered = .true.
+    self%bordered_directions = self%bordered_directions + 1
+  end subroutine bordered_direction
+
   !> Newton direction for a system that declared structure (vci_banded): rows equilibrated by their
   !> largest entry in the band and the border (the entries outside are zero), the band block and
   !> the Schur complement of the border factorised. factored false: fall back to the dense path
@@ -557,6 +636,7 @@ contains
     ! NaN/Inf in the matrix or r w: the dense path reports it (nothing non-finite goes to LAPACK)
     if (.not. (total <= huge(1.0_dp) .and. all_finite(self%dx(1:n)))) return
     call self%band%factor(n, nb, bw, self%jac, self%capacity, self%rw, info)
+    self%lu_bordered = .false.
     if (info /= 0) return
     self%factorisations = self%factorisations + 1
     self%structured_factorisations = self%structured_factorisations + 1
@@ -678,7 +758,7 @@ contains
     type(vci_newton_t), intent(inout) :: self
     integer, intent(in) :: n
     integer, intent(out) :: info
-    self%lu_banded = .false.
+    self%lu_banded = .false.; self%lu_bordered = .false.
     if (n <= self%small_lu_max) then
       call small_lu(n, self%lu, self%ipiv, info)
     else
@@ -692,7 +772,9 @@ contains
     integer, intent(in) :: n
     real(dp), intent(inout) :: b(:)
     integer :: info
-    if (self%lu_banded) then
+    if (self%lu_bordered) then
+      call self%bord%solve(b(1:n))
+    else if (self%lu_banded) then
       call self%band%solve(b(1:n))
     else if (n <= self%small_lu_max) then
       call small_lu_solve(n, self%lu, self%ipiv, b)
