@@ -4,8 +4,9 @@
 !> start of docs/RESULTS.md's chain (x_i = 0.24 sin(2 pi i/(n+1)), v_i = 1.2 sin(3 pi i/(n+1)) +
 !> 0.8 sin(pi i/(n+1))). Every step is timed on its own and classed as regular (no impact) or impact
 !> step; medians of each, their ratio, LU factorisations per step of each class, the peak resident
-!> memory's growth over the run. Arguments: `banded` (declare the chain's bandwidth 1) and the n to
-!> run (default 32 128 256). Not a test: tools/bench/run_chain.sh runs it with OpenBLAS on one thread.
+!> memory's growth over the run. Arguments: `banded` (declare the chain's bandwidth 1), `whole`
+!> (impact stages with the whole stage matrix factorised, set_bordered_impacts(.false.): the path
+!> before bordering) and the n to run (default 32 128 256). Not a test: tools/bench/run_chain.sh runs it with OpenBLAS on one thread.
 
 program bench_chain_impacts
   use, intrinsic :: iso_fortran_env, only: output_unit
@@ -20,17 +21,19 @@ program bench_chain_impacts
   real(dp), allocatable :: q0(:), p0(:), treg(:), timp(:)
   integer, allocatable :: ns(:)
   real(dp) :: pi, rss0, rss1
-  logical :: banded
+  logical :: banded, whole
   character(len=32) :: arg
   real(dp), parameter :: h = 0.01_dp, t_end = 2.0_dp
   pi = acos(-1.0_dp)
-  banded = .false.
+  banded = .false.; whole = .false.
   narg = command_argument_count()
   allocate (ns(0)); nn = 0
   do ia = 1, narg
     call get_command_argument(ia, arg)
     if (trim(arg) == 'banded') then
       banded = .true.
+    else if (trim(arg) == 'whole') then
+      whole = .true.
     else
       read (arg, *) k
       ns = [ns, k]
@@ -54,6 +57,7 @@ program bench_chain_impacts
     if (banded) call model%declare_bandwidth(1)
     call integ%create(model, h, stat)
     if (stat == VCI_OK) call integ%set_scheme(VCI_SCHEME_MIDPOINT, 1, stat)
+    call integ%set_bordered_impacts(.not. whole)
     if (stat == VCI_OK) call integ%set_impact_energy(VCI_IMPACT_HAMILTONIAN, stat)
     if (stat == VCI_OK) call integ%set_max_impacts(max(16, 2 * n), stat)
     if (stat == VCI_OK) call integ%init_from_momentum(0.0_dp, q0, p0, stat)
@@ -82,7 +86,8 @@ program bench_chain_impacts
     rss1 = peak_rss_mb()
     imp_total = st1%impacts
     write (output_unit, '("| ",i0," | ",a," | ",i0," | ",i0," | ",i0," | ",f10.2," | ",f10.2," | ",f7.2," | ",f6.2,' // &
-      '" | ",f6.2," | ",f7.1," |")') n, merge('1    ', 'dense', banded), nsteps, nimp, imp_total, &
+      '" | ",f6.2," | ",f7.1," |")') n, &
+      trim(merge('1    ', 'dense', banded))//trim(merge(' whole', '      ', whole)), nsteps, nimp, imp_total, &
       1.0e6_dp * median(treg(1:nreg)), 1.0e6_dp * median(timp(1:nimp)), median(timp(1:nimp)) / median(treg(1:nreg)), &
       real(f_reg, dp) / max(nreg, 1), real(f_imp, dp) / max(nimp, 1), rss1 - rss0
     deallocate (q0, p0, treg, timp)

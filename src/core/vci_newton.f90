@@ -136,6 +136,9 @@ module vci_newton
     !> block is factorised alone and the border eliminated by its Schur complement (vci_bordered).
     !> False: the whole matrix is factorised (the comparison path of the tests and benchmarks).
     logical :: bordered = .true.
+    !> ... for systems of at least this many unknowns: below, the in-line LU of the whole matrix costs
+    !> less than the block's plus the elimination (ellipse, walled pendulum: docs/bench/bordered.md).
+    integer :: border_min = vci_large_system
     !> Systems of more than reuse_min unknowns keep the block's factors across the iterations of one
     !> bordered solve (a chord on the block; the border is the current Jacobian's) while each step
     !> contracts the scaled residual by reuse_contraction; false: refactorise it at every iteration.
@@ -316,7 +319,7 @@ contains
         self%znb = self%snb; self%zbw = self%sbw; self%snb = 0
       end if
     end if
-    if (self%bordered .and. self%snb == 0 .and. n >= 2) self%nbord = sys%border()
+    if (self%bordered .and. self%snb == 0 .and. n >= max(2, self%border_min)) self%nbord = sys%border()
     if (self%nbord /= 1) self%nbord = 0
     call sys%residual(x, self%r(1:n), self%sc(1:n), stat)
     if (stat /= VCI_OK) then

@@ -548,13 +548,16 @@ contains
 
   !> Impact stages 1 and 2 by bordering (on, the default: the sub-step's block factorised and the
   !> alpha/mu row and column eliminated by their Schur complement, docs/DESIGN.md "Impact systems by
-  !> bordering") or with the whole stage matrix factorised (off: the comparison path).
-  subroutine set_bordered_impacts(self, on)
+  !> bordering") or with the whole stage matrix factorised (off: the comparison path). min_unknowns:
+  !> border stage systems of at least this many unknowns (default 16; smaller ones cost less whole).
+  subroutine set_bordered_impacts(self, on, min_unknowns)
     class(vci_integrator_t), intent(inout) :: self
     logical, intent(in) :: on
+    integer, intent(in), optional :: min_unknowns
     type(vci_settings_t) :: settings
     settings = self%stepper%current_settings()
     settings%bordered_impacts = on
+    if (present(min_unknowns)) settings%border_min = max(2, min_unknowns)
     call self%stepper%configure(settings)
   end subroutine set_bordered_impacts
 

@@ -24,6 +24,7 @@ module vci_settings
     !> Impact stages solved by bordering the sub-step's block (vci_bordered); false: the whole
     !> stage matrix is factorised (the comparison path of tests and benchmarks).
     logical :: bordered_impacts = .true.
+    integer :: border_min = 16     !< ... for stage systems of at least this many unknowns
   end type vci_settings_t
 
   public :: vci_default_max_impacts, vci_too_many_impacts_cause

@@ -222,6 +222,7 @@ contains
     self%newton%rtol = settings%rtol
     self%newton%max_iterations = settings%max_iterations
     self%newton%bordered = settings%bordered_impacts
+    self%newton%border_min = settings%border_min
     if (.not. allocated(self%sys)) return
     call self%sys%configure_impacts(settings%impact_energy, settings%rtol)
   end subroutine configure
