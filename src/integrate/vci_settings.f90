@@ -24,6 +24,10 @@ module vci_settings
     !> Newton fail is retried as 2, 4, ... equal sub-steps of the same scheme, up to this many;
     !> 1 turns the net off (the step then fails with its own status).
     integer :: max_step_splits = 16
+    !> Impact stages solved by bordering the sub-step's block (vci_bordered); false: the whole
+    !> stage matrix is factorised (the comparison path of tests and benchmarks).
+    logical :: bordered_impacts = .true.
+    integer :: border_min = 16     !< ... for stage systems of at least this many unknowns
   end type vci_settings_t
 
   public :: vci_default_max_impacts, vci_too_many_impacts_cause
