@@ -55,6 +55,9 @@ module vci_explicit_step
     integer :: condition = VCI_IMPACT_HAMILTONIAN
     type(vci_composition_energy_t) :: energy   !< the discrete condition's E_d and its scratch
     integer(i8) :: fallbacks = 0      !< discrete-condition impacts that kept the mirror (a graze)
+    !> The model's one-wall gradient (gap_gradient): 0 not probed yet, 1 provided (O(n) a wall),
+    !> 2 not provided (every wall's gradients, O(n n_gaps), for the one wanted)
+    integer :: one_wall_gradient = 0
   contains
     procedure :: setup => explicit_setup
     procedure :: advance => explicit_advance
@@ -75,6 +78,7 @@ contains
     if (stat /= VCI_OK) return
     n = model%n; ng = max(model%n_gaps, 1); s = self%map%stages
     self%n = n; self%ng = model%n_gaps
+    self%one_wall_gradient = 0
     if (allocated(self%a)) deallocate (self%a, self%pa, self%qe, self%pe, self%qt, self%pt, self%stage_q, &
                                        self%g_start, self%g_end, self%g_trial, self%grads, self%sorted, self%order, &
                                        self%g_samples, self%q_run, self%p_run, self%q_root, self%p_root, &
@@ -240,7 +244,7 @@ contains
         stat = VCI_OK
         if (best > 0.0_dp) call self%map%flow(self%qt, self%pt, dir * best * tau, stat)
       end if
-      if (stat == VCI_OK) call gap_gradients(self, self%qt, stat)
+      if (stat == VCI_OK) call gap_gradient_of(self, self%qt, jbest, stat)
       if (stat == VCI_OK) call self%map%hamiltonian(self%qt, self%pt, e_before, stat)
       if (stat /= VCI_OK) then
         call fail(self, 'stage 2 (reflection)', stat, cause); return
@@ -337,7 +341,7 @@ contains
       if (stat /= VCI_OK) return
       self%start_gaps_known = .true.
     end if
-    call gap_gradients(self, self%a, stat)
+    call gap_gradient_of(self, self%a, j, stat)
     if (stat /= VCI_OK) return
     on_wall = self%g_start(j) <= 64.0_dp * epsilon(1.0_dp) * sum(abs(self%grads(:, j)) * max(abs(self%a), 1.0_dp))
     if (on_wall) then
@@ -445,11 +449,11 @@ contains
     real(dp) :: g0, g1, d0, d1, a, b, fa, fb, f, df
     integer :: i
     c = -1.0_dp
-    call gap_gradients(self, self%a, stat)
+    call gap_gradient_of(self, self%a, j, stat)
     if (stat /= VCI_OK) return
     call self%map%model%inverse_mass_times(self%pa, self%qt)
     d0 = dir * tau * dot_product(self%grads(:, j), self%qt)
-    call gap_gradients(self, self%qe, stat)
+    call gap_gradient_of(self, self%qe, j, stat)
     if (stat /= VCI_OK) return
     call self%map%model%inverse_mass_times(self%pe, self%qt)
     d1 = dir * tau * dot_product(self%grads(:, j), self%qt)
@@ -488,7 +492,7 @@ contains
     real(dp), intent(out) :: slope
     integer, intent(out) :: stat
     slope = 0.0_dp
-    call gap_gradients(self, self%qt, stat)
+    call gap_gradient_of(self, self%qt, j, stat)
     if (stat /= VCI_OK) return
     call self%map%model%inverse_mass_times(self%pt, self%v_scratch)
     slope = dir * tau * dot_product(self%grads(:, j), self%v_scratch)
@@ -563,15 +567,29 @@ contains
     call callback_status(self, s, all(abs(g(1:self%ng)) <= huge(1.0_dp)), stat)
   end subroutine gaps
 
-  subroutine gap_gradients(self, q, stat)
+  !> grads(:, j) = the gradient of wall j's gap at q (only that column is needed anywhere): the
+  !> model's one-wall gradient when it has one (probed at the first call), else every wall's.
+  !> A chain of n particles has 2n walls: all gradients would cost O(n^2) per call.
+  subroutine gap_gradient_of(self, q, j, stat)
     type(vci_explicit_t), intent(inout) :: self
     real(dp), intent(in) :: q(:)
+    integer, intent(in) :: j
     integer, intent(out) :: stat
     integer :: s
     s = 0
-    call self%map%model%gap_gradients(q, self%grads(:, 1:self%ng), s)
-    call callback_status(self, s, all(abs(self%grads(:, 1:self%ng)) <= huge(1.0_dp)), stat)
-  end subroutine gap_gradients
+    if (self%one_wall_gradient /= 2) then
+      if (self%one_wall_gradient == 0) call self%map%model%clear_not_provided()
+      call self%map%model%gap_gradient(q, j, self%grads(:, j), s)
+      if (self%one_wall_gradient == 0) then
+        self%one_wall_gradient = merge(2, 1, self%map%model%answered_not_provided())
+        if (self%one_wall_gradient == 2) s = 0
+      end if
+    end if
+    if (self%one_wall_gradient == 2) then
+      call self%map%model%gap_gradients(q, self%grads(:, 1:self%ng), s)
+    end if
+    call callback_status(self, s, all(abs(self%grads(:, j)) <= huge(1.0_dp)), stat)
+  end subroutine gap_gradient_of
 
   subroutine callback_status(self, s, finite, stat)
     type(vci_explicit_t), intent(inout) :: self

@@ -64,7 +64,7 @@ program dop853_results_driver
     call get_command_argument(2, path)
     arg = ''
     if (command_argument_count() >= 3) call get_command_argument(3, arg)
-    call sweep(trim(path), trim(arg))
+    call sweep(trim(path), scene_argument(arg))
   case ('once')
     call get_command_argument(2, path)
     call get_command_argument(3, arg)

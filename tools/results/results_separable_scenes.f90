@@ -30,6 +30,7 @@ module results_separable_scenes
   contains
     procedure :: potential => fpu_v, potential_gradient => fpu_dv
     procedure :: gaps => fpu_gaps, gap_gradients => fpu_dg
+    procedure :: gap_gradient => fpu_dg_one   ! one wall's, O(n): the chain has 2n walls
   end type fpu_sep_t
 
   public :: particle_sep_model, ellipse_sep_model, fpu_sep_model
@@ -180,4 +181,20 @@ contains
       dg(i, n + i) = 1.0_dp
     end do
   end subroutine fpu_dg
+
+  subroutine fpu_dg_one(self, q, j, dg, stat)
+    class(fpu_sep_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    integer, intent(in) :: j
+    real(dp), intent(out) :: dg(:)
+    integer, intent(inout) :: stat
+    integer :: n
+    n = size(q)
+    dg = 0.0_dp
+    if (j <= n) then
+      dg(j) = -1.0_dp
+    else
+      dg(j - n) = 1.0_dp
+    end if
+  end subroutine fpu_dg_one
 end module results_separable_scenes

@@ -11,12 +11,14 @@
 #   tools/results/run_results.sh
 #   tools/results/run_results.sh --scene SCENE [--scene SCENE ...]
 #
-# With --scene (particle, ellipse, pendulum, pendulum_walls, fpu_walls) only that scene's compiled
+# With --scene (particle, ellipse, pendulum, pendulum_walls, fpu_walls, fpu_walls_1024) only that scene's compiled
 # rows are rerun (vci, the compiled DOP853, CVODE: a few minutes instead of the whole command): they
 # replace that scene's rows in the previous full run's output in $VCI_RESULTS_OUT, which must exist,
 # and the page is rewritten from it. The SciPy and Siconos rows, the long runs and the profile stay
 # from the full run (the profile is rerun with pendulum_walls, the scene it profiles); the page's
-# header names every refreshed scene with its date and commit.
+# header names every refreshed scene with its date and commit. fpu_walls_1024 is the FPU chain with
+# n = 1024 (issue 28): its own reference (quad-precision Taylor, ~1 min) and rows (*_chain1024.csv),
+# run at the end of the full command or alone with --scene.
 # Environment: VCI_RESULTS_BUILD (build directory, default $TMPDIR/vci-results-build),
 # VCI_RESULTS_OUT (raw CSV output, default $VCI_RESULTS_BUILD/out), VCI_RESULTS_BUDGET (seconds for
 # the whole command, default 3600: each run gets what is left; a run that exceeds it is stopped and
@@ -29,8 +31,8 @@ while [ $# -gt 0 ]; do
     --scene)
       [ $# -ge 2 ] || { echo "run_results.sh: --scene needs a scene name" >&2; exit 2; }
       case "$2" in
-        particle|ellipse|pendulum|pendulum_walls|fpu_walls) SCENES_ONLY="$SCENES_ONLY $2" ;;
-        *) echo "run_results.sh: unknown scene '$2' (particle, ellipse, pendulum, pendulum_walls, fpu_walls)" >&2; exit 2 ;;
+        particle|ellipse|pendulum|pendulum_walls|fpu_walls|fpu_walls_1024) SCENES_ONLY="$SCENES_ONLY $2" ;;
+        *) echo "run_results.sh: unknown scene '$2' (particle, ellipse, pendulum, pendulum_walls, fpu_walls, fpu_walls_1024)" >&2; exit 2 ;;
       esac
       shift 2 ;;
     *) echo "run_results.sh: unknown argument '$1' (usage: run_results.sh [--scene SCENE ...])" >&2; exit 2 ;;
@@ -65,6 +67,18 @@ run() {
     exit 1
   fi
 }
+# the FPU chain with n = 1024 (issue 28): reference, vci, the compiled DOP853 and CVODE-Adams, each
+# its own file in $OUT (make_report.py adds the scene when they exist)
+large_chain() {
+  echo "== fpu_walls_1024: reference (quad-precision Taylor, checked at half the step)"
+  run "reference (fpu_walls_1024)" "$BUILD/vci_results_driver" reference "$OUT/reference_chain1024.json" fpu_walls_1024
+  echo "== fpu_walls_1024: vci step-size sweep"
+  run "vci sweep (fpu_walls_1024)" sh -c '"$1" sweep "$2" "" fpu_walls_1024 2>"$3"' sh "$BUILD/vci_results_driver" "$OUT/vci_chain1024.csv" "$OUT/vci_chain1024.stderr"
+  echo "== fpu_walls_1024: compiled DOP853 tolerance sweep"
+  run "DOP853 sweep (fpu_walls_1024)" "$BUILD/dop853_results_driver" sweep "$OUT/dop853_chain1024.csv" fpu_walls_1024
+  echo "== fpu_walls_1024: CVODE-Adams tolerance sweep"
+  run "CVODE sweep (fpu_walls_1024)" "$BUILD/cvode_results_driver" sweep "$OUT/cvode_chain1024.csv" fpu_walls_1024
+}
 # single-threaded BLAS for every method: on a shared 2-core machine a threaded LU only adds
 # contention (docs/SCHEMES.md, Cost), and CPU time would count both threads
 export OPENBLAS_NUM_THREADS=1
@@ -96,6 +110,20 @@ if [ -n "$SCENES_ONLY" ]; then
   done
   COMMIT=$(git -C "$ROOT" describe --always --dirty 2>/dev/null || echo "${VCI_RESULTS_COMMIT:-unknown}")
   for scene in $SCENES_ONLY; do
+    if [ "$scene" = fpu_walls_1024 ]; then
+      t_scene=$(date +%s)
+      large_chain
+      $PY - "$OUT/meta.json" "$COMMIT" $(( $(date +%s) - t_scene )) "$(cut -d' ' -f1 /proc/loadavg)" <<'PYEOF'
+import json, sys, time
+path, commit, secs, load = sys.argv[1:5]
+meta = json.load(open(path))
+entry = {"scene": "fpu_walls_1024", "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+         "commit": commit, "elapsed_s": int(secs), "load": load}
+meta["refreshed"] = [e for e in meta.get("refreshed", []) if e["scene"] != "fpu_walls_1024"] + [entry]
+json.dump(meta, open(path, "w"), indent=1)
+PYEOF
+      continue
+    fi
     PART="$OUT/part_$scene"
     mkdir -p "$PART"
     t_scene=$(date +%s)
@@ -160,6 +188,7 @@ run "Siconos long run (pendulum_walls)" $PY "$ROOT/tools/results/peers_siconos.p
 
 echo "== where the time goes (callgrind, walled pendulum): DOP853 against vci's compositions"
 run "profile (callgrind)" "$ROOT/tools/results/profile_peers.sh" "$BUILD" "$OUT"
+large_chain
 
 # --- the page --------------------------------------------------------------------------------
 END=$(date +%s)
