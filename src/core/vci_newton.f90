@@ -157,9 +157,10 @@ module vci_newton
     !> ... for systems of at least this many unknowns: below, the in-line LU of the whole matrix costs
     !> less than the block's plus the elimination (ellipse, walled pendulum: docs/bench/bordered.md).
     integer :: border_min = vci_large_system
-    !> Systems of more than reuse_min unknowns keep the block's factors across the iterations of one
-    !> bordered solve (a chord on the block; the border is the current Jacobian's) while each step
-    !> contracts the scaled residual by reuse_contraction; false: refactorise it at every iteration.
+    !> Systems of more than reuse_min unknowns with a dense block keep the block's factors across the
+    !> iterations of one bordered solve (a chord on the block; the border is the current Jacobian's)
+    !> while each step contracts the scaled residual by reuse_contraction; false: refactorise it at
+    !> every iteration (as band and sparse blocks always are: their factorisation is O(n)).
     logical :: border_chord = .true.
     integer(i8) :: bordered_directions = 0         !< Newton directions by bordering
     type(vci_bordered_t), private :: bord          !< the current border of the block
@@ -663,9 +664,11 @@ contains
     factored = .false.
     ni = n - 1
     self%block_reused = .true.
-    ! (the chord only from reuse_min unknowns: below, a factorisation costs less than the extra
-    ! iterations a chord takes, each with its residual and Jacobian)
-    if (self%block_stale .or. .not. self%border_chord .or. n <= self%reuse_min .or. self%block_ni /= ni) then
+    ! (the chord only on a dense block of more than reuse_min unknowns: below, and for a band or
+    ! sparse block at any size, a factorisation costs less than the extra iterations a chord takes,
+    ! each with its residual and Jacobian: docs/bench/bordered.md)
+    if (self%block_stale .or. .not. self%border_chord .or. n <= self%reuse_min .or. self%block_ni /= ni .or. &
+        self%snb > 0 .or. self%ssp > 0) then
       self%block_stale = .true.
       if (.not. (structure_rows(self, ni, self%jac, self%capacity, self%brw) <= huge(1.0_dp))) return
       call structured_factor(self, ni, self%jac, self%capacity, self%brw, info)
