@@ -815,7 +815,18 @@ contains
     subroutine reflect_hamiltonian(e_ref, stat)
       real(dp), intent(in) :: e_ref
       integer, intent(out) :: stat
+      real(dp) :: s0, s1, noise
       self%x_saved(1:nx0) = self%x(1:nx0)
+      if (m == 0) then
+        ! Newton from a start on the falling side of H along the impulse line (the mirror of a long,
+        ! curved sub-step can be: 1.33 for a reflection at 3.42 on Kepler below the wall, h = 0.8)
+        ! goes to the pass-through root mu = 0: start from twice the fold instead (the rate's zero
+        ! by a secant from mu = 0; exact where H is quadratic in p)
+        call normal_rate(self, 0.0_dp, s0, noise, stat)
+        if (stat == VCI_OK) call normal_rate(self, mu0, s1, noise, stat)
+        if (stat /= VCI_OK) return
+        if (s1 < -noise .and. s0 < s1) mu0 = 2.0_dp * mu0 * s0 / (s0 - s1)
+      end if
       self%x(1:m) = 0.0_dp                       ! the impulse system's unknowns: [nu(m), mu]
       call self%sys%put_extra(self%x, KIND_IMPULSE, mu0)
       call self%sys%pose_impulse(self%q_wall, self%p_arrive, e_ref)
@@ -985,7 +996,16 @@ contains
     integer, intent(out) :: stat
     real(dp), parameter :: eps_frac = 1.0e-3_dp
     integer :: nx
+    real(dp) :: rate, noise
     stat = VCI_OK
+    reflected = .false.
+    ! the branch first: a root whose momentum still moves into the wall is not the reflection,
+    ! wherever its sub-step ends (issue 27: through the centre of Kepler's force, below the wall)
+    if (self%has_energy .and. self%m == 0) then
+      call normal_rate(self, mu, rate, noise, stat)
+      if (stat /= VCI_OK) return
+      if (rate < -noise) return
+    end if
     call self%sys%get_endpoint(self%x, self%q_trial)
     reflected = dot_product(self%sys%grad, self%q_trial - self%q_wall) > 0.0_dp
     if (reflected) return
@@ -1000,6 +1020,34 @@ contains
     self%x(1:nx) = self%x_saved(1:nx)
     if (.not. reflected) stat = VCI_OK
   end function reflected
+
+  !> The rate at which the continuous motion from (qt, p- + mu grad g) leaves the wall in the run's
+  !> direction, dir grad g . dH/dp = dir d/dmu H(qt, p- + mu grad g) (central difference; rate > 0:
+  !> it leaves), and the
+  !> difference's round-off (noise). Elastic reflection reverses this rate; the pass-through root keeps
+  !> it negative. For H convex in p, H along the impulse line is a parabola-like curve with the
+  !> pass-through root (mu = 0) on its falling side and the reflection on its rising side.
+  subroutine normal_rate(self, mu, rate, noise, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    real(dp), intent(in) :: mu
+    real(dp), intent(out) :: rate, noise
+    integer, intent(out) :: stat
+    real(dp), parameter :: rel = 6.0e-6_dp   ! ~ eps**(1/3), as vci_scheme's vci_fd_rel
+    real(dp) :: d, hp, hm
+    rate = 0.0_dp; noise = 0.0_dp
+    d = rel * max(abs(mu), maxval(abs(self%p_arrive)) / max(maxval(abs(self%sys%grad)), tiny(1.0_dp)))
+    self%p_leave = self%p_arrive + (mu + d) * self%sys%grad
+    call self%sys%hamiltonian(self%q_wall, self%p_leave, hp, stat)
+    if (stat == VCI_OK) then
+      self%p_leave = self%p_arrive + (mu - d) * self%sys%grad
+      call self%sys%hamiltonian(self%q_wall, self%p_leave, hm, stat)
+    end if
+    if (stat /= VCI_OK) then
+      call set_cause(self, 'stage 2: H along the impulse line (does the reflection leave the wall?)'); return
+    end if
+    rate = real(self%sys%dir, dp) * (hp - hm) / (2.0_dp * d)   ! backward, q moves along -dH/dp
+    noise = 8.0_dp * epsilon(1.0_dp) * (abs(hp) + abs(hm)) / (2.0_dp * d)
+  end subroutine normal_rate
 
   !> The impact just resolved (stage 1 in x_stage1 / q_wall, stage 2 in x), into imp.
   subroutine record_impact(self, imp, dir, h, t, elapsed, j, e_minus, s1res, tau2)

@@ -55,6 +55,9 @@ module vci_long_cases
     integer(i8) :: steps = 0, impacts = 0, split_steps = 0, largest_split = 0
     real(dp) :: t_end = 0.0_dp
     real(dp) :: error = huge(1.0_dp)   !< max |q - q_ref|, |p - p_ref| at the end (huge: did not finish)
+    !> Kepler scenes: |H(q, p) - H(q0, p0)| at the end (the walls keep H; huge: did not finish or
+    !> another scene)
+    real(dp) :: energy_error = huge(1.0_dp)
   end type long_run_t
 
   public :: long_run, kepler_circle_exact, long_start
@@ -210,6 +213,8 @@ contains
       call fpu_walls_run(fpu_walls_params(beta=fpu_beta, w=w, step=0.01_dp), q0, p0, r%t_end, qr, pr, nimp)
     end select
     r%error = max(maxval(abs(q - qr)), maxval(abs(p - pr)))
+    if (scene == LONG_KEPLER_CIRCLE .or. scene == LONG_KEPLER_WALL) &
+      r%energy_error = abs(0.5_dp * sum(p**2) - 1.0_dp / norm2(q) - (0.5_dp * sum(p0**2) - 1.0_dp / norm2(q0)))
   end subroutine long_run
 
   !> The start of a scene (both Kepler scenes: the pericentre of a = 1, e = 0.5).

@@ -15,6 +15,7 @@ C     pendw77_ref.txt. Stops with code 1 if a number is off.
       DOUBLE PRECISION H, T, Q(N), P(N), TIMP(LTIMP), RPAR(2)
       DOUBLE PRECISION TREF, QREF, PREF, Q0(N), P0(N), T1, Q1(N), P1(N)
       INTEGER IPAR(1), NIMP, NREF, ISTAT, IH, NBAD, K, IOPT(4), IPASS
+      INTEGER NSPL, MOSTSP
       DOUBLE PRECISION WORST
       CHARACTER*300 MSG
       DATA RPAR /9.8D0, 1.0D0/
@@ -127,6 +128,40 @@ C     that no later call of this program unit receives.)
       WRITE (*, '(2A)') ' failing TASK 11: ', MSG(1:160)
       CALL CHECKS('failing TASK 11 message', MSG, 'TASK = 11', NBAD)
       CALL VCIDEL(IH)
+C     the safety net (issue 27, VCISPL, VCINET): midpoint at h = 0.8
+C     (h omega = 2.5) meets a step Newton cannot solve at t = 4; off
+C     (MAXSPL = 1) the run stops there with ISTAT = 4, on (default 16)
+C     it reaches t = 10.4 in 13 steps, some split in 2 or more parts
+C     (4 steps in 2 parts measured)
+      IPAR(1) = 0
+      DO 15 K = 1, 2
+        CALL VCINEW(PWMOD, N, M, NG, 8, 0.8D0, RPAR, IPAR, IH, ISTAT)
+        CALL CHECKI('VCINEW h = 0.8', ISTAT, 0, NBAD)
+        CALL VCISCH(IH, 2, 1, ISTAT)
+        CALL CHECKI('VCISCH midpoint', ISTAT, 0, NBAD)
+        IF (K .EQ. 1) CALL VCISPL(IH, 1, ISTAT)
+        CALL CHECKI('VCISPL', ISTAT, 0, NBAD)
+        CALL VCIINM(IH, 0.0D0, Q0, P0, ISTAT)
+        CALL CHECKI('VCIINM', ISTAT, 0, NBAD)
+        CALL VCIADV(IH, 13, 1, T, Q, P, NIMP, TIMP, LTIMP, ISTAT)
+        CALL CHECKI('net off / on: status', ISTAT, 4 * (2 - K), NBAD)
+        CALL VCINET(IH, NSPL, MOSTSP, IPASS)
+        CALL CHECKI('VCINET', IPASS, 0, NBAD)
+        WRITE (*, '(A,I2,A,F6.2,A,I3,A,I3)') ' net', K - 1, ': t =',
+     &    T, ', steps split', NSPL, ', most parts', MOSTSP
+        IF (K .EQ. 1) THEN
+          CALL CHECKR('net off: stop at t = 4', T, 4.0D0, 1.0D-12,
+     &                NBAD)
+          CALL CHECKI('net off: nothing split', NSPL, 0, NBAD)
+        ELSE
+          CALL CHECKR('net on: t = 10.4', T, 10.4D0, 1.0D-12, NBAD)
+          IF (NSPL .LT. 1 .OR. MOSTSP .LT. 2) THEN
+            WRITE (*, '(A)') ' FAIL: net on: no step counted as split'
+            NBAD = NBAD + 1
+          END IF
+        END IF
+        CALL VCIDEL(IH)
+   15 CONTINUE
 C     the model checker (issue 31): the model passes; with a wrong
 C     sign in dL/dq (IPAR(1) = 7) it fails and VCIMSG names dl_dq
       DO 20 K = 1, 2
