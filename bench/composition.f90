@@ -10,6 +10,10 @@
 !>                                                one (H each step), walls: walls at ±1 rad (3520
 !>                                                impacts), far: walls at ±2 rad (never reached:
 !>                                                the walled run's regular step)
+!>   vci_bench_composition --profile lib|hand order chain|kepler   the same for the FPU-β chain
+!>                                                (n = 32, 2000 steps) or Kepler (n = 2, 100000
+!>                                                steps), no walls, h = 0.01
+!>   vci_bench_composition --scenes order         timed runs of those two (best of 5), ratios
 !>   vci_bench_composition --sweep                    the walled pendulum over 10 s (18 impacts) from
 !>                                                    the exact start: final error against the exact
 !>                                                    solution and CPU time per run, orders 4 … 10
@@ -20,10 +24,12 @@ program vci_bench_composition
   use vci_composition, only: composition_coefficients
   use vci_scene_pendulum_walls_sep, only: pendulum_walls_sep_t, pendulum_walls_sep_model
   use vci_ref_pendulum_quad, only: pendulum_quad_t, pendulum_quad_state
+  use vci_bench_composition_scenes, only: chain_sep_t, kepler_sep_t, chain_sep_model, kepler_sep_model, &
+    chain_gradient, kepler_gradient, chain_n, run_timed_integrate, run_timed_steps
   implicit none
   integer, parameter :: nsteps = 200000
   real(dp), parameter :: h = 0.01_dp
-  character(len=16) :: arg, what
+  character(len=16) :: arg, what, scene
   integer :: order, stat, rep, nimp_steps
   real(dp) :: q_lib, p_lib, q_hand, p_hand, q_step, p_step, t_lib, t_hand, t_walls, t_far, t_step, t
   real(dp) :: pair_walls(5), pair_far(5), ratio(5)
@@ -33,14 +39,28 @@ program vci_bench_composition
     if (arg == '--sweep') then
       call sweep(); stop
     end if
+    if (arg == '--scenes') then
+      call get_command_argument(2, arg); read (arg, *) order
+      call time_scenes(order); stop
+    end if
     if (arg == '--profile') then
       call get_command_argument(2, what); call get_command_argument(3, arg); read (arg, *) order
+      scene = 'pendulum'
+      if (command_argument_count() >= 4) call get_command_argument(4, scene)
+      if (scene /= 'pendulum') then
+        block
+          real(dp), allocatable :: qs(:), ps(:)
+          if (what == 'lib') call lib_scene_run(scene, order, qs, ps, stat, t)
+          if (what == 'hand') call run_timed_hand_scene(scene, order, qs, ps)
+        end block
+        stop
+      end if
       select case (what)
-      case ('lib'); call run_timed_lib(order, q_lib, p_lib, stat)
-      case ('step'); call run_timed_step(order, q_lib, p_lib, stat)
+      case ('lib'); call lib_run(order, q_lib, p_lib, stat, t)
+      case ('step'); call step_run(order, q_lib, p_lib, stat, t)
       case ('hand'); call run_timed_hand(order, q_hand, p_hand)
-      case ('walls'); call run_timed_walls(order, nimp_steps, stat)
-      case ('far'); call run_timed_walls(order, nimp_steps, stat, 2.0_dp)
+      case ('walls'); call walls_run(order, nimp_steps, stat, t)
+      case ('far'); call walls_run(order, nimp_steps, stat, t, 2.0_dp)
         if (nimp_steps /= 0) error stop 'walls at 2 rad were reached'
       end select
       stop
@@ -49,15 +69,15 @@ program vci_bench_composition
   end if
   t_lib = huge(1.0_dp); t_hand = huge(1.0_dp); t_walls = huge(1.0_dp); t_far = huge(1.0_dp); t_step = huge(1.0_dp)
   do rep = 1, 5
-    t = clock(); call run_timed_lib(order, q_lib, p_lib, stat); t_lib = min(t_lib, clock() - t)
+    call lib_run(order, q_lib, p_lib, stat, t); t_lib = min(t_lib, t)
     if (stat /= VCI_OK) error stop 'library run failed'
-    t = clock(); call run_timed_step(order, q_step, p_step, stat); t_step = min(t_step, clock() - t)
+    call step_run(order, q_step, p_step, stat, t); t_step = min(t_step, t)
     if (stat /= VCI_OK) error stop 'library run (step by step) failed'
     t = clock(); call run_timed_hand(order, q_hand, p_hand); t_hand = min(t_hand, clock() - t)
-    t = clock(); call run_timed_walls(order, nimp_steps, stat, 2.0_dp); pair_far(rep) = clock() - t
+    call walls_run(order, nimp_steps, stat, pair_far(rep), 2.0_dp)
     t_far = min(t_far, pair_far(rep))
     if (stat /= VCI_OK) error stop 'far-walled run failed'
-    t = clock(); call run_timed_walls(order, nimp_steps, stat); pair_walls(rep) = clock() - t
+    call walls_run(order, nimp_steps, stat, pair_walls(rep))
     t_walls = min(t_walls, pair_walls(rep))
     if (stat /= VCI_OK) error stop 'walled run failed'
   end do
@@ -84,6 +104,118 @@ program vci_bench_composition
 
 contains
 
+  !> The steps of a scene's run (the chain's steps cost ~30 pendulum steps).
+  integer function scene_steps(scene)
+    character(len=*), intent(in) :: scene
+    scene_steps = merge(2000, 100000, scene == 'chain')
+  end function scene_steps
+
+  !> The scene's start: the chain's lowest mode (amplitude 0.5) at rest, Kepler's ellipse of
+  !> eccentricity 0.44 from pericentre.
+  subroutine scene_start(scene, q, p)
+    character(len=*), intent(in) :: scene
+    real(dp), allocatable, intent(out) :: q(:), p(:)
+    integer :: i
+    if (scene == 'chain') then
+      allocate (q(chain_n), p(chain_n))
+      do i = 1, chain_n
+        q(i) = 0.5_dp * sin(acos(-1.0_dp) * i / (chain_n + 1))
+      end do
+      p = 0.0_dp
+    else
+      q = [1.0_dp, 0.0_dp]; p = [0.0_dp, 1.2_dp]
+    end if
+  end subroutine scene_start
+
+  !> The library's run (integrate, no observer) on the chain or Kepler.
+  subroutine lib_scene_run(scene, order, q_end, p_end, stat, elapsed)
+    character(len=*), intent(in) :: scene
+    integer, intent(in) :: order
+    real(dp), allocatable, intent(out) :: q_end(:), p_end(:)
+    integer, intent(out) :: stat
+    real(dp), intent(out) :: elapsed   !< seconds in integrate alone
+    type(chain_sep_t), target :: chain
+    type(kepler_sep_t), target :: kepler
+    type(vci_integrator_t) :: integ
+    real(dp), allocatable :: q(:), p(:)
+    call scene_start(scene, q, p)
+    if (scene == 'chain') then
+      chain = chain_sep_model(); call integ%create(chain, h, stat)
+    else
+      kepler = kepler_sep_model(); call integ%create(kepler, h, stat)
+    end if
+    if (stat == VCI_OK) call integ%set_scheme(VCI_SCHEME_COMPOSITION, order, stat)
+    if (stat == VCI_OK) call integ%init_from_momentum(0.0_dp, q, p, stat)
+    elapsed = 0.0_dp
+    if (stat == VCI_OK) call run_timed_integrate(integ, int(scene_steps(scene), i8), stat, elapsed)
+    q_end = integ%configuration(); p_end = integ%momentum()
+  end subroutine lib_scene_run
+
+  !> The same composition written out for the chain or Kepler (M = I; the scene's force routine).
+  subroutine run_timed_hand_scene(scene, order, q, p)
+    character(len=*), intent(in) :: scene
+    integer, intent(in) :: order
+    real(dp), allocatable, intent(out) :: q(:), p(:)
+    real(dp), allocatable :: gam(:), kick(:), dv(:)
+    integer :: s, i, k, j, stat, n
+    call composition_coefficients(order, gam, stat)
+    s = size(gam)
+    allocate (kick(s + 1))
+    kick(1) = 0.5_dp * gam(1); kick(s + 1) = 0.5_dp * gam(s)
+    do i = 2, s
+      kick(i) = 0.5_dp * (gam(i - 1) + gam(i))
+    end do
+    call scene_start(scene, q, p)
+    n = size(q)
+    allocate (dv(n))
+    call scene_force(n, q, dv)
+    do k = 1, scene_steps(scene)
+      do i = 1, s
+        do j = 1, n
+          p(j) = p(j) - (kick(i) * h) * dv(j)
+          q(j) = q(j) + (gam(i) * h) * (1.0_dp * p(j))
+        end do
+        call scene_force(n, q, dv)
+      end do
+      do j = 1, n
+        p(j) = p(j) - (kick(s + 1) * h) * dv(j)
+      end do
+    end do
+  end subroutine run_timed_hand_scene
+
+  !> The hand loop's force: Kepler's (n = 2) or the chain's gradient.
+  subroutine scene_force(n, x, g)
+    integer, intent(in) :: n
+    real(dp), intent(in) :: x(n)
+    real(dp), intent(out) :: g(n)
+    if (n == 2) then
+      call kepler_gradient(x, g)
+    else
+      call chain_gradient(n, x, g)
+    end if
+  end subroutine scene_force
+
+  !> Timed runs (best of 5) of the chain and Kepler: library against hand loop, same bits checked.
+  subroutine time_scenes(order)
+    integer, intent(in) :: order
+    character(len=8), parameter :: scenes(2) = [character(len=8) :: 'chain', 'kepler']
+    real(dp), allocatable :: ql(:), pl(:), qh(:), ph(:)
+    real(dp) :: tl, th, t0
+    integer :: k, rep, st
+    do k = 1, 2
+      tl = huge(1.0_dp); th = huge(1.0_dp)
+      do rep = 1, 5
+        call lib_scene_run(trim(scenes(k)), order, ql, pl, st, t0); tl = min(tl, t0)
+        if (st /= VCI_OK) error stop 'library run failed'
+        t0 = clock(); call run_timed_hand_scene(trim(scenes(k)), order, qh, ph); th = min(th, clock() - t0)
+      end do
+      write (output_unit, '(a,a8,a,i0,a,l1,a,f9.1,a,f9.1,a,f6.2)') 'scene ', scenes(k), ' order ', order, &
+        ' same bits ', all(ql == qh) .and. all(pl == ph), '; step: integrate ', &
+        1.0e9_dp * tl / scene_steps(trim(scenes(k))), ' ns, hand ', 1.0e9_dp * th / scene_steps(trim(scenes(k))), &
+        ' ns; ratio ', tl / th
+    end do
+  end subroutine time_scenes
+
   !> Insertion sort of 5 numbers (the median of the paired ratios).
   subroutine sort5(x)
     real(dp), intent(inout) :: x(5)
@@ -105,10 +237,11 @@ contains
     clock = real(c, dp) / real(r, dp)
   end function clock
 
-  subroutine run_timed_lib(order, q_end, p_end, stat)
+  subroutine lib_run(order, q_end, p_end, stat, elapsed)
     integer, intent(in) :: order
     real(dp), intent(out) :: q_end, p_end
     integer, intent(out) :: stat
+    real(dp), intent(out) :: elapsed   !< seconds in integrate (or the step loop) alone
     type(pendulum_walls_sep_t), target :: model
     type(vci_integrator_t) :: integ
     real(dp) :: q(1), p(1)
@@ -116,30 +249,30 @@ contains
     call integ%create(model, h, stat)
     if (stat == VCI_OK) call integ%set_scheme(VCI_SCHEME_COMPOSITION, order, stat)
     if (stat == VCI_OK) call integ%init_from_momentum(0.0_dp, [0.0_dp], [4.0_dp], stat)
-    if (stat == VCI_OK) call integ%integrate(int(nsteps, i8), 1, stat)
+    elapsed = 0.0_dp
+    if (stat == VCI_OK) call run_timed_integrate(integ, int(nsteps, i8), stat, elapsed)
     q = integ%configuration(); p = integ%momentum()
     q_end = q(1); p_end = p(1)
-  end subroutine run_timed_lib
+  end subroutine lib_run
 
   !> The library run as a caller stepping one by one (step(): the general path, H each step).
-  subroutine run_timed_step(order, q_end, p_end, stat)
+  subroutine step_run(order, q_end, p_end, stat, elapsed)
     integer, intent(in) :: order
     real(dp), intent(out) :: q_end, p_end
     integer, intent(out) :: stat
+    real(dp), intent(out) :: elapsed   !< seconds in integrate (or the step loop) alone
     type(pendulum_walls_sep_t), target :: model
     type(vci_integrator_t) :: integ
     real(dp) :: q(1), p(1)
-    integer :: k
     model = pendulum_walls_sep_model(.false.)
     call integ%create(model, h, stat)
     if (stat == VCI_OK) call integ%set_scheme(VCI_SCHEME_COMPOSITION, order, stat)
     if (stat == VCI_OK) call integ%init_from_momentum(0.0_dp, [0.0_dp], [4.0_dp], stat)
-    do k = 1, nsteps
-      if (stat == VCI_OK) call integ%step(1, stat)
-    end do
+    elapsed = 0.0_dp
+    if (stat == VCI_OK) call run_timed_steps(integ, nsteps, stat, elapsed)
     q = integ%configuration(); p = integ%momentum()
     q_end = q(1); p_end = p(1)
-  end subroutine run_timed_step
+  end subroutine step_run
 
   !> The same composition written out: merged half kicks, M⁻¹ = 1/(m l²) = 1, force −m g l sin θ.
   subroutine run_timed_hand(order, q, p)
@@ -219,9 +352,10 @@ contains
     end do
   end subroutine sweep
 
-  subroutine run_timed_walls(order, impact_steps, stat, theta_wall)
+  subroutine walls_run(order, impact_steps, stat, elapsed, theta_wall)
     integer, intent(in) :: order
     integer, intent(out) :: impact_steps, stat
+    real(dp), intent(out) :: elapsed
     real(dp), intent(in), optional :: theta_wall   !< default 1 rad
     type(pendulum_walls_sep_t), target :: model
     type(vci_integrator_t) :: integ
@@ -231,8 +365,9 @@ contains
     call integ%create(model, h, stat)
     if (stat == VCI_OK) call integ%set_scheme(VCI_SCHEME_COMPOSITION, order, stat)
     if (stat == VCI_OK) call integ%init_from_momentum(0.0_dp, [0.0_dp], [4.0_dp], stat)
-    if (stat == VCI_OK) call integ%integrate(int(nsteps, i8), 1, stat)
+    elapsed = 0.0_dp
+    if (stat == VCI_OK) call run_timed_integrate(integ, int(nsteps, i8), stat, elapsed)
     st = integ%statistics()
     impact_steps = int(st%impacts)   ! (h = 0.01: one impact per impact step)
-  end subroutine run_timed_walls
+  end subroutine walls_run
 end program vci_bench_composition

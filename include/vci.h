@@ -228,6 +228,28 @@ int  vci_model_create_lagrangian(vci_model *model, int n, int m, int ngaps, cons
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: not a live model handle, or a separable model. */
 int  vci_model_declare_bandwidth(vci_model model, int bw, int check);
 
+/** Declare the Hessian blocks of a model sparse with a pattern (docs/C_API.md, "Sparse Hessian
+ *  pattern"; issue 28): entries outside it vanish (L_qq, L_qv, L_vv of a continuous model; D1 D2
+ *  L_d of a discrete one). The pattern is n x n in compressed columns, 0-based: column j's nonzero
+ *  rows are rowind[colptr[j] .. colptr[j+1] - 1], strictly increasing; colptr[n + 1] starts at
+ *  colptr[0] = 0 and never decreases, rowind[colptr[n]] lies in 0..n-1. The library closes it
+ *  under transposition and adds the diagonal (neither need be given). The left, midpoint and
+ *  discrete schemes then factorise their Newton matrices by sparse LU (SuiteSparse KLU).
+ *  n = 0 withdraws the declaration (colptr, rowind may then be NULL). check != 0: the debug check
+ *  (O(n^2)): every Newton matrix is checked for a nonzero outside the pattern, reported as
+ *  VCI_ERR_ARGUMENT with a message naming the entry. A model with both a bandwidth and a pattern
+ *  is refused by vci_integrator_create. Applies to integrators created afterwards.
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT (vci_last_error(NULL, ...) says which): not a live model
+ *  handle, a separable model, n not the model's n (nor 0), colptr or rowind NULL, colptr[0] != 0,
+ *  a decreasing colptr, a row out of range or not strictly increasing in its column, or this
+ *  library built without the sparse solver (vci_sparse_available() == 0: CMake VCI_SPARSE=OFF);
+ *  VCI_ERR_MEMORY. */
+int  vci_model_declare_pattern(vci_model model, int n, const int *colptr /* [n+1] */,
+                               const int *rowind /* [colptr[n]] */, int check);
+/** 1 if this library was built with the sparse solver for vci_model_declare_pattern (CMake
+ *  VCI_SPARSE, SuiteSparse KLU), else 0. */
+int  vci_sparse_available(void);
+
 /* ---- Separable models (docs/C_API.md, "Separable models"): L = 1/2 qdot^T M qdot - V(q), M constant ---- */
 
 /** mass_kind of vci_model_create_separable: how `mass` holds the constant mass matrix M. */

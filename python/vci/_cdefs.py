@@ -64,6 +64,8 @@ int  vci_model_create_lagrangian(vci_model *model, int n, int m, int ngaps, cons
 int  vci_set_scheme(vci_integrator integ, int scheme, int stages);
 void vci_model_destroy(vci_model *model);
 int  vci_model_declare_bandwidth(vci_model model, int bw, int check);
+int  vci_model_declare_pattern(vci_model model, int n, const int *colptr, const int *rowind, int check);
+int  vci_sparse_available(void);
 int  vci_integrator_create(vci_integrator *integ, vci_model model, double h);
 void vci_integrator_destroy(vci_integrator *integ);
 int  vci_set_tolerances(vci_integrator integ, double atol, double rtol, int max_iterations);

@@ -8,12 +8,13 @@ module vci_capi
   use vci_status
   use vci_limits, only: vci_size_problem
   use vci_integrator, only: vci_stats_t
-  use vci, only: VCI_VERSION_NUMBER
+  use vci, only: VCI_VERSION_NUMBER, sparse_available_f => vci_sparse_available
   use vci_model_check, only: vci_check_model, vci_check_report_t
 #ifdef VCI_HAVE_HDF5
   use vci_hdf5_output, only: vci_hdf5_writer_t, vci_hdf5_read_checkpoint
   use vci_checkpoint, only: vci_checkpoint_t
 #endif
+  use vci_sparse, only: pattern_arrays_error
   use vci_capi_models
   use vci_capi_registry
   implicit none
@@ -31,6 +32,7 @@ module vci_capi
   public :: vci_set_impact_callback, vci_open_output, vci_open_output_every, vci_close_output
   public :: vci_append_output, vci_restore_from_file
   public :: vci_last_error, vci_status_string, vci_version
+  public :: vci_model_declare_pattern, vci_sparse_available
 
   !> mass_kind of vci_model_create_separable (vci.h: VCI_MASS_DIAGONAL, VCI_MASS_DENSE)
   integer, parameter :: VCI_MASS_DIAGONAL_C = 0, VCI_MASS_DENSE_C = 1
@@ -490,6 +492,7 @@ contains
       ip%lag%user = ip%model%user
       ip%lag%record => ip%model%record
       call ip%lag%declare_bandwidth(ip%model%hessian_bandwidth, check=ip%model%check_bandwidth)
+      call copy_pattern(ip%model, ip%lag)
       call ip%integ%create(ip%lag, real(h, dp), stat)
     else
       call ip%integ%create(ip%model, real(h, dp), stat)
@@ -1231,6 +1234,95 @@ contains
     end do
     out(min(len(text), size - 1) + 1) = c_null_char
   end function capi_check_model
+
+  !> int vci_model_declare_pattern(vci_model model, int n, const int *colptr, const int *rowind,
+  !> int check): the model's Hessian blocks vanish outside a sparse pattern, given 0-based in
+  !> compressed columns and checked strictly here (the Fortran declare_pattern is lenient: any order,
+  !> repeats); n = 0 withdraws it. Integrators created from the model afterwards use it.
+  integer(c_int) function vci_model_declare_pattern(model, n, colptr, rowind, check) &
+      bind(C, name='vci_model_declare_pattern')
+    type(c_ptr), value :: model, colptr, rowind
+    integer(c_int), value :: n, check
+    character(len=*), parameter :: who = 'vci_model_declare_pattern: '
+    integer(c_int), pointer :: cp(:), ri(:)
+    integer(c_int), target :: empty(0)
+    integer, allocatable :: cp1(:), ri1(:)
+    character(len=200) :: why
+    integer :: i, nnz, st
+    vci_model_declare_pattern = VCI_ERR_ARGUMENT
+    why = ''
+    nnz = 0
+    if (n /= 0 .and. .not. sparse_available_f()) then
+      why = 'this vci was built without the sparse solver (CMake VCI_SPARSE=OFF; SuiteSparse KLU, '// &
+            'Debian libsuitesparse-dev); vci_sparse_available() returns 0'
+    else if (n < 0) then
+      write (why, '(a,i0,a)') 'n = ', n, ' (the model''s n, or 0 to withdraw the pattern)'
+    else if (n > 0 .and. .not. c_associated(colptr)) then
+      why = 'colptr is NULL'
+    else if (n > 0) then
+      call c_f_pointer(colptr, cp, [n + 1])
+      nnz = max(cp(n + 1), 0)
+      if (nnz > 0 .and. .not. c_associated(rowind)) then
+        why = 'rowind is NULL (colptr[n] > 0)'
+      else
+        if (nnz > 0) call c_f_pointer(rowind, ri, [nnz])
+        if (nnz == 0) ri => empty
+        call pattern_arrays_error(int(n), cp, ri, 0, 'colptr', 'rowind', why)
+      end if
+    end if
+    if (why /= '') then
+      call set_thread_message(who//trim(why)); return
+    end if
+    allocate (cp1(merge(0, n + 1, n == 0)), ri1(nnz), stat=st)
+    if (st /= 0) then
+      call set_thread_message(who//'out of memory')
+      vci_model_declare_pattern = VCI_ERR_MEMORY; return
+    end if
+    if (n > 0) then
+      cp1 = cp + 1
+      if (nnz > 0) ri1 = ri + 1
+    end if
+    st = VCI_OK
+    call lock_registry()
+    i = find_live(model, KIND_MODEL)
+    if (i > 0) then
+      if (slots(i)%model%separable) then
+        why = 'a separable model has no declared pattern (give its potential_hessian; the pattern is for '// &
+              'vci_model_create and vci_model_create_lagrangian models)'
+      else if (n /= 0 .and. n /= slots(i)%model%n) then
+        write (why, '(a,i0,a,i0,a)') 'n = ', n, ', but the model has n = ', slots(i)%model%n, ' (or 0 to withdraw)'
+      else
+        call slots(i)%model%declare_pattern(cp1, ri1, check=check /= 0)
+        if (slots(i)%model%pattern_status /= 0) then
+          why = slots(i)%model%pattern_message
+          if (index(why, 'memory') > 0) st = VCI_ERR_MEMORY
+          call slots(i)%model%declare_pattern([integer ::], [integer ::])
+        end if
+      end if
+    else
+      why = 'not a live model handle'
+    end if
+    call unlock_registry()
+    if (why /= '') then
+      call set_thread_message(who//trim(why))
+      if (st == VCI_ERR_MEMORY) vci_model_declare_pattern = VCI_ERR_MEMORY
+      return
+    end if
+    vci_model_declare_pattern = VCI_OK
+  end function vci_model_declare_pattern
+
+  !> int vci_sparse_available(void): 1 if built with the sparse solver (VCI_SPARSE, KLU), else 0.
+  integer(c_int) function vci_sparse_available() bind(C, name='vci_sparse_available')
+    vci_sparse_available = merge(1_c_int, 0_c_int, sparse_available_f())
+  end function vci_sparse_available
+
+  !> The declared pattern of a C model handed to the continuous model the integrator runs.
+  subroutine copy_pattern(from, to)
+    type(c_model_t), intent(in) :: from
+    type(c_lagrangian_t), intent(inout) :: to
+    to%hessian_pattern = from%hessian_pattern; to%check_pattern = from%check_pattern
+    to%pattern_status = from%pattern_status; to%pattern_message = from%pattern_message
+  end subroutine copy_pattern
 
   !> int vci_version(void): major*10000 + minor*100 + patch.
   integer(c_int) function vci_version() bind(C, name='vci_version')

@@ -24,6 +24,14 @@
 !>     VCICLS(IH, ISTAT)                                         finish the output file
 !>     VCIRST(IH, PATH, ISTAT)                                   restart from an HDF5 file's last state
 !>     VCIBND(IH, IBW, ICHK, ISTAT)                              Hessians banded with half-bandwidth IBW
+!>     VCIPAT(IH, NNZ, ICOLP, IROW, ICHK, ISTAT)                 Hessians sparse: a pattern (issue 28)
+!>
+!> VCIPAT declares the N x N pattern of the Hessian blocks (the TASK 4 / TASK 13 matrices) in
+!> compressed columns, 1-based: column J's nonzero rows are IROW(ICOLP(J) : ICOLP(J+1) - 1),
+!> strictly increasing; ICOLP(1) = 1, ICOLP does not decrease, ICOLP(N+1) = NNZ + 1. The library
+!> closes it under transposition and adds the diagonal. NNZ < 0 withdraws it (dense again). It
+!> needs a library built with the sparse solver (CMake VCI_SPARSE, SuiteSparse KLU): without it
+!> ISTAT = 1 and VCIMSG says so. Like VCIBND, call it before VCIINP / VCIINM.
 !>
 !> The model routine (one EXTERNAL, selecting what to compute by TASK as MINPACK's FCN does
 !> with IFLAG):
@@ -93,12 +101,14 @@ module vci_legacy
   use vci_model_check, only: vci_check_model, vci_check_report_t
   use vci_checkpoint, only: vci_checkpoint_t
   use vci_bindings_h5, only: bindings_open_h5, bindings_read_h5
+  use vci_sparse, only: sparse_available, pattern_arrays_error
   implicit none
   private
 
   public :: vci_legacy_model_fn, legacy_new, legacy_get, legacy_after, legacy_delete, legacy_advance, legacy_message
   public :: legacy_set_scheme, legacy_init, legacy_check, legacy_size
   public :: legacy_open_output, legacy_close_output, legacy_restore, legacy_bandwidth
+  public :: legacy_pattern
 
   !> TASK codes of the model routine: a discrete L_d (1-4, 6), a continuous L (10-13), both (5, 7-9).
   integer, parameter, public :: TASK_D1 = 1, TASK_D2 = 2, TASK_D3 = 3, TASK_HESSIAN = 4, TASK_FORMS = 5, &
@@ -983,6 +993,56 @@ contains
     end associate
   end subroutine legacy_bandwidth
 
+  !> VCIPAT: declare the model's Hessians sparse with the 1-based pattern (icolp(n + 1), irow(nnz)),
+  !> checked strictly (nnz < 0: withdrawn), with the debug check when check, then rebuild the
+  !> current scheme with it (so before VCIINP / VCIINM, as VCIBND).
+  subroutine legacy_pattern(ih, nnz, icolp, irow, check, stat)
+    integer, intent(in) :: ih, nnz, icolp(*), irow(*)
+    logical, intent(in) :: check
+    integer, intent(out) :: stat
+    character(len=200) :: why
+    integer :: i, n
+    i = slot_of(ih)
+    stat = VCI_ERR_ARGUMENT
+    why = ''
+    if (associated(slots(i)%sep)) then
+      why = 'a separable model (IOPT bit 16) has no declared pattern'
+    else if (associated(slots(i)%lag)) then
+      n = slots(i)%lag%n
+    else
+      n = slots(i)%model%n
+    end if
+    if (why == '' .and. nnz >= 0) then
+      if (.not. sparse_available()) then
+        why = 'this vci was built without the sparse solver (CMake VCI_SPARSE=OFF; SuiteSparse KLU)'
+      else if (icolp(n + 1) /= nnz + 1) then
+        write (why, '(a,i0,a,i0,a)') 'ICOLP(N+1) = ', icolp(n + 1), ', not NNZ + 1 = ', nnz + 1, ''
+      else
+        call pattern_arrays_error(n, icolp(1:n + 1), irow(1:nnz), 1, 'ICOLP', 'IROW', why)
+      end if
+    end if
+    if (why /= '') then
+      call slots(i)%integ%report_failure(VCI_ERR_ARGUMENT, 'VCIPAT: '//trim(why)); return
+    end if
+    if (associated(slots(i)%lag)) then
+      if (nnz >= 0) then
+        call slots(i)%lag%declare_pattern(icolp(1:n + 1), irow(1:nnz), check)
+      else
+        call slots(i)%lag%declare_pattern([integer ::], [integer ::])
+      end if
+    else
+      if (nnz >= 0) then
+        call slots(i)%model%declare_pattern(icolp(1:n + 1), irow(1:nnz), check)
+      else
+        call slots(i)%model%declare_pattern([integer ::], [integer ::])
+      end if
+    end if
+    associate (integ => slots(i)%integ)
+      call integ%set_scheme(integ%scheme(), integ%stages(), stat)
+      if (stat /= VCI_OK) call integ%report_failure(stat, 'VCIPAT: '//trim(integ%message_text()))
+    end associate
+  end subroutine legacy_pattern
+
   !> Free the integrator named ih (no-op if none); ih becomes 0.
   subroutine legacy_delete(ih)
     integer, intent(inout) :: ih
@@ -1267,6 +1327,25 @@ subroutine vcibnd(ih, ibw, ichk, istat)
   call legacy_bandwidth(ih, ibw, ichk /= 0, istat)
   call legacy_after(ih, istat)
 end subroutine vcibnd
+
+!> Declare the model's Hessians sparse: the N x N pattern in compressed columns, 1-based (column
+!> J's rows IROW(ICOLP(J) : ICOLP(J+1) - 1), strictly increasing; ICOLP(N+1) = NNZ + 1); NNZ < 0:
+!> dense again. ICHK /= 0: the debug check of every Newton matrix against the pattern. Needs the
+!> sparse solver (VCI_SPARSE); ISTAT = 1 with a message otherwise, or for a bad pattern. The
+!> current scheme is rebuilt with it: call before VCIINP / VCIINM.
+subroutine vcipat(ih, nnz, icolp, irow, ichk, istat)
+  use vci_status, only: VCI_OK
+  use vci_integrator, only: vci_integrator_t
+  use vci_legacy, only: legacy_get, legacy_pattern, legacy_after
+  implicit none
+  integer, intent(in) :: ih, nnz, icolp(*), irow(*), ichk
+  integer, intent(out) :: istat
+  type(vci_integrator_t), pointer :: integ
+  call legacy_get(ih, 'VCIPAT', integ, istat)
+  if (istat /= VCI_OK) return
+  call legacy_pattern(ih, nnz, icolp, irow, ichk /= 0, istat)
+  call legacy_after(ih, istat)
+end subroutine vcipat
 
 !> Start from Q0 at T0 and Q1 at T0 + H: the state becomes (T0 + H, Q1, D2 L_d(Q0, Q1, H)).
 subroutine vciinp(ih, t0, q0, q1, istat)

@@ -82,7 +82,7 @@ module vci_sparse
     end subroutine vci_klu_free
   end interface
 
-  public :: sparse_available, make_pattern, outside_pattern, pattern_rows
+  public :: sparse_available, make_pattern, outside_pattern, pattern_rows, pattern_arrays_error
 
 contains
 
@@ -161,6 +161,65 @@ contains
     pat%n = n
     stat = 0
   end subroutine make_pattern
+
+  !> The strict check of a pattern given through the C or legacy entry (make_pattern itself is
+  !> lenient): colptr(1:n + 1) starts at base and never decreases, column j's rows
+  !> rowind(colptr(j) - base + 1 : colptr(j + 1) - base) lie in base..n - 1 + base and strictly
+  !> increase. msg = '' when it holds, else the first fault, naming the arrays as the caller calls
+  !> them (cname, rname) with the caller's indices (base 0: name[k]; base 1: name(k)).
+  subroutine pattern_arrays_error(n, colptr, rowind, base, cname, rname, msg)
+    integer, intent(in) :: n, colptr(:), rowind(:), base
+    character(len=*), intent(in) :: cname, rname
+    character(len=*), intent(out) :: msg
+    integer :: j, k, r
+    msg = ''
+    if (colptr(1) /= base) then
+      msg = at(cname, 1)//' = '//itoa(colptr(1))//', not '//itoa(base); return
+    end if
+    do j = 1, n
+      if (colptr(j + 1) < colptr(j)) then
+        msg = cname//' decreases: '//at(cname, j + 1)//' = '//itoa(colptr(j + 1))//' < '//at(cname, j)// &
+              ' = '//itoa(colptr(j)); return
+      end if
+    end do
+    if (colptr(n + 1) - base > size(rowind)) then
+      msg = at(cname, n + 1)//' = '//itoa(colptr(n + 1))//' goes past the '//itoa(size(rowind))//' row indices'
+      return
+    end if
+    do j = 1, n
+      do k = colptr(j) - base + 1, colptr(j + 1) - base
+        r = rowind(k)
+        if (r < base .or. r > n - 1 + base) then
+          msg = at(rname, k)//' = '//itoa(r)//' (column '//itoa(j - 1 + base)//') is outside '//itoa(base)//'..'// &
+                itoa(n - 1 + base); return
+        else if (k > colptr(j) - base + 1) then
+          if (r <= rowind(k - 1)) then
+            msg = 'the rows of column '//itoa(j - 1 + base)//' are not strictly increasing at '//at(rname, k)// &
+                  ' = '//itoa(r)//' (sorted, no repeats)'; return
+          end if
+        end if
+      end do
+    end do
+  contains
+    !> name[k - 1] (base 0) or name(k) (base 1): element k of an array as the caller writes it.
+    function at(name, k) result(s)
+      character(len=*), intent(in) :: name
+      integer, intent(in) :: k
+      character(len=:), allocatable :: s
+      if (base == 0) then
+        s = name//'['//itoa(k - 1)//']'
+      else
+        s = name//'('//itoa(k)//')'
+      end if
+    end function at
+    function itoa(i) result(s)
+      integer, intent(in) :: i
+      character(len=:), allocatable :: s
+      character(len=12) :: buf
+      write (buf, '(i0)') i
+      s = trim(buf)
+    end function itoa
+  end subroutine pattern_arrays_error
 
   !> The first entry (i, j) of the block (i, j <= nb) outside the pattern with a(i, j) /= 0
   !> (column by column), or i = j = 0 (the debug check of a declared pattern; O(nb^2)).

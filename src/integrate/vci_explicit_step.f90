@@ -153,20 +153,11 @@ contains
     integer :: stat, i
     done = 0; found = 0
     if (self%ng == 0) then
-      ! no walls: the composed map in place on the state (move's arithmetic, the same bits), the
-      ! step's start kept to put back if it fails (move's copies and bookkeeping were ~180 of the
-      ! ~540 instructions of a Verlet step of the pendulum, docs/bench/composition.md)
+      ! no walls: the composed map's steps in one kernel (vci_composition's run_steps: flow's
+      ! arithmetic, the same bits; a failing step is not taken, its start is in the state)
       impacts%count = 0
-      do while (done < nsteps)
-        call copy(self%n, state%q, self%q_run); call copy(self%n, state%p, self%p_run)
-        call self%map%flow(state%q, state%p, dir * state%h, stat)
-        if (stat /= VCI_OK) then
-          call copy(self%n, self%q_run, state%q); call copy(self%n, self%p_run, state%p)
-          return
-        end if
-        state%k = state%k + dir
-        done = done + 1
-      end do
+      call self%map%run_steps(state%q, state%p, dir * state%h, nsteps, done, stat)
+      state%k = state%k + dir * done
       return
     end if
     do while (done < nsteps)

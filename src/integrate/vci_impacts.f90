@@ -19,8 +19,9 @@ contains
     type(vci_impact_buffer_t), intent(inout) :: impacts
     logical, intent(out) :: landed
     integer, intent(out) :: stat
-    integer :: n, j, jstar, last_gap
-    real(dp) :: h, t, alpha, alpha_j, consumed, e_minus, s1res
+    integer :: n, j, jstar, last_gap, poked
+    real(dp) :: h, t, alpha, alpha_j, consumed, e_minus, s1res, p_lo, p_hi, p_glo, p_ghi
+    logical :: ok
     n = self%n; h = state%h; t = state%time()
     consumed = 0.0_dp
     stat = VCI_OK
@@ -32,7 +33,21 @@ contains
       if (stat /= VCI_OK) then
         call set_cause(self, 'gap evaluation'); return
       end if
-      if (all(self%gaps_end(1:self%ng) >= 0.0_dp)) exit
+      ! A wall that the sub-step passes and comes back from within it: where the two directions cut
+      ! the motion into different sub-steps (a step with impacts in either), one would meet it at a
+      ! sub-step's end and the other not (find_poke). A sub-step with impacts, or ending beyond a
+      ! wall, is sampled; a whole step that ends admissible only when the parabola through the
+      ! previous step's start says it may come near a wall (gap evaluations only: may_poke).
+      poked = 0
+      if (.not. self%settings%poke_samples) then
+        continue                          ! (off by default: set_poke_samples)
+      else if (impacts%count > 0 .or. any(self%gaps_end(1:self%ng) < 0.0_dp)) then
+        call find_poke(self, tau, 0, poked, p_lo, p_hi, p_glo, p_ghi, stat)
+      else if (may_poke(self, state, dir, tau, stat)) then
+        call find_poke(self, tau, 0, poked, p_lo, p_hi, p_glo, p_ghi, stat)
+      end if
+      if (stat /= VCI_OK) return
+      if (poked == 0 .and. all(self%gaps_end(1:self%ng) >= 0.0_dp)) exit
       if (impacts%count >= self%settings%max_impacts_per_step) then
         stat = VCI_ERR_TOO_MANY_IMPACTS
         self%cause = vci_too_many_impacts_cause(self%settings%max_impacts_per_step)
@@ -87,6 +102,25 @@ contains
         alpha = huge(1.0_dp)
         self%wall_tried(1:self%ng) = .false.
         j = first_by_chord(self, self%gaps_end)
+        if (poked > 0) then
+          ! the poked wall first: then the walls the end is beyond that the motion crossed before it
+          self%wall_tried(poked) = .true.
+          call stage_poke(self, poked, tau, p_lo, p_hi, p_glo, p_ghi, alpha_j, ok, stat)
+          if (stat /= VCI_OK) return
+          if (ok) then
+            alpha = alpha_j; jstar = poked
+            self%x_stage1(1:self%nsub + 1) = self%x(1:self%nsub + 1)
+            s1res = self%last_residual
+            call self%sys%get_endpoint(self%x_stage1, self%q_trial)
+            call self%sys%eval_gaps(self%q_trial, self%gaps_trial(1:self%ng), stat)
+            if (stat /= VCI_OK) then
+              call set_cause(self, 'gap evaluation at the wall'); return
+            end if
+            j = first_by_chord(self, self%gaps_trial)
+          else
+            self%x(1:self%nsub) = self%x_full(1:self%nsub)   ! no crossing found: the sub-step as it was
+          end if
+        end if
         do while (j > 0)
           self%wall_tried(j) = .true.
           call stage_wall(self, j, tau, alpha_j, stat)
@@ -103,6 +137,7 @@ contains
           end if
           j = first_by_chord(self, self%gaps_trial)
         end do
+        if (jstar == 0) exit      ! a poke stage 1 did not confirm and the end is admissible: no impact
         call self%sys%get_endpoint(self%x_stage1, self%q_wall)
         if (self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN) then
           call self%sys%impact_momentum(self%x_stage1, self%q_start, alpha * tau, self%p_arrive, stat, self%p_start)
@@ -275,7 +310,9 @@ contains
     logical function evaluate(mu, f)
       real(dp), intent(in) :: mu
       real(dp), intent(out) :: f
-      real(dp) :: tol_unused
+      real(dp) :: tol_unused, lo, hi, glo, ghi
+      integer :: poked
+      logical :: found
       evaluate = .false.
       consistent = .false.
       f = huge(1.0_dp)
@@ -289,11 +326,19 @@ contains
       if (stat /= VCI_OK) then
         call set_cause(self, 'gap evaluation'); return
       end if
-      if (self%gaps_end(j) >= 0.0_dp) return
-      call stage_wall(self, j, tau, alpha, stat)
-      if (stat /= VCI_OK) then
-        if (.not. self%sys%unrecoverable) stat = VCI_OK
-        return
+      if (self%gaps_end(j) >= 0.0_dp) then
+        if (.not. self%settings%poke_samples) return
+        ! the motion may still pass wall j and come back within the sub-step (find_poke)
+        call find_poke(self, tau, j, poked, lo, hi, glo, ghi, stat)
+        if (stat /= VCI_OK .or. poked /= j) return
+        call stage_poke(self, j, tau, lo, hi, glo, ghi, alpha, found, stat)
+        if (stat /= VCI_OK .or. .not. found) return
+      else
+        call stage_wall(self, j, tau, alpha, stat)
+        if (stat /= VCI_OK) then
+          if (.not. self%sys%unrecoverable) stat = VCI_OK
+          return
+        end if
       end if
       self%x_stage1(1:nx + 1) = self%x(1:nx + 1)
       s1res = self%last_residual
@@ -312,6 +357,201 @@ contains
       end if
     end function evaluate
   end subroutine tie_to_wall
+
+  !> Does the sub-step from (q_start, p_start) of length tau (its solution in x) pass a wall and come
+  !> back before it reaches a wall its end is beyond? Its end alone cannot tell: a curved motion
+  !> near a graze crosses a wall and returns within one sub-step, and in a step with impacts the
+  !> two directions cut the motion into different sub-steps, so one saw the crossing at a sub-step's
+  !> end and the other did not (docs/BACKWARD.md). Samples the discrete trajectory (regular
+  !> sub-steps of length s tau, s = 1/8 .. 7/8, each solve started between the last sample and the
+  !> whole sub-step) up to the first with a negative gap: poked is the wall crossed first there
+  !> (only that wall counts when only > 0), bracketed on [lo, hi] with g(lo) = glo >= 0 > g(hi) = ghi
+  !> and the two samples' solutions in x_low, x_high. poked = 0: no poke (no negative sample, or a
+  !> wall the end is beyond is crossed by then: stage 1 as before; or a sample's solve failed). x is
+  !> left as it came (kept in x_full).
+  subroutine find_poke(self, tau, only, poked, lo, hi, glo, ghi, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    real(dp), intent(in) :: tau
+    integer, intent(in) :: only
+    integer, intent(out) :: poked
+    real(dp), intent(out) :: lo, hi, glo, ghi
+    integer, intent(out) :: stat
+    real(dp) :: g_prev(self%ng), lam(self%m), s, f, best
+    integer :: nm, k, jj, st
+    logical :: screened
+    nm = self%nsub
+    poked = 0; lo = 0.0_dp; hi = 1.0_dp; glo = 0.0_dp; ghi = 0.0_dp
+    self%x_full(1:nm) = self%x(1:nm)
+    call self%sys%eval_gaps(self%q_start, g_prev, stat)
+    if (stat /= VCI_OK) then
+      call set_cause(self, 'gap evaluation at the start of the sub-step'); return
+    end if
+    call self%sys%get_multipliers(self%x_full, lam)
+    call self%sys%put_endpoint(self%x_low, self%q_start, self%q_start)
+    call self%sys%put_multipliers(self%x_low, lam)
+    ! The screen: one solve at s = 1/2 and the parabola through the start, that point and the end,
+    ! its bend doubled for a margin, at s = 1/8 .. 7/8 (gap evaluations). Only where it comes below
+    ! a wall that the end is not beyond is the trajectory sampled (most impacts: one solve here).
+    self%x(1:nm) = 0.5_dp * (self%x_low(1:nm) + self%x_full(1:nm))
+    call substep(self, self%q_start, self%p_start, 0.5_dp * tau, st)
+    if (st /= VCI_OK) then
+      if (self%sys%unrecoverable) stat = st
+      self%x(1:nm) = self%x_full(1:nm)
+      return
+    end if
+    call self%sys%get_endpoint(self%x, self%q_guess)
+    self%q_guess = self%q_guess - 0.5_dp * (self%q_start + self%q_end)   ! the bend at s = 1/2
+    screened = .false.
+    do k = 1, POKE_SAMPLES
+      s = real(k, dp) / real(POKE_SAMPLES + 1, dp)
+      self%q_trial = self%q_start + s * (self%q_end - self%q_start) + 8.0_dp * s * (1.0_dp - s) * self%q_guess
+      call self%sys%eval_gaps(self%q_trial, self%gaps_trial(1:self%ng), stat)
+      if (stat /= VCI_OK) then
+        call set_cause(self, 'gap evaluation inside the sub-step'); self%x(1:nm) = self%x_full(1:nm); return
+      end if
+      do jj = 1, self%ng
+        if (self%gaps_trial(jj) < 0.0_dp .and. self%gaps_end(jj) >= 0.0_dp .and. (only == 0 .or. jj == only)) &
+          screened = .true.
+      end do
+      if (screened) exit
+    end do
+    if (.not. screened) then
+      self%x(1:nm) = self%x_full(1:nm)
+      return
+    end if
+    do k = 1, POKE_SAMPLES
+      s = real(k, dp) / real(POKE_SAMPLES + 1, dp)
+      self%x(1:nm) = self%x_low(1:nm) + (s - lo) / (1.0_dp - lo) * (self%x_full(1:nm) - self%x_low(1:nm))
+      call substep(self, self%q_start, self%p_start, s * tau, st)
+      if (st /= VCI_OK) then
+        if (self%sys%unrecoverable) stat = st     ! a callback said so; else no sample, no poke
+        exit
+      end if
+      call self%sys%get_endpoint(self%x, self%q_trial)
+      call self%sys%eval_gaps(self%q_trial, self%gaps_trial(1:self%ng), stat)
+      if (stat /= VCI_OK) then
+        call set_cause(self, 'gap evaluation inside the sub-step'); exit
+      end if
+      if (any(self%gaps_trial(1:self%ng) < 0.0_dp)) then
+        if (any(self%gaps_trial(1:self%ng) < 0.0_dp .and. self%gaps_end(1:self%ng) < 0.0_dp)) exit
+        best = huge(1.0_dp)
+        do jj = 1, self%ng
+          if (.not. self%gaps_trial(jj) < 0.0_dp .or. (only > 0 .and. jj /= only)) cycle
+          f = max(g_prev(jj), 0.0_dp) / (max(g_prev(jj), 0.0_dp) - self%gaps_trial(jj))
+          if (f < best) then
+            best = f; poked = jj
+          end if
+        end do
+        if (poked > 0) then
+          hi = s; glo = max(g_prev(poked), 0.0_dp); ghi = self%gaps_trial(poked)
+          self%x_high(1:nm) = self%x(1:nm)
+        end if
+        exit
+      end if
+      self%x_low(1:nm) = self%x(1:nm); lo = s
+      g_prev = self%gaps_trial(1:self%ng)
+    end do
+    self%x(1:nm) = self%x_full(1:nm)
+  end subroutine find_poke
+
+  !> Might the whole step (no impact so far, its end admissible) pass a wall and come back? The
+  !> screen before find_poke's solves, by gap evaluations only: the parabola through the previous
+  !> step's start, this step's start a and its end b has its bend B = -(d - d_prev)/4 at s = 1/2
+  !> (d, d_prev: this and the previous step's displacement); with the bend doubled for a margin, a
+  !> linear g along it stays above min(g(a), g(b), g(c)) + min(0, g(c + 2B) - g(c)), c = (a + b)/2,
+  !> and the step is sampled where that bound is negative. Without a previous regular step in this
+  !> direction (the run's first step, after an impact or a reversal) find_poke's own screen decides.
+  logical function may_poke(self, state, dir, tau, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    type(vci_state_t), intent(in) :: state
+    integer, intent(in) :: dir
+    real(dp), intent(in) :: tau
+    integer, intent(out) :: stat
+    integer :: j
+    real(dp) :: gc(self%ng)
+    stat = VCI_OK
+    may_poke = .true.
+    if (state%predictor_depth * dir <= 0) return
+    ! (gaps_start and gaps_trial as scratch: an impact that follows evaluates them again)
+    call self%sys%eval_gaps(self%q_start, self%gaps_start(1:self%ng), stat)
+    self%q_trial = 0.5_dp * (self%q_start + self%q_end)
+    if (stat == VCI_OK) call self%sys%eval_gaps(self%q_trial, gc, stat)
+    ! c + 2B; the second difference d - d_prev = (q_end - q_start) - dir tau velocity
+    self%q_trial = self%q_trial - 0.5_dp * ((self%q_end - self%q_start) - real(dir, dp) * tau * state%velocity)
+    if (stat == VCI_OK) call self%sys%eval_gaps(self%q_trial, self%gaps_trial(1:self%ng), stat)
+    if (stat /= VCI_OK) then
+      call set_cause(self, 'gap evaluation inside the step'); return
+    end if
+    do j = 1, self%ng
+      if (min(self%gaps_start(j), self%gaps_end(j), gc(j)) + min(0.0_dp, self%gaps_trial(j) - gc(j)) < 0.0_dp) return
+    end do
+    may_poke = .false.
+  end function may_poke
+
+  !> Stage 1 for wall j, poked within the sub-step (find_poke's bracket [lo, hi] with the samples'
+  !> solutions in x_low, x_high): Newton from the interpolated crossing. found when it reached the
+  !> wall before hi (the first crossing; past hi it found the way back out).
+  subroutine stage_poke(self, j, tau, lo, hi, glo, ghi, alpha, found, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: j
+    real(dp), intent(in) :: tau, lo, hi, glo, ghi
+    real(dp), intent(out) :: alpha
+    logical, intent(out) :: found
+    integer, intent(out) :: stat
+    integer :: nm, st
+    character(len=40) :: what
+    found = .false.
+    nm = self%nsub
+    what = wall_label('stage 1 (reaching wall ', j)
+    call start_gradient(self, j, stat)
+    if (stat /= VCI_OK) return
+    alpha = lo + (hi - lo) * glo / max(glo - ghi, tiny(1.0_dp))
+    alpha = min(max(alpha, lo + 1.0e-3_dp * (hi - lo)), hi)
+    self%x(1:nm) = self%x_low(1:nm) + (alpha - lo) / (hi - lo) * (self%x_high(1:nm) - self%x_low(1:nm))
+    call solve_wall(self, j, tau, alpha, what(1:len_trim(what)), st)
+    if (st /= VCI_OK) then
+      if (self%sys%unrecoverable) stat = st
+      return
+    end if
+    alpha = self%sys%get_extra(self%x, KIND_STAGE1)
+    found = alpha > 0.0_dp .and. alpha <= hi
+  end subroutine stage_poke
+
+  !> Stage 2's free motion over the rest tau2 (in x, its end in q_trial) ends off the wall (num >= 0),
+  !> but it may depart into the wall and come back within tau2 (a wall poked within the sub-step, as
+  !> find_poke meets it): then the impact needs an impulse all the same, and num becomes the change
+  !> of g over tau2 at the departure's rate (a regular sub-step of 1e-3 tau2; the mirror start is
+  !> then that of reflect_from_departure). A motion that departs off the wall keeps num (a touch:
+  !> no impulse). x and the sub-step's kept factors are those of the free motion over tau2 again.
+  subroutine poke_departure(self, tau2, num, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    real(dp), intent(in) :: tau2
+    real(dp), intent(inout) :: num
+    integer, intent(out) :: stat
+    real(dp), parameter :: eps_frac = 1.0e-3_dp
+    real(dp) :: rate
+    integer :: nx, st
+    stat = VCI_OK
+    nx = self%nsub
+    self%x_saved(1:nx) = self%x(1:nx)
+    self%q_guess = self%q_wall + eps_frac * (self%q_trial - self%q_wall)
+    call self%sys%put_endpoint(self%x, self%q_wall, self%q_guess)
+    call substep(self, self%q_wall, self%p_arrive, eps_frac * tau2, st)
+    if (st /= VCI_OK) then
+      if (self%sys%unrecoverable) stat = st
+      self%x(1:nx) = self%x_saved(1:nx)
+      return
+    end if
+    call self%sys%get_endpoint(self%x, self%q_guess)
+    rate = dot_product(self%sys%grad, self%q_guess - self%q_wall) / eps_frac
+    self%x(1:nx) = self%x_saved(1:nx)
+    if (.not. rate < 0.0_dp) return
+    num = rate
+    ! the free motion over tau2 once more (from its own solution: one iteration), for its factors
+    call substep(self, self%q_wall, self%p_arrive, tau2, stat)
+    if (stat /= VCI_OK) return
+    call self%sys%get_endpoint(self%x, self%q_trial)
+  end subroutine poke_departure
 
   !> Of the walls violated at the sub-step's end (gaps_end < 0), not yet tried and with gap(j) < 0,
   !> the one the chord q_start -> q_end crosses first (smallest g_start / (g_start - g_end)); 0: none.
@@ -567,6 +807,10 @@ contains
     if (stat /= VCI_OK) return
     call self%sys%get_endpoint(self%x, self%q_trial)
     num = dot_product(self%sys%grad, self%q_trial - self%q_wall)
+    if (.not. num < 0.0_dp .and. self%settings%poke_samples) then
+      call poke_departure(self, tau2, num, stat)
+      if (stat /= VCI_OK) return
+    end if
     mu0 = 0.0_dp; mirror = 0.0_dp
     if (num < 0.0_dp) then
       self%q_trial = -self%sys%grad

@@ -28,6 +28,9 @@ module vci_settings
     !> stage matrix is factorised (the comparison path of tests and benchmarks).
     logical :: bordered_impacts = .true.
     integer :: border_min = 16     !< ... for stage systems of at least this many unknowns
+    !> Sample sub-steps inside for a wall poked within one (docs/BACKWARD.md, "A wall poked within
+    !> one sub-step"): set_poke_samples; off by default (cost, and under-resolved stiff motion)
+    logical :: poke_samples = .false.
   end type vci_settings_t
 
   public :: vci_default_max_impacts, vci_too_many_impacts_cause

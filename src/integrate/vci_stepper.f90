@@ -36,6 +36,10 @@ module vci_stepper
   !> so it converges superlinearly: 3 to 5 gap evaluations where bisection took 20); on the
   !> trajectory, where the bracket only seeds Newton and a point costs a solve, a few bisections.
   integer, parameter :: CHORD_REFINEMENTS = 30, TRAJECTORY_BISECTIONS = 8
+  !> A sub-step of a step with impacts is also sampled inside, at s = 1/(POKE_SAMPLES + 1) ..., on
+  !> the discrete trajectory (a regular sub-step of length s tau each), so that a wall it passes and
+  !> comes back from (a poke) is met as the other direction meets it (vci_impacts: find_poke).
+  integer, parameter :: POKE_SAMPLES = 7
   real(dp), parameter :: CHORD_WIDTH = 1.0e-9_dp
 
   type, public :: vci_stepper_t
@@ -55,6 +59,7 @@ module vci_stepper
     real(dp), allocatable :: x_stage1(:)      !< stage 1's solution for the first wall reached
     real(dp), allocatable :: x_saved(:)       !< the unknowns kept across a side computation
     real(dp), allocatable :: x_low(:), x_high(:)  !< trajectory bracket: sub-step solutions at its ends
+    real(dp), allocatable :: x_full(:)        !< the whole sub-step's solution while find_poke samples inside it
     real(dp), allocatable :: jac(:, :), rhs(:), res(:), res_scale(:)  !< stage 2's linearised start
     ! Configurations and momenta (n):
     real(dp), allocatable :: q_start(:), p_start(:)  !< start of the current sub-step
@@ -168,7 +173,7 @@ contains
       self%newton%chord_after_newton = m > 0
     end select
     call self%configure(self%settings)
-    allocate (self%x(nx), self%x_stage1(nx), self%x_saved(nx), self%x_low(nx), self%x_high(nx), self%jac(nx, nx), &
+    allocate (self%x(nx), self%x_stage1(nx), self%x_saved(nx), self%x_low(nx), self%x_high(nx), self%x_full(nx), self%jac(nx, nx), &
               self%rhs(nx), self%res(nx), self%res_scale(nx), self%q_start(n), self%p_start(n), self%q_end(n), &
               self%q_wall(n), self%p_arrive(n), self%p_leave(n), self%chord_velocity(n), self%q_guess(n), &
               self%q_trial(n), self%gaps_start(ngw), self%gaps_end(ngw), self%gaps_trial(ngw), self%gap_grads(n, ngw), &
@@ -192,7 +197,7 @@ contains
   subroutine release_workspace(self)
     type(vci_stepper_t), intent(inout) :: self
     call free1(self%x); call free1(self%x_stage1); call free1(self%x_saved); call free1(self%x_low)
-    call free1(self%x_high); call free2(self%jac); call free1(self%rhs); call free1(self%res)
+    call free1(self%x_high); call free1(self%x_full); call free2(self%jac); call free1(self%rhs); call free1(self%res)
     call free1(self%res_scale); call free1(self%q_start); call free1(self%p_start); call free1(self%q_end)
     call free1(self%q_wall); call free1(self%p_arrive); call free1(self%p_leave); call free1(self%chord_velocity)
     call free1(self%q_guess); call free1(self%q_trial); call free1(self%gaps_start); call free1(self%gaps_end)

@@ -146,6 +146,8 @@ contains
     end if
     ! the paper's initial pair (q0, q0 + h v0): Newton's first start is then the motion itself (from
     ! a start at rest, q0 + h 0, the regular step of a strongly quartic L may not converge)
+    ! walls poked within one sub-step met in both directions (docs/BACKWARD.md)
+    if (stat == VCI_OK) call integ%set_poke_samples(.true., stat)
     if (stat == VCI_OK) call integ%init_from_pair(0.0_dp, s%q0, s%q0 + s%h * s%v0, stat)
     if (stat /= VCI_OK) then
       r%stat = stat; r%message = 'setup: '//integ%message(); return

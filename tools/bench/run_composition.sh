@@ -38,6 +38,25 @@ N=200000
       imp = 3520; printf "| %d | %d | %d | %d | %d | %.2f | %.2f | %.2f | %.1f |\n", o, s, l/n, st/n, hd/n, l/hd, st/hd, f/l, (w - f*(n-imp)/n)/imp/(f/n) }'
   done
   echo
+  echo "The FPU-β chain (n = 32, unit masses, β = 1, lowest mode of amplitude 0.5, 2000 steps) and Kepler"
+  echo "(n = 2, e = 0.44 from pericentre, 100000 steps), no walls, h = 0.01: instructions per step of"
+  echo "integrate and of the hand loop (\`--profile lib|hand <order> chain|kepler\`; the force is one"
+  echo "routine that the model's callback and the hand loop both call; same bits checked below)."
+  echo
+  echo "| order | chain: integrate / step | chain: hand / step | chain: integrate / hand | Kepler: integrate / step | Kepler: hand / step | Kepler: integrate / hand |"
+  echo "|---:|---:|---:|---:|---:|---:|---:|"
+  for o in 2 4 6 8 10; do
+    for sc in chain kepler; do
+      for w in lib hand; do
+        ir=$(valgrind --tool=callgrind --callgrind-out-file=/dev/null --toggle-collect='*run_timed*' \
+               "$EXE" --profile $w $o $sc 2>&1 | awk '/Collected/ {print $4}')
+        eval "ir_${sc}_$w=$ir"
+      done
+    done
+    awk -v o=$o -v cl=$ir_chain_lib -v ch=$ir_chain_hand -v kl=$ir_kepler_lib -v kh=$ir_kepler_hand 'BEGIN {
+      printf "| %d | %d | %d | %.2f | %d | %d | %.2f |\n", o, cl/2000, ch/2000, cl/ch, kl/100000, kh/100000, kl/kh }'
+  done
+  echo
   echo "Targets (issue 32 item 6): integrate / hand ≤ 1.3 and impact step / walled regular step ≤ 4, read"
   echo "from the instruction columns above."
   echo
@@ -46,7 +65,7 @@ N=200000
   echo "counts above are the measure; same bits checked):"
   echo
   echo '```'
-  for o in 2 6 10; do "$EXE" $o; done
+  for o in 2 6 10; do "$EXE" $o; "$EXE" --scenes $o; done
   echo '```'
   echo
   echo "Error against CPU time on the walled pendulum over 10 s (18 impacts) from the exact start, final"

@@ -1,5 +1,5 @@
 C     Checks shared by the legacy test programs (pendw77.f, sepw77.f,
-C     chainb77.f):
+C     chainb77.f, chainp77.f):
 C     each prints what failed and counts it in NBAD, so that a program
 C     reports every failed check before it stops with status 1.
 C     (ellipse77.f keeps its own: it is also built alone, as a user's
