@@ -5,8 +5,9 @@
 !> 0.8 sin(pi i/(n+1))). Every step is timed on its own and classed as regular (no impact) or impact
 !> step; medians of each, their ratio, LU factorisations per step of each class, the peak resident
 !> memory's growth over the run and at its end. Arguments: `banded` (declare the chain's bandwidth 1),
-!> `bandcb` (that and the model's hessians_band: no n x n Hessian block), `steps=K` (only the first K
-!> steps) and the n to run (default 32 128 256). Not a test: tools/bench/run_chain.sh runs it with OpenBLAS on one thread.
+!> `bandcb` (that and the model's hessians_band: no n x n Hessian block), `whole`
+!> (impact stages with the whole stage matrix factorised, set_bordered_impacts(.false.): the path
+!> before bordering), `steps=K` (only the first K steps) and the n to run (default 32 128 256). Not a test: tools/bench/run_chain.sh runs it with OpenBLAS on one thread.
 
 program bench_chain_impacts
   use, intrinsic :: iso_fortran_env, only: output_unit
@@ -22,12 +23,12 @@ program bench_chain_impacts
   real(dp), allocatable :: q0(:), p0(:), treg(:), timp(:)
   integer, allocatable :: ns(:)
   real(dp) :: pi, rss0, rss1
-  logical :: banded, bandcb
+  logical :: banded, bandcb, whole
   integer :: max_steps
   character(len=32) :: arg
   real(dp), parameter :: h = 0.01_dp, t_end = 2.0_dp
   pi = acos(-1.0_dp)
-  banded = .false.; bandcb = .false.; max_steps = huge(1)
+  banded = .false.; bandcb = .false.; whole = .false.; max_steps = huge(1)
   narg = command_argument_count()
   allocate (ns(0)); nn = 0
   do ia = 1, narg
@@ -38,6 +39,8 @@ program bench_chain_impacts
       banded = .true.; bandcb = .true.
     else if (arg(1:6) == 'steps=') then
       read (arg(7:), *) max_steps
+    else if (trim(arg) == 'whole') then
+      whole = .true.
     else
       read (arg, *) k
       ns = [ns, k]
@@ -62,6 +65,7 @@ program bench_chain_impacts
     model%band_hessians = bandcb
     call integ%create(model, h, stat)
     if (stat == VCI_OK) call integ%set_scheme(VCI_SCHEME_MIDPOINT, 1, stat)
+    call integ%set_bordered_impacts(.not. whole)
     if (stat == VCI_OK) call integ%set_impact_energy(VCI_IMPACT_HAMILTONIAN, stat)
     if (stat == VCI_OK) call integ%set_max_impacts(max(16, 2 * n), stat)
     if (stat == VCI_OK) call integ%init_from_momentum(0.0_dp, q0, p0, stat)
@@ -90,7 +94,8 @@ program bench_chain_impacts
     rss1 = peak_rss_mb()
     imp_total = st1%impacts
     write (output_unit, '("| ",i0," | ",a," | ",i0," | ",i0," | ",i0," | ",f10.2," | ",f10.2," | ",f7.2," | ",f6.2,' // &
-      '" | ",f6.2," | ",f7.1," | ",f7.1," |")') n, trim(merge(merge('1, cb', '1    ', bandcb), 'dense', banded)), &
+      '" | ",f6.2," | ",f7.1," | ",f7.1," |")') n, &
+      trim(merge(merge('1, cb', '1    ', bandcb), 'dense', banded))//trim(merge(' whole', '      ', whole)), &
       nsteps, nimp, imp_total, &
       1.0e6_dp * median(treg(1:nreg)), 1.0e6_dp * median(timp(1:nimp)), median(timp(1:nimp)) / median(treg(1:nreg)), &
       real(f_reg, dp) / max(nreg, 1), real(f_imp, dp) / max(nimp, 1), rss1 - rss0, rss1

@@ -114,6 +114,16 @@ contains
     if (st_ == VCI_OK) call ig%set_scheme(VCI_SCHEME_LOBATTO, s, st_)
     if (st_ == VCI_OK) call ig%set_tolerances(0.0_dp, 1.0e-12_dp, 30, st_)
     call must(st_, ig)
+    ! VCI_BENCH_WHOLE_IMPACTS=1: impact stages with the whole stage matrix factorised (the path
+    ! before bordering, set_bordered_impacts(.false.)), for the before/after comparison
+    call get_environment_variable('VCI_BENCH_WHOLE_IMPACTS', arg, status=st_)
+    if (st_ == 0 .and. trim(arg) == '1') call ig%set_bordered_impacts(.false.)
+    ! VCI_BENCH_BORDER_MIN=k: border stage systems from k unknowns (default 16)
+    call get_environment_variable('VCI_BENCH_BORDER_MIN', arg, status=st_)
+    if (st_ == 0) then
+      read (arg, *) st_
+      call ig%set_bordered_impacts(.true., st_)
+    end if
     ! VCI_BENCH_REUSE_MIN=k: Newton keeps factors across solves from k unknowns (an experiment)
     call get_environment_variable('VCI_BENCH_REUSE_MIN', arg, status=st_)
     if (st_ == 0) then

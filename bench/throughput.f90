@@ -169,7 +169,7 @@ contains
   !> The examples' default set-ups (examples/*.f90, docs/DESIGN.md §8).
   subroutine setup_scenes()
     real(dp) :: qd2(2), qd3(3), q2(2), q3(3)
-    integer :: k, i, stat
+    integer :: k, i, stat, bm
     character(len=8) :: env
     ! particle: floor, start (0, 1) with velocity (1, 0), pair q(0) -/+ (h/2) qdot, 3 s
     sc(1)%h = 1.0e-2_dp; sc(1)%t0 = -0.5_dp * sc(1)%h; sc(1)%nsteps = 300; sc(1)%expected_impacts = 3
@@ -220,6 +220,26 @@ contains
       do k = 1, 2
         do i = 1, size(integ, 1)
           call integ(i, k)%set_solver_paths(8, 16, fused=.false.)
+        end do
+      end do
+    end if
+    ! VCI_BENCH_WHOLE_IMPACTS=1: impact stages with the whole stage matrix factorised (the path
+    ! before bordering, set_bordered_impacts(.false.)), for the before/after comparison
+    call get_environment_variable('VCI_BENCH_WHOLE_IMPACTS', env, status=stat)
+    if (stat == 0 .and. env == '1') then
+      do k = 1, 2
+        do i = 1, size(integ, 1)
+          call integ(i, k)%set_bordered_impacts(.false.)
+        end do
+      end do
+    end if
+    ! VCI_BENCH_BORDER_MIN=k: border stage systems from k unknowns (default 16)
+    call get_environment_variable('VCI_BENCH_BORDER_MIN', env, status=stat)
+    if (stat == 0) then
+      read (env, *) bm
+      do k = 1, 2
+        do i = 1, size(integ, 1)
+          call integ(i, k)%set_bordered_impacts(.true., bm)
         end do
       end do
     end if

@@ -16,6 +16,7 @@
 module vci_banded
   use vci_kinds, only: dp
   use vci_kernels, only: small_lu, small_lu_solve
+  use vci_factor, only: vci_factor_t
   implicit none
   private
 
@@ -24,11 +25,10 @@ module vci_banded
   integer, parameter :: border_max = 64
 
   !> Factors of a banded block with a dense border (factor, then solve any number of times).
-  type, public :: vci_banded_lu_t
+  type, extends(vci_factor_t), public :: vci_banded_lu_t
     integer :: nx = 0        !< unknowns of the factorised matrix
     integer :: nb = 0        !< of them, the banded block's
     integer :: bw = 0        !< the block's half-bandwidth
-    logical :: ready = .false.  !< factors hold a successful factorisation
     real(dp), allocatable, private :: ab(:, :), w(:, :), c(:, :), s(:, :)
     integer, allocatable, private :: ipiv(:), spiv(:)
   contains

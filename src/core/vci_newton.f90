@@ -19,6 +19,8 @@ module vci_newton
   use vci_kernels, only: equilibrate, scaled_merit, small_lu, small_lu_solve, pivots_regular
   use vci_banded, only: vci_banded_lu_t, outside_band
   use vci_sparse, only: vci_sparse_lu_t, vci_sparse_pattern_t, outside_pattern, pattern_rows
+  use vci_factor, only: vci_dense_lu_t
+  use vci_bordered, only: vci_bordered_t
   implicit none
   private
 
@@ -42,6 +44,11 @@ module vci_newton
   !> iterations and solves (simplified Newton, below) and schemes size their rows in O(n) per residual.
   integer, parameter, public :: vci_large_system = 16
 
+  !> Which factors a Newton direction used (lu_solve solves with the same): the whole matrix's dense
+  !> LU (lu, ipiv), or one of the vci_factor_t kinds, or a block of those bordered (vci_bordered).
+  integer, parameter :: FACTORS_WHOLE = 0, FACTORS_BAND = 1, FACTORS_SPARSE = 2, FACTORS_BLOCK = 3, &
+                        FACTORS_BORDERED = 4
+
   !> A nonlinear system as Newton sees it. A residual that fails (stat /= 0) at a trial point of
   !> the line search is backed off from, unless the system sets `unrecoverable` (a callback's
   !> negative return): then the solve ends at once with that status.
@@ -60,6 +67,8 @@ module vci_newton
     procedure :: structure => no_structure
     !> A declared sparse pattern of the leading block instead (default: none; vci_sparse).
     procedure :: sparse_structure => no_sparse_structure
+    !> Unknowns at the end that border the rest (1: an impact stage's alpha or mu; default 0).
+    procedure :: border => no_border
   end type vci_system_t
 
   abstract interface
@@ -124,19 +133,42 @@ module vci_newton
     real(dp), private :: lu_key = 0.0_dp
     integer :: capacity = 0               !< unknowns the workspace is sized for (reserve)
     real(dp), allocatable, private :: jac(:, :), lu(:, :), r(:), sc(:), dx(:), xt(:), rt(:), sct(:)
-    real(dp), allocatable, private :: sv(:), work(:), rw(:)
+    real(dp), allocatable, private :: sv(:), work(:), rw(:), brw(:)
     integer, allocatable, private :: ipiv(:), iwork(:)
-    !> Factorisations in band storage with a Schur-complement border (systems that declare structure)
+    !> Factorisations in a declared structure (band or sparse pattern, with their dense border)
     integer(i8) :: structured_factorisations = 0
-    type(vci_banded_lu_t), private :: band         !< the factors when the last factorisation was structured
-    logical, private :: lu_banded = .false.        !< the kept/last factors are band's, not lu's
-    integer, private :: snb = 0, sbw = -1          !< the posed system's block and half-bandwidth
-    logical, private :: scheck = .false.           !< check the band on every Newton matrix
-    !> Sparse LU of a declared pattern (vci_sparse, KLU): the posed system's block, its pattern
+    !> The factors of the structured kinds (vci_factor_t): a band with a Schur-complement border,
+    !> the posed system's or its bordered block's (vci_banded) ...
+    type(vci_banded_lu_t), private :: band
+    !> ... a sparse LU of a declared pattern (vci_sparse, KLU) ...
     type(vci_sparse_lu_t), private :: sparse
-    logical, private :: lu_sparse = .false.        !< the kept/last factors are sparse's
+    !> ... and a dense block's LU (a bordered system that declares no structure)
+    type(vci_dense_lu_t), private :: blockd
+    integer, private :: fkind = FACTORS_WHOLE      !< the factors the last direction used (FACTORS_*)
+    integer, private :: snb = 0, sbw = -1          !< the posed system's band block and half-bandwidth
+    logical, private :: scheck = .false.           !< check the structure on every Newton matrix
     integer, private :: ssp = 0                    !< the posed system's sparse block (0: none)
     type(vci_sparse_pattern_t), pointer, private :: spat => null()
+    !> Systems that declare a border of one unknown (an impact's stage 1 and 2): the block is
+    !> factorised alone, in its own structure (dense, band or sparse), and the border eliminated by
+    !> its Schur complement (vci_bordered). False: the whole matrix is factorised (the comparison
+    !> path of the tests and benchmarks).
+    logical :: bordered = .true.
+    !> ... for systems of at least this many unknowns: below, the in-line LU of the whole matrix costs
+    !> less than the block's plus the elimination (ellipse, walled pendulum: docs/bench/bordered.md).
+    integer :: border_min = vci_large_system
+    !> Systems of more than reuse_min unknowns with a dense block keep the block's factors across the
+    !> iterations of one bordered solve (a chord on the block; the border is the current Jacobian's)
+    !> while each step contracts the scaled residual by reuse_contraction; false: refactorise it at
+    !> every iteration (as band and sparse blocks always are: their factorisation is O(n)).
+    logical :: border_chord = .true.
+    integer(i8) :: bordered_directions = 0         !< Newton directions by bordering
+    type(vci_bordered_t), private :: bord          !< the current border of the block
+    integer, private :: bkind = FACTORS_BLOCK      !< the block's factors (FACTORS_BAND/SPARSE/BLOCK)
+    integer, private :: block_ni = 0               !< the block's unknowns
+    logical, private :: block_stale = .true.       !< refactorise the bordered block at the next direction
+    integer, private :: nbord = 0                  !< the posed system's border (0 or 1)
+    logical, private :: block_reused = .false.     !< the last bordered direction used an earlier block
   contains
     !> Allocate workspace for systems of up to nmax unknowns (call once, outside the step loop).
     procedure :: reserve
@@ -183,6 +215,12 @@ contains
     nb = 0; pat => null(); check = .false.
   end subroutine no_sparse_structure
 
+  !> Unknowns at the end of x that border the rest: none unless the system says so.
+  integer function no_border(self)
+    class(vci_system_t), intent(inout) :: self
+    no_border = 0
+  end function no_border
+
   logical function always_admissible(self, x)
     class(vci_system_t), intent(inout) :: self
     real(dp), intent(in) :: x(:)
@@ -201,7 +239,8 @@ contains
     if (self%capacity >= nmax) return
     call release(self)
     allocate (self%jac(nmax, nmax), self%lu(nmax, nmax), self%r(nmax), self%sc(nmax), self%dx(nmax), &
-              self%xt(nmax), self%rt(nmax), self%sct(nmax), self%sv(nmax), self%ipiv(nmax), self%rw(nmax), stat=st)
+              self%xt(nmax), self%rt(nmax), self%sct(nmax), self%sv(nmax), self%ipiv(nmax), self%rw(nmax), &
+              self%brw(nmax), stat=st)
     if (st == 0) then
       call dgelsd(nmax, nmax, 1, a, nmax, b, nmax, s, -1.0_dp, rank, query, -1, iq, info)
       lwork = max(1, int(query(1)))
@@ -237,7 +276,7 @@ contains
     integer, allocatable, intent(out) :: ipiv(:)
     integer, intent(out) :: stat
     nf = 0; key = 0.0_dp; stat = VCI_OK
-    if (.not. self%have_lu .or. self%lu_banded .or. self%lu_sparse) return   ! (band/sparse factors: the continued run refactorises)
+    if (.not. self%have_lu .or. self%fkind /= FACTORS_WHOLE) return   ! (structured factors: the continued run refactorises)
     allocate (rw(self%lu_n), lu(self%lu_n, self%lu_n), ipiv(self%lu_n), stat=stat)
     if (stat /= 0) then
       stat = VCI_ERR_MEMORY; return
@@ -260,7 +299,7 @@ contains
     if (any(ipiv < 1) .or. any(ipiv > nf)) return
     if (.not. (all_finite(rw) .and. all_finite(lu))) return     ! (from a file: nothing non-finite to LAPACK)
     self%rw(1:nf) = rw; self%lu(1:nf, 1:nf) = lu; self%ipiv(1:nf) = ipiv
-    self%lu_banded = .false.; self%lu_sparse = .false.
+    self%fkind = FACTORS_WHOLE
     self%lu_n = nf; self%lu_key = key
     self%have_lu = .true.
   end subroutine keep_factors
@@ -280,10 +319,11 @@ contains
     if (allocated(self%sv)) deallocate (self%sv)
     if (allocated(self%ipiv)) deallocate (self%ipiv)
     if (allocated(self%rw)) deallocate (self%rw)
+    if (allocated(self%brw)) deallocate (self%brw)
     if (allocated(self%work)) deallocate (self%work)
     if (allocated(self%iwork)) deallocate (self%iwork)
     call self%sparse%reset()
-    self%lu_sparse = .false.
+    self%fkind = FACTORS_WHOLE
     self%capacity = 0
     self%have_lu = .false.
   end subroutine release
@@ -305,10 +345,13 @@ contains
     sys%unrecoverable = .false.
     key = 0.0_dp
     if (n >= self%reuse_min) key = sys%reuse_key()
-    call sys%structure(self%snb, self%sbw, self%scheck)
-    if (self%snb > n .or. self%sbw < 0) self%snb = 0
-    self%ssp = 0
-    if (self%snb == 0) call sparse_posed(self, sys, n)
+    call pose_structure(self, sys, n)
+    ! a stage system bordered by its last unknown: the block (the first n - 1, holding any declared
+    ! structure) is factorised on its own and the border eliminated
+    self%nbord = 0; self%block_stale = .true.
+    if (self%bordered .and. n >= max(2, self%border_min) .and. self%snb < n .and. self%ssp < n) then
+      if (sys%border() == 1) self%nbord = 1
+    end if
     call sys%residual(x, self%r(1:n), self%sc(1:n), stat)
     if (stat /= VCI_OK) then
       call fail_eval(res, stat); return
@@ -400,6 +443,9 @@ contains
       end do
       if (ib > self%max_backtracks) then
         if (phi <= 1.0_dp) exit
+        if (self%fkind == FACTORS_BORDERED .and. self%block_reused) then
+          self%block_stale = .true.; cycle     ! a chord direction: retry with the current block
+        end if
         ! a callback that failed (or gave NaN) at the trial points is the cause, not the descent
         if (trial_stat /= VCI_OK) then
           call fail_eval(res, trial_stat); return
@@ -408,6 +454,9 @@ contains
         res%status = VCI_ERR_NEWTON
         return
       end if
+      ! a chord on the bordered block that stopped contracting: a new block at the next iteration
+      if (self%fkind == FACTORS_BORDERED .and. .not. (phit <= self%reuse_contraction * phi)) &
+        self%block_stale = .true.
       call accept_trial(self, n, x, phit, phi, res)
     end do
 
@@ -454,8 +503,9 @@ contains
 
   !> Solve the small dense system a x = b in place (b becomes x), with the solver's workspace.
   !> info /= 0: singular even for least squares, or a or b not finite (LAPACK is then not called).
-  !> structured_as (optional): a system whose declared structure a has (vci_banded): then a is
-  !> factorised in band storage with its border, as Newton's matrices of that system are.
+  !> structured_as (optional): a system whose declared structure a has (a band, vci_banded, or a
+  !> sparse pattern, vci_sparse): then a is factorised in that structure with its border, as
+  !> Newton's matrices of that system are.
   subroutine linear_solve(self, n, a, b, info, structured_as)
     class(vci_newton_t), intent(inout) :: self
     integer, intent(in) :: n
@@ -463,14 +513,32 @@ contains
     real(dp), intent(inout) :: b(:)
     integer, intent(out) :: info
     class(vci_system_t), intent(inout), optional :: structured_as
-    integer :: rank, nb, bw, i
+    integer :: snb, sbw, ssp
     logical :: chk
-    nb = 0; bw = -1; chk = .false.
-    if (present(structured_as)) call structured_as%structure(nb, bw, chk)
-    if (nb > n .or. bw < 0) nb = 0
-    if (nb > 0 .and. .not. chk) then
-      ! a declared band: a's entries outside it were never written (read as zero below)
-      if (.not. (band_rows(self, n, nb, bw, a, size(a, 1)) <= huge(1.0_dp) .and. all_finite(b(1:n)))) then
+    type(vci_sparse_pattern_t), pointer :: spat
+    ! structured_as's structure is posed for this solve; the last Newton solve's is put back after
+    snb = self%snb; sbw = self%sbw; ssp = self%ssp; chk = self%scheck; spat => self%spat
+    self%snb = 0; self%sbw = -1; self%ssp = 0; self%scheck = .false.
+    if (present(structured_as)) call pose_structure(self, structured_as, n)
+    call posed_linear_solve(self, n, a, b, info)
+    self%snb = snb; self%sbw = sbw; self%ssp = ssp; self%scheck = chk; self%spat => spat
+  end subroutine linear_solve
+
+  !> linear_solve with the posed structure (snb, sbw, ssp, spat, scheck).
+  subroutine posed_linear_solve(self, n, a, b, info)
+    type(vci_newton_t), intent(inout) :: self
+    integer, intent(in) :: n
+    real(dp), intent(in) :: a(:, :)
+    real(dp), intent(inout) :: b(:)
+    integer, intent(out) :: info
+    integer :: rank, i
+    logical :: band_only
+    ! a declared band without the debug check: a's entries outside it were never written (read as
+    ! zero below)
+    band_only = self%snb > 0 .and. .not. self%scheck
+    if (band_only) then
+      if (.not. (band_rows(n, self%snb, self%sbw, a, size(a, 1), self%rw) <= huge(1.0_dp) .and. &
+                 all_finite(b(1:n)))) then
         info = -1; return
       end if
     else if (.not. (all_finite(a(1:n, 1:n)) .and. all_finite(b(1:n)))) then
@@ -478,40 +546,21 @@ contains
     end if
     self%rt(1:n) = b(1:n)                  ! the right-hand side, for the fallback
     self%have_lu = .false.            ! the factors below are not a Newton matrix's
-    if (nb > 0) then
-      if (band_rows(self, n, nb, bw, a, size(a, 1)) <= huge(1.0_dp)) then
-        call self%band%factor(n, nb, bw, a, size(a, 1), self%rw, info)
+    if (self%snb > 0 .or. self%ssp > 0) then
+      if (structure_rows(self, n, a, size(a, 1), self%rw) <= huge(1.0_dp)) then
+        call structured_factor(self, n, a, size(a, 1), self%rw, info)
         if (info == 0) then
           do i = 1, n
             b(i) = b(i) * self%rw(i)
           end do
-          call self%band%solve(b(1:n))
-          self%lu_banded = .true.
+          call lu_solve(self, n, b)
           if (all_finite(b(1:n))) return
           b(1:n) = self%rt(1:n)
         end if
       end if
     end if
-    if (nb == 0 .and. present(structured_as)) then
-      ! a declared sparse pattern: a is dense in memory (all entries written), factorised sparsely
-      call sparse_posed(self, structured_as, n)
-      if (self%ssp > 0) then
-        if (pattern_rows(n, self%ssp, self%spat, a, size(a, 1), self%rw) <= huge(1.0_dp)) then
-          call self%sparse%factor(n, self%ssp, self%spat, a, size(a, 1), self%rw, info)
-          if (info == 0) then
-            do i = 1, n
-              b(i) = b(i) * self%rw(i)
-            end do
-            call self%sparse%solve(b(1:n))
-            self%lu_sparse = .true.
-            if (all_finite(b(1:n))) return
-            b(1:n) = self%rt(1:n)
-          end if
-        end if
-      end if
-    end if
     self%lu(1:n, 1:n) = a(1:n, 1:n)
-    if (nb > 0 .and. .not. chk) call zero_outside_band(nb, bw, self%lu, self%capacity)
+    if (band_only) call zero_outside_band(self%snb, self%sbw, self%lu, self%capacity)
     call lu_factor(self, n, info)
     if (info == 0) then
       call lu_solve(self, n, b)
@@ -519,7 +568,7 @@ contains
     end if
     ! singular: the minimum-norm least-squares solution, as in the Newton direction
     self%jac(1:n, 1:n) = a(1:n, 1:n)
-    if (nb > 0 .and. .not. chk) call zero_outside_band(nb, bw, self%jac, self%capacity)
+    if (band_only) call zero_outside_band(self%snb, self%sbw, self%jac, self%capacity)
     self%dx(1:n) = self%rt(1:n)
     call dgelsd(n, n, 1, self%jac, self%capacity, self%dx, self%capacity, self%sv, 1.0e-12_dp, rank, &
                 self%work, size(self%work), self%iwork, info)
@@ -529,25 +578,31 @@ contains
       b(1:n) = self%rt(1:n)
       if (info == 0) info = -1
     end if
-  end subroutine linear_solve
+  end subroutine posed_linear_solve
 
   !> Newton direction dx = J^{-1} r on the row-equilibrated system; least squares when singular.
+  !> A stage system's border is eliminated with its block's factors (bordered_direction), a declared
+  !> structure is factorised in it (structured_direction); when those fail (a singular block or
+  !> Schur complement, a cancelling border, no memory) the whole matrix is factorised densely.
   subroutine newton_direction(self, n, factored, res)
     type(vci_newton_t), intent(inout) :: self
     integer, intent(in) :: n
     logical, intent(out) :: factored
     type(vci_newton_result_t), intent(inout) :: res
     integer :: i, info, rank
-    if (self%snb > 0) then
-      call structured_direction(self, n, factored, res)
-      if (factored .or. res%reason /= NEWTON_CONVERGED) return
-      ! a singular band block or Schur complement (or no workspace): the dense path below decides,
-      ! on the matrix with its zeros outside the band written (the assembly wrote the band alone)
-      if (.not. self%scheck) call zero_outside_band(self%snb, self%sbw, self%jac, self%capacity)
-    else if (self%ssp > 0) then
-      call sparse_direction(self, n, factored, res)
-      if (factored .or. res%reason /= NEWTON_CONVERGED) return
-      ! singular (or no KLU, no memory): the dense path below decides, on the full matrix
+    factored = .false.
+    if (outside_structure(self, res)) return
+    if (self%nbord == 1) then
+      call bordered_direction(self, n, factored)
+      if (factored) return
+    end if
+    if (self%snb > 0 .or. self%ssp > 0) then
+      call structured_direction(self, n, factored)
+      if (factored) return
+      ! a singular band block or Schur complement (or no workspace, no KLU): the dense path below
+      ! decides, on the matrix with its zeros outside the band written (the assembly wrote the band
+      ! alone; a sparse pattern's matrix is dense in memory)
+      if (self%snb > 0 .and. .not. self%scheck) call zero_outside_band(self%snb, self%sbw, self%jac, self%capacity)
     end if
     ! rows equilibrated by their largest entry; jac keeps the equilibrated matrix for the fallback
     call equilibrate(n, self%capacity, self%jac, self%lu, self%r, self%dx, self%rw)
@@ -576,39 +631,111 @@ contains
     if (info /= 0 .or. .not. all(ieee_is_finite(self%dx(1:n)))) res%reason = NEWTON_SINGULAR
   end subroutine newton_direction
 
-  !> Newton direction for a system that declared structure (vci_banded): rows equilibrated by their
-  !> largest entry in the band and the border (the entries outside are zero), the band block and
-  !> the Schur complement of the border factorised. factored false: fall back to the dense path
-  !> (jac untouched); res%reason NEWTON_STRUCTURE when the debug check finds an entry outside the band.
-  subroutine structured_direction(self, n, factored, res)
+  !> The debug check of a declared structure (scheck): true, with res%reason NEWTON_STRUCTURE and
+  !> the entry, when the Newton matrix has a nonzero outside the band or the pattern.
+  logical function outside_structure(self, res) result(outside)
+    type(vci_newton_t), intent(inout) :: self
+    type(vci_newton_result_t), intent(inout) :: res
+    integer :: i, j
+    outside = .false.
+    if (.not. self%scheck) return
+    i = 0; j = 0
+    if (self%snb > 0) then
+      call outside_band(self%snb, self%sbw, self%jac, self%capacity, i, j)
+    else if (self%ssp > 0) then
+      call outside_pattern(self%ssp, self%spat, self%jac, self%capacity, i, j)
+    end if
+    if (i > 0) then
+      res%reason = NEWTON_STRUCTURE; res%bad_row = i; res%bad_col = j; outside = .true.
+    end if
+  end function outside_structure
+
+  !> Newton direction for a system bordered by its last unknown (vci_bordered): the block
+  !> jac(1:n-1, 1:n-1), in its declared structure (band or sparse pattern with their own border,
+  !> else dense), factorised when stale (else its factors from an earlier iteration of this solve: a
+  !> chord on the block), the current border eliminated. factored false: the whole matrix is
+  !> factorised instead (singular block, cancelling Schur complement, NaN/Inf: the whole path
+  !> reports those). rw = 1: the bordered solve equilibrates the block's rows itself (brw).
+  subroutine bordered_direction(self, n, factored)
     type(vci_newton_t), intent(inout) :: self
     integer, intent(in) :: n
     logical, intent(out) :: factored
-    type(vci_newton_result_t), intent(inout) :: res
-    integer :: i, j, nb, bw, info
+    integer :: info, ni
+    factored = .false.
+    ni = n - 1
+    self%block_reused = .true.
+    ! (the chord only on a dense block of more than reuse_min unknowns: below, and for a band or
+    ! sparse block at any size, a factorisation costs less than the extra iterations a chord takes,
+    ! each with its residual and Jacobian: docs/bench/bordered.md)
+    if (self%block_stale .or. .not. self%border_chord .or. n <= self%reuse_min .or. self%block_ni /= ni .or. &
+        self%snb > 0 .or. self%ssp > 0) then
+      self%block_stale = .true.
+      if (.not. (structure_rows(self, ni, self%jac, self%capacity, self%brw) <= huge(1.0_dp))) return
+      call structured_factor(self, ni, self%jac, self%capacity, self%brw, info)
+      if (info /= 0) return
+      self%bkind = self%fkind; self%block_ni = ni
+      self%factorisations = self%factorisations + 1
+      if (self%bkind /= FACTORS_BLOCK) self%structured_factorisations = self%structured_factorisations + 1
+      self%block_stale = .false.; self%block_reused = .false.
+    end if
+    select case (self%bkind)
+    case (FACTORS_BAND)
+      call self%bord%border(self%band, ni, self%jac, self%capacity, self%brw, info)
+    case (FACTORS_SPARSE)
+      call self%bord%border(self%sparse, ni, self%jac, self%capacity, self%brw, info)
+    case default
+      call self%bord%border(self%blockd, ni, self%jac, self%capacity, self%brw, info)
+    end select
+    if (info /= 0) then
+      self%block_stale = .true.; return
+    end if
+    self%rw(1:n) = 1.0_dp
+    self%dx(1:n) = self%r(1:n)
+    self%fkind = FACTORS_BORDERED
+    call lu_solve(self, n, self%dx)
+    factored = all(ieee_is_finite(self%dx(1:n)))
+    if (.not. factored) then
+      self%block_stale = .true.; return
+    end if
+    self%bordered_directions = self%bordered_directions + 1
+  end subroutine bordered_direction
+
+  !> Newton direction for a system that declared structure (a band, vci_banded, or a sparse
+  !> pattern, vci_sparse; each with its dense border): rows equilibrated by their largest entry in
+  !> the structure and the border, the matrix factorised in its structure. factored false: fall
+  !> back to the dense path (jac untouched).
+  subroutine structured_direction(self, n, factored)
+    type(vci_newton_t), intent(inout) :: self
+    integer, intent(in) :: n
+    logical, intent(out) :: factored
+    integer :: i, info
     real(dp) :: total
     factored = .false.
-    nb = self%snb; bw = self%sbw
-    if (self%scheck) then
-      call outside_band(nb, bw, self%jac, self%capacity, i, j)
-      if (i > 0) then
-        res%reason = NEWTON_STRUCTURE; res%bad_row = i; res%bad_col = j; return
-      end if
-    end if
-    total = band_rows(self, n, nb, bw, self%jac, self%capacity)
+    total = structure_rows(self, n, self%jac, self%capacity, self%rw)
     do i = 1, n
       self%dx(i) = self%r(i) * self%rw(i)
     end do
     ! NaN/Inf in the matrix or r w: the dense path reports it (nothing non-finite goes to LAPACK)
     if (.not. (total <= huge(1.0_dp) .and. all_finite(self%dx(1:n)))) return
-    call self%band%factor(n, nb, bw, self%jac, self%capacity, self%rw, info)
+    call structured_factor(self, n, self%jac, self%capacity, self%rw, info)
     if (info /= 0) return
     self%factorisations = self%factorisations + 1
     self%structured_factorisations = self%structured_factorisations + 1
-    call self%band%solve(self%dx(1:n))
+    call lu_solve(self, n, self%dx)
     factored = all(ieee_is_finite(self%dx(1:n)))
-    self%lu_banded = factored
   end subroutine structured_direction
+
+  !> The posed structure of sys (n unknowns): a band (snb, sbw) or else a sparse pattern (ssp,
+  !> spat), and whether to check it on every matrix (scheck).
+  subroutine pose_structure(self, sys, n)
+    type(vci_newton_t), intent(inout) :: self
+    class(vci_system_t), intent(inout) :: sys
+    integer, intent(in) :: n
+    call sys%structure(self%snb, self%sbw, self%scheck)
+    if (self%snb > n .or. self%sbw < 0) self%snb = 0
+    self%ssp = 0
+    if (self%snb == 0) call sparse_posed(self, sys, n)
+  end subroutine pose_structure
 
   !> The system's declared sparse pattern, if it has one that fits n unknowns: ssp, spat, scheck.
   subroutine sparse_posed(self, sys, n)
@@ -624,45 +751,62 @@ contains
     self%ssp = nb; self%scheck = chk
   end subroutine sparse_posed
 
-  !> Newton direction for a system with a declared sparse pattern (vci_sparse): rows equilibrated
-  !> by their largest entry in the pattern and the border, the bordered matrix factorised by KLU.
-  !> factored false: fall back to the dense path (jac untouched); res%reason NEWTON_STRUCTURE when
-  !> the debug check finds a nonzero outside the pattern.
-  subroutine sparse_direction(self, n, factored, res)
+  !> rw(i) = 1 / the largest |a(i, j)| of row i of a(1:n, 1:n) over the posed structure (band or
+  !> pattern) and the border, or over the whole row when none is declared; returns the sum of those
+  !> maxima (not finite: a NaN or Inf in the matrix).
+  real(dp) function structure_rows(self, n, a, lda, rw) result(total)
     type(vci_newton_t), intent(inout) :: self
-    integer, intent(in) :: n
-    logical, intent(out) :: factored
-    type(vci_newton_result_t), intent(inout) :: res
-    integer :: i, j, info
-    real(dp) :: total
-    factored = .false.
-    if (self%scheck) then
-      call outside_pattern(self%ssp, self%spat, self%jac, self%capacity, i, j)
-      if (i > 0) then
-        res%reason = NEWTON_STRUCTURE; res%bad_row = i; res%bad_col = j; return
-      end if
+    integer, intent(in) :: n, lda
+    real(dp), intent(in) :: a(lda, *)
+    real(dp), intent(out) :: rw(:)
+    integer :: i, j
+    real(dp) :: big
+    if (self%snb > 0) then
+      total = band_rows(n, self%snb, self%sbw, a, lda, rw)
+    else if (self%ssp > 0) then
+      total = pattern_rows(n, self%ssp, self%spat, a, lda, rw)
+    else
+      total = 0.0_dp
+      do i = 1, n
+        big = 0.0_dp
+        do j = 1, n
+          big = max(big, abs(a(i, j)))
+        end do
+        total = total + big
+        rw(i) = 1.0_dp
+        if (big > 0.0_dp) rw(i) = 1.0_dp / big
+      end do
     end if
-    total = pattern_rows(n, self%ssp, self%spat, self%jac, self%capacity, self%rw)
-    do i = 1, n
-      self%dx(i) = self%r(i) * self%rw(i)
-    end do
-    if (.not. (total <= huge(1.0_dp) .and. all_finite(self%dx(1:n)))) return
-    call self%sparse%factor(n, self%ssp, self%spat, self%jac, self%capacity, self%rw, info)
-    if (info /= 0) return
-    self%factorisations = self%factorisations + 1
-    self%structured_factorisations = self%structured_factorisations + 1
-    call self%sparse%solve(self%dx(1:n))
-    factored = all(ieee_is_finite(self%dx(1:n)))
-    self%lu_sparse = factored
-    self%lu_banded = .false.
-  end subroutine sparse_direction
+  end function structure_rows
+
+  !> Factorise diag(rw) a(1:n, 1:n) in the posed structure — band (vci_banded), sparse pattern
+  !> (vci_sparse) or, with none, the dense block LU (vci_factor) — into the factors of that kind;
+  !> fkind names them (lu_solve then solves with them). n may be the posed system's unknowns or its
+  !> bordered block's (n - 1). info /= 0: not factorised (singular, no workspace, no KLU).
+  subroutine structured_factor(self, n, a, lda, rw, info)
+    type(vci_newton_t), intent(inout) :: self
+    integer, intent(in) :: n, lda
+    real(dp), intent(in) :: a(lda, *), rw(:)
+    integer, intent(out) :: info
+    if (self%snb > 0) then
+      call self%band%factor(n, self%snb, self%sbw, a, lda, rw, info)
+      self%fkind = FACTORS_BAND
+    else if (self%ssp > 0) then
+      call self%sparse%factor(n, self%ssp, self%spat, a, lda, rw, info)
+      self%fkind = FACTORS_SPARSE
+    else
+      call self%blockd%factor(n, a, lda, rw, self%small_lu_max, info)
+      self%fkind = FACTORS_BLOCK
+    end if
+    if (info /= 0) self%fkind = FACTORS_WHOLE     ! (lu_solve must not use factors that failed)
+  end subroutine structured_factor
 
   !> rw(i) = 1 / the largest |a(i, j)| of row i over the band and the border (the entries outside the
   !> band are zero); returns the sum of those maxima (not finite: a NaN or Inf in the matrix).
-  real(dp) function band_rows(self, n, nb, bw, a, lda) result(total)
-    type(vci_newton_t), intent(inout) :: self
+  real(dp) function band_rows(n, nb, bw, a, lda, rw) result(total)
     integer, intent(in) :: n, nb, bw, lda
     real(dp), intent(in) :: a(lda, *)
+    real(dp), intent(out) :: rw(:)
     integer :: i, j
     real(dp) :: big
     total = 0.0_dp
@@ -681,8 +825,8 @@ contains
         end do
       end if
       total = total + big
-      self%rw(i) = 1.0_dp
-      if (big > 0.0_dp) self%rw(i) = 1.0_dp / big
+      rw(i) = 1.0_dp
+      if (big > 0.0_dp) rw(i) = 1.0_dp / big
     end do
   end function band_rows
 
@@ -770,7 +914,7 @@ contains
     type(vci_newton_t), intent(inout) :: self
     integer, intent(in) :: n
     integer, intent(out) :: info
-    self%lu_banded = .false.; self%lu_sparse = .false.
+    self%fkind = FACTORS_WHOLE
     if (n <= self%small_lu_max) then
       call small_lu(n, self%lu, self%ipiv, info)
     else
@@ -784,15 +928,29 @@ contains
     integer, intent(in) :: n
     real(dp), intent(inout) :: b(:)
     integer :: info
-    if (self%lu_banded) then
+    select case (self%fkind)
+    case (FACTORS_BAND)
       call self%band%solve(b(1:n))
-    else if (self%lu_sparse) then
+    case (FACTORS_SPARSE)
       call self%sparse%solve(b(1:n))
-    else if (n <= self%small_lu_max) then
-      call small_lu_solve(n, self%lu, self%ipiv, b)
-    else
-      call dgetrs('N', n, 1, self%lu, self%capacity, self%ipiv, b, size(b), info)
-    end if
+    case (FACTORS_BLOCK)
+      call self%blockd%solve(b(1:n))
+    case (FACTORS_BORDERED)           ! the bordered block's factors, of their own kind
+      select case (self%bkind)
+      case (FACTORS_BAND)
+        call self%bord%solve(self%band, b(1:n))
+      case (FACTORS_SPARSE)
+        call self%bord%solve(self%sparse, b(1:n))
+      case default
+        call self%bord%solve(self%blockd, b(1:n))
+      end select
+    case default
+      if (n <= self%small_lu_max) then
+        call small_lu_solve(n, self%lu, self%ipiv, b)
+      else
+        call dgetrs('N', n, 1, self%lu, self%capacity, self%ipiv, b, size(b), info)
+      end if
+    end select
   end subroutine lu_solve
 
 

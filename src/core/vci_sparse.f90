@@ -15,6 +15,7 @@
 module vci_sparse
   use, intrinsic :: iso_c_binding, only: c_int, c_double, c_ptr, c_null_ptr, c_associated
   use vci_kinds, only: dp
+  use vci_factor, only: vci_factor_t
   implicit none
   private
 
@@ -38,8 +39,7 @@ module vci_sparse
   end type klu_slot_t
 
   !> Sparse LU factors of bordered Newton matrices (factor, then solve any number of times).
-  type, public :: vci_sparse_lu_t
-    logical :: ready = .false.            !< the last factor call succeeded (solve uses it)
+  type, extends(vci_factor_t), public :: vci_sparse_lu_t
     integer, private :: last = 0          !< slot of the last factorisation
     integer, private :: clock = 0
     type(klu_slot_t), private :: slot(max_slots)

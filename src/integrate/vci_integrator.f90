@@ -55,6 +55,8 @@ module vci_integrator
     !> set_step_splits; docs/DESIGN.md §2), and the most sub-steps one of them needed
     integer(i8) :: split_steps = 0
     integer(i8) :: largest_split = 0   !< the most equal sub-steps one split step needed (0: none)
+    !> impact-stage Newton directions solved by bordering the sub-step's block (set_bordered_impacts)
+    integer(i8) :: bordered_directions = 0
   end type vci_stats_t
 
   !> The driver: create it for a model and a step length, choose settings, initialise, then step or
@@ -111,6 +113,8 @@ module vci_integrator
     procedure :: set_poke_samples
     !> The safety net: retry a failed step as up to max_splits equal sub-steps (1: off).
     procedure :: set_step_splits
+    !> Solve impact stages by bordering the sub-step's block (default) or as whole matrices.
+    procedure :: set_bordered_impacts
     !> Start from q0 at t0 and q1 at t0 + h (the paper's initial pair).
     procedure :: init_from_pair
     !> Start from (q0, p0) at t0; step index 0.
@@ -619,6 +623,21 @@ contains
     call self%stepper%configure(settings)
     call finish(self, VCI_OK, stat)
   end subroutine set_step_splits
+
+  !> Impact stages 1 and 2 by bordering (on, the default: the sub-step's block factorised and the
+  !> alpha/mu row and column eliminated by their Schur complement, docs/DESIGN.md "Impact systems by
+  !> bordering") or with the whole stage matrix factorised (off: the comparison path). min_unknowns:
+  !> border stage systems of at least this many unknowns (default 16; smaller ones cost less whole).
+  subroutine set_bordered_impacts(self, on, min_unknowns)
+    class(vci_integrator_t), intent(inout) :: self
+    logical, intent(in) :: on
+    integer, intent(in), optional :: min_unknowns
+    type(vci_settings_t) :: settings
+    settings = self%stepper%current_settings()
+    settings%bordered_impacts = on
+    if (present(min_unknowns)) settings%border_min = max(2, min_unknowns)
+    call self%stepper%configure(settings)
+  end subroutine set_bordered_impacts
 
   !> Start from q0 at t0 and q1 at t0 + h (the paper's initial pair). The current state becomes
   !> (t0 + h, q1, p1) with p1 = D2 L_d(q0, q1, h); the step index is 1.
@@ -1190,6 +1209,7 @@ contains
     stats%steps = self%steps_taken; stats%impacts = self%impacts_found
     stats%newton_solves = solver%newton_solves; stats%newton_iterations = solver%newton_iterations
     stats%factorisations = self%stepper%factorisations()
+    stats%bordered_directions = self%stepper%bordered_directions()
     stats%fallbacks = solver%fallbacks
     stats%fused_solves = solver%fused_solves
     stats%energy_fallbacks = solver%energy_fallbacks

@@ -24,6 +24,10 @@ module vci_settings
     !> Newton fail is retried as 2, 4, ... equal sub-steps of the same scheme, up to this many;
     !> 1 turns the net off (the step then fails with its own status).
     integer :: max_step_splits = 16
+    !> Impact stages solved by bordering the sub-step's block (vci_bordered); false: the whole
+    !> stage matrix is factorised (the comparison path of tests and benchmarks).
+    logical :: bordered_impacts = .true.
+    integer :: border_min = 16     !< ... for stage systems of at least this many unknowns
     !> Sample sub-steps inside for a wall poked within one (docs/BACKWARD.md, "A wall poked within
     !> one sub-step"): set_poke_samples; off by default (cost, and under-resolved stiff motion)
     logical :: poke_samples = .false.

@@ -105,6 +105,7 @@ module vci_stepper
     procedure :: solver_stats
     procedure :: set_solver_paths
     procedure :: factorisations
+    procedure :: bordered_directions
     procedure :: failure_cause
     procedure :: use_model_derivatives
     procedure :: position_carry
@@ -227,6 +228,8 @@ contains
     self%newton%atol = settings%atol
     self%newton%rtol = settings%rtol
     self%newton%max_iterations = settings%max_iterations
+    self%newton%bordered = settings%bordered_impacts
+    self%newton%border_min = settings%border_min
     if (.not. allocated(self%sys)) return
     call self%sys%configure_impacts(settings%impact_energy, settings%rtol)
   end subroutine configure
@@ -254,6 +257,12 @@ contains
     self%newton%reuse_min = reuse_min
     if (present(fused)) self%fused = fused
   end subroutine set_solver_paths
+
+  !> Newton directions of impact stages solved by bordering so far.
+  pure integer(i8) function bordered_directions(self)
+    class(vci_stepper_t), intent(in) :: self
+    bordered_directions = self%newton%bordered_directions
+  end function bordered_directions
 
   !> LU factorisations of Newton matrices so far.
   pure integer(i8) function factorisations(self)

@@ -112,6 +112,7 @@ module vci_scheme
     procedure :: jacobian => dispatch_jacobian
     procedure :: admissible => wall_admissible
     procedure :: reuse_key => substep_key
+    procedure :: border => stage_border
     procedure :: eval_gaps
     procedure :: eval_gap_gradients
     procedure :: eval_gap_gradient
@@ -680,6 +681,14 @@ contains
     substep_key = 0.0_dp
     if (self%kind == KIND_SUBSTEP) substep_key = real(self%dir, dp) * self%tau
   end function substep_key
+
+  !> Stage 1 and stage 2 are the sub-step system bordered by alpha or mu, their last unknown (the
+  !> layout contract above): Newton eliminates it by its Schur complement (vci_bordered).
+  integer function stage_border(self)
+    class(vci_scheme_t), intent(inout) :: self
+    stage_border = 0
+    if (self%kind == KIND_STAGE1 .or. self%kind == KIND_STAGE2) stage_border = 1
+  end function stage_border
 
   !> Stage 1 keeps the impact fraction inside (0, 1].
   logical function wall_admissible(self, x)

@@ -10,18 +10,22 @@
 #
 #   tools/bench/run_chain_scaling.sh             # uses $BUILD_DIR (default: build)
 #   NS="32 64 128" CG_MAX=128 tools/bench/run_chain_scaling.sh
+#   WHOLE=1 OUT=/tmp/whole.md tools/bench/run_chain_scaling.sh   # impact stages as whole matrices
+#                                                                # (no bordering: the path before it)
 set -eu
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
 BUILD_DIR=${BUILD_DIR:-$ROOT/build}
 OUT=${OUT:-$ROOT/docs/bench/chain_scaling.md}
 NS=${NS:-"32 64 128 256 512 1024 2048 4096"}
 CG_MAX=${CG_MAX:-1024}
+ARGS="bandcb"
+[ "${WHOLE:-0}" = 1 ] && ARGS="bandcb whole"
 cmake --build "$BUILD_DIR" --target vci_bench_chain_impacts -j1 >/dev/null
 EXE="$BUILD_DIR/bin/vci_bench_chain_impacts"
 export OPENBLAS_NUM_THREADS=1
 rows=$(mktemp)
 for n in $NS; do
-  "$EXE" bandcb "$n" | tail -n 1 >>"$rows"
+  "$EXE" $ARGS "$n" | tail -n 1 >>"$rows"
 done
 # least-squares slope of log(column) against log(n): fit COLUMN [MIN_N] (awk field of a table row)
 fit() {
@@ -32,10 +36,15 @@ fit() {
   echo "# The banded FPU chain against n"
   echo
   echo "Written by \`tools/bench/run_chain_scaling.sh\` ($(date -u +%Y-%m-%d), $(uname -m), $(nproc) cores, commit"
-  echo "$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)). \`OPENBLAS_NUM_THREADS=1 vci_bench_chain_impacts bandcb N\`"
+  echo "$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)). \`OPENBLAS_NUM_THREADS=1 vci_bench_chain_impacts $ARGS N\`"
   echo "(bench/chain_impacts.f90), one process per n: the FPU-beta chain between walls |x_i| <= 0.6, midpoint"
   echo "from L, declared bandwidth 1 with the model's \`hessians_band\`, \`hamiltonian\` impacts, h = 0.01,"
   echo "T = 2, docs/RESULTS.md's start scaled to n. Times: medians of individually timed steps."
+  if [ "${WHOLE:-0}" = 1 ]; then
+    echo "Impact stages: the whole stage matrix factorised (band block with the alpha/mu border) at every Newton iteration."
+  else
+    echo "Impact stages: bordered (the sub-step's band block factorised, kept across iterations while they contract, the alpha/mu border by its Schur complement)."
+  fi
   echo
   echo "| n | band | steps | impact steps | impacts | regular step (us) | impact step (us) | impact / regular | LU per regular step | LU per impact step | memory growth (MB) | peak memory (MB) |"
   echo "|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
@@ -68,7 +77,7 @@ fit() {
   for n in $NS; do
     [ "$n" -le "$CG_MAX" ] || continue
     f=$(mktemp)
-    valgrind --tool=callgrind --callgrind-out-file="$f" "$EXE" bandcb "$n" >/dev/null 2>&1
+    valgrind --tool=callgrind --callgrind-out-file="$f" "$EXE" $ARGS "$n" >/dev/null 2>&1
     adv=$(callgrind_annotate --inclusive=yes "$f" 2>/dev/null | awk '/__vci_stepper_MOD_advance / {gsub(",", "", $1); print $1; exit}')
     res=$(callgrind_annotate --inclusive=yes "$f" 2>/dev/null | awk '/__vci_stepper_MOD_resolve_impacts / {gsub(",", "", $1); print $1; exit}')
     rm -f "$f"
