@@ -859,9 +859,10 @@ they differ by {check} in the double results (state and impact times at T). Run 
 `vci_results_driver sweep FILE "" fpu_walls_1024` and the peers' drivers with the scene
 `fpu_walls_1024`. vci runs `midpoint` from L with the chain's tridiagonal Hessians declared
 (`declare_bandwidth(1)`, LAPACK band LU). **Not the explicit compositions**, although their regular
-step is O(n) and explicit: their stage 1 (the impact time along the composed map) runs its root
-iteration to its cap of 200 when the root lies at a small fraction of the sub-step (the stopping
-test is relative to the fraction, below the gap's rounding), ~0.07 s an impact here, 17 s a run —
+step is O(n) and explicit: their stage 1 (the impact time along the composed map) costs ~0.07 s an
+impact here, 17 s a run (callgrind at T = 0.25: two thirds of the run in its trial maps along the
+sub-step; the likely cause, not yet confirmed, is its root iteration's stopping test, relative to the
+fraction of the sub-step and so below the gap's rounding when the root lies at a small fraction) —
 a defect to fix (issue 32), not the method's cost. Its dense rows (the hand-written
 L_d with an n × n mixed Hessian, Lobatto's stage systems) and CVODE-BDF (a dense 2n × 2n Newton
 matrix) are left out: each would spend the time budget on dense LU, and a user with this chain would

@@ -310,8 +310,7 @@ contains
   !> Whether a variant runs on the large chain: its dense rows (the hand-written L_d's n x n mixed
   !> Hessian, Lobatto's (s + 1) n stage systems, which do not use the band) would spend the time
   !> budget on dense LU; midpoint from L (banded) runs. The explicit compositions do not yet: their
-  !> stage 1 runs its root iteration to the cap at small fractions of a sub-step (~0.07 s an impact
-  !> here, 17 s a run; docs/RESULTS.md says so).
+  !> stage 1 costs ~0.07 s an impact here, 17 s a run (docs/RESULTS.md says so).
   logical function runs_on_large_chain(var)
     type(variant_t), intent(in) :: var
     runs_on_large_chain = var%scheme == VCI_SCHEME_MIDPOINT .and. var%impact_mode == VCI_IMPACT_HAMILTONIAN
