@@ -77,6 +77,26 @@ lobatto_table() {
         printf "\nImpact step / regular step: %.2fx in instructions, %.2fx in time. Library / hand loop (no walls):\n", i / r, timp / treg
         printf "%.2fx in instructions, %.2fx in time.\n", f / h, tfree / thand }'
     echo
+    echo "$lt" | awk -v ireg="$ireg" -v iimp="$iimp" -v nreg="$nreg" -v nimp="$nimp" '
+      END {
+        ereg = nreg / 200 * 10; eimp = nimp / 200 * 10; r = ireg / ereg; i = iimp / eimp
+        printf "Targets of issue 26: a regular Lobatto-4 step <= 10k instructions (**%s**: %.1fk), an impact\n", (r <= 10000 ? "met" : "missed"), r / 1000
+        printf "step <= 5x a regular step (item 2, **%s**: %.2fx) and <= 4x (item 3, **%s**). Where the regular\n", (i / r <= 5 ? "met" : "missed"), i / r, (i / r <= 4 ? "met" : "missed")
+        printf "step goes (callgrind, self instructions per regular step by function, the largest; the same counted run):\n" }'
+    echo
+    echo "| function | instructions/regular step | share |"
+    echo "|---|---:|---:|"
+    prof=$(mktemp)
+    OPENBLAS_NUM_THREADS=1 valgrind --tool=callgrind --callgrind-out-file="$prof" --toggle-collect='*counted_regular_step*' \
+      "$LEXE" 4 2 walled >/dev/null 2>&1
+    callgrind_annotate --inclusive=no "$prof" 2>/dev/null | awk -v ireg="$ireg" -v nreg="$nreg" '
+      /PROGRAM TOTALS/ { next }
+      /^ *[0-9,]+ +\(/ && n < 12 {
+        c = $1; gsub(",", "", c); f = $0; sub(/^[^)]*\) +/, "", f); sub(/ \[.*$/, "", f); sub(/^[^:]*:/, "", f)
+        ereg = nreg / 200 * 10
+        printf "| `%s` | %.0f | %.1f %% |\n", f, c / ereg, 100 * c / ireg; n++ }'
+    rm -f "$prof"
+    echo
     echo "The program's own lines (Newton iterations per step count the polishing step):"
     echo
     echo '```'
