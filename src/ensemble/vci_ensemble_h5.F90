@@ -387,9 +387,8 @@ contains
     class(vci_ensemble_file_t), intent(inout) :: self
     integer, intent(in) :: members_run, members_failed
     integer, intent(out) :: stat
-    integer :: i, err
 #ifdef VCI_HAVE_MPI
-    integer :: rank
+    integer :: i, err, rank
 #endif
     stat = VCI_OK
     if (.not. self%is_open) return
