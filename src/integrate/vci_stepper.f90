@@ -118,6 +118,7 @@ module vci_stepper
     procedure :: use_explicit
     procedure :: explicit_steps
     procedure :: pair_momentum
+    procedure :: momentum_velocity
   end type vci_stepper_t
 
 
@@ -445,7 +446,8 @@ contains
       end do
       if (st == VCI_OK) then
         ! the step as a whole: its velocity starts the next step's predictor afresh
-        state%velocity = real(dir, dp) * (self%q_new - state%q) / state%h
+        ! the last part's velocity (its chord, or after an impact its polynomial's end velocity)
+        state%velocity = self%part%velocity
         state%predictor_depth = 0
         state%arriving_energy = self%part%arriving_energy
         self%stats%split_steps = self%stats%split_steps + 1
@@ -479,7 +481,7 @@ contains
     type(vci_impact_buffer_t), intent(inout) :: impacts
     integer, intent(out) :: stat
     real(dp) :: tau
-    logical :: landed
+    logical :: landed, known
 
     if (allocated(self%explicit)) then
       call explicit_take_step(self, state, dir, impacts, stat); return
@@ -524,6 +526,10 @@ contains
       state%predictor_depth = 0              ! an impact breaks the smooth history
     end if
     state%velocity = real(dir, dp) * (self%q_new - self%q_start) / tau
+    ! after an impact, the velocity at the end of the leaving sub-step, where the scheme has a
+    ! polynomial through it (issue 27): the chord of a step with a reflection in it is O(1) off and
+    ! started the next regular step far enough away for Newton to reach a spurious root
+    if (impacts%count > 0) call self%sys%end_velocity(self%x, tau, state%velocity, known)
     state%arriving_energy = self%e_new
   end subroutine take_step
 
@@ -598,6 +604,30 @@ contains
     end if
     call run_newton(self, nx, 'regular step', stat)
   end subroutine substep
+
+  !> The free flight's velocity at a state given by (q, p) (init_from_momentum), for the first step's
+  !> Newton start (issue 27): the end velocity of a regular sub-step of 1e-3 h from (q, p), solved
+  !> from rest (its start is O(1e-3 h |v|) off, so Newton converges as on any short sub-step). Only
+  !> schemes with interior stages have such a velocity (end_velocity); elsewhere, and when that
+  !> sub-step fails, the velocity stays 0 and the first step starts from q as before.
+  subroutine momentum_velocity(self, state)
+    class(vci_stepper_t), intent(inout) :: self
+    type(vci_state_t), intent(inout) :: state
+    real(dp), parameter :: eps_frac = 1.0e-3_dp
+    integer :: stat
+    logical :: known
+    state%velocity = 0.0_dp
+    if (allocated(self%explicit) .or. .not. self%sys%needs_pair_solve()) return
+    call self%sys%set_direction(1)
+    call self%sys%put_endpoint(self%x, state%q, state%q)
+    call self%sys%put_multipliers(self%x, state%lambda)
+    call substep(self, state%q, state%p, eps_frac * state%h, stat)
+    if (stat == VCI_OK) then
+      call self%sys%end_velocity(self%x, eps_frac * state%h, self%q_guess, known)
+      if (known) state%velocity = self%q_guess
+    end if
+    self%cause = ''
+  end subroutine momentum_velocity
 
   !> The momentum p1 at q1 and the discrete energy of the segment from q0 to q1 of length h, forward
   !> (the paper's initial pair). Schemes with interior stages solve for them first (KIND_PAIR).
