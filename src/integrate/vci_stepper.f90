@@ -88,6 +88,7 @@ module vci_stepper
     real(dp) :: e_blend_after = 0.0_dp        !< a blended impact's energy after it (e_fallback: before)
     real(dp) :: e_arrive_last = 0.0_dp        !< E_d arriving at the last impact of this step (tie_to_wall)
     logical :: has_energy = .false.           !< the model supplies H(q, p) (probed at initialisation)
+    logical :: last_damped = .false.          !< (issue 27) the last Newton solve needed its line search
     real(dp), allocatable :: constraint_impulse(:)  !< nu of the Hamiltonian impact (m > 0)
     ! The step's outcome, committed to the state when the step succeeds:
     real(dp), allocatable :: q_new(:), p_new(:), lambda_new(:)
@@ -445,9 +446,11 @@ contains
         self%part%arriving_direction = dir
       end do
       if (st == VCI_OK) then
-        ! the step as a whole: its velocity starts the next step's predictor afresh
-        ! the last part's velocity (its chord, or after an impact its polynomial's end velocity)
-        state%velocity = self%part%velocity
+        ! the step as a whole: its velocity starts the next step's predictor afresh; with interior
+        ! stages the last part's (after an impact its polynomial's end velocity, not a chord bent by
+        ! the reflection)
+        state%velocity = real(dir, dp) * (self%q_new - state%q) / state%h
+        if (self%sys%needs_pair_solve()) state%velocity = self%part%velocity
         state%predictor_depth = 0
         state%arriving_energy = self%part%arriving_energy
         self%stats%split_steps = self%stats%split_steps + 1
@@ -495,6 +498,12 @@ contains
     call vci_predict_start(self%sys, state, dir, abs(state%predictor_depth), self%x, self%q_guess, self%lambda_start)
     call substep(self, self%q_start, self%p_start, tau, stat)
     if (stat /= VCI_OK) return
+    ! a root reached by a damped iteration left the predictor's convergence region: it must be the
+    ! motion's (docs/DESIGN.md §6, "The regular step's root checked by its reversal")
+    if (self%last_damped .and. self%sys%needs_pair_solve()) then
+      call confirm_by_reversal(self, dir, tau, stat)
+      if (stat /= VCI_OK) return
+    end if
 
     if (self%ng > 0) then
       call resolve_impacts(self, state, dir, tau, impacts, landed, stat)
@@ -532,6 +541,58 @@ contains
     if (impacts%count > 0) call self%sys%end_velocity(self%x, tau, state%velocity, known)
     state%arriving_energy = self%e_new
   end subroutine take_step
+
+  !> Is the regular step's root (in x, from q_start, p_start over tau) the motion's? (issue 27) A
+  !> symmetric scheme's step from (q1, p1) run backwards has q_start as a root whatever root q1 is;
+  !> on the motion's branch (the one continued from tau -> 0) it is the root Newton reaches from the
+  !> reversed step's free-flight start q1 - dir tau v1 (v1 the root's own end velocity), as the
+  !> forward step reaches q1 from its start. A spurious root's reversed step lands on its own
+  !> motion instead (Kepler, lobatto s = 2, h = 0.8, from rest: at (1.93, 3.47), not at the
+  !> pericentre (0.5, 0)). A reversed step that ends more than 1e-6 of the step's span from q_start
+  !> fails the step with VCI_ERR_NEWTON (the safety net splits it); one that does not converge
+  !> decides nothing. Called only after a damped Newton solve; x and the posed sub-step are restored.
+  subroutine confirm_by_reversal(self, dir, tau, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: dir
+    real(dp), intent(in) :: tau
+    integer, intent(out) :: stat
+    integer :: nx, st
+    real(dp) :: span, off
+    logical :: known
+    nx = self%nsub
+    self%x_saved(1:nx) = self%x(1:nx)
+    ! (workspace: q_end, p_arrive, q_guess and q_trial are set afresh by resolve_impacts before use)
+    call self%sys%get_endpoint(self%x, self%q_end)
+    call self%sys%momentum_out(self%x, self%q_start, tau, self%p_arrive, stat, self%p_start)
+    if (stat /= VCI_OK) then
+      call set_cause(self, 'momentum of the regular step'); return
+    end if
+    call self%sys%end_velocity(self%x, tau, self%q_guess, known)
+    if (.not. known) return
+    span = maxval(abs(self%q_end - self%q_start))
+    self%q_guess = self%q_end - real(dir, dp) * tau * self%q_guess
+    call self%sys%set_direction(-dir)
+    call self%sys%put_endpoint(self%x, self%q_end, self%q_guess)
+    call substep(self, self%q_end, self%p_arrive, tau, st)
+    off = 0.0_dp
+    if (st == VCI_OK) then
+      call self%sys%get_endpoint(self%x, self%q_trial)
+      off = maxval(abs(self%q_trial - self%q_start))
+    end if
+    call self%sys%set_direction(dir)
+    self%x(1:nx) = self%x_saved(1:nx)
+    self%cause = ''
+    call self%sys%pose_substep(self%q_start, self%p_start, tau, stat)
+    if (stat /= VCI_OK) then
+      call set_cause(self, 'constraint forms'); return
+    end if
+    if (off > 1.0e-6_dp * span) then
+      stat = VCI_ERR_NEWTON
+      call vci_set_message(self%cause, 'regular step: Newton reached a spurious root (the step reversed from it, '// &
+        'started from its end velocity, ends '//trim(vci_real_text(off, '(es9.2)'))//' from the start instead of '// &
+        'returning there); a shorter step reaches the motion''s')
+    end if
+  end subroutine confirm_by_reversal
 
   !> Take the steps with an explicit composition (after setup, which drops any earlier one).
   subroutine use_explicit(self, explicit)
@@ -583,6 +644,7 @@ contains
     if (stat /= VCI_OK) then
       call set_cause(self, 'constraint forms'); return
     end if
+    self%last_damped = .false.
     if (self%fused) then
       ! small analytic systems: the fused solve; anything unusual there is redone on the general
       ! path, except a callback's unrecoverable failure, which ends the step at once (the flag is
@@ -665,6 +727,7 @@ contains
     call self%sys%forget_jacobian()
     call self%newton%solve(self%sys, self%x(1:nx), res)
     call count_solve(self, res)
+    self%last_damped = res%damped
     stat = res%status
     if (stat == VCI_OK) return
     select case (res%reason)
