@@ -99,6 +99,7 @@ module vci_newton
     real(dp) :: scaled_residual = 0.0_dp  !< max_i |r_i| / (atol + rtol scale_i) at the end
     integer :: bad_row = 0                !< NEWTON_STRUCTURE: the row of the entry outside the declared band
     integer :: bad_col = 0                !< NEWTON_STRUCTURE: its column
+    logical :: damped = .false.           !< (issue 27) the line search shortened a full Newton step
   end type vci_newton_result_t
 
   !> Damped Newton's method on LAPACK: solves a vci_system_t; settings, workspace and counters.
@@ -457,6 +458,7 @@ contains
       ! a chord on the bordered block that stopped contracting: a new block at the next iteration
       if (self%fkind == FACTORS_BORDERED .and. .not. (phit <= self%reuse_contraction * phi)) &
         self%block_stale = .true.
+      if (step < 1.0_dp) res%damped = .true.
       call accept_trial(self, n, x, phit, phi, res)
     end do
 

@@ -689,6 +689,7 @@ contains
     self%state%step_energy = ieee_value(1.0_dp, ieee_quiet_nan)
     self%state%arriving_direction = 0
     call self%stepper%forget_factors()
+    call self%stepper%momentum_velocity(self%state)   ! the first step's start (issue 27)
     call start_run_counts(self, 0_i8, 0_i8)
     self%initialized = .true.; self%start_kind = 2
     call finish(self, VCI_OK, stat)

@@ -88,6 +88,7 @@ module vci_stepper
     real(dp) :: e_blend_after = 0.0_dp        !< a blended impact's energy after it (e_fallback: before)
     real(dp) :: e_arrive_last = 0.0_dp        !< E_d arriving at the last impact of this step (tie_to_wall)
     logical :: has_energy = .false.           !< the model supplies H(q, p) (probed at initialisation)
+    logical :: last_damped = .false.          !< (issue 27) the last Newton solve needed its line search
     real(dp), allocatable :: constraint_impulse(:)  !< nu of the Hamiltonian impact (m > 0)
     ! The step's outcome, committed to the state when the step succeeds:
     real(dp), allocatable :: q_new(:), p_new(:), lambda_new(:)
@@ -118,6 +119,7 @@ module vci_stepper
     procedure :: use_explicit
     procedure :: explicit_steps
     procedure :: pair_momentum
+    procedure :: momentum_velocity
   end type vci_stepper_t
 
 
@@ -444,8 +446,11 @@ contains
         self%part%arriving_direction = dir
       end do
       if (st == VCI_OK) then
-        ! the step as a whole: its velocity starts the next step's predictor afresh
+        ! the step as a whole: its velocity starts the next step's predictor afresh; with interior
+        ! stages the last part's (after an impact its polynomial's end velocity, not a chord bent by
+        ! the reflection)
         state%velocity = real(dir, dp) * (self%q_new - state%q) / state%h
+        if (self%sys%needs_pair_solve()) state%velocity = self%part%velocity
         state%predictor_depth = 0
         state%arriving_energy = self%part%arriving_energy
         self%stats%split_steps = self%stats%split_steps + 1
@@ -479,7 +484,7 @@ contains
     type(vci_impact_buffer_t), intent(inout) :: impacts
     integer, intent(out) :: stat
     real(dp) :: tau
-    logical :: landed
+    logical :: landed, known
 
     if (allocated(self%explicit)) then
       call explicit_take_step(self, state, dir, impacts, stat); return
@@ -493,6 +498,12 @@ contains
     call vci_predict_start(self%sys, state, dir, abs(state%predictor_depth), self%x, self%q_guess, self%lambda_start)
     call substep(self, self%q_start, self%p_start, tau, stat)
     if (stat /= VCI_OK) return
+    ! a root reached by a damped iteration left the predictor's convergence region: it must be the
+    ! motion's (docs/DESIGN.md §6, "The regular step's root checked by its reversal")
+    if (self%last_damped .and. self%sys%needs_pair_solve()) then
+      call confirm_by_reversal(self, dir, tau, stat)
+      if (stat /= VCI_OK) return
+    end if
 
     if (self%ng > 0) then
       call resolve_impacts(self, state, dir, tau, impacts, landed, stat)
@@ -524,8 +535,64 @@ contains
       state%predictor_depth = 0              ! an impact breaks the smooth history
     end if
     state%velocity = real(dir, dp) * (self%q_new - self%q_start) / tau
+    ! after an impact, the velocity at the end of the leaving sub-step, where the scheme has a
+    ! polynomial through it (issue 27): the chord of a step with a reflection in it is O(1) off and
+    ! started the next regular step far enough away for Newton to reach a spurious root
+    if (impacts%count > 0) call self%sys%end_velocity(self%x, tau, state%velocity, known)
     state%arriving_energy = self%e_new
   end subroutine take_step
+
+  !> Is the regular step's root (in x, from q_start, p_start over tau) the motion's? (issue 27) A
+  !> symmetric scheme's step from (q1, p1) run backwards has q_start as a root whatever root q1 is;
+  !> on the motion's branch (the one continued from tau -> 0) it is the root Newton reaches from the
+  !> reversed step's free-flight start q1 - dir tau v1 (v1 the root's own end velocity), as the
+  !> forward step reaches q1 from its start. A spurious root's reversed step lands on its own
+  !> motion instead (Kepler, lobatto s = 2, h = 0.8, from rest: at (1.93, 3.47), not at the
+  !> pericentre (0.5, 0)). A reversed step that ends more than 1e-6 of the step's span from q_start
+  !> fails the step with VCI_ERR_NEWTON (the safety net splits it); one that does not converge
+  !> decides nothing. Called only after a damped Newton solve; x and the posed sub-step are restored.
+  subroutine confirm_by_reversal(self, dir, tau, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: dir
+    real(dp), intent(in) :: tau
+    integer, intent(out) :: stat
+    integer :: nx, st
+    real(dp) :: span, off
+    logical :: known
+    nx = self%nsub
+    self%x_saved(1:nx) = self%x(1:nx)
+    ! (workspace: q_end, p_arrive, q_guess and q_trial are set afresh by resolve_impacts before use)
+    call self%sys%get_endpoint(self%x, self%q_end)
+    call self%sys%momentum_out(self%x, self%q_start, tau, self%p_arrive, stat, self%p_start)
+    if (stat /= VCI_OK) then
+      call set_cause(self, 'momentum of the regular step'); return
+    end if
+    call self%sys%end_velocity(self%x, tau, self%q_guess, known)
+    if (.not. known) return
+    span = maxval(abs(self%q_end - self%q_start))
+    self%q_guess = self%q_end - real(dir, dp) * tau * self%q_guess
+    call self%sys%set_direction(-dir)
+    call self%sys%put_endpoint(self%x, self%q_end, self%q_guess)
+    call substep(self, self%q_end, self%p_arrive, tau, st)
+    off = 0.0_dp
+    if (st == VCI_OK) then
+      call self%sys%get_endpoint(self%x, self%q_trial)
+      off = maxval(abs(self%q_trial - self%q_start))
+    end if
+    call self%sys%set_direction(dir)
+    self%x(1:nx) = self%x_saved(1:nx)
+    self%cause = ''
+    call self%sys%pose_substep(self%q_start, self%p_start, tau, stat)
+    if (stat /= VCI_OK) then
+      call set_cause(self, 'constraint forms'); return
+    end if
+    if (off > 1.0e-6_dp * span) then
+      stat = VCI_ERR_NEWTON
+      call vci_set_message(self%cause, 'regular step: Newton reached a spurious root (the step reversed from it, '// &
+        'started from its end velocity, ends '//trim(vci_real_text(off, '(es9.2)'))//' from the start instead of '// &
+        'returning there); a shorter step reaches the motion''s')
+    end if
+  end subroutine confirm_by_reversal
 
   !> Take the steps with an explicit composition (after setup, which drops any earlier one).
   subroutine use_explicit(self, explicit)
@@ -577,6 +644,7 @@ contains
     if (stat /= VCI_OK) then
       call set_cause(self, 'constraint forms'); return
     end if
+    self%last_damped = .false.
     if (self%fused) then
       ! small analytic systems: the fused solve; anything unusual there is redone on the general
       ! path, except a callback's unrecoverable failure, which ends the step at once (the flag is
@@ -598,6 +666,30 @@ contains
     end if
     call run_newton(self, nx, 'regular step', stat)
   end subroutine substep
+
+  !> The free flight's velocity at a state given by (q, p) (init_from_momentum), for the first step's
+  !> Newton start (issue 27): the end velocity of a regular sub-step of 1e-3 h from (q, p), solved
+  !> from rest (its start is O(1e-3 h |v|) off, so Newton converges as on any short sub-step). Only
+  !> schemes with interior stages have such a velocity (end_velocity); elsewhere, and when that
+  !> sub-step fails, the velocity stays 0 and the first step starts from q as before.
+  subroutine momentum_velocity(self, state)
+    class(vci_stepper_t), intent(inout) :: self
+    type(vci_state_t), intent(inout) :: state
+    real(dp), parameter :: eps_frac = 1.0e-3_dp
+    integer :: stat
+    logical :: known
+    state%velocity = 0.0_dp
+    if (allocated(self%explicit) .or. .not. self%sys%needs_pair_solve()) return
+    call self%sys%set_direction(1)
+    call self%sys%put_endpoint(self%x, state%q, state%q)
+    call self%sys%put_multipliers(self%x, state%lambda)
+    call substep(self, state%q, state%p, eps_frac * state%h, stat)
+    if (stat == VCI_OK) then
+      call self%sys%end_velocity(self%x, eps_frac * state%h, self%q_guess, known)
+      if (known) state%velocity = self%q_guess
+    end if
+    self%cause = ''
+  end subroutine momentum_velocity
 
   !> The momentum p1 at q1 and the discrete energy of the segment from q0 to q1 of length h, forward
   !> (the paper's initial pair). Schemes with interior stages solve for them first (KIND_PAIR).
@@ -635,6 +727,7 @@ contains
     call self%sys%forget_jacobian()
     call self%newton%solve(self%sys, self%x(1:nx), res)
     call count_solve(self, res)
+    self%last_damped = res%damped
     stat = res%status
     if (stat == VCI_OK) return
     select case (res%reason)

@@ -100,6 +100,8 @@ module vci_scheme
     procedure :: needs_pair_solve
     procedure :: endpoint_direction
     procedure :: put_quadratic_start
+    !> (issue 27) the velocity at the end of a solved sub-step from the scheme's own polynomial
+    procedure :: end_velocity
     procedure :: put_multiplier_history
     procedure :: forget_jacobian
     procedure :: fused_substep => no_fused_substep
@@ -511,6 +513,18 @@ contains
     real(dp), intent(out) :: v(:)
     call self%get_endpoint(x, v)
   end subroutine endpoint_direction
+
+  !> The velocity (forward time) at the end of the sub-step of length tau whose solution is x, from
+  !> the scheme's own polynomial through it (issue 27: Newton's start for the step after an impact or
+  !> after init_from_momentum). Schemes without one beyond the chord (the default) leave v as it is
+  !> and return known = .false.
+  subroutine end_velocity(self, x, tau, v, known)
+    class(vci_scheme_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:), tau
+    real(dp), intent(inout) :: v(:)
+    logical, intent(out) :: known
+    known = .false.
+  end subroutine end_velocity
 
   !> Newton's start from the quadratic through the last three points, a + dh (c v + c (c + 1)/2 (v -
   !> v_before)) at the fraction c of the step (dh = dir h; v, v_before the chord velocities of the last

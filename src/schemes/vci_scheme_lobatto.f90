@@ -76,6 +76,7 @@ module vci_scheme_lobatto
     procedure :: forget_jacobian
     procedure :: endpoint_direction
     procedure :: put_quadratic_start
+    procedure :: end_velocity
     procedure :: put_multiplier_history
     ! (issue 24) the polynomial start in checkpoints
     procedure :: start_memory => lobatto_start_memory
@@ -222,6 +223,24 @@ contains
     real(dp), intent(out) :: v(:)
     v = x((self%s - 1) * self%n + 1:self%s * self%n)
   end subroutine endpoint_direction
+
+  !> The stage polynomial's velocity at the new point (forward time), dir W_s = dir (1/tau) sum_j
+  !> D_sj (y_j - a) (issue 27): O(h^s) from the motion's, where the chord of a step with a reflection
+  !> in it is O(1) off.
+  subroutine end_velocity(self, x, tau, v, known)
+    class(vci_scheme_lobatto_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:), tau
+    real(dp), intent(inout) :: v(:)
+    logical, intent(out) :: known
+    integer :: j, n
+    n = self%n
+    v = 0.0_dp
+    do j = 1, self%s
+      v = v + self%rule%d(self%s, j) * x((j - 1) * n + 1:j * n)
+    end do
+    v = (real(self%dir, dp) / tau) * v
+    known = .true.
+  end subroutine end_velocity
 
   !> Newton's start from the quadratic through the last three points (vci_predictor): stage i at
   !> a + dh (c_i v + c_i (c_i + 1)/2 (v - v_before)), dh = dir h, v and v_before the chord velocities

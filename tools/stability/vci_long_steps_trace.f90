@@ -1,0 +1,74 @@
+!> One run of a Kepler scene of docs/STABILITY.md's "Long steps" (test/stability/vci_long_cases.f90),
+!> step by step: time, q, p, H - H0 and the impacts of each step (alpha, the point on the wall, p-
+!> and p+, the condition and its energies), the state to 17 digits on the line `full`, and the steps
+!> the safety net split so far. Usage (from the build directory):
+!>
+!>   bin/vci_long_steps_trace SCENE STAGES H SPLITS WALLS
+!>
+!> SCENE 2 (Kepler in the circle) or 4 (Kepler below the wall), STAGES of the lobatto scheme, step
+!> H, the net's bound SPLITS (1: off), WALLS 1 (the scene) or 0 (its free flight). Issue 27's
+!> analysis of the rows that end with status 0 far off reads these traces.
+program vci_long_steps_trace
+  use vci
+  use vci_long_cases
+  use vci_test_kepler, only: kepler_t
+  use vci_kepler_wall, only: kepler_wall_t
+  implicit none
+  class(vci_lagrangian_t), allocatable, target :: model
+  type(vci_integrator_t) :: integ
+  type(vci_impact_t) :: imp
+  type(vci_stats_t) :: st
+  real(dp), allocatable :: q0(:), p0(:), q(:), p(:)
+  real(dp) :: h, h0, hh
+  integer :: scene, stages, splits, stat, k, nsteps, i, walls
+  character(len=32) :: arg
+  if (command_argument_count() < 5) then
+    write (*, '(a)') 'usage: vci_long_steps_trace SCENE(2|4) STAGES H SPLITS WALLS(0|1)'
+    stop 2
+  end if
+  call get_command_argument(1, arg); read (arg, *) scene
+  call get_command_argument(2, arg); read (arg, *) stages
+  call get_command_argument(3, arg); read (arg, *) h
+  call get_command_argument(4, arg); read (arg, *) splits
+  call get_command_argument(5, arg); read (arg, *) walls
+  if (scene == LONG_KEPLER_WALL .and. walls == 1) then
+    allocate (kepler_wall_t :: model)
+    select type (model)
+    type is (kepler_wall_t)
+      model%w = kepler_wall_w
+    end select
+    model%n_gaps = 1
+  else if (scene == LONG_KEPLER_CIRCLE .and. walls == 1) then
+    allocate (kepler_circle_t :: model); model%n_gaps = 1
+  else
+    allocate (kepler_t :: model)
+  end if
+  model%n = 2
+  call long_start(scene, q0, p0)
+  call integ%create(model, h, stat)
+  if (stat == VCI_OK) call integ%set_scheme(VCI_SCHEME_LOBATTO, stages, stat)
+  if (stat == VCI_OK) call integ%set_step_splits(splits, stat)
+  if (stat == VCI_OK) call integ%init_from_momentum(0.0_dp, q0, p0, stat)
+  if (stat /= VCI_OK) then
+    write (*, '(a,i0,a,a)') 'status ', stat, ' ', trim(integ%message())
+    stop 1
+  end if
+  h0 = 0.5_dp * sum(p0**2) - 1 / norm2(q0)
+  nsteps = nint(long_t_final(scene) / h)
+  do k = 1, nsteps
+    call integ%step(1, stat)
+    q = integ%configuration(); p = integ%momentum()
+    hh = 0.5_dp * sum(p**2) - 1 / norm2(q); st = integ%statistics()
+    write (*, '(i4,f8.3,a,2f9.4,a,2f9.4,a,es10.2,a,i2,a,i0)') k, integ%time(), ' q', q, ' p', p, ' H-H0', hh - h0, &
+      ' imp', integ%impact_count(), ' split', st%split_steps
+    write (*, '(a,4es25.17)') '  full', q, p
+    do i = 1, integ%impact_count()
+      imp = integ%impact(i)
+      write (*, '(a,f8.4,a,2f9.4,a,2f9.4,a,2f9.4,a,i0,a,2es11.3)') '    alpha', imp%alpha, ' q', imp%q, ' p-', imp%p_before, &
+        ' p+', imp%p_after, ' cond ', imp%condition, ' E-/E+', imp%energy_before, imp%energy_after
+    end do
+    if (stat /= 0) then
+      print *, 'status', stat, trim(integ%message()); exit
+    end if
+  end do
+end program vci_long_steps_trace
