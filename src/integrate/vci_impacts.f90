@@ -376,10 +376,11 @@ contains
     integer, intent(out) :: poked
     real(dp), intent(out) :: lo, hi, glo, ghi
     integer, intent(out) :: stat
-    real(dp) :: g_prev(self%ng), lam(self%m), s, f, best
+    real(dp) :: s, f, best
     integer :: nm, k, jj, st
     logical :: screened
     nm = self%nsub
+    associate (g_prev => self%poke_gaps(1:self%ng, 1), lam => self%poke_lambda)
     poked = 0; lo = 0.0_dp; hi = 1.0_dp; glo = 0.0_dp; ghi = 0.0_dp
     self%x_full(1:nm) = self%x(1:nm)
     call self%sys%eval_gaps(self%q_start, g_prev, stat)
@@ -419,6 +420,10 @@ contains
       self%x(1:nm) = self%x_full(1:nm)
       return
     end if
+    if (.not. samples_are_path(self, self%q_start, self%p_start, self%q_end, self%x_full, tau, lam, stat)) then
+      self%x(1:nm) = self%x_full(1:nm)
+      return
+    end if
     do k = 1, POKE_SAMPLES
       s = real(k, dp) / real(POKE_SAMPLES + 1, dp)
       self%x(1:nm) = self%x_low(1:nm) + (s - lo) / (1.0_dp - lo) * (self%x_full(1:nm) - self%x_low(1:nm))
@@ -452,7 +457,53 @@ contains
       g_prev = self%gaps_trial(1:self%ng)
     end do
     self%x(1:nm) = self%x_full(1:nm)
+    end associate
   end subroutine find_poke
+
+  !> Are the ends of shorter sub-steps from (a, pa) a path between the ends a, b of the sub-step of
+  !> length tau, solved in xw (find_poke's samples; poke_departure's short sub-step)? Only where
+  !> the scheme resolves the motion: then the second half sub-step, from the end of the first
+  !> (solved in x) with its momentum, ends where the whole sub-step does, in q and in p each to
+  !> within POKE_PATH_FRACTION of the whole sub-step's change. A stiff spring at h omega = 10 is not
+  !> resolved: the midpoint rule turns (q, p / omega) by 2 atan(5) in one sub-step and by 4 atan(2.5)
+  !> in two halves; the departure test took its energy to 1e197 there (docs/BACKWARD.md). Both q
+  !> and p: for a turn, one of the two misses is at least 1/sqrt(2) of sin(difference / 2) /
+  !> sin(turn / 2) of its change, whatever the phase (q alone passed at h omega = 10). x is left as
+  !> it came.
+  logical function samples_are_path(self, a, pa, b, xw, tau, lam, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    real(dp), intent(in) :: a(:), pa(:), b(:), xw(:), tau, lam(:)
+    integer, intent(out) :: stat
+    integer :: nm, st
+    real(dp) :: slack
+    nm = self%nsub
+    stat = VCI_OK
+    samples_are_path = .false.
+    associate (q_mid => self%poke_half(:, 1), p_mid => self%poke_half(:, 2), p_b => self%poke_half(:, 3), &
+               p_two => self%poke_half(:, 4))
+      call self%sys%get_endpoint(self%x, q_mid)
+      call self%sys%momentum_out(self%x, a, 0.5_dp * tau, p_mid, st, pa)
+      if (st == VCI_OK) call self%sys%momentum_out(xw, a, tau, p_b, st, pa)
+      if (st /= VCI_OK) then
+        if (self%sys%unrecoverable) stat = st
+        return
+      end if
+      self%x_high(1:nm) = self%x(1:nm)
+      call self%sys%put_endpoint(self%x, q_mid, b)
+      call self%sys%put_multipliers(self%x, lam)
+      call substep(self, q_mid, p_mid, 0.5_dp * tau, st)
+      if (st == VCI_OK) call self%sys%momentum_out(self%x, q_mid, 0.5_dp * tau, p_two, st, p_mid)
+      if (st == VCI_OK) then
+        call self%sys%get_endpoint(self%x, q_mid)
+        slack = 10.0_dp * (self%settings%atol + self%settings%rtol * (norm2(b) + norm2(p_b)))
+        samples_are_path = norm2(q_mid - b) <= POKE_PATH_FRACTION * norm2(b - a) + slack .and. &
+                           norm2(p_two - p_b) <= POKE_PATH_FRACTION * norm2(p_b - pa) + slack
+      else if (self%sys%unrecoverable) then
+        stat = st
+      end if
+    end associate
+    self%x(1:nm) = self%x_high(1:nm)
+  end function samples_are_path
 
   !> Might the whole step (no impact so far, its end admissible) pass a wall and come back? The
   !> screen before find_poke's solves, by gap evaluations only: the parabola through the previous
@@ -468,14 +519,13 @@ contains
     real(dp), intent(in) :: tau
     integer, intent(out) :: stat
     integer :: j
-    real(dp) :: gc(self%ng)
     stat = VCI_OK
     may_poke = .true.
     if (state%predictor_depth * dir <= 0) return
     ! (gaps_start and gaps_trial as scratch: an impact that follows evaluates them again)
     call self%sys%eval_gaps(self%q_start, self%gaps_start(1:self%ng), stat)
     self%q_trial = 0.5_dp * (self%q_start + self%q_end)
-    if (stat == VCI_OK) call self%sys%eval_gaps(self%q_trial, gc, stat)
+    if (stat == VCI_OK) call self%sys%eval_gaps(self%q_trial, self%poke_gaps(1:self%ng, 2), stat)
     ! c + 2B; the second difference d - d_prev = (q_end - q_start) - dir tau velocity
     self%q_trial = self%q_trial - 0.5_dp * ((self%q_end - self%q_start) - real(dir, dp) * tau * state%velocity)
     if (stat == VCI_OK) call self%sys%eval_gaps(self%q_trial, self%gaps_trial(1:self%ng), stat)
@@ -483,7 +533,9 @@ contains
       call set_cause(self, 'gap evaluation inside the step'); return
     end if
     do j = 1, self%ng
-      if (min(self%gaps_start(j), self%gaps_end(j), gc(j)) + min(0.0_dp, self%gaps_trial(j) - gc(j)) < 0.0_dp) return
+      associate (gc => self%poke_gaps(j, 2))
+        if (min(self%gaps_start(j), self%gaps_end(j), gc) + min(0.0_dp, self%gaps_trial(j) - gc) < 0.0_dp) return
+      end associate
     end do
     may_poke = .false.
   end function may_poke
@@ -531,6 +583,7 @@ contains
     real(dp), parameter :: eps_frac = 1.0e-3_dp
     real(dp) :: rate
     integer :: nx, st
+    logical :: resolved
     stat = VCI_OK
     nx = self%nsub
     self%x_saved(1:nx) = self%x(1:nx)
@@ -546,6 +599,20 @@ contains
     rate = dot_product(self%sys%grad, self%q_guess - self%q_wall) / eps_frac
     self%x(1:nx) = self%x_saved(1:nx)
     if (.not. rate < 0.0_dp) return
+    ! a departure into the wall and a free end off it are one motion only where the sub-step over
+    ! tau2 resolves it (samples_are_path, from a half sub-step): a stiff spring turns by more than
+    ! a right angle in one sub-step, and an impulse here took its energy to 1e197
+    call self%sys%get_multipliers(self%x_saved, self%poke_lambda)
+    call self%sys%put_endpoint(self%x, self%q_wall, 0.5_dp * (self%q_wall + self%q_trial))
+    call substep(self, self%q_wall, self%p_arrive, 0.5_dp * tau2, st)
+    resolved = .false.
+    if (st == VCI_OK) then
+      resolved = samples_are_path(self, self%q_wall, self%p_arrive, self%q_trial, self%x_saved, tau2, self%poke_lambda, stat)
+    else if (self%sys%unrecoverable) then
+      stat = st
+    end if
+    self%x(1:nx) = self%x_saved(1:nx)
+    if (stat /= VCI_OK .or. .not. resolved) return
     num = rate
     ! the free motion over tau2 once more (from its own solution: one iteration), for its factors
     call substep(self, self%q_wall, self%p_arrive, tau2, stat)

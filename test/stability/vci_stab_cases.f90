@@ -23,11 +23,12 @@ contains
   !> Particle on a vertical spring (omega = h_omega / h, equilibrium y = 1) above the floor y = 0,
   !> started at the equilibrium moving down with amplitude 2: the free oscillation would reach
   !> y = -1, so every period has a bounce. h = 1e-3, nsteps steps, impact condition `mode`.
-  subroutine stiff_case(h_omega, mode, nsteps, s)
+  subroutine stiff_case(h_omega, mode, nsteps, s, poke)
     real(dp), intent(in) :: h_omega
     integer, intent(in) :: mode
     integer(i8), intent(in) :: nsteps
     type(run_summary_t), intent(out) :: s
+    logical, intent(in), optional :: poke   !< set_poke_samples (absent: the default, off)
     type(particle_t), target :: model
     type(vci_integrator_t) :: integ
     real(dp), parameter :: h = 1.0e-3_dp
@@ -39,6 +40,7 @@ contains
     model%y_rest = 1.0_dp + model%grav / model%k
     call integ%create(model, h, stat)
     call integ%set_impact_energy(mode, stat)
+    if (present(poke)) call integ%set_poke_samples(poke, stat)
     call integ%init_from_momentum(0.0_dp, [0.0_dp, 1.0_dp], [1.0_dp, -2.0_dp * omega], stat)
     call run_steps(integ, model, nsteps, s)
   end subroutine stiff_case
@@ -96,9 +98,10 @@ contains
   !> Gravity 9.8, ceiling y <= 1 (normal (0, -1)); a parabola whose apex is at height 1 + depth at
   !> time t_apex. h = 1e-2, 60 steps. depth > 0 pokes through the ceiling. t_apex on a grid point or
   !> between two. Returns the run (impacts, smallest gap on the grid).
-  subroutine graze_ceiling_case(depth, t_apex, s)
+  subroutine graze_ceiling_case(depth, t_apex, s, poke)
     real(dp), intent(in) :: depth, t_apex
     type(run_summary_t), intent(out) :: s
+    logical, intent(in), optional :: poke   !< set_poke_samples (absent: the default, off)
     type(particle_t), target :: model
     type(vci_integrator_t) :: integ
     real(dp), parameter :: g = 9.8_dp
@@ -106,6 +109,7 @@ contains
     model = particle_on_floor(1.0_dp, g)
     model%normal(:, 1) = [0.0_dp, -1.0_dp]; model%offset(1) = -1.0_dp
     call integ%create(model, 1.0e-2_dp, stat)
+    if (present(poke)) call integ%set_poke_samples(poke, stat)
     call integ%init_from_momentum(0.0_dp, [0.0_dp, 1.0_dp + depth - 0.5_dp * g * t_apex**2], &
                                   [1.0_dp, g * t_apex], stat)
     call run_steps(integ, model, 60_i8, s)
