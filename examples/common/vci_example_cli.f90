@@ -50,6 +50,7 @@ module vci_example_cli
   !> Prints one line per impact and a progress line on stderr; forwards everything to `next`.
   type, extends(vci_observer_t), public :: summary_observer_t
     class(vci_observer_t), pointer :: next => null()
+    class(vci_observer_t), pointer :: watch => null()   !< also sees every step and impact (run_example's `watch`)
     integer(i8) :: impacts = 0, steps = 0, total_steps = 0
     logical :: quiet = .false., progress = .false.
     real(dp) :: h_first = 0.0_dp, h_last = 0.0_dp
@@ -233,7 +234,9 @@ contains
   end subroutine parse_options
 
   !> Create, initialise and run; print the summary. `init` is called when not starting from a file.
-  subroutine run_example(name, model, opts, init)
+  !> Optional: `watch` sees every step and impact of the run (beside the output file), and `report`
+  !> prints the program's own lines after the summary, before the status line.
+  subroutine run_example(name, model, opts, init, watch, report)
     character(len=*), intent(in) :: name
     class(vci_model_base_t), target, intent(inout) :: model
     type(example_options_t), intent(inout) :: opts
@@ -243,7 +246,13 @@ contains
         type(vci_integrator_t), intent(inout) :: integ
         integer, intent(out) :: stat
       end subroutine init
+      subroutine report(integ)
+        import :: vci_integrator_t
+        type(vci_integrator_t), intent(in) :: integ
+      end subroutine report
     end interface
+    class(vci_observer_t), target, intent(inout), optional :: watch
+    optional :: report
     type(vci_integrator_t), target :: integ
     type(summary_observer_t) :: summary
     type(vci_csv_writer_t), target :: csv
@@ -322,6 +331,7 @@ contains
     end if
     summary%quiet = opts%quiet
     summary%total_steps = nsteps
+    if (present(watch)) summary%watch => watch
     progress%tty = c_isatty(2_c_int) == 1
 
     has_h = model_has_energy(model, integ)
@@ -369,6 +379,7 @@ contains
     write (output_unit, '(a,f0.4,a)') 'wall time: ', real(c1 - c0, dp) / real(rate, dp), ' s'
     call print_state('end state', integ)
     if (.not. opts%no_output) write (output_unit, '(a)') 'output: '//opts%output
+    if (present(report)) call report(integ)
     if (integ%status() == VCI_STOPPED .and. c_signal_caught() /= 0) then
       write (output_unit, '(a)') 'status: '//interrupted_by()//'; '//integ%message()
       ! as a shell reports a program a signal ended: 128 + the signal's number (130 SIGINT, 143 SIGTERM)
@@ -600,6 +611,7 @@ contains
     real(dp), intent(in) :: t, q(:), p(:), lambda(:), energy
     integer, intent(inout) :: stat
     self%steps = self%steps + 1
+    if (associated(self%watch)) call self%watch%on_step(step, t, q, p, lambda, energy, stat)
     if (associated(self%next)) call self%next%on_step(step, t, q, p, lambda, energy, stat)
   end subroutine s_step
 
@@ -610,6 +622,7 @@ contains
     self%impacts = self%impacts + 1
     if (.not. self%quiet) write (output_unit, '(a,i0,a,f0.12,a,i0,a,f8.6,a,es12.5)') 'impact ', self%impacts, &
       ' t=', impact%t, ' wall=', impact%gap, ' alpha=', impact%alpha, ' impulse=', impact%impulse
+    if (associated(self%watch)) call self%watch%on_impact(impact, stat)
     if (associated(self%next)) call self%next%on_impact(impact, stat)
   end subroutine s_impact
 

@@ -128,6 +128,11 @@ module vci_newton
     !> so the chord step finishes where a second Jacobian and factorisation would (issue 25: Lobatto
     !> with constraints, docs/bench/lobatto.md). Off by default; the stepper sets it per scheme.
     logical :: chord_after_newton = .false.
+    !> The polish only when the converged residual is above this many units of round-off of its
+    !> terms (phi rtol > polish_above eps; 0: always): a residual within a few ulps gains nothing
+    !> from it, and a rejected polish leaves the scheme's cached node values stale (issue 25:
+    !> Lobatto with constraints at rtol 1e-14, docs/bench/lobatto.md). The stepper sets it per scheme.
+    real(dp) :: polish_above = 0.0_dp
     integer(i8) :: factorisations = 0     !< LU factorisations of Newton matrices so far
     logical, private :: have_lu = .false.
     integer, private :: lu_n = 0
@@ -467,7 +472,8 @@ contains
       res%status = VCI_ERR_NEWTON
       return
     end if
-    if (self%polish .and. factored .and. phi > 0.0_dp) call polish_step(self, sys, x, n, phi, res)
+    if (self%polish .and. factored .and. phi > 0.0_dp .and. phi * self%rtol > self%polish_above * epsilon(1.0_dp)) &
+      call polish_step(self, sys, x, n, phi, res)
   end subroutine solve
 
   !> After a solve of n unknowns that failed on convergence (not on an evaluation): the row with

@@ -180,10 +180,13 @@ contains
     call self%newton%forget_factors()      ! another scheme's Jacobian is no chord matrix for this one
     ! Lobatto with constraints: one chord step before a second Jacobian (vci_newton's
     ! chord_after_newton; docs/bench/lobatto.md measures it)
+    ! and no polish of a residual already within 8 ulps (polish_above)
     self%newton%chord_after_newton = .false.
+    self%newton%polish_above = 0.0_dp
     select type (sys => self%sys)
     type is (vci_scheme_lobatto_t)
       self%newton%chord_after_newton = m > 0
+      if (m > 0) self%newton%polish_above = 8.0_dp
     end select
     call self%configure(self%settings)
     allocate (self%x(nx), self%x_stage1(nx), self%x_saved(nx), self%x_low(nx), self%x_high(nx), self%x_full(nx), self%jac(nx, nx), &
