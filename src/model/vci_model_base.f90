@@ -69,6 +69,8 @@ contains
     integer, intent(in) :: bw
     logical, intent(in), optional :: check
     self%hessian_bandwidth = max(bw, -1)
+    ! a band of n - 1 covers the matrix: no more storage than that (bw = 1e9 zeroed 3 (2 bw + 1) n doubles)
+    if (self%n > 0) self%hessian_bandwidth = min(self%hessian_bandwidth, self%n - 1)
     self%check_bandwidth = .false.
     if (present(check)) self%check_bandwidth = check
   end subroutine declare_bandwidth

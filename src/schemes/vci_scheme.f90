@@ -15,6 +15,7 @@
 !> the interior stages of a segment with both ends given). KIND_IMPULSE (the Hamiltonian impact's
 !> [nu, mu] system) is scheme-independent and implemented here.
 module vci_scheme
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use vci_kinds, only: dp
   use vci_status, only: VCI_OK, VCI_ERR_CALLBACK, VCI_ERR_NONFINITE, VCI_ERR_NEWTON, VCI_ERR_MEMORY
   use vci_lapack, only: dgetrf, dgetrs
@@ -423,6 +424,10 @@ contains
       end do
       if (stat /= VCI_OK) exit
       rhs(:, 1) = r(1:m)
+      ! differences of huge finite H values overflow: nothing non-finite to LAPACK (fuzz seed 2963)
+      if (.not. (all(ieee_is_finite(jac)) .and. all(ieee_is_finite(rhs)))) then
+        stat = VCI_ERR_NONFINITE; self%failed_stat = 0; self%failed_callback = 'momentum projection (not finite)'; exit
+      end if
       call dgetrf(m, m, jac, m, ipiv, info)
       if (info == 0) call dgetrs('N', m, 1, jac, m, ipiv, rhs, m, info)
       if (info /= 0) then

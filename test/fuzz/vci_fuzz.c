@@ -1,13 +1,24 @@
-/* A random-input harness for the C ABI (vci.h): random programs of 1 to 40 calls on random models,
+/* A random-input harness for the C ABI (vci.h): random programs of 1 to 40 calls on random models
+ * of every kind (discrete L_d: fuzz_discrete.c; continuous L and separable: fuzz_continuous.c),
  * with random, often invalid, arguments (NULL, stale and garbage handles, NaN, Inf, huge or
- * negative sizes and counts) and callbacks that fail at random calls with positive or negative
- * codes, or return NaN, Inf or +-1e308. Each program runs in a child process under alarm(): the
- * parent reports a crash (signal), a hang (SIGALRM), an exit from library code (status 70), NaN or
- * Inf handed to LAPACK (status 71, lapack_guard.c), a broken promise of the API (status 72), or
- * a sanitizer report (the sanitizer's exit status). The seeds are fixed, so a failure replays:
+ * negative sizes and counts, schemes and stages out of range, wrong bandwidths and patterns) and
+ * callbacks that fail at random calls with positive or negative codes, or return NaN, Inf or
+ * +-1e308. Each program runs in a child process under a CPU-time limit and an alarm(): the parent
+ * reports a crash (signal), a hang (SIGXCPU, or SIGALRM when blocked), an exit from library code (status 70), NaN or Inf handed to LAPACK (status 71,
+ * lapack_guard.c), a broken promise of the API (status 72: a status not in the function's list in
+ * vci.h, a failure without a message, a non-finite state, a handle set on failure), or a sanitizer
+ * report (the sanitizer's exit status).
  *
- *   vci_fuzz SEED_FIRST SEED_COUNT [SECONDS]     run the seeds, stop early after SECONDS (default 60)
- *   vci_fuzz -1 SEED                             run one seed in this process (for a debugger)
+ * --reversal: the reversal property instead (issue 24): a random continuous model without faults
+ * (fuzz_continuous.c's four kinds, walls at random), a random scheme (left, midpoint, Lobatto s = 1..4,
+ * compositions of order 2, 4, 6 for a separable model) and solver tolerance rtol; N steps forward
+ * and N back must return (q0, p0) to REVERSAL_C * 2N * rtol (relative to 1 + |q0|, 1 + |p0|), at
+ * index 0, with as many impacts back as forward; runs where the safety net split a step or an energy
+ * fallback was taken (vci_get_split_steps, vci_get_energy_fallbacks) are counted but not judged.
+ * The seeds are fixed, so a failure replays:
+ *
+ *   vci_fuzz [--reversal] SEED_FIRST SEED_COUNT [SECONDS]   run the seeds, stop after SECONDS (default 60)
+ *   vci_fuzz [--reversal] -1 SEED                           run one seed in this process (for a debugger)
  */
 #include <math.h>
 #include <signal.h>
@@ -15,342 +26,375 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
 #include "vci.h"
+#include "fuzz_util.h"
+#include "fuzz_discrete.h"
+#include "fuzz_continuous.h"
 #include "../api/lapack_guard.h"
 
-/* ---- a small deterministic generator (xorshift64*) ---- */
-static uint64_t rng_state;
-static uint64_t rnd(void) {
-  rng_state ^= rng_state >> 12;
-  rng_state ^= rng_state << 25;
-  rng_state ^= rng_state >> 27;
-  return rng_state * 2685821657736338717ULL;
-}
-static int below(int n) { return n <= 0 ? 0 : (int)(rnd() % (uint64_t)n); }
-static double uniform(double a, double b) { return a + (b - a) * (double)(rnd() >> 11) / 9007199254740992.0; }
-static int chance(int percent) { return below(100) < percent; }
-
-/* a double that is often ordinary and sometimes hostile */
-static double wild(double typical) {
-  static const double hostile[] = {0.0, -0.0, 1e308, -1e308, 1e-308, 5e-324, 1e20, -1e20};
-  switch (below(12)) {
-  case 0: return NAN;
-  case 1: return chance(50) ? INFINITY : -INFINITY;
-  case 2: return hostile[below(8)];
-  default: return typical * uniform(-2.0, 2.0);
-  }
-}
-static int wild_int(int typical) {
-  static const int hostile[] = {0, -1, 1, 2147483647, -2147483647 - 1, 46341, 100000, 1000000000};
-  return chance(20) ? hostile[below(8)] : below(typical + 1);
-}
-
-/* ---- the model: L_d(q, v, h) = h [ sum_i mass_i (v_i - q_i)^2 / (2 h^2) - V((q + v)/2) ],
- * V(x) = sum_i (grav_i x_i + stiff_i x_i^2 / 2); constraints a_mu . qdot = 0 (omega_d = a_mu .
- * (other - base) / h); walls g_j = normal_j . q - offset_j >= 0. Faults: a callback fails from
- * a random call on, now and then, with a random code or output. ---- */
-enum { MAXN = 4, MAXM = 2, MAXG = 6, NCALLBACKS = 9 };
-typedef struct {
-  int n, m, ng;
-  double mass[MAXN], grav[MAXN], stiff[MAXN], a[MAXM][MAXN], normal[MAXG][MAXN], offset[MAXG];
-  int fault_which, fault_from, fault_every, fault_kind, fault_code;
-  long calls[NCALLBACKS];
-} model_t;
-
-static int fault(model_t *md, int which, double *out, int nout) {
-  long c = ++md->calls[which];
-  if (md->fault_which != which || c < md->fault_from || (c - md->fault_from) % md->fault_every != 0) return 0;
-  switch (md->fault_kind) {
-  case 0: return md->fault_code;                              /* failure code, either sign */
-  case 1: if (nout > 0) out[c % nout] = NAN; return 0;
-  case 2: if (nout > 0) out[c % nout] = (c & 1) ? INFINITY : -INFINITY; return 0;
-  case 3: if (nout > 0) out[c % nout] = (c & 1) ? 1e308 : -1e308; return 0;
-  default: return 0;
-  }
-}
-
-static double force(const model_t *md, int i, double x) { return md->grav[i] + md->stiff[i] * x; }
-
-static int cb_d1(int n, const double *q, const double *v, double h, double *out, void *u) {
-  model_t *md = (model_t *)u;
-  int i;
-  for (i = 0; i < n; ++i) out[i] = -md->mass[i] * (v[i] - q[i]) / h - 0.5 * h * force(md, i, 0.5 * (q[i] + v[i]));
-  return fault(md, 0, out, n);
-}
-static int cb_d2(int n, const double *q, const double *v, double h, double *out, void *u) {
-  model_t *md = (model_t *)u;
-  int i;
-  for (i = 0; i < n; ++i) out[i] = md->mass[i] * (v[i] - q[i]) / h - 0.5 * h * force(md, i, 0.5 * (q[i] + v[i]));
-  return fault(md, 1, out, n);
-}
-static int cb_d3(int n, const double *q, const double *v, double h, double *out, void *u) {
-  model_t *md = (model_t *)u;
-  int i;
-  out[0] = 0.0;
-  for (i = 0; i < n; ++i) {
-    double x = 0.5 * (q[i] + v[i]);
-    out[0] += -0.5 * md->mass[i] * (v[i] - q[i]) * (v[i] - q[i]) / (h * h) - (md->grav[i] * x + 0.5 * md->stiff[i] * x * x);
-  }
-  return fault(md, 2, out, 1);
-}
-static int cb_hessian(int n, const double *q, const double *v, double h, double *hess, void *u) {
-  model_t *md = (model_t *)u;
-  int i;
-  (void)q; (void)v;
-  for (i = 0; i < n * n; ++i) hess[i] = 0.0;
-  for (i = 0; i < n; ++i) hess[i + n * i] = -md->mass[i] / h - 0.25 * h * md->stiff[i];
-  return fault(md, 3, hess, n * n);
-}
-static int cb_forms(int n, int m, const double *q, double *omega, void *u) {
-  model_t *md = (model_t *)u;
-  int i, mu;
-  (void)q;
-  for (mu = 0; mu < m; ++mu)
-    for (i = 0; i < n; ++i) omega[i + n * mu] = md->a[mu][i];
-  return fault(md, 4, omega, n * m);
-}
-static int cb_dconstraint(int n, int m, const double *base, const double *other, double h, double *out, void *u) {
-  model_t *md = (model_t *)u;
-  int i, mu;
-  for (mu = 0; mu < m; ++mu) {
-    out[mu] = 0.0;
-    for (i = 0; i < n; ++i) out[mu] += md->a[mu][i] * (other[i] - base[i]) / h;
-  }
-  return fault(md, 5, out, m);
-}
-static int cb_gaps(int n, int ng, const double *q, double *g, void *u) {
-  model_t *md = (model_t *)u;
-  int i, j;
-  for (j = 0; j < ng; ++j) {
-    g[j] = -md->offset[j];
-    for (i = 0; i < n; ++i) g[j] += md->normal[j][i] * q[i];
-  }
-  return fault(md, 6, g, ng);
-}
-static int cb_gap_grads(int n, int ng, const double *q, double *dg, void *u) {
-  model_t *md = (model_t *)u;
-  int i, j;
-  (void)q;
-  for (j = 0; j < ng; ++j)
-    for (i = 0; i < n; ++i) dg[i + n * j] = md->normal[j][i];
-  return fault(md, 7, dg, n * ng);
-}
-static int cb_energy(int n, const double *q, const double *p, double *e, void *u) {
-  model_t *md = (model_t *)u;
-  int i;
-  e[0] = 0.0;
-  for (i = 0; i < n; ++i) e[0] += 0.5 * p[i] * p[i] / md->mass[i] + md->grav[i] * q[i] + 0.5 * md->stiff[i] * q[i] * q[i];
-  return fault(md, 8, e, 1);
-}
+/* Reversal tolerance: REVERSAL_C * 2N * rtol. Each of the 2N solves stops with a residual of at
+ * most rtol relative to its terms; the constant covers the Newton matrices' condition (O(1) at
+ * these h) and the impact solves' own tolerance. Measured over seeds 1-3000: at most 7.1 (a chain
+ * with 43 impacts each way), above 1 in 3 of 2911 judged runs (docs/TESTING.md). */
+#define REVERSAL_C 100.0
+/* exit statuses of a reversal child beside 0 (held): judged broken, not judged (a step failed, or
+ * the net split steps or energy fallbacks were taken alike both ways), not judged and one-sided (the
+ * two directions differ in splits or fallbacks: issue 24 item 1 wants that never; counted, not failed) */
+enum { EXIT_REVERSAL_BROKEN = 73, EXIT_REVERSAL_UNJUDGED = 74, EXIT_REVERSAL_ONE_SIDED = 75 };
 
 static int impact_calls = 0, impact_fail_at = -1;
 static int cb_impact(double t, double alpha, int gap, const double *q, double impulse, void *user) {
   (void)t; (void)alpha; (void)gap; (void)q; (void)impulse; (void)user;
   return ++impact_calls == impact_fail_at ? (chance(50) ? 9 : -9) : 0;
 }
+static int progress_calls = 0, progress_stop_at = -1;
+static int cb_progress(const vci_progress *info, void *user) {
+  (void)user;
+  promise(info != NULL && info->steps_done >= 0 && info->steps_done <= info->steps_total, "progress counts");
+  return ++progress_calls == progress_stop_at;
+}
 
-/* the walls leave the reference point `ref` (where programs start) inside the admissible set */
-static double ref[MAXN];
+/* the reference point (programs start near it; every wall leaves it inside) */
+static double ref[MAXC];
+static int finished = 0;
 
-static void random_model(model_t *md) {
-  int i, j, mu;
-  memset(md, 0, sizeof *md);
-  md->n = 1 + below(MAXN);
-  md->m = below((md->n < MAXM ? md->n : MAXM) + 1);
-  md->ng = below(MAXG + 1);
-  for (i = 0; i < md->n; ++i) {
-    md->mass[i] = chance(5) ? wild(1.0) : uniform(0.2, 3.0);
-    md->grav[i] = chance(50) ? uniform(-10.0, 10.0) : 0.0;
-    md->stiff[i] = chance(30) ? uniform(0.0, chance(20) ? 1e6 : 50.0) : 0.0;
-  }
-  for (mu = 0; mu < md->m; ++mu)
-    for (i = 0; i < md->n; ++i) md->a[mu][i] = uniform(-1.0, 1.0);
-  for (j = 0; j < md->ng; ++j) {
-    md->offset[j] = -uniform(0.01, chance(50) ? 0.3 : 2.0);
-    for (i = 0; i < md->n; ++i) {
-      md->normal[j][i] = uniform(-1.0, 1.0);
-      md->offset[j] += md->normal[j][i] * ref[i];
+enum { KIND_DISCRETE_MODEL, KIND_LAGRANGIAN_MODEL, KIND_SEPARABLE_MODEL };
+
+static const char *scheme_name(int scheme) {
+  static const char *names[] = {"discrete", "left", "midpoint", "lobatto", "composition"};
+  return scheme >= 0 && scheme <= 4 ? names[scheme] : "?";
+}
+
+/* Create a model of a random kind in slot j (hostile sizes and struct sizes now and then).
+ * Returns the status; *n_out = the model's n when created. */
+static int create_model(vci_model *mh, int *kind, int *n_out, model_t *dm, cmodel_t *cm, int hostile) {
+  int s, n, m, ng, k = below(100) < 35 ? KIND_DISCRETE_MODEL : (chance(60) ? KIND_LAGRANGIAN_MODEL : KIND_SEPARABLE_MODEL);
+  int maxn = k == KIND_DISCRETE_MODEL ? MAXN : MAXC, maxm = k == KIND_DISCRETE_MODEL ? MAXM : MAXCM;
+  int maxg = k == KIND_DISCRETE_MODEL ? MAXG : MAXCG;
+  vci_callbacks dcb;
+  vci_lagrangian_callbacks lcb;
+  vci_separable_callbacks scb;
+  const char *fn;
+  vci_model tmp = NULL, *target;
+  int mass_kind = chance(60) ? VCI_MASS_DIAGONAL : VCI_MASS_DENSE;
+  if (k == KIND_DISCRETE_MODEL) {
+    random_model(dm, ref);
+    discrete_callbacks(&dcb, dm->ng);
+    n = dm->n; m = dm->m; ng = dm->ng;
+    if (hostile && chance(5)) dcb.d2_ld = NULL;
+    if (hostile && chance(5)) dcb.size = (size_t)below((int)sizeof dcb + 1); /* an older or broken header; never beyond
+                                                                              the struct (a lie the library cannot see) */
+  } else {
+    random_cmodel(cm, ref, 0, k == KIND_SEPARABLE_MODEL);
+    n = cm->n; m = cm->m; ng = cm->ng;
+    if (k == KIND_LAGRANGIAN_MODEL) {
+      lagrangian_callbacks(&lcb, cm->ng, 1);
+      if (hostile && chance(5)) lcb.dl_dv = NULL;
+      if (hostile && chance(5)) lcb.size = (size_t)below((int)sizeof lcb + 1);
+    } else {
+      separable_callbacks(&scb, cm->ng, 1);
+      if (hostile && chance(5)) scb.gap_gradients = NULL;
+      if (hostile && chance(5)) scb.size = (size_t)below((int)sizeof scb + 1);
+      if (hostile && chance(5)) m = 1;  /* refused: a separable model has no constraints */
+      if (hostile && chance(5)) mass_kind = wild_int(2);
     }
   }
-  md->fault_which = chance(60) ? below(NCALLBACKS) : -1;
-  md->fault_from = 1 + below(400);
-  md->fault_every = 1 + below(chance(50) ? 3 : 50);
-  md->fault_kind = below(4);
-  md->fault_code = chance(50) ? 1 + below(100) : -1 - below(100);
-  if (chance(3)) md->fault_code = chance(50) ? 2147483647 : -2147483647 - 1;
+  if (hostile && chance(10)) { n = wild_int(maxn); m = wild_int(maxm); ng = wild_int(maxg); }
+  if (n > maxn || m > maxm || ng > maxg) { /* sizes the callbacks cannot serve: must be refused or unused */
+    if (n > 0 && n <= 46339 && m >= 0 && m <= n && ng >= 0) n = maxn + 1 + below(3);
+  }
+  /* sizes beyond what these callbacks can serve: only the refused ones are created (and dropped) */
+  target = n <= maxn && m <= maxm && ng <= maxg ? mh : &tmp;
+  if (k == KIND_DISCRETE_MODEL) {
+    fn = "vci_model_create";
+    s = vci_model_create(target, n, m, ng, &dcb, dm);
+  } else if (k == KIND_LAGRANGIAN_MODEL) {
+    fn = "vci_model_create_lagrangian";
+    s = vci_model_create_lagrangian(target, n, m, ng, &lcb, cm);
+  } else {
+    fn = "vci_model_create_separable";
+    s = vci_model_create_separable(target, n, m, ng, mass_kind,
+                                   chance(3) ? NULL : (mass_kind == VCI_MASS_DENSE ? cm->dense_mass : cm->mass), &scb, cm);
+  }
+  if (fuzz_trace) printf("  %s(n %d, m %d, ng %d, kind %d) = %d\n", fn, n, m, ng, cm->kind, s);
+  check_listed(s, ST_CREATE, fn);
+  promise((s == VCI_OK) == (*target != NULL), "model handle set iff VCI_OK");
+  check_message(s, NULL, fn);
+  if (target == &tmp) vci_model_destroy(&tmp);
+  *kind = k;
+  *n_out = n;
+  return s;
 }
 
-/* ---- the promises checked on the way (exit status 72 when one is broken) ---- */
-static void promise(int ok, const char *what) {
-  if (!ok) {
-    printf("broken promise: %s\n", what);
-    fflush(stdout);
-    _exit(72);
-  }
+/* a random scheme: mostly valid for a continuous model, now and then out of range */
+static void random_scheme(int *scheme, int *stages) {
+  *scheme = chance(90) ? 1 + below(4) : wild_int(6);
+  *stages = *scheme == VCI_SCHEME_COMPOSITION ? 2 * (1 + below(5)) : 1 + below(VCI_LOBATTO_MAX_STAGES);
+  if (chance(10)) *stages = wild_int(12);
 }
 
-static void check_status(int s) { promise(s >= VCI_OK && s <= VCI_ERR_MEMORY, "status within the enum"); }
-
-static int finished = 0, trace = 0;
-static void exit_guard(void) {
-  if (!finished) {
-    printf("exit() during the program (library code ended the process)\n");
-    fflush(stdout);
-    _exit(70);
+/* a sparsity pattern for n: the tridiagonal one (right for a chain), the diagonal (wrong for a chain),
+ * full, or hostile (colptr[0] != 0, decreasing, rows out of range or repeated); the rows never run
+ * past rowind's end (that lie the library cannot see) */
+static int random_pattern(int n, int *colptr, int *rowind, int cap) {
+  int j, i, nnz = 0, kind = below(5);
+  colptr[0] = 0;
+  for (j = 0; j < n; ++j) {
+    for (i = 0; i < n && nnz < cap; ++i) {
+      int in = kind == 0 ? abs(i - j) <= 1 : kind == 1 ? i == j : kind == 2 ? 1 : chance(40);
+      if (in) rowind[nnz++] = i;
+    }
+    colptr[j + 1] = nnz;
   }
+  if (kind >= 3 && nnz > 0) { /* break it */
+    switch (below(4)) {
+    case 0: colptr[0] = 1; break;
+    case 1: if (n > 1) colptr[1 + below(n - 1)] = chance(50) ? -1 : colptr[n]; break;
+    case 2: rowind[below(nnz)] = chance(50) ? n + below(3) : -1 - below(3); break;
+    default: rowind[below(nnz)] = rowind[0]; break;
+    }
+  }
+  return kind;
+}
+
+static void check_finite_state(vci_integrator it, int n) {
+  double t, q[MAXC], p[MAXC];
+  int i;
+  if (vci_get_state(it, &t, q, p) != VCI_OK) return;
+  promise(isfinite(t), "state finite (t)");
+  for (i = 0; i < n; ++i) promise(isfinite(q[i]) && isfinite(p[i]), "state finite (q, p)");
 }
 
 /* One random program. */
 static void program(uint64_t seed) {
   enum { NM = 3, NI = 4 };
-  model_t models[NM];
+  static model_t dmodels[NM];
+  static cmodel_t cmodels[NM];
   vci_model mh[NM] = {NULL};
+  int mkind[NM] = {0}, mn[NM] = {0}, in[NI] = {0}, ik[NI] = {0};
+  int64_t steps_by_kind[3] = {0, 0, 0}, steps_before = 0;
   vci_integrator ih[NI] = {NULL}, stale = NULL;
   char msg[600], path[64];
-  int ncalls, c, histogram[VCI_ERR_MEMORY + 1] = {0};
-  rng_state = seed * 0x9E3779B97F4A7C15ULL + 1;
+  int ncalls, c, progress_set = 0, histogram[VCI_STOPPED + 1] = {0};
+  fuzz_seed(seed);
   impact_calls = 0;
   impact_fail_at = chance(30) ? 1 + below(5) : -1;
+  progress_calls = 0;
+  progress_stop_at = chance(50) ? 1 + below(20) : -1;
   snprintf(path, sizeof path, "fuzz_%ld.h5", (long)getpid());
-  for (c = 0; c < MAXN; ++c) ref[c] = uniform(-1.0, 1.0);
+  for (c = 0; c < MAXC; ++c) ref[c] = uniform(-1.0, 1.0);
   ncalls = 1 + below(40);
   if (chance(85)) { /* most programs start with a working integrator, so that steps get taken */
-    vci_callbacks cb = VCI_CALLBACKS_INIT;
-    double q0[MAXN], q1[MAXN];
-    random_model(&models[0]);
-    cb.d1_ld = cb_d1; cb.d2_ld = cb_d2; cb.d3_ld = cb_d3; cb.constraint_forms = cb_forms;
-    cb.discrete_constraint = cb_dconstraint; cb.gaps = cb_gaps;
-    if (chance(50)) cb.mixed_hessian = cb_hessian;
-    if (chance(50)) cb.gap_gradients = cb_gap_grads;
-    if (chance(70)) cb.energy = cb_energy;
-    check_status(vci_model_create(&mh[0], models[0].n, models[0].m, models[0].ng, &cb, &models[0]));
-    check_status(vci_integrator_create(&ih[0], mh[0], uniform(2e-3, 3e-2)));
-    for (c = 0; c < MAXN; ++c) {
-      q0[c] = ref[c];
-      q1[c] = ref[c] + uniform(-0.02, 0.02);
+    double q0[MAXC], q1[MAXC];
+    int s;
+    if (create_model(&mh[0], &mkind[0], &mn[0], &dmodels[0], &cmodels[0], 0) == VCI_OK) {
+      if (mkind[0] != KIND_DISCRETE_MODEL && chance(30))
+        check_listed(vci_model_declare_bandwidth(mh[0], cmodel_bandwidth(&cmodels[0]), chance(20)), ST_BUSY_ARG,
+                     "vci_model_declare_bandwidth");
+      s = vci_integrator_create(&ih[0], mh[0], uniform(2e-3, 3e-2));
+      check_listed(s, ST_CREATE, "vci_integrator_create");
+      in[0] = mn[0];
+      ik[0] = mkind[0];
+      if (s == VCI_OK && mkind[0] != KIND_DISCRETE_MODEL && chance(60)) {
+        int scheme, stages;
+        random_scheme(&scheme, &stages);
+        s = vci_set_scheme(ih[0], scheme, stages);
+        check_listed(s, ST_CREATE | S(VCI_ERR_STATE), "vci_set_scheme");
+      }
+      for (c = 0; c < MAXC; ++c) {
+        q0[c] = ref[c];
+        q1[c] = ref[c] + uniform(-0.02, 0.02);
+      }
+      /* a pair that moves off the constraint gets a multiplier; one across a wall is refused */
+      s = vci_init_from_pair(ih[0], 0.0, q0, q1);
+      check_listed(s, ST_INIT, "vci_init_from_pair");
     }
-    /* a pair that moves off the constraint gets a multiplier; one across a wall is refused */
-    check_status(vci_init_from_pair(ih[0], 0.0, q0, q1));
   }
   for (c = 0; c < ncalls; ++c) {
     int k = chance(70) ? 0 : below(NI), j = chance(50) ? 0 : below(NM), s = VCI_OK, i;
     vci_integrator it = chance(3) ? stale : (chance(2) ? (vci_integrator)(uintptr_t)rnd() : ih[k]);
-    double q0[MAXN], q1[MAXN], t, e, lambda[MAXM];
-    int64_t kk, st, im, ni;
-    int what = below(22);
-    if (what >= 16) what = 5;   /* integrate most often */
-    if (trace) printf("call %d: case %d on integrator %d\n", c, what, k), fflush(stdout);
+    int live = it != NULL && it == ih[k];
+    double q0[MAXC], q1[MAXC], t, e, lambda[MAXCM];
+    int64_t kk, st, im, ni, a, b;
+    unsigned allowed = ST_BUSY_ARG;
+    const char *fn = "?";
+    vci_integrator about = it; /* whose message tells why a failure happened (NULL: the thread's) */
+    int what = below(28);
+    if (what >= 22) what = 5;   /* integrate most often */
+    if (fuzz_trace)
+      printf("call %d: case %d on integrator %d (model slot %d), %.2f s\n", c, what, k, j, (double)clock() / CLOCKS_PER_SEC),
+          fflush(stdout);
+    if (live && vci_get_stats(it, &steps_before, NULL, NULL) != VCI_OK) steps_before = 0;
     switch (what) {
-    case 0: { /* a model */
-      vci_callbacks cb = VCI_CALLBACKS_INIT;
-      int n, m, ng;
-      random_model(&models[j]);
-      n = models[j].n; m = models[j].m; ng = models[j].ng;
-      cb.d1_ld = cb_d1; cb.d2_ld = cb_d2; cb.d3_ld = cb_d3;
-      if (chance(50)) cb.mixed_hessian = cb_hessian;
-      cb.constraint_forms = cb_forms; cb.discrete_constraint = cb_dconstraint;
-      cb.gaps = cb_gaps;
-      if (chance(50)) cb.gap_gradients = cb_gap_grads;
-      if (chance(70)) cb.energy = cb_energy;
-      if (chance(5)) cb.d2_ld = NULL;
-      if (chance(5)) cb.size = (size_t)below((int)sizeof cb + 1); /* an older or broken header; never beyond
-                                                                   the struct (a caller's lie the library cannot see) */
-      if (chance(10)) { n = wild_int(4); m = wild_int(2); ng = wild_int(6); }
-      if (n > MAXN || m > MAXM || ng > MAXG) { /* sizes the callbacks cannot serve: must be refused or unused */
-        if (n > 0 && n <= 46339 && m >= 0 && m <= n && ng >= 0) n = MAXN + 1 + below(3);
-      }
+    case 0: /* a model */
       vci_model_destroy(&mh[j]);
-      if (n <= MAXN && m <= MAXM && ng <= MAXG) {
-        s = vci_model_create(&mh[j], n, m, ng, &cb, &models[j]);
-        promise((s == VCI_OK) == (mh[j] != NULL), "model handle set iff VCI_OK");
-      } else {
-        /* sizes beyond what these callbacks can serve: only the refused ones are created */
-        vci_model tmp = NULL;
-        s = vci_model_create(&tmp, n, m, ng, &cb, &models[j]);
-        if (s == VCI_OK) vci_model_destroy(&tmp);
-      }
+      mn[j] = 0;
+      create_model(&mh[j], &mkind[j], &mn[j], &dmodels[j], &cmodels[j], 1);
+      continue; /* checked inside */
+    case 1: { /* an integrator */
+      vci_model from = chance(5) ? (vci_model)ih[0] : mh[j];
+      vci_integrator_destroy(&ih[k]);
+      s = vci_integrator_create(&ih[k], from, chance(80) ? uniform(1e-3, 5e-2) : wild(1e-2));
+      in[k] = mn[j];
+      ik[k] = mkind[j];
+      promise((s == VCI_OK) == (ih[k] != NULL), "integrator handle set iff VCI_OK");
+      fn = "vci_integrator_create"; allowed = ST_CREATE; about = NULL;
       break;
     }
-    case 1: /* an integrator */
-      vci_integrator_destroy(&ih[k]);
-      s = vci_integrator_create(&ih[k], chance(5) ? (vci_model)ih[0] : mh[j], chance(80) ? uniform(1e-3, 5e-2) : wild(1e-2));
-      promise((s == VCI_OK) == (ih[k] != NULL), "integrator handle set iff VCI_OK");
-      break;
     case 2:
       if (chance(30)) stale = ih[k];
       vci_integrator_destroy(chance(5) ? NULL : &ih[k]);
-      break;
+      continue;
     case 3: case 4: { /* a start */
-      for (i = 0; i < MAXN; ++i) {
+      for (i = 0; i < MAXC; ++i) {
         q0[i] = chance(95) ? ref[i] + uniform(-0.05, 0.05) : wild(1.0);
         q1[i] = q0[i] + (chance(90) ? uniform(-0.05, 0.05) : wild(0.05));
       }
-      if (chance(50))
+      if (chance(50)) {
+        fn = "vci_init_from_pair";
         s = vci_init_from_pair(it, chance(90) ? uniform(-5.0, 5.0) : wild(1.0), chance(3) ? NULL : q0, q1);
-      else
+      } else {
+        fn = "vci_init_from_momentum";
         s = vci_init_from_momentum(it, uniform(-5.0, 5.0), q0, chance(3) ? NULL : q1);
+      }
+      allowed = ST_INIT;
       break;
     }
     case 5: case 6: case 7:
       /* hostile counts are negative: a huge positive one is a long run, not a fault */
       s = vci_integrate(it, chance(95) ? below(200) : (chance(50) ? -1 - below(3) : INT64_MIN),
                         chance(90) ? (chance(70) ? 1 : -1) : wild_int(3));
+      fn = "vci_integrate"; allowed = ST_STEP | (progress_set ? S(VCI_STOPPED) : 0u);
       break;
     case 8:
       s = vci_step(it, chance(90) ? (chance(70) ? 1 : -1) : wild_int(3));
+      fn = "vci_step"; allowed = ST_STEP;
       break;
     case 9:
       s = vci_get_state(it, chance(80) ? &t : NULL, chance(80) ? q0 : NULL, chance(80) ? q1 : NULL);
-      if (s == VCI_OK && it == ih[k]) s = vci_get_multipliers(it, lambda);
+      fn = "vci_get_state";
+      if (s == VCI_OK && live) { s = vci_get_multipliers(it, lambda); fn = "vci_get_multipliers"; }
       break;
     case 10:
+      fn = "vci_get_energy";
       s = vci_get_energy(it, chance(90) ? &e : NULL);
-      if (s == VCI_OK) s = vci_get_index(it, &kk);
-      if (s == VCI_OK) s = vci_get_stats(it, &st, chance(80) ? &im : NULL, &ni);
+      if (s == VCI_OK) { s = vci_get_index(it, &kk); fn = "vci_get_index"; }
+      if (s == VCI_OK) { s = vci_get_stats(it, &st, chance(80) ? &im : NULL, &ni); fn = "vci_get_stats"; }
       if (s == VCI_OK) promise(st >= 0 && ni >= 0, "counters are not negative");
+      if (s == VCI_OK) { s = vci_get_energy_fallbacks(it, chance(90) ? &a : NULL); fn = "vci_get_energy_fallbacks"; }
+      if (s == VCI_OK) { s = vci_get_split_steps(it, &a, chance(80) ? &b : NULL); fn = "vci_get_split_steps"; }
+      if (s == VCI_OK) promise(a >= 0, "split steps not negative");
       break;
     case 11: {
       double atol = chance(70) ? 0.0 : wild(1e-10), rtol = chance(70) ? uniform(1e-13, 1e-6) : wild(1e-10);
       int maxit = chance(80) ? 1 + below(40) : wild_int(50);
-      if (trace) printf("  set_tolerances(%g, %g, %d)\n", atol, rtol, maxit);
+      if (fuzz_trace) printf("  set_tolerances(%g, %g, %d)\n", atol, rtol, maxit);
       s = vci_set_tolerances(it, atol, rtol, maxit);
+      fn = "vci_set_tolerances";
       break;
     }
     case 12:
-      s = chance(50) ? vci_set_impact_energy(it, chance(90) ? below(2) : wild_int(3))
-                     : vci_set_max_impacts(it, chance(80) ? 1 + below(20) : wild_int(30));
+      if (chance(50)) {
+        s = vci_set_impact_energy(it, chance(90) ? below(2) : wild_int(3));
+        fn = "vci_set_impact_energy";
+      } else {
+        s = vci_set_max_impacts(it, chance(80) ? 1 + below(20) : wild_int(30));
+        fn = "vci_set_max_impacts";
+      }
       break;
     case 13:
       s = vci_set_impact_callback(it, chance(80) ? cb_impact : NULL, NULL);
+      fn = "vci_set_impact_callback";
       break;
     case 14:
-      s = chance(70) ? vci_open_output(it, chance(95) ? path : (chance(50) ? "" : "/nonexistent-dir/f.h5"))
-                     : vci_close_output(it);
+      if (chance(70)) {
+        const char *p = chance(95) ? path : (chance(50) ? "" : "/nonexistent-dir/f.h5");
+        if (chance(50)) {
+          s = vci_open_output(it, p);
+          fn = "vci_open_output";
+        } else {
+          s = vci_open_output_every(it, p, chance(80) ? 1 + below(5) : wild_int(3), chance(80) ? below(10) : wild_int(12));
+          fn = "vci_open_output_every";
+        }
+        allowed = ST_BUSY_ARG | S(VCI_ERR_IO) | S(VCI_ERR_MEMORY);
+      } else {
+        s = vci_close_output(it);
+        fn = "vci_close_output"; allowed = ST_BUSY_ARG | S(VCI_ERR_IO);
+      }
+      break;
+    case 15: { /* a scheme (a discrete model's integrator refuses any) */
+      int scheme, stages;
+      random_scheme(&scheme, &stages);
+      if (fuzz_trace) printf("  set_scheme(%d %s, %d)\n", scheme, scheme_name(scheme), stages);
+      s = vci_set_scheme(it, scheme, stages);
+      fn = "vci_set_scheme"; allowed = ST_BUSY_ARG | S(VCI_ERR_MEMORY);
+      break;
+    }
+    case 16:
+      s = vci_set_step_splits(it, chance(80) ? 1 + below(32) : wild_int(2000));
+      fn = "vci_set_step_splits";
+      break;
+    case 17: { /* a bandwidth, right or wrong, for integrators created later */
+      int bw = chance(70) ? (mkind[j] != KIND_DISCRETE_MODEL ? cmodel_bandwidth(&cmodels[j]) : 0) : wild_int(3) - 1;
+      s = vci_model_declare_bandwidth(chance(5) ? (vci_model)ih[0] : mh[j], chance(10) ? -1 : bw, chance(30));
+      fn = "vci_model_declare_bandwidth"; about = NULL;
+      break;
+    }
+    case 18: { /* a pattern, right or wrong */
+      int colptr[MAXC + 2], rowind[MAXC * MAXC], n = mn[j] > 0 && mn[j] <= MAXC ? mn[j] : 1;
+      int kind = random_pattern(n, colptr, rowind, MAXC * MAXC), nn = n;
+      if (chance(10)) nn = chance(50) ? 0 : (chance(50) ? n + 1 : n - 1); /* withdraw, or not the model's n */
+      for (i = n + 1; i < MAXC + 2; ++i) colptr[i] = colptr[n]; /* a wrong n + 1 reads a column of nothing */
+      if (fuzz_trace) printf("  declare_pattern(n %d of %d, kind %d)\n", nn, n, kind);
+      s = vci_model_declare_pattern(chance(5) ? (vci_model)ih[0] : mh[j], nn, chance(3) ? NULL : colptr,
+                                    chance(3) ? NULL : rowind, chance(30));
+      fn = "vci_model_declare_pattern"; allowed = ST_BUSY_ARG | S(VCI_ERR_MEMORY); about = NULL;
+      break;
+    }
+    case 19: { /* the model checker */
+      double worst = 0.0;
+      char report[256];
+      int passed = -1, size = chance(90) ? (int)sizeof report : 1 + below(8);
+      for (i = 0; i < MAXC; ++i) {
+        q0[i] = ref[i] + uniform(-0.1, 0.1);
+        q1[i] = chance(95) ? q0[i] + uniform(-0.05, 0.05) : wild(1.0);
+      }
+      s = vci_check_model(chance(5) ? (vci_model)ih[0] : mh[j], q0, q1, chance(90) ? uniform(1e-3, 0.1) : wild(0.01),
+                          chance(80) ? 0.0 : wild(1e-6), &passed, &worst, chance(70) ? report : NULL, size);
+      fn = "vci_check_model"; allowed = S(VCI_OK) | S(VCI_ERR_ARGUMENT) | S(VCI_ERR_CALLBACK); about = NULL;
+      if (s == VCI_OK) promise(passed == 0 || passed == 1, "check_model's passed is 0 or 1");
+      break;
+    }
+    case 20:
+      s = vci_set_progress(it, chance(80) ? cb_progress : NULL, chance(90) ? 0.0 : wild(1.0), NULL);
+      fn = "vci_set_progress";
+      if (s == VCI_OK) progress_set = 1;
       break;
     default:
       s = vci_last_error(chance(90) ? it : NULL, chance(95) ? msg : NULL, chance(95) ? (int)sizeof msg : wild_int(3));
       if (s == VCI_OK) promise(memchr(msg, '\0', sizeof msg) != NULL, "message NUL-terminated");
-      break;
+      check_listed(s, ST_BUSY_ARG, "vci_last_error");
+      ++histogram[s];
+      continue; /* its own failures carry no message */
     }
-    check_status(s);
+    check_listed(s, allowed, fn);
     ++histogram[s];
-    if (s != VCI_OK && it != NULL) {
-      /* a failure always says why (through the integrator, or the thread's message) */
-      msg[0] = '\0';
-      if (vci_last_error(it, msg, sizeof msg) != VCI_OK) vci_last_error(NULL, msg, sizeof msg);
+    check_message(s, about, fn);
+    if (live && (what >= 3 && what <= 8)) {
+      check_finite_state(it, in[k]);
+      if (vci_get_stats(it, &st, NULL, NULL) == VCI_OK && st > steps_before) steps_by_kind[ik[k]] += st - steps_before;
     }
     (void)vci_status_string(s);
   }
   if (getenv("VCI_FUZZ_VERBOSE")) { /* what the program got done, for judging the harness */
-    int64_t steps = 0, total = 0;
-    for (c = 0; c < NI; ++c)
-      if (vci_get_stats(ih[c], &steps, NULL, NULL) == VCI_OK) total += steps;
-    printf("seed %llu: %d calls, %lld steps on live integrators, statuses", (unsigned long long)seed, ncalls,
-           (long long)total);
-    for (c = 0; c <= VCI_ERR_MEMORY; ++c) printf(" %d", histogram[c]);
+    printf("seed %llu: %d calls, steps of discrete/lagrangian/separable models %lld %lld %lld, statuses",
+           (unsigned long long)seed, ncalls, (long long)steps_by_kind[0], (long long)steps_by_kind[1],
+           (long long)steps_by_kind[2]);
+    for (c = 0; c <= VCI_STOPPED; ++c) printf(" %d", histogram[c]);
     printf("\n");
   }
   for (c = 0; c < NI; ++c) vci_integrator_destroy(&ih[c]);
@@ -359,30 +403,141 @@ static void program(uint64_t seed) {
   if (vci_test_lapack_nonfinite_calls() != 0) _exit(71); /* (the guard exits at once anyway) */
 }
 
+/* The reversal property on one random continuous scene: returns 0 (held), EXIT_REVERSAL_BROKEN or
+ * EXIT_REVERSAL_UNJUDGED (a step failed, the net split a step or an energy fallback was taken). */
+static int reversal(uint64_t seed) {
+  static cmodel_t md;
+  vci_model model = NULL;
+  vci_integrator it = NULL;
+  int separable, scheme, stages, s, i, n, nsteps, verdict = 0;
+  double h, rtol, q0[MAXC], p0[MAXC], t0, q[MAXC], p[MAXC], t, err_q = 0.0, err_p = 0.0, tol;
+  int64_t imp_f = 0, imp_b = 0, split_f = 0, split_b = 0, fb_f = 0, fb_b = 0, k = -1;
+  const char *verbose = getenv("VCI_FUZZ_VERBOSE");
+  fuzz_seed(seed);
+  for (i = 0; i < MAXC; ++i) ref[i] = uniform(-1.0, 1.0);
+  separable = chance(35);
+  random_cmodel(&md, ref, 1, separable);
+  n = md.n;
+  if (separable) {
+    vci_separable_callbacks cb;
+    separable_callbacks(&cb, md.ng, 0);
+    int dense = chance(50);
+    s = vci_model_create_separable(&model, n, 0, md.ng, dense ? VCI_MASS_DENSE : VCI_MASS_DIAGONAL,
+                                   dense ? md.dense_mass : md.mass, &cb, &md);
+  } else {
+    vci_lagrangian_callbacks cb;
+    lagrangian_callbacks(&cb, md.ng, 0);
+    s = vci_model_create_lagrangian(&model, n, 0, md.ng, &cb, &md);
+  }
+  if (s != VCI_OK) {
+    char msg[300];
+    vci_last_error(NULL, msg, sizeof msg);
+    printf("%s\n", msg);
+  }
+  promise(s == VCI_OK, "a benign model is created");
+  if (md.kind == KIND_CHAIN && !separable && chance(50))
+    promise(vci_model_declare_bandwidth(model, 1, 0) == VCI_OK, "bandwidth 1");
+  h = uniform(0.005, 0.05);
+  promise(vci_integrator_create(&it, model, h) == VCI_OK, "integrator created");
+  scheme = separable && chance(30) ? VCI_SCHEME_COMPOSITION : 1 + below(3);
+  stages = scheme == VCI_SCHEME_COMPOSITION ? 2 * (1 + below(3)) : 1 + below(4);
+  promise(vci_set_scheme(it, scheme, stages) == VCI_OK, "scheme set");
+  rtol = pow(10.0, uniform(-13.0, -10.0));
+  promise(vci_set_tolerances(it, 0.0, rtol, 30) == VCI_OK, "tolerances set");
+  t0 = uniform(-1.0, 1.0);
+  for (i = 0; i < n; ++i) {
+    q0[i] = ref[i];
+    p0[i] = uniform(-2.0, 2.0);
+  }
+  nsteps = 10 + below(91);
+  s = vci_init_from_momentum(it, t0, q0, p0);
+  if (s == VCI_OK) s = vci_integrate(it, nsteps, 1);
+  if (s == VCI_OK) {
+    vci_get_stats(it, NULL, &imp_f, NULL);
+    vci_get_split_steps(it, &split_f, NULL);
+    vci_get_energy_fallbacks(it, &fb_f);
+    s = vci_integrate(it, nsteps, -1);
+  }
+  if (s == VCI_OK) {
+    vci_get_stats(it, NULL, &imp_b, NULL);
+    vci_get_split_steps(it, &split_b, NULL);
+    vci_get_energy_fallbacks(it, &fb_b);
+    imp_b -= imp_f; split_b -= split_f; fb_b -= fb_f;
+    promise(vci_get_state(it, &t, q, p) == VCI_OK && vci_get_index(it, &k) == VCI_OK, "state after the run");
+    for (i = 0; i < n; ++i) {
+      err_q = fmax(err_q, fabs(q[i] - q0[i]) / (1.0 + fabs(q0[i])));
+      err_p = fmax(err_p, fabs(p[i] - p0[i]) / (1.0 + fabs(p0[i])));
+    }
+  }
+  tol = REVERSAL_C * 2.0 * nsteps * rtol;
+  if (s == VCI_OK && (split_f != split_b || fb_f != fb_b)) verdict = EXIT_REVERSAL_ONE_SIDED;
+  else if (s != VCI_OK || split_f + split_b + fb_f + fb_b > 0) verdict = EXIT_REVERSAL_UNJUDGED;
+  else if (!(err_q <= tol && err_p <= tol) || k != 0 || imp_f != imp_b) verdict = EXIT_REVERSAL_BROKEN;
+  if (verbose || verdict == EXIT_REVERSAL_BROKEN) {
+    char msg[300] = "";
+    if (s != VCI_OK) vci_last_error(it, msg, sizeof msg);
+    printf("reversal seed %llu: kind %d n %d ng %d %s s %d h %.4f N %d rtol %.1e: status %d, impacts %lld/%lld, "
+           "splits %lld/%lld, fallbacks %lld/%lld, index %lld, err q %.2e p %.2e (%.2g of 2N rtol)%s %s\n",
+           (unsigned long long)seed, md.kind, n, md.ng, scheme_name(scheme), stages, h, nsteps, rtol, s,
+           (long long)imp_f, (long long)imp_b, (long long)split_f, (long long)split_b, (long long)fb_f, (long long)fb_b,
+           (long long)k, err_q, err_p, fmax(err_q, err_p) / (2.0 * nsteps * rtol),
+           verdict == EXIT_REVERSAL_BROKEN ? " BROKEN" : verdict == EXIT_REVERSAL_ONE_SIDED ? " one-sided" :
+           verdict ? " unjudged" : "", msg);
+  }
+  vci_integrator_destroy(&it);
+  vci_model_destroy(&model);
+  if (vci_test_lapack_nonfinite_calls() != 0) _exit(71);
+  return verdict;
+}
+
+static int reversal_mode = 0;
+
+static void exit_guard(void) {
+  if (!finished) {
+    printf("exit() during the program (library code ended the process)\n");
+    fflush(stdout);
+    _exit(70);
+  }
+}
+
 static void run_child(uint64_t seed) {
+  int code = 0;
   atexit(exit_guard);
-  /* a hang: SIGALRM ends the child; 20 s, or VCI_FUZZ_CHILD_SECONDS (the sanitizer build runs
-   * 4-5x slower: a program of 5 s in release is no hang there) */
+  /* a hang: 20 s of CPU time (SIGXCPU), or VCI_FUZZ_CHILD_SECONDS (the sanitizer build runs 4-5x
+   * slower: a program of 5 s in release is no hang there); CPU time, so that a loaded machine does
+   * not make a slow program a hang. A child blocked without using CPU: 10 times as long in wall
+   * time (SIGALRM). */
   const char *env = getenv("VCI_FUZZ_CHILD_SECONDS");
   unsigned limit = env != NULL && atoi(env) > 0 ? (unsigned)atoi(env) : 20u;
-  alarm(limit);
-  program(seed);
+  struct rlimit cpu;
+  cpu.rlim_cur = limit;
+  cpu.rlim_max = limit + 5;
+  setrlimit(RLIMIT_CPU, &cpu);
+  alarm(10u * limit);
+  if (reversal_mode) code = reversal(seed);
+  else program(seed);
   finished = 1;
-  exit(0); /* normal exit: sanitizers report leaks here */
+  fflush(stdout);
+  exit(code); /* normal exit: sanitizers report leaks here */
 }
 
 int main(int argc, char **argv) {
-  long first, count, i, ran = 0, bad = 0;
+  long first, count, i, ran = 0, bad = 0, unjudged = 0, one_sided = 0, stopped = 0;
   double budget;
   time_t start = time(NULL);
-  trace = getenv("VCI_FUZZ_TRACE") != NULL;
+  fuzz_trace = getenv("VCI_FUZZ_TRACE") != NULL;
   setenv("VCI_LAPACK_GUARD_EXIT", "1", 1); /* NaN/Inf to LAPACK ends the child at once: status 71 */
+  if (argc > 1 && strcmp(argv[1], "--reversal") == 0) {
+    reversal_mode = 1;
+    --argc;
+    ++argv;
+  }
   if (argc == 3 && atol(argv[1]) == -1) { /* one seed in this process */
     run_child((uint64_t)atoll(argv[2]));
     return 0;
   }
   if (argc < 3) {
-    fprintf(stderr, "usage: vci_fuzz SEED_FIRST SEED_COUNT [SECONDS] | vci_fuzz -1 SEED\n");
+    fprintf(stderr, "usage: vci_fuzz [--reversal] SEED_FIRST SEED_COUNT [SECONDS] | vci_fuzz [--reversal] -1 SEED\n");
     return 2;
   }
   first = atol(argv[1]);
@@ -401,22 +556,34 @@ int main(int argc, char **argv) {
     if (pid == 0) run_child((uint64_t)(first + i));
     waitpid(pid, &status, 0);
     ++ran;
-    if (bad >= 5) { /* enough to act on; the rest would repeat the reports */
-      printf("stopping after 5 failures\n");
-      break;
-    }
     if (WIFSIGNALED(status)) {
       ++bad;
-      printf("FAIL seed %ld: %s (signal %d)\n", first + i, WTERMSIG(status) == SIGALRM ? "hang" : "crash", WTERMSIG(status));
+      int sig = WTERMSIG(status);
+      printf("FAIL seed %ld: %s (signal %d)\n", first + i,
+             sig == SIGXCPU ? "hang (CPU time limit)" : sig == SIGALRM ? "hang (blocked: wall time limit)" : "crash", sig);
+    } else if (reversal_mode && WEXITSTATUS(status) == EXIT_REVERSAL_UNJUDGED) {
+      ++unjudged;
+    } else if (reversal_mode && WEXITSTATUS(status) == EXIT_REVERSAL_ONE_SIDED) {
+      ++one_sided;
     } else if (WEXITSTATUS(status) != 0) {
-      static const char *why[] = {"exit from library code", "NaN/Inf given to LAPACK", "broken promise"};
+      static const char *why[] = {"exit from library code", "NaN/Inf given to LAPACK", "broken promise",
+                                  "reversal broken"};
       int code = WEXITSTATUS(status);
       ++bad;
       printf("FAIL seed %ld: exit status %d (%s)\n", first + i, code,
-             code >= 70 && code <= 72 ? why[code - 70] : "sanitizer report or runtime error");
+             code >= 70 && code <= 73 ? why[code - 70] : "sanitizer report or runtime error");
+    }
+    if (bad >= 5) { /* enough to act on; the rest would repeat the reports */
+      printf("stopping after 5 failures\n");
+      stopped = 1;
+      break;
     }
   }
-  printf("%ld random programs (seeds %ld..%ld) in %.0f s: %ld failed%s\n", ran, first, first + ran - 1,
-         difftime(time(NULL), start), bad, ran < count ? " (time budget reached)" : "");
+  printf("%ld %s (seeds %ld..%ld) in %.0f s: %ld failed", ran, reversal_mode ? "reversal runs" : "random programs",
+         first, first + ran - 1, difftime(time(NULL), start), bad);
+  if (reversal_mode)
+    printf(", %ld not judged (a failed step, or splits or energy fallbacks alike both ways), %ld not judged as"
+           " one-sided (splits or energy fallbacks differ between the directions)", unjudged, one_sided);
+  printf("%s\n", ran < count && !stopped ? " (time budget reached)" : "");
   return bad ? 1 : 0;
 }
