@@ -163,8 +163,26 @@ contains
       return
     end if
     do while (done < nsteps)
+      ! The regular step first, as move takes it (the composed map, the gaps at its end and at the
+      ! internal stages): when no wall is reached it is committed here, without move's per-wall
+      ! stage-1 set-up; else move goes on from this map (not evaluated twice). The same bits.
+      call copy(self%n, state%q, self%qe); call copy(self%n, state%p, self%pe)   ! (move sets a, pa)
+      call self%map%flow(self%qe, self%pe, dir * state%h, stat, self%stage_q)
+      if (stat == VCI_OK) call gaps(self, self%qe, self%g_end, stat)
+      self%samples_known = .false.
+      if (stat == VCI_OK) call ensure_samples(self, stat)
+      if (stat /= VCI_OK) then
+        impacts%count = 0; return             ! the general path retakes the step and reports it
+      end if
+      if (all_admissible(self%ng, self%g_end, self%g_sample_min)) then
+        call copy(self%n, self%qe, state%q); call copy(self%n, self%pe, state%p)
+        impacts%count = 0
+        state%k = state%k + dir
+        done = done + 1
+        cycle
+      end if
       call move(self, state%q, state%p, state%h, dir, state%time(), max_impacts, impacts, self%q_run, self%p_run, &
-                cause, stat)
+                cause, stat, have_end=.true.)
       if (stat /= VCI_OK) then
         impacts%count = 0; return
       end if
@@ -177,8 +195,22 @@ contains
     end do
   end subroutine explicit_run
 
-  !> The step of explicit_advance without H at its end.
-  subroutine move(self, q, p, h, dir, t, max_impacts, impacts, q_new, p_new, cause, stat)
+  !> No gap negative at the step's end nor at an internal stage (every wall's least sample).
+  pure logical function all_admissible(ng, g_end, g_min)
+    integer, intent(in) :: ng
+    real(dp), intent(in) :: g_end(ng), g_min(ng)
+    integer :: j
+    all_admissible = .false.
+    do j = 1, ng
+      if (g_end(j) < 0.0_dp .or. g_min(j) < 0.0_dp) return
+    end do
+    all_admissible = .true.
+  end function all_admissible
+
+  !> The step of explicit_advance without H at its end. have_end: the first sub-step's map from
+  !> (q, p) over h is already in (qe, pe, stage_q) with its gaps in g_end and the samples'
+  !> (explicit_run's regular step that met a wall).
+  subroutine move(self, q, p, h, dir, t, max_impacts, impacts, q_new, p_new, cause, stat, have_end)
     type(vci_explicit_t), intent(inout) :: self
     real(dp), intent(in) :: q(:), p(:), h, t
     integer, intent(in) :: dir, max_impacts
@@ -186,8 +218,10 @@ contains
     real(dp), contiguous, intent(out) :: q_new(:), p_new(:)   ! (contiguous: no packing check per step)
     character(len=*), intent(inout) :: cause
     integer, intent(out) :: stat
+    logical, intent(in), optional :: have_end
     real(dp) :: tau, elapsed, alpha, best, mu, e_before, e_after, residual
     integer :: j, jj, j0, jbest, condition
+    logical :: mapped
     self%max_impacts = max_impacts
     impacts%count = 0
     if (self%ng == 0) then                  ! no walls: the composed map straight into the result
@@ -198,18 +232,23 @@ contains
     end if
     call copy(self%n, q, self%a); call copy(self%n, p, self%pa)
     tau = h; elapsed = 0.0_dp
+    mapped = .false.
+    if (present(have_end)) mapped = have_end
     do
-      call copy(self%n, self%a, self%qe); call copy(self%n, self%pa, self%pe)
-      call self%map%flow(self%qe, self%pe, dir * tau, stat, self%stage_q)
-      if (stat /= VCI_OK) then
-        call fail(self, 'regular step', stat, cause); return
+      if (.not. mapped) then
+        call copy(self%n, self%a, self%qe); call copy(self%n, self%pa, self%pe)
+        call self%map%flow(self%qe, self%pe, dir * tau, stat, self%stage_q)
+        if (stat /= VCI_OK) then
+          call fail(self, 'regular step', stat, cause); return
+        end if
+        call gaps(self, self%qe, self%g_end, stat)
+        if (stat /= VCI_OK) then
+          call fail(self, 'gaps of the step''s end', stat, cause); return
+        end if
+        self%samples_known = .false.
       end if
-      call gaps(self, self%qe, self%g_end, stat)
-      if (stat /= VCI_OK) then
-        call fail(self, 'gaps of the step''s end', stat, cause); return
-      end if
+      mapped = .false.
       self%start_gaps_known = .false.       ! (evaluated only when a wall may be crossed)
-      self%samples_known = .false.
       self%root_known = .false.
       ! stage 1: the first wall reached along the composed map
       ! The wall met first is searched first (when several are crossed in the sub-step, e.g. a
