@@ -14,6 +14,10 @@
 !>                                                (n = 32, 2000 steps) or Kepler (n = 2, 100000
 !>                                                steps), no walls, h = 0.01
 !>   vci_bench_composition --scenes order         timed runs of those two (best of 5), ratios
+!>   vci_bench_composition --chainwalls order n T h    the FPU-β chain of n particles between walls
+!>                                                    at ±0.6 (the results' fpu_walls start) over T:
+!>                                                    impacts, gradients (composed stages) per
+!>                                                    impact beyond the regular steps', CPU time
 !>   vci_bench_composition --sweep                    the walled pendulum over 10 s (18 impacts) from
 !>                                                    the exact start: final error against the exact
 !>                                                    solution and CPU time per run, orders 4 … 10
@@ -25,7 +29,8 @@ program vci_bench_composition
   use vci_scene_pendulum_walls_sep, only: pendulum_walls_sep_t, pendulum_walls_sep_model
   use vci_ref_pendulum_quad, only: pendulum_quad_t, pendulum_quad_state
   use vci_bench_composition_scenes, only: chain_sep_t, kepler_sep_t, chain_sep_model, kepler_sep_model, &
-    chain_gradient, kepler_gradient, chain_n, run_timed_integrate, run_timed_steps
+    chain_gradient, kepler_gradient, chain_n, run_timed_integrate, run_timed_steps, chain_walls_sep_t, &
+    chain_walls_sep_model
   implicit none
   integer, parameter :: nsteps = 200000
   real(dp), parameter :: h = 0.01_dp
@@ -38,6 +43,9 @@ program vci_bench_composition
     call get_command_argument(1, arg)
     if (arg == '--sweep') then
       call sweep(); stop
+    end if
+    if (arg == '--chainwalls') then
+      call chain_walls(); stop
     end if
     if (arg == '--scenes') then
       call get_command_argument(2, arg); read (arg, *) order
@@ -301,6 +309,61 @@ contains
       p = p + (kick(s + 1) * h) * f
     end do
   end subroutine run_timed_hand
+
+  !> The chain between walls (--chainwalls order n T h): the results' fpu_walls start
+  !> (q_i = 0.24 sin(2πi/(n+1)), q̇_i = 1.2 sin(3πi/(n+1)) + 0.8 sin(πi/(n+1))), one run of
+  !> integrate over T (CPU time of that call), and the same run with the walls moved to ±10
+  !> (never reached): the gradients and time beyond it, per impact. Also H(T) − H(0).
+  subroutine chain_walls()
+    type(chain_walls_sep_t), target :: model
+    type(vci_integrator_t) :: integ
+    type(vci_stats_t) :: st
+    character(len=32) :: a
+    integer :: order, n, stat, i, pass
+    integer(i8) :: nst, grads(2)
+    real(dp) :: tend, hh, t0, t1, cpu(2), e0, e1, pi
+    real(dp), allocatable :: q(:), p(:), qe(:), pe(:)
+    call get_command_argument(2, a); read (a, *) order
+    call get_command_argument(3, a); read (a, *) n
+    call get_command_argument(4, a); read (a, *) tend
+    call get_command_argument(5, a); read (a, *) hh
+    pi = acos(-1.0_dp)
+    allocate (q(n), p(n))
+    do i = 1, n
+      q(i) = 0.24_dp * sin(2 * pi * i / (n + 1))
+      p(i) = 1.2_dp * sin(3 * pi * i / (n + 1)) + 0.8_dp * sin(pi * i / (n + 1))
+    end do
+    nst = nint(tend / hh, i8)
+    do pass = 1, 2
+      model = chain_walls_sep_model(n)
+      if (pass == 2) model%n_gaps = 0            ! the same run without walls: the regular steps' cost
+      call integ%create(model, hh, stat)
+      if (stat == VCI_OK) call integ%set_scheme(VCI_SCHEME_COMPOSITION, order, stat)
+      if (stat == VCI_OK) call integ%init_from_momentum(0.0_dp, q, p, stat)
+      if (stat /= VCI_OK) error stop 'chain set-up failed'
+      call model%potential(q, e0, stat); e0 = e0 + 0.5_dp * sum(p**2)
+      model%gradient_calls = 0
+      call cpu_time(t0)
+      call integ%integrate(nst, 1, stat)
+      call cpu_time(t1)
+      if (stat /= VCI_OK) then
+        write (output_unit, '(a)') trim(integ%message()); error stop 'chain run failed'
+      end if
+      grads(pass) = model%gradient_calls; cpu(pass) = t1 - t0
+      if (pass == 1) then
+        st = integ%statistics()
+        qe = integ%configuration(); pe = integ%momentum()
+        call model%potential(qe, e1, stat); e1 = e1 + 0.5_dp * sum(pe**2)
+      end if
+    end do
+    write (output_unit, '(a,i0,a,i0,a,es9.2,a,es9.2,a,i0,a,i0)') 'chain walls: order ', order, ' n ', n, ' T ', tend, &
+      ' h ', hh, ' steps ', nst, ' impacts ', st%impacts
+    write (output_unit, '(a,i0,a,i0,a,f10.1,a)') 'gradients: walled ', grads(1), ', free ', grads(2), &
+      '; per impact beyond the free run ', real(grads(1) - grads(2), dp) / max(st%impacts, 1_i8), ' gradients'
+    write (output_unit, '(a,f8.3,a,f8.3,a,f9.5,a,es10.2)') 'CPU: walled ', cpu(1), ' s, free ', cpu(2), &
+      ' s; per impact ', (cpu(1) - cpu(2)) / max(st%impacts, 1_i8), ' s;  H(T) - H(0) ', e1 - e0
+    write (output_unit, '(a,2es25.16)') 'end state: sum q, sum p ', sum(qe), sum(pe)
+  end subroutine chain_walls
 
   !> Error against CPU time on the walled pendulum (T = 10 s): for each order and h, the final
   !> error max(|θ − θ_exact|, |θ' − θ'_exact|) and the best of 7 timings of the whole run

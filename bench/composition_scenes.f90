@@ -24,7 +24,19 @@ module vci_bench_composition_scenes
     procedure :: potential => kepler_v, potential_gradient => kepler_dv
   end type kepler_sep_t
 
+  !> The chain between walls at ±chain_wall (issue 32 item 1: stage 1 on a large chain), with a
+  !> count of its gradient callbacks (the composed maps' stages: the cost of an impact).
+  type, extends(chain_sep_t), public :: chain_walls_sep_t
+    integer(i8) :: gradient_calls = 0
+  contains
+    procedure :: potential_gradient => chain_walls_dv
+    procedure :: gaps => chain_walls_gaps, gap_gradients => chain_walls_dg
+    procedure :: gap_gradient => chain_walls_dg_one
+  end type chain_walls_sep_t
+  real(dp), parameter, public :: chain_wall = 0.6_dp
+
   public :: chain_gradient, kepler_gradient, chain_sep_model, kepler_sep_model, run_timed_integrate, run_timed_steps
+  public :: chain_walls_sep_model
 
 contains
 
@@ -41,6 +53,63 @@ contains
     model%n = 2; model%n_gaps = 0
     call model%set_mass_diagonal([1.0_dp, 1.0_dp], stat)
   end function kepler_sep_model
+
+  !> n particles between walls at ±chain_wall (2n gaps), unit masses.
+  function chain_walls_sep_model(n) result(model)
+    integer, intent(in) :: n
+    type(chain_walls_sep_t) :: model
+    integer :: stat
+    model%n = n; model%n_gaps = 2 * n
+    call model%set_mass_diagonal(spread(1.0_dp, 1, n), stat)
+  end function chain_walls_sep_model
+
+  subroutine chain_walls_dv(self, q, dv, stat)
+    class(chain_walls_sep_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: dv(:)
+    integer, intent(inout) :: stat
+    self%gradient_calls = self%gradient_calls + 1
+    call chain_gradient(size(q), q, dv)
+  end subroutine chain_walls_dv
+
+  !> g_i = w − x_i, g_{n+i} = w + x_i.
+  subroutine chain_walls_gaps(self, q, g, stat)
+    class(chain_walls_sep_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: g(:)
+    integer, intent(inout) :: stat
+    integer :: n
+    n = size(q)
+    g(1:n) = chain_wall - q
+    g(n + 1:2 * n) = chain_wall + q
+  end subroutine chain_walls_gaps
+
+  subroutine chain_walls_dg(self, q, dg, stat)
+    class(chain_walls_sep_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    real(dp), intent(out) :: dg(:, :)
+    integer, intent(inout) :: stat
+    integer :: i, n
+    n = size(q)
+    dg = 0.0_dp
+    do i = 1, n
+      dg(i, i) = -1.0_dp; dg(i, n + i) = 1.0_dp
+    end do
+  end subroutine chain_walls_dg
+
+  subroutine chain_walls_dg_one(self, q, j, dg, stat)
+    class(chain_walls_sep_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:)
+    integer, intent(in) :: j
+    real(dp), intent(out) :: dg(:)
+    integer, intent(inout) :: stat
+    dg = 0.0_dp
+    if (j <= size(q)) then
+      dg(j) = -1.0_dp
+    else
+      dg(j - size(q)) = 1.0_dp
+    end if
+  end subroutine chain_walls_dg_one
 
   !> dv_i = V'(r_{i−1}) − V'(r_i), V'(r) = r + β r³, r_0 = x_1, r_i = x_{i+1} − x_i, r_n = −x_n.
   pure subroutine chain_gradient(n, x, dv)

@@ -45,6 +45,7 @@ module vci_explicit_step
     real(dp), allocatable :: q_run(:), p_run(:)   !< explicit_run's step result before it is committed
     real(dp), allocatable :: q_root(:), p_root(:), v_scratch(:)  !< stage 1's last point (fraction root_alpha)
     real(dp), allocatable :: g_sample_min(:)      !< each wall's least gap over the internal stages
+    real(dp), allocatable :: g_root(:)            !< every wall's gap at (q_root, p_root)
     real(dp) :: root_alpha = -1.0_dp
     logical :: root_known = .false.
     real(dp), allocatable :: g_start(:), g_end(:), g_trial(:), grads(:, :), sorted(:), g_samples(:, :)
@@ -82,8 +83,9 @@ contains
     if (allocated(self%a)) deallocate (self%a, self%pa, self%qe, self%pe, self%qt, self%pt, self%stage_q, &
                                        self%g_start, self%g_end, self%g_trial, self%grads, self%sorted, self%order, &
                                        self%g_samples, self%q_run, self%p_run, self%q_root, self%p_root, &
-                                       self%v_scratch, self%g_sample_min)
+                                       self%v_scratch, self%g_sample_min, self%g_root)
     allocate (self%q_run(n), self%p_run(n), self%q_root(n), self%p_root(n), self%v_scratch(n), self%g_sample_min(ng), &
+              self%g_root(ng), &
               self%a(n), self%pa(n), self%qe(n), self%pe(n), self%qt(n), &
               self%pt(n), self%stage_q(n, s), &
               self%g_start(ng), self%g_end(ng), self%g_trial(ng), self%grads(n, ng), self%sorted(s), &
@@ -161,8 +163,26 @@ contains
       return
     end if
     do while (done < nsteps)
+      ! The regular step first, as move takes it (the composed map, the gaps at its end and at the
+      ! internal stages): when no wall is reached it is committed here, without move's per-wall
+      ! stage-1 set-up; else move goes on from this map (not evaluated twice). The same bits.
+      call copy(self%n, state%q, self%qe); call copy(self%n, state%p, self%pe)   ! (move sets a, pa)
+      call self%map%flow(self%qe, self%pe, dir * state%h, stat, self%stage_q)
+      if (stat == VCI_OK) call gaps(self, self%qe, self%g_end, stat)
+      self%samples_known = .false.
+      if (stat == VCI_OK) call ensure_samples(self, stat)
+      if (stat /= VCI_OK) then
+        impacts%count = 0; return             ! the general path retakes the step and reports it
+      end if
+      if (all_admissible(self%ng, self%g_end, self%g_sample_min)) then
+        call copy(self%n, self%qe, state%q); call copy(self%n, self%pe, state%p)
+        impacts%count = 0
+        state%k = state%k + dir
+        done = done + 1
+        cycle
+      end if
       call move(self, state%q, state%p, state%h, dir, state%time(), max_impacts, impacts, self%q_run, self%p_run, &
-                cause, stat)
+                cause, stat, have_end=.true.)
       if (stat /= VCI_OK) then
         impacts%count = 0; return
       end if
@@ -175,8 +195,22 @@ contains
     end do
   end subroutine explicit_run
 
-  !> The step of explicit_advance without H at its end.
-  subroutine move(self, q, p, h, dir, t, max_impacts, impacts, q_new, p_new, cause, stat)
+  !> No gap negative at the step's end nor at an internal stage (every wall's least sample).
+  pure logical function all_admissible(ng, g_end, g_min)
+    integer, intent(in) :: ng
+    real(dp), intent(in) :: g_end(ng), g_min(ng)
+    integer :: j
+    all_admissible = .false.
+    do j = 1, ng
+      if (g_end(j) < 0.0_dp .or. g_min(j) < 0.0_dp) return
+    end do
+    all_admissible = .true.
+  end function all_admissible
+
+  !> The step of explicit_advance without H at its end. have_end: the first sub-step's map from
+  !> (q, p) over h is already in (qe, pe, stage_q) with its gaps in g_end and the samples'
+  !> (explicit_run's regular step that met a wall).
+  subroutine move(self, q, p, h, dir, t, max_impacts, impacts, q_new, p_new, cause, stat, have_end)
     type(vci_explicit_t), intent(inout) :: self
     real(dp), intent(in) :: q(:), p(:), h, t
     integer, intent(in) :: dir, max_impacts
@@ -184,8 +218,10 @@ contains
     real(dp), contiguous, intent(out) :: q_new(:), p_new(:)   ! (contiguous: no packing check per step)
     character(len=*), intent(inout) :: cause
     integer, intent(out) :: stat
+    logical, intent(in), optional :: have_end
     real(dp) :: tau, elapsed, alpha, best, mu, e_before, e_after, residual
-    integer :: j, jbest, condition
+    integer :: j, jj, j0, jbest, condition
+    logical :: mapped
     self%max_impacts = max_impacts
     impacts%count = 0
     if (self%ng == 0) then                  ! no walls: the composed map straight into the result
@@ -196,22 +232,37 @@ contains
     end if
     call copy(self%n, q, self%a); call copy(self%n, p, self%pa)
     tau = h; elapsed = 0.0_dp
+    mapped = .false.
+    if (present(have_end)) mapped = have_end
     do
-      call copy(self%n, self%a, self%qe); call copy(self%n, self%pa, self%pe)
-      call self%map%flow(self%qe, self%pe, dir * tau, stat, self%stage_q)
-      if (stat /= VCI_OK) then
-        call fail(self, 'regular step', stat, cause); return
+      if (.not. mapped) then
+        call copy(self%n, self%a, self%qe); call copy(self%n, self%pa, self%pe)
+        call self%map%flow(self%qe, self%pe, dir * tau, stat, self%stage_q)
+        if (stat /= VCI_OK) then
+          call fail(self, 'regular step', stat, cause); return
+        end if
+        call gaps(self, self%qe, self%g_end, stat)
+        if (stat /= VCI_OK) then
+          call fail(self, 'gaps of the step''s end', stat, cause); return
+        end if
+        self%samples_known = .false.
       end if
-      call gaps(self, self%qe, self%g_end, stat)
-      if (stat /= VCI_OK) then
-        call fail(self, 'gaps of the step''s end', stat, cause); return
-      end if
+      mapped = .false.
       self%start_gaps_known = .false.       ! (evaluated only when a wall may be crossed)
-      self%samples_known = .false.
       self%root_known = .false.
       ! stage 1: the first wall reached along the composed map
+      ! The wall met first is searched first (when several are crossed in the sub-step, e.g. a
+      ! stretch of a chain): the others are then only checked against its point, whose gaps are
+      ! kept (first_crossing), so k walls crossed in one sub-step cost one root search, not k.
       best = 2.0_dp; jbest = 0
-      do j = 1, self%ng
+      call earliest_candidate(self, j0, stat)
+      if (stat /= VCI_OK) then
+        call fail(self, 'stage 1 (impact time)', stat, cause); return
+      end if
+      do jj = 0, self%ng
+        j = jj
+        if (jj == 0) j = j0
+        if (j == 0 .or. (jj > 0 .and. jj == j0)) cycle
         call first_crossing(self, j, dir, tau, best, alpha, stat)
         if (stat /= VCI_OK) then
           call fail(self, 'stage 1 (impact time)', stat, cause); return
@@ -309,18 +360,13 @@ contains
     real(dp), intent(in) :: tau, limit
     real(dp), intent(out) :: alpha
     integer, intent(out) :: stat
-    real(dp) :: lo, hi, glo, ghi, c, g, gs, slope, delta, delta_prev
-    integer :: i, k, nk, side, cb
-    logical :: have_lo, any_inside, on_wall, finite
+    real(dp) :: lo, hi, glo, ghi, c, g, gs, slope, delta, delta_prev, floor
+    integer :: i, k, nk, side
+    logical :: have_lo, any_inside, on_wall
     alpha = 2.0_dp; stat = VCI_OK
     nk = self%samples
-    if (.not. self%samples_known) then      ! every wall's gap at every internal stage, once
-      call sample_stages(self%map%model, self%n, self%ng, nk - 1, self%order, self%stage_q, self%g_samples, &
-                         self%g_sample_min, cb, finite)
-      call callback_status(self, cb, finite, stat)
-      if (stat /= VCI_OK) return
-      self%samples_known = .true.
-    end if
+    call ensure_samples(self, stat)
+    if (stat /= VCI_OK) return
     any_inside = self%g_end(j) < 0.0_dp .or. self%g_sample_min(j) < 0.0_dp
     if (.not. any_inside) return
     ! A start on the wall (after a reflection, or a step that ended on it), to within the rounding
@@ -352,8 +398,13 @@ contains
         ! sample and that wall's point: the gap there on the true map decides (samples are sparse,
         ! Verlet has none inside a step; without this the earlier crossing was reflected late).
         if (.not. have_lo .or. on_wall) return
-        call gap_on_map(self, j, dir, limit * tau, g, stat)
-        if (stat /= VCI_OK .or. .not. g < 0.0_dp) return
+        if (.not. (self%root_known .and. self%root_alpha == limit)) then   ! that point's map, once
+          call gap_on_map(self, j, dir, limit * tau, g, stat)
+          if (stat /= VCI_OK) return
+          call keep_root(self, limit)
+        end if
+        g = self%g_root(j)
+        if (.not. g < 0.0_dp) return
         hi = limit; ghi = g; exit
       end if
       if (k < nk .and. have_lo) then
@@ -384,7 +435,7 @@ contains
     ! rate says its error is (its map is the one stage 2 needs anyway).
     call hermite_start(self, j, dir, tau, lo, hi, c, stat)
     if (stat /= VCI_OK) return
-    side = 0; delta_prev = 0.0_dp
+    side = 0; delta_prev = 0.0_dp; floor = 0.0_dp
     do i = 1, ILLINOIS_MAX
       if (.not. (c > lo .and. c < hi)) then
         c = (lo * ghi - hi * glo) / (ghi - glo)
@@ -414,6 +465,21 @@ contains
       if (abs(delta) <= 4.0_dp * epsilon(1.0_dp) * c) then
         call keep_root(self, c); alpha = c; return
       end if
+      ! The gap's rounding at this point, as a fraction: below it the computed g is noise and a
+      ! test relative to c (small when the wall is met early in the sub-step) is out of reach.
+      ! When Newton's correction is within it and no longer contracting, c is a root to the
+      ! precision g has: accept it if admissible, else the admissible end of the bracket if that
+      ! is as close (else go on: the next point lands on either side of the noisy root).
+      ! (At most √ε: a graze, slope → 0, leaves the root that ill-determined anyway.)
+      floor = min(8.0_dp * epsilon(1.0_dp) * sum(abs(self%grads(:, j)) * abs(self%qt)) / abs(slope), &
+                  sqrt(epsilon(1.0_dp)))
+      if (abs(delta) <= floor .and. delta_prev /= 0.0_dp .and. abs(delta) > 0.5_dp * abs(delta_prev)) then
+        if (gs > 0.0_dp) then
+          call keep_root(self, c); alpha = c; return
+        else if (c - lo <= 2.0_dp * floor) then
+          alpha = lo; return                      ! (its state: stage 2's map)
+        end if
+      end if
       if (delta_prev /= 0.0_dp .and. abs(delta) < abs(delta_prev)) then
         if (abs(delta / delta_prev) * abs(delta) <= 4.0_dp * epsilon(1.0_dp) * c .and. &
             c + delta > lo .and. c + delta < hi) then
@@ -422,10 +488,68 @@ contains
       end if
       delta_prev = delta
       c = c + delta
-      if (hi - lo <= 2.0_dp * epsilon(1.0_dp) * hi) exit
+      if (hi - lo <= 2.0_dp * epsilon(1.0_dp) * hi .or. hi - lo <= floor) exit
     end do
     alpha = lo                                 ! the admissible side of the crossing
   end subroutine first_crossing
+
+  !> Every wall's gap at every internal stage of the sub-step (once per sub-step).
+  subroutine ensure_samples(self, stat)
+    type(vci_explicit_t), intent(inout) :: self
+    integer, intent(out) :: stat
+    integer :: cb
+    logical :: finite
+    stat = VCI_OK
+    if (self%samples_known) return
+    call sample_stages(self%map%model, self%n, self%ng, self%samples - 1, self%order, self%stage_q, self%g_samples, &
+                       self%g_sample_min, cb, finite)
+    call callback_status(self, cb, finite, stat)
+    if (stat == VCI_OK) self%samples_known = .true.
+  end subroutine ensure_samples
+
+  !> j0: the wall whose gap turns negative first along the sub-step, by linear interpolation
+  !> between the last admissible point (the start or a sample) and the first one beyond the wall
+  !> (a sample or the end); 0 when no wall is crossed at a sample or the end. An estimate only,
+  !> for the order of the searches: a wall crossed earlier is still found by its check.
+  subroutine earliest_candidate(self, j0, stat)
+    type(vci_explicit_t), intent(inout) :: self
+    integer, intent(out) :: j0
+    integer, intent(out) :: stat
+    integer :: j, k, inside, nk
+    real(dp) :: est, best_est, c_prev, g_prev, c_in, g_in
+    j0 = 0; inside = 0
+    call ensure_samples(self, stat)
+    if (stat /= VCI_OK) return
+    do j = 1, self%ng
+      if (self%g_end(j) < 0.0_dp .or. self%g_sample_min(j) < 0.0_dp) then
+        inside = inside + 1; j0 = j
+      end if
+    end do
+    if (inside <= 1) return          ! one wall or none: nothing to order
+    if (.not. self%start_gaps_known) then
+      call gaps(self, self%a, self%g_start, stat)
+      if (stat /= VCI_OK) return
+      self%start_gaps_known = .true.
+    end if
+    nk = self%samples
+    best_est = huge(1.0_dp); j0 = 0
+    do j = 1, self%ng
+      if (.not. (self%g_end(j) < 0.0_dp .or. self%g_sample_min(j) < 0.0_dp)) cycle
+      c_prev = 0.0_dp; g_prev = self%g_start(j)
+      c_in = 1.0_dp; g_in = self%g_end(j)
+      do k = 1, nk - 1
+        if (self%g_samples(j, k) < 0.0_dp) then
+          c_in = self%sorted(k); g_in = self%g_samples(j, k); exit
+        end if
+        c_prev = self%sorted(k); g_prev = self%g_samples(j, k)
+      end do
+      est = c_prev
+      if (g_prev > 0.0_dp) est = c_prev + (c_in - c_prev) * g_prev / (g_prev - g_in)
+      if (est < best_est) then
+        best_est = est; j0 = j
+      end if
+    end do
+  end subroutine earliest_candidate
 
   !> Stage 1's first point in (lo, hi) for wall j: the root there of the cubic Hermite interpolant
   !> of α ↦ g_j on [0, 1] from g and its slope (dir τ ∇g_jᵀ M⁻¹ p) at the sub-step's start (a, pa)
@@ -489,11 +613,13 @@ contains
     slope = dir * tau * dot_product(self%grads(:, j), self%v_scratch)
   end subroutine slope_on_map
 
-  !> Stage 1 ends on the point of the last gap_on_map (fraction c): keep its state for stage 2.
+  !> Stage 1 ends on the point of the last gap_on_map (fraction c): keep its state for stage 2
+  !> and every wall's gap there (the other walls are checked against it).
   subroutine keep_root(self, c)
     type(vci_explicit_t), intent(inout) :: self
     real(dp), intent(in) :: c
     call copy(self%n, self%qt, self%q_root); call copy(self%n, self%pt, self%p_root)
+    call copy(self%ng, self%g_trial, self%g_root)
     self%root_alpha = c; self%root_known = .true.
   end subroutine keep_root
 

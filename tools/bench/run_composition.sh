@@ -68,6 +68,15 @@ N=200000
   for o in 2 6 10; do "$EXE" $o; "$EXE" --scenes $o; done
   echo '```'
   echo
+  echo "Stage 1 on a large chain (issue 32 item 1): the FPU-β chain of n = 1024 particles between walls at"
+  echo "±0.6 from the results' fpu_walls start, T = 0.25, h = 0.005 (50 steps, 86 impacts), and the same run"
+  echo "without walls: gradients (composed stages) per impact beyond the free run's, CPU per impact"
+  echo "(\`vci_bench_composition --chainwalls <order> 1024 0.25 0.005\`; one run each, times move with the load):"
+  echo
+  echo '```'
+  for o in 2 4 6 8 10; do "$EXE" --chainwalls $o 1024 0.25 0.005; done
+  echo '```'
+  echo
   echo "Error against CPU time on the walled pendulum over 10 s (18 impacts) from the exact start, final"
   echo "error against the exact solution (\`vci_bench_composition --sweep\`, best of 7 per run):"
   echo
