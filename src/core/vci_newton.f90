@@ -37,6 +37,7 @@ module vci_newton
   integer, parameter, public :: NEWTON_EVALUATION = 4      !< the residual or Jacobian reported failure
   integer, parameter, public :: NEWTON_NONFINITE = 5       !< residual, scale or Jacobian not finite (overflow)
   integer, parameter, public :: NEWTON_STRUCTURE = 6       !< a nonzero outside the declared band (debug check)
+  integer, parameter, public :: NEWTON_MEMORY = 7          !< no memory for the dense matrices a system needed
 
   !> A starting merit at or below this is round-off: the start is accepted without a Newton step.
   real(dp), parameter, public :: start_roundoff = 1.0e-3_dp
@@ -420,7 +421,7 @@ contains
     ! Newton's matrix in the declared band when the system writes it there, else dense
     call pose_storage(self, sys, n, stat)
     if (stat /= VCI_OK) then
-      res%status = stat; res%reason = NEWTON_SINGULAR; return
+      res%status = stat; res%reason = NEWTON_MEMORY; return
     end if
     ! a stage system bordered by its last unknown: the block (the first n - 1, holding any declared
     ! structure) is factorised on its own and the border eliminated
@@ -489,6 +490,9 @@ contains
       call newton_direction(self, n, factored, res)
       if (res%reason == NEWTON_STRUCTURE) then
         res%status = VCI_ERR_ARGUMENT; return
+      end if
+      if (res%reason == NEWTON_MEMORY) then
+        res%status = VCI_ERR_MEMORY; return
       end if
       if (res%reason /= NEWTON_CONVERGED .and. phi <= 1.0_dp) then
         res%reason = NEWTON_CONVERGED; factored = .false.; exit
@@ -769,7 +773,7 @@ contains
       if (self%packed) then
         call grow_dense(self, n, info)
         if (info /= 0) then
-          res%reason = NEWTON_SINGULAR; return
+          res%reason = NEWTON_MEMORY; return
         end if
         call self%bmat%to_dense(self%jac, self%dense_capacity)
       else if (self%snb > 0 .and. .not. self%scheck) then

@@ -15,7 +15,8 @@ module vci_stepper
   use vci_status
   use vci_message, only: vci_set_message, vci_int_text, vci_real_text
   use vci_newton, only: vci_newton_t, vci_newton_result_t, NEWTON_MAX_ITERATIONS, NEWTON_NO_DESCENT, &
-                        NEWTON_SINGULAR, NEWTON_EVALUATION, NEWTON_NONFINITE, NEWTON_STRUCTURE, vci_large_system
+                        NEWTON_SINGULAR, NEWTON_EVALUATION, NEWTON_NONFINITE, NEWTON_STRUCTURE, vci_large_system, &
+                        NEWTON_MEMORY
   use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_STAGE1, KIND_STAGE2, KIND_IMPULSE, &
                         VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN, VCI_IMPACT_BLENDED
   use vci_observer, only: vci_impact_t
@@ -776,6 +777,9 @@ contains
       call explain_newton(self, nx)
     case (NEWTON_NONFINITE)
       self%cause = what//': residual or Newton matrix not finite (callback values overflow)'
+    case (NEWTON_MEMORY)
+      call vci_set_message(self%cause, what//': out of memory for a dense Newton matrix of '// &
+        trim(vci_int_text(nx))//' unknowns')
     case (NEWTON_STRUCTURE)      ! (the debug check of a declared Hessian bandwidth or pattern)
       call vci_set_message(self%cause, what//': the Newton matrix has a nonzero at ('//trim(vci_int_text(res%bad_row))// &
         ', '//trim(vci_int_text(res%bad_col))//') outside the Hessian bandwidth the model declared, or its sparse pattern')
