@@ -627,7 +627,7 @@ contains
     logical :: chk, packed
     type(vci_sparse_pattern_t), pointer :: spat
     n = size(x)
-    info = -1
+    info = -1; st = 0
     snb = self%snb; sbw = self%sbw; ssp = self%ssp; chk = self%scheck; spat => self%spat; packed = self%packed
     call pose_structure(self, sys, n)
     self%packed = .false.

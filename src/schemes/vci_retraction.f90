@@ -438,11 +438,28 @@ contains
     if (s /= VCI_OK) then
       stat = failure_code(self, s); return
     end if
-    do j = 1, n
-      do i = max(1, j - bw), min(n, j + bw)
-        ab(k + i - j, j) = mixed_entry(self, h, i, j)
+    if (self%band_hessians) then    ! (one loop per case: a branch per entry cost ~25 % more instructions)
+      if (self%rule == RETRACTION_LEFT) then
+        do j = 1, n
+          do i = max(1, j - bw), min(n, j + bw)
+            ab(k + i - j, j) = self%lqv(k + i - j, j) - self%lvv(k + i - j, j) / h
+          end do
+        end do
+      else
+        do j = 1, n
+          do i = max(1, j - bw), min(n, j + bw)
+            ab(k + i - j, j) = 0.25_dp * h * self%lqq(k + i - j, j) + 0.5_dp * (self%lqv(k + i - j, j) - &
+                               self%lqv(k + j - i, i)) - self%lvv(k + i - j, j) / h
+          end do
+        end do
+      end if
+    else
+      do j = 1, n
+        do i = max(1, j - bw), min(n, j + bw)
+          ab(k + i - j, j) = mixed_entry(self, h, i, j)
+        end do
       end do
-    end do
+    end if
     if (dir >= 0) return
     ! -transpose in place on the band: (i, j) and (j, i) sit at rows k + i - j and k + j - i
     do j = 1, n
