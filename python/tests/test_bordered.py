@@ -1,7 +1,7 @@
 """vci_set_bordered_impacts from Python (issue 28 item 4): impact stages by bordering or whole.
 The walled pendulum (18 impacts in 10 s) bordered at every stage size (min_unknowns=2) and with the
 whole stage matrices: the same impacts and end state to the solver's tolerance (rtol 1e-13: two
-runs of 1000 steps through 18 impacts; observed ~1e-14), bordering counted only when on."""
+runs of 1000 steps through 18 impacts; observed equal to the bit), bordering counted only when on."""
 import pytest
 
 import vci
