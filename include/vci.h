@@ -609,6 +609,22 @@ int  vci_ensemble_run_file(vci_model model, const vci_ensemble_config *config, i
                            const double *t0, const double *q0, const double *v0, const char *path,
                            int overwrite, int mpi_comm, int64_t *members_failed);
 
+/* ---- impact stages by bordering (issue 28) ---- */
+
+/** Impact stages 1 and 2 solved by bordering (on = 1, the default): the sub-step's Newton block is
+ *  factorised in its own structure (dense, declared band or pattern) and the alpha/mu row and column
+ *  eliminated by their Schur complement; on = 0 factorises each whole stage matrix (the comparison
+ *  path; same answers to solver tolerance). min_unknowns >= 2: border only stage systems of at least
+ *  this many unknowns (default 16: below, the whole matrix costs less); 0 keeps the current bound
+ *  (docs/DESIGN.md, "Impact systems by bordering").
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, on not 0 or 1, min_unknowns 1 or negative;
+ *  VCI_ERR_STATE: busy. */
+int  vci_set_bordered_impacts(vci_integrator integ, int on, int min_unknowns);
+
+/** *count = impact-stage Newton directions solved by bordering over the integrator's life.
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, count NULL; VCI_ERR_STATE: busy. */
+int  vci_get_bordered_directions(vci_integrator integ, int64_t *count);
+
 #ifdef __cplusplus
 }
 #endif

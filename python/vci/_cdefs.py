@@ -180,6 +180,10 @@ int  vci_ensemble_run_file(vci_model model, const vci_ensemble_config *config, i
                            int overwrite, int mpi_comm, int64_t *members_failed);
 """
 
+DECLARATIONS += """int  vci_set_bordered_impacts(vci_integrator integ, int on, int min_unknowns);
+int  vci_get_bordered_directions(vci_integrator integ, int64_t *count);
+"""
+
 
 def cdef_text():
     """The whole text handed to ffi.cdef (the structs need the typedefs before them)."""

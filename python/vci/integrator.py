@@ -429,6 +429,19 @@ class Integrator:
         """The safety net's bound: retry a failed step as up to max_splits equal sub-steps (1: off)."""
         self._check(lib.vci_set_step_splits(self._h[0], int(max_splits)))
 
+    def set_bordered_impacts(self, on=True, min_unknowns=0):
+        """Impact stages by bordering (on, the default: the sub-step's block factorised in its own
+        structure, the alpha/mu border by its Schur complement) or whole (off); min_unknowns >= 2:
+        border only stage systems of at least that many unknowns (0 keeps the current bound, 16)."""
+        self._check(lib.vci_set_bordered_impacts(self._h[0], 1 if on else 0, int(min_unknowns)))
+
+    @property
+    def bordered_directions(self):
+        """Impact-stage Newton directions solved by bordering over the integrator's life."""
+        c = ffi.new("int64_t *")
+        self._check(lib.vci_get_bordered_directions(self._h[0], c))
+        return int(c[0])
+
     @property
     def impacts(self):
         """Every impact since the last init_*, a structured array of impact_dtype(n)."""

@@ -29,6 +29,7 @@ module vci_capi
   public :: vci_get_state, vci_get_multipliers, vci_get_energy, vci_get_index, vci_get_stats
   public :: vci_get_energy_fallbacks
   public :: vci_set_step_splits, vci_get_split_steps
+  public :: vci_set_bordered_impacts, vci_get_bordered_directions
   public :: vci_set_impact_callback, vci_open_output, vci_open_output_every, vci_close_output
   public :: vci_append_output, vci_restore_from_file
   public :: vci_last_error, vci_status_string, vci_version
@@ -935,6 +936,57 @@ contains
     end if
     vci_get_split_steps = stat
   end function vci_get_split_steps
+
+  !> int vci_set_bordered_impacts(vci_integrator integ, int on, int min_unknowns): impact stages by
+  !> bordering (on = 1, the default) or whole (0); min_unknowns >= 2 sets the smallest bordered stage
+  !> system, 0 keeps the current one (vci_integrator_t%set_bordered_impacts).
+  integer(c_int) function vci_set_bordered_impacts(integ, on, min_unknowns) bind(C, name='vci_set_bordered_impacts')
+    type(c_ptr), value :: integ
+    integer(c_int), value :: on, min_unknowns
+    type(c_integrator_t), pointer :: ip
+    integer :: stat
+    call enter(integ, 'vci_set_bordered_impacts', ip, stat)
+    if (stat /= VCI_OK) then
+      vci_set_bordered_impacts = stat; return
+    end if
+    if ((on /= 0 .and. on /= 1) .or. min_unknowns == 1 .or. min_unknowns < 0) then
+      stat = VCI_ERR_ARGUMENT
+      call ip%integ%report_failure(stat, 'vci_set_bordered_impacts: on must be 0 or 1 and min_unknowns 0 '// &
+                                   '(keep) or at least 2')
+    else
+      if (min_unknowns == 0) then
+        call ip%integ%set_bordered_impacts(on == 1)
+      else
+        call ip%integ%set_bordered_impacts(on == 1, int(min_unknowns))
+      end if
+      call ip%integ%report_failure(VCI_OK, '')
+    end if
+    call leave(ip)
+    vci_set_bordered_impacts = stat
+  end function vci_set_bordered_impacts
+
+  !> int vci_get_bordered_directions(vci_integrator integ, int64_t *count): impact-stage Newton
+  !> directions solved by bordering over the integrator's life.
+  integer(c_int) function vci_get_bordered_directions(integ, count) bind(C, name='vci_get_bordered_directions')
+    type(c_ptr), value :: integ, count
+    type(c_integrator_t), pointer :: ip
+    type(vci_stats_t) :: stats
+    integer :: stat
+    integer(c_int64_t), pointer :: l
+    call enter(integ, 'vci_get_bordered_directions', ip, stat)
+    if (stat == VCI_OK) then
+      if (c_associated(count)) then
+        stats = ip%integ%statistics()
+        call c_f_pointer(count, l)
+        l = int(stats%bordered_directions, c_int64_t)
+      else
+        stat = VCI_ERR_ARGUMENT
+        call ip%integ%report_failure(stat, 'vci_get_bordered_directions: count is NULL')
+      end if
+      call leave(ip)
+    end if
+    vci_get_bordered_directions = stat
+  end function vci_get_bordered_directions
 
   !> int vci_set_impact_callback(vci_integrator integ, vci_impact_fn fn, void *user): NULL fn removes it.
   integer(c_int) function vci_set_impact_callback(integ, fn, user) bind(C, name='vci_set_impact_callback')

@@ -17,6 +17,7 @@ module vci_banded
   use vci_kinds, only: dp
   use vci_kernels, only: small_lu, small_lu_solve
   use vci_factor, only: vci_factor_t
+  use vci_banded_matrix, only: vci_band_matrix_t
   implicit none
   private
 
@@ -34,6 +35,8 @@ module vci_banded
   contains
     !> Factorise diag(rw) jac(1:nx, 1:nx) with block nb and half-bandwidth bw.
     procedure :: factor
+    !> The same from a matrix stored in its structure (vci_band_matrix_t), no n x n array.
+    procedure :: factor_packed
     !> b(1:nx) := matrix^{-1} b with the factors.
     procedure :: solve
   end type vci_banded_lu_t
@@ -53,16 +56,10 @@ contains
     integer, intent(in) :: nx, nb, bw, ld
     real(dp), intent(in) :: jac(ld, *), rw(*)
     integer, intent(out) :: info
-    integer :: i, j, k, nd, ldab, st
-    real(dp) :: acc, dmin, dmax
-    self%ready = .false.
+    integer :: i, j, k, nd
+    call take_sizes(self, nx, nb, bw, info)
+    if (info /= 0) return
     nd = nx - nb
-    ldab = 3 * bw + 1
-    info = -1
-    if (nb < 1 .or. nd < 0 .or. nd > border_max .or. bw < 0) return
-    call ensure(self, ldab, nb, nd + 1, st)     ! (+1: a stage system's border after its sub-step's)
-    if (st /= 0) return
-    self%nx = nx; self%nb = nb; self%bw = bw
     ! band storage: A(i, j) at ab(2 bw + 1 + i - j, j), the top bw rows for dgbtrf's fill-in
     do j = 1, nb
       self%ab(1:bw, j) = 0.0_dp
@@ -70,6 +67,89 @@ contains
         self%ab(2 * bw + 1 + i - j, j) = rw(i) * jac(i, j)
       end do
     end do
+    do k = 1, nd
+      do i = 1, nb
+        self%w(i, k) = rw(i) * jac(i, nb + k)
+      end do
+    end do
+    do j = 1, nb
+      do i = 1, nd
+        self%c(i, j) = rw(nb + i) * jac(nb + i, j)
+      end do
+    end do
+    do k = 1, nd
+      do i = 1, nd
+        self%s(i, k) = rw(nb + i) * jac(nb + i, nb + k)
+      end do
+    end do
+    call factor_taken(self, info)
+  end subroutine factor
+
+  !> factor, with the matrix in its declared structure (vci_banded_matrix: compact band, border
+  !> rows and columns apart), of nx unknowns: its leading nx (<= mat%nx) rows and columns, so a
+  !> stage system's block (the sub-step's unknowns) is factorised from the stage's own matrix.
+  !> Nothing of size nx^2 is read or written.
+  subroutine factor_packed(self, nx, mat, rw, info)
+    class(vci_banded_lu_t), intent(inout) :: self
+    integer, intent(in) :: nx
+    type(vci_band_matrix_t), intent(in) :: mat
+    real(dp), intent(in) :: rw(*)
+    integer, intent(out) :: info
+    integer :: i, j, k, nd, nb, bw
+    nb = mat%nb; bw = mat%bw
+    info = -1
+    if (nx > mat%nx) return
+    call take_sizes(self, nx, nb, bw, info)
+    if (info /= 0) return
+    nd = nx - nb
+    do j = 1, nb
+      self%ab(1:bw, j) = 0.0_dp
+      do i = max(1, j - bw), min(nb, j + bw)
+        self%ab(2 * bw + 1 + i - j, j) = rw(i) * mat%band(bw + 1 + i - j, j)
+      end do
+    end do
+    do k = 1, nd
+      do i = 1, nb
+        self%w(i, k) = rw(i) * mat%cols(i, k)
+      end do
+    end do
+    do j = 1, nb
+      do i = 1, nd
+        self%c(i, j) = rw(nb + i) * mat%rows(i, j)
+      end do
+    end do
+    do k = 1, nd
+      do i = 1, nd
+        self%s(i, k) = rw(nb + i) * mat%cols(nb + i, k)
+      end do
+    end do
+    call factor_taken(self, info)
+  end subroutine factor_packed
+
+  !> Check the sizes and make room for them (info -1: a border above border_max, or no memory).
+  subroutine take_sizes(self, nx, nb, bw, info)
+    type(vci_banded_lu_t), intent(inout) :: self
+    integer, intent(in) :: nx, nb, bw
+    integer, intent(out) :: info
+    integer :: nd, st
+    self%ready = .false.
+    nd = nx - nb
+    info = -1
+    if (nb < 1 .or. nd < 0 .or. nd > border_max .or. bw < 0) return
+    call ensure(self, 3 * bw + 1, nb, nd + 1, st)     ! (+1: a stage system's border after its sub-step's)
+    if (st /= 0) return
+    self%nx = nx; self%nb = nb; self%bw = bw
+    info = 0
+  end subroutine take_sizes
+
+  !> The factorisation of what factor or factor_packed put in ab (the scaled band, fill rows zero),
+  !> w (B), c (C) and s (D): the band LU, W = A^{-1} B and the Schur complement S = D - C W.
+  subroutine factor_taken(self, info)
+    type(vci_banded_lu_t), intent(inout) :: self
+    integer, intent(out) :: info
+    integer :: i, j, k, nd, nb, bw
+    real(dp) :: acc, dmin, dmax
+    nb = self%nb; bw = self%bw; nd = self%nx - nb
     call band_lu(nb, bw, self%ab, self%ipiv, info)
     if (info /= 0) return
     dmin = huge(1.0_dp); dmax = 0.0_dp
@@ -80,23 +160,12 @@ contains
       info = 1; return
     end if
     if (nd > 0) then
-      ! W = A^{-1} B, S = D - C W
-      do k = 1, nd
-        do i = 1, nb
-          self%w(i, k) = rw(i) * jac(i, nb + k)
-        end do
-      end do
       do k = 1, nd
         call band_solve(nb, bw, self%ab, self%ipiv, self%w(:, k))
       end do
-      do j = 1, nb
-        do i = 1, nd
-          self%c(i, j) = rw(nb + i) * jac(nb + i, j)
-        end do
-      end do
       do k = 1, nd
         do i = 1, nd
-          acc = rw(nb + i) * jac(nb + i, nb + k)
+          acc = self%s(i, k)
           do j = 1, nb
             acc = acc - self%c(i, j) * self%w(j, k)
           end do
@@ -118,7 +187,7 @@ contains
     end if
     info = 0
     self%ready = .true.
-  end subroutine factor
+  end subroutine factor_taken
 
   !> b(1:nx) := matrix^{-1} b with the factors of the last successful factor.
   subroutine solve(self, b)

@@ -34,6 +34,8 @@ module vci_bordered
   contains
     !> Take the border column jac(1:ni, ni+1), row jac(ni+1, 1:ni) and corner with the block's factors.
     procedure :: border
+    !> The same with the border column, row and corner given apart.
+    procedure :: border_parts
     !> b(1:ni+1) := the bordered matrix^{-1} b.
     procedure :: solve
   end type vci_bordered_t
@@ -50,6 +52,17 @@ contains
     integer, intent(in) :: ni, ld
     real(dp), intent(in) :: jac(ld, *), rw(*)
     integer, intent(out) :: info
+    call self%border_parts(blk, ni, jac(1:ni, ni + 1), jac(ni + 1, 1:ni), jac(ni + 1, ni + 1), rw, info)
+  end subroutine border
+
+  !> border with the border given as its parts: column b(1:ni), row c(1:ni), corner d (a matrix
+  !> stored in its structure, vci_banded_matrix, keeps them apart; no n x n array).
+  subroutine border_parts(self, blk, ni, b, c, d, rw, info)
+    class(vci_bordered_t), intent(inout) :: self
+    class(vci_factor_t), intent(inout) :: blk
+    integer, intent(in) :: ni
+    real(dp), intent(in) :: b(:), c(:), d, rw(*)
+    integer, intent(out) :: info
     integer :: i, st
     real(dp) :: s, terms
     self%ready = .false.
@@ -60,13 +73,13 @@ contains
     self%ni = ni
     do i = 1, ni
       self%rwa(i) = rw(i)
-      self%w(i) = rw(i) * jac(i, ni + 1)
-      self%c(i) = jac(ni + 1, i)
+      self%w(i) = rw(i) * b(i)
+      self%c(i) = c(i)
     end do
     if (.not. (finite_sum(self%w(1:ni)) .and. finite_sum(self%c(1:ni)) .and. &
-               abs(jac(ni + 1, ni + 1)) <= huge(1.0_dp))) return
+               abs(d) <= huge(1.0_dp))) return
     call blk%solve(self%w(1:ni))
-    s = jac(ni + 1, ni + 1); terms = abs(s)
+    s = d; terms = abs(s)
     do i = 1, ni
       s = s - self%c(i) * self%w(i)
       terms = terms + abs(self%c(i) * self%w(i))
@@ -77,7 +90,7 @@ contains
     self%s = s
     info = 0
     self%ready = .true.
-  end subroutine border
+  end subroutine border_parts
 
   !> b(1:ni+1) := the bordered matrix^{-1} b (after a successful `border` with the same blk): the
   !> block solve, then the scalar.

@@ -18,6 +18,7 @@ module vci_newton
   use vci_lapack, only: dgetrf, dgetrs, dgelsd
   use vci_kernels, only: equilibrate, scaled_merit, small_lu, small_lu_solve, pivots_regular
   use vci_banded, only: vci_banded_lu_t, outside_band
+  use vci_banded_matrix, only: vci_band_matrix_t
   use vci_sparse, only: vci_sparse_lu_t, vci_sparse_pattern_t, outside_pattern, pattern_rows
   use vci_factor, only: vci_dense_lu_t
   use vci_bordered, only: vci_bordered_t
@@ -36,6 +37,7 @@ module vci_newton
   integer, parameter, public :: NEWTON_EVALUATION = 4      !< the residual or Jacobian reported failure
   integer, parameter, public :: NEWTON_NONFINITE = 5       !< residual, scale or Jacobian not finite (overflow)
   integer, parameter, public :: NEWTON_STRUCTURE = 6       !< a nonzero outside the declared band (debug check)
+  integer, parameter, public :: NEWTON_MEMORY = 7          !< no memory for the dense matrices a system needed
 
   !> A starting merit at or below this is round-off: the start is accepted without a Newton step.
   real(dp), parameter, public :: start_roundoff = 1.0e-3_dp
@@ -69,6 +71,10 @@ module vci_newton
     procedure :: sparse_structure => no_sparse_structure
     !> Unknowns at the end that border the rest (1: an impact stage's alpha or mu; default 0).
     procedure :: border => no_border
+    !> Does the posed system write its Jacobian in its declared band (band_jacobian)? (default: no)
+    procedure :: packs_band => never_packs
+    !> jac = dR/dx written in the declared structure (vci_band_matrix_t, no n x n array).
+    procedure :: band_jacobian => no_band_jacobian
   end type vci_system_t
 
   abstract interface
@@ -139,7 +145,14 @@ module vci_newton
     real(dp), private :: lu_key = 0.0_dp
     integer :: capacity = 0               !< unknowns the workspace is sized for (reserve)
     real(dp), allocatable, private :: jac(:, :), lu(:, :), r(:), sc(:), dx(:), xt(:), rt(:), sct(:)
-    real(dp), allocatable, private :: sv(:), work(:), rw(:), brw(:)
+    real(dp), allocatable, private :: sv(:), work(:), rw(:), brw(:), bvec(:)
+    !> Unknowns the dense matrices (jac, lu) and the least-squares workspace are sized for: reserve's
+    !> dense_max, grown on demand (a dense fallback of a structured system) — with a declared band
+    !> Newton's matrix lives in bmat and these stay small (issue 28 item 3)
+    integer :: dense_capacity = 0
+    !> Newton's matrix in its declared band (vci_banded_matrix) when the system writes it there
+    type(vci_band_matrix_t), private :: bmat
+    logical, private :: packed = .false.           !< this solve's Jacobian is in bmat
     integer, allocatable, private :: ipiv(:), iwork(:)
     !> Factorisations in a declared structure (band or sparse pattern, with their dense border)
     integer(i8) :: structured_factorisations = 0
@@ -188,6 +201,8 @@ module vci_newton
     procedure :: solve
     !> Solve the small dense system a x = b in place (b becomes x), with the solver's workspace.
     procedure :: linear_solve
+    !> Solve J x = b for the Jacobian J of a system at x, assembled in its declared structure.
+    procedure :: jacobian_solve
     !> After a solve that failed on convergence: the row with the largest scaled residual.
     procedure :: worst_row
   end type vci_newton_t
@@ -221,6 +236,21 @@ contains
     nb = 0; pat => null(); check = .false.
   end subroutine no_sparse_structure
 
+  !> Does the posed system write its Jacobian in its declared band? Not unless it says so.
+  logical function never_packs(self)
+    class(vci_system_t), intent(inout) :: self
+    never_packs = .false.
+  end function never_packs
+
+  !> Not called unless packs_band says so: a system that packs its band overrides it.
+  subroutine no_band_jacobian(self, x, r, mat, stat)
+    class(vci_system_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:), r(:)
+    type(vci_band_matrix_t), intent(inout) :: mat
+    integer, intent(out) :: stat
+    stat = VCI_ERR_ARGUMENT
+  end subroutine no_band_jacobian
+
   !> Unknowns at the end of x that border the rest: none unless the system says so.
   integer function no_border(self)
     class(vci_system_t), intent(inout) :: self
@@ -234,26 +264,25 @@ contains
   end function always_admissible
 
   !> Allocate workspace for systems of up to nmax unknowns (call once, outside the step loop).
-  !> stat (optional): VCI_ERR_MEMORY when an allocation fails (the solver then has no workspace).
-  subroutine reserve(self, nmax, stat)
+  !> dense_max (optional, default nmax): the largest system without a declared band the caller
+  !> poses — the dense matrices are sized for it (a band model's n x n never exists; a dense
+  !> fallback grows them on demand). stat (optional): VCI_ERR_MEMORY when an allocation fails (the
+  !> solver then has no workspace).
+  subroutine reserve(self, nmax, stat, dense_max)
     class(vci_newton_t), intent(inout) :: self
     integer, intent(in) :: nmax
     integer, intent(out), optional :: stat
-    real(dp) :: query(1), a(1, 1), b(1, 1), s(1)
-    integer :: iq(1), rank, info, lwork, liwork, nlvl, st
+    integer, intent(in), optional :: dense_max
+    integer :: st, dm
     if (present(stat)) stat = VCI_OK
-    if (self%capacity >= nmax) return
+    dm = nmax
+    if (present(dense_max)) dm = max(1, min(nmax, dense_max))
+    if (self%capacity >= nmax .and. self%dense_capacity >= dm) return
     call release(self)
-    allocate (self%jac(nmax, nmax), self%lu(nmax, nmax), self%r(nmax), self%sc(nmax), self%dx(nmax), &
+    allocate (self%r(nmax), self%sc(nmax), self%dx(nmax), &
               self%xt(nmax), self%rt(nmax), self%sct(nmax), self%sv(nmax), self%ipiv(nmax), self%rw(nmax), &
-              self%brw(nmax), stat=st)
-    if (st == 0) then
-      call dgelsd(nmax, nmax, 1, a, nmax, b, nmax, s, -1.0_dp, rank, query, -1, iq, info)
-      lwork = max(1, int(query(1)))
-      nlvl = max(0, int(log(real(nmax, dp) / 26.0_dp) / log(2.0_dp)) + 1)
-      liwork = max(1, 3 * nmax * nlvl + 11 * nmax, iq(1))
-      allocate (self%work(lwork), self%iwork(liwork), stat=st)
-    end if
+              self%brw(nmax), self%bvec(nmax), stat=st)
+    if (st == 0) call grow_dense(self, dm, st)
     if (st /= 0) then
       call release(self)       ! a multi-object allocate may fail part-way: free what it got
       if (present(stat)) stat = VCI_ERR_MEMORY
@@ -261,6 +290,42 @@ contains
     end if
     self%capacity = nmax
   end subroutine reserve
+
+  !> Dense matrices (jac, lu) and the least-squares workspace for systems of n unknowns (kept when
+  !> large enough; growing them drops kept dense factors). st /= 0: out of memory (none left).
+  subroutine grow_dense(self, n, st)
+    type(vci_newton_t), intent(inout) :: self
+    integer, intent(in) :: n
+    integer, intent(out) :: st
+    real(dp) :: query(1), a(1, 1), b(1, 1), s(1)
+    integer :: iq(1), rank, info, lwork, liwork, nlvl
+    st = 0
+    if (self%dense_capacity >= n) return
+    if (self%fkind == FACTORS_WHOLE) self%have_lu = .false.
+    call release_dense(self)
+    allocate (self%jac(n, n), self%lu(n, n), stat=st)
+    if (st == 0) then
+      call dgelsd(n, n, 1, a, n, b, n, s, -1.0_dp, rank, query, -1, iq, info)
+      lwork = max(1, int(query(1)))
+      nlvl = max(0, int(log(real(n, dp) / 26.0_dp) / log(2.0_dp)) + 1)
+      liwork = max(1, 3 * n * nlvl + 11 * n, iq(1))
+      allocate (self%work(lwork), self%iwork(liwork), stat=st)
+    end if
+    if (st /= 0) then
+      call release_dense(self); return
+    end if
+    self%dense_capacity = n
+  end subroutine grow_dense
+
+  !> No dense matrices (each array freed on its own).
+  subroutine release_dense(self)
+    type(vci_newton_t), intent(inout) :: self
+    if (allocated(self%jac)) deallocate (self%jac)
+    if (allocated(self%lu)) deallocate (self%lu)
+    if (allocated(self%work)) deallocate (self%work)
+    if (allocated(self%iwork)) deallocate (self%iwork)
+    self%dense_capacity = 0
+  end subroutine release_dense
 
   !> Drop the factors kept for simplified Newton: the next solve of a large system starts with a
   !> new Jacobian, as the first solve after reserve does. The driver calls it at the points a run
@@ -299,8 +364,11 @@ contains
     integer, intent(in) :: nf
     real(dp), intent(in) :: key, rw(:), lu(:, :)
     integer, intent(in) :: ipiv(:)
+    integer :: info
     self%have_lu = .false.
     if (nf < 1 .or. nf > self%capacity .or. key == 0.0_dp) return
+    call grow_dense(self, nf, info)
+    if (info /= 0) return
     if (size(rw) /= nf .or. size(lu, 1) /= nf .or. size(lu, 2) /= nf .or. size(ipiv) /= nf) return
     if (any(ipiv < 1) .or. any(ipiv > nf)) return
     if (.not. (all_finite(rw) .and. all_finite(lu))) return     ! (from a file: nothing non-finite to LAPACK)
@@ -314,8 +382,7 @@ contains
   !> part-way some are allocated and some not).
   subroutine release(self)
     type(vci_newton_t), intent(inout) :: self
-    if (allocated(self%jac)) deallocate (self%jac)
-    if (allocated(self%lu)) deallocate (self%lu)
+    call release_dense(self)
     if (allocated(self%r)) deallocate (self%r)
     if (allocated(self%sc)) deallocate (self%sc)
     if (allocated(self%dx)) deallocate (self%dx)
@@ -326,8 +393,7 @@ contains
     if (allocated(self%ipiv)) deallocate (self%ipiv)
     if (allocated(self%rw)) deallocate (self%rw)
     if (allocated(self%brw)) deallocate (self%brw)
-    if (allocated(self%work)) deallocate (self%work)
-    if (allocated(self%iwork)) deallocate (self%iwork)
+    if (allocated(self%bvec)) deallocate (self%bvec)
     call self%sparse%reset()
     self%fkind = FACTORS_WHOLE
     self%capacity = 0
@@ -352,6 +418,11 @@ contains
     key = 0.0_dp
     if (n >= self%reuse_min) key = sys%reuse_key()
     call pose_structure(self, sys, n)
+    ! Newton's matrix in the declared band when the system writes it there, else dense
+    call pose_storage(self, sys, n, stat)
+    if (stat /= VCI_OK) then
+      res%status = stat; res%reason = NEWTON_MEMORY; return
+    end if
     ! a stage system bordered by its last unknown: the block (the first n - 1, holding any declared
     ! structure) is factorised on its own and the border eliminated
     self%nbord = 0; self%block_stale = .true.
@@ -405,7 +476,12 @@ contains
         if (res%status /= VCI_OK) return
       end if
       res%iterations = res%iterations + 1
-      call sys%jacobian(x, self%r(1:n), self%jac(1:n, 1:n), stat)
+      if (self%packed) then
+        call self%bmat%pose(n)
+        call sys%band_jacobian(x, self%r(1:n), self%bmat, stat)
+      else
+        call sys%jacobian(x, self%r(1:n), self%jac(1:n, 1:n), stat)
+      end if
       if (stat /= VCI_OK .and. phi <= 1.0_dp .and. .not. sys%unrecoverable) exit   ! (optional step: the start stands)
       if (stat /= VCI_OK) then
         call fail_eval(res, stat); return
@@ -414,6 +490,9 @@ contains
       call newton_direction(self, n, factored, res)
       if (res%reason == NEWTON_STRUCTURE) then
         res%status = VCI_ERR_ARGUMENT; return
+      end if
+      if (res%reason == NEWTON_MEMORY) then
+        res%status = VCI_ERR_MEMORY; return
       end if
       if (res%reason /= NEWTON_CONVERGED .and. phi <= 1.0_dp) then
         res%reason = NEWTON_CONVERGED; factored = .false.; exit
@@ -532,6 +611,82 @@ contains
     self%snb = snb; self%sbw = sbw; self%ssp = ssp; self%scheck = chk; self%spat => spat
   end subroutine linear_solve
 
+  !> b := J^{-1} b with J = dR/dx of sys at x (r = R(x), evaluated by the caller), J assembled as
+  !> Newton's solves assemble it: in its declared band (vci_banded_matrix, no n x n array) when
+  !> sys writes it there, else densely into jac (grown to n if smaller) and solved as linear_solve
+  !> with structured_as = sys. stat: the Jacobian's own (b unchanged when it fails); info as
+  !> linear_solve's.
+  subroutine jacobian_solve(self, sys, x, r, jac, b, info, stat)
+    class(vci_newton_t), intent(inout) :: self
+    class(vci_system_t), intent(inout) :: sys
+    real(dp), intent(in) :: x(:), r(:)
+    real(dp), allocatable, intent(inout) :: jac(:, :)
+    real(dp), intent(inout) :: b(:)
+    integer, intent(out) :: info, stat
+    integer :: n, snb, sbw, ssp, st
+    logical :: chk, packed
+    type(vci_sparse_pattern_t), pointer :: spat
+    n = size(x)
+    info = -1; st = 0
+    snb = self%snb; sbw = self%sbw; ssp = self%ssp; chk = self%scheck; spat => self%spat; packed = self%packed
+    call pose_structure(self, sys, n)
+    self%packed = .false.
+    if (self%snb > 0 .and. .not. self%scheck) then
+      if (sys%packs_band()) then
+        call self%bmat%size_for(self%snb, self%sbw, self%capacity - self%snb, st)
+        self%packed = st == 0
+      end if
+    end if
+    if (self%packed) then
+      call self%bmat%pose(n)
+      call sys%band_jacobian(x, r, self%bmat, stat)
+      if (stat == VCI_OK) call packed_linear_solve(self, n, b, info)
+    else
+      stat = VCI_OK
+      if (allocated(jac)) then
+        if (size(jac, 1) < n .or. size(jac, 2) < n) deallocate (jac)
+      end if
+      if (.not. allocated(jac)) allocate (jac(n, n), stat=st)
+      if (st /= 0) stat = VCI_ERR_MEMORY
+      if (stat == VCI_OK) call sys%jacobian(x, r, jac(1:n, 1:n), stat)
+      if (stat == VCI_OK) call posed_linear_solve(self, n, jac, b, info)
+    end if
+    self%snb = snb; self%sbw = sbw; self%ssp = ssp; self%scheck = chk; self%spat => spat; self%packed = packed
+  end subroutine jacobian_solve
+
+  !> linear_solve of the matrix in bmat (its declared band): factorised there; when the band
+  !> block or its border is singular, densely from a copy (n^2, made only then), as linear_solve.
+  subroutine packed_linear_solve(self, n, b, info)
+    type(vci_newton_t), intent(inout) :: self
+    integer, intent(in) :: n
+    real(dp), intent(inout) :: b(:)
+    integer, intent(out) :: info
+    integer :: i, st
+    real(dp), allocatable :: a(:, :)
+    info = -1
+    if (.not. (self%bmat%row_weights(n, self%rw) <= huge(1.0_dp) .and. all_finite(b(1:n)))) return
+    self%rt(1:n) = b(1:n)
+    self%have_lu = .false.            ! the factors below are not a Newton matrix's
+    call self%band%factor_packed(n, self%bmat, self%rw, info)
+    if (info == 0) then
+      self%fkind = FACTORS_BAND
+      do i = 1, n
+        b(i) = b(i) * self%rw(i)
+      end do
+      call lu_solve(self, n, b)
+      if (all_finite(b(1:n))) return
+      b(1:n) = self%rt(1:n)
+    end if
+    self%fkind = FACTORS_WHOLE
+    allocate (a(n, n), stat=st)
+    if (st /= 0) then
+      info = -1; return
+    end if
+    call self%bmat%to_dense(a, n)
+    self%snb = 0; self%ssp = 0; self%scheck = .false.
+    call posed_linear_solve(self, n, a, b, info)
+  end subroutine packed_linear_solve
+
   !> linear_solve with the posed structure (snb, sbw, ssp, spat, scheck).
   subroutine posed_linear_solve(self, n, a, b, info)
     type(vci_newton_t), intent(inout) :: self
@@ -567,8 +722,12 @@ contains
         end if
       end if
     end if
+    call grow_dense(self, n, info)
+    if (info /= 0) then
+      b(1:n) = self%rt(1:n); info = -1; return
+    end if
     self%lu(1:n, 1:n) = a(1:n, 1:n)
-    if (band_only) call zero_outside_band(self%snb, self%sbw, self%lu, self%capacity)
+    if (band_only) call zero_outside_band(self%snb, self%sbw, self%lu, self%dense_capacity)
     call lu_factor(self, n, info)
     if (info == 0) then
       call lu_solve(self, n, b)
@@ -576,9 +735,9 @@ contains
     end if
     ! singular: the minimum-norm least-squares solution, as in the Newton direction
     self%jac(1:n, 1:n) = a(1:n, 1:n)
-    if (band_only) call zero_outside_band(self%snb, self%sbw, self%jac, self%capacity)
+    if (band_only) call zero_outside_band(self%snb, self%sbw, self%jac, self%dense_capacity)
     self%dx(1:n) = self%rt(1:n)
-    call dgelsd(n, n, 1, self%jac, self%capacity, self%dx, self%capacity, self%sv, 1.0e-12_dp, rank, &
+    call dgelsd(n, n, 1, self%jac, self%dense_capacity, self%dx, self%capacity, self%sv, 1.0e-12_dp, rank, &
                 self%work, size(self%work), self%iwork, info)
     if (info == 0 .and. all_finite(self%dx(1:n))) then
       b(1:n) = self%dx(1:n)
@@ -609,11 +768,20 @@ contains
       if (factored) return
       ! a singular band block or Schur complement (or no workspace, no KLU): the dense path below
       ! decides, on the matrix with its zeros outside the band written (the assembly wrote the band
-      ! alone; a sparse pattern's matrix is dense in memory)
-      if (self%snb > 0 .and. .not. self%scheck) call zero_outside_band(self%snb, self%sbw, self%jac, self%capacity)
+      ! alone; a sparse pattern's matrix is dense in memory); a matrix kept in its band is copied
+      ! out to a dense one, made (n^2) only now
+      if (self%packed) then
+        call grow_dense(self, n, info)
+        if (info /= 0) then
+          res%reason = NEWTON_MEMORY; return
+        end if
+        call self%bmat%to_dense(self%jac, self%dense_capacity)
+      else if (self%snb > 0 .and. .not. self%scheck) then
+        call zero_outside_band(self%snb, self%sbw, self%jac, self%dense_capacity)
+      end if
     end if
     ! rows equilibrated by their largest entry; jac keeps the equilibrated matrix for the fallback
-    call equilibrate(n, self%capacity, self%jac, self%lu, self%r, self%dx, self%rw)
+    call equilibrate(n, self%dense_capacity, self%jac, self%lu, self%r, self%dx, self%rw)
     factored = .false.
     ! r w overflows when r is huge and the row's entries tiny: nothing non-finite goes to LAPACK
     if (.not. (all_finite(self%lu(1:n, 1:n)) .and. all_finite(self%dx(1:n)))) then
@@ -623,7 +791,7 @@ contains
     self%factorisations = self%factorisations + 1
     factored = .false.
     if (info == 0) then
-      if (pivots_regular(n, self%capacity, self%lu)) then
+      if (pivots_regular(n, self%dense_capacity, self%lu)) then
         call lu_solve(self, n, self%dx)
         factored = all(ieee_is_finite(self%dx(1:n)))
       end if
@@ -633,7 +801,7 @@ contains
     do i = 1, n
       self%dx(i) = self%r(i) * self%rw(i)
     end do
-    call dgelsd(n, n, 1, self%jac, self%capacity, self%dx, self%capacity, self%sv, 1.0e-12_dp, rank, &
+    call dgelsd(n, n, 1, self%jac, self%dense_capacity, self%dx, self%capacity, self%sv, 1.0e-12_dp, rank, &
                 self%work, size(self%work), self%iwork, info)
     res%used_fallback = .true.
     if (info /= 0 .or. .not. all(ieee_is_finite(self%dx(1:n)))) res%reason = NEWTON_SINGULAR
@@ -649,9 +817,9 @@ contains
     if (.not. self%scheck) return
     i = 0; j = 0
     if (self%snb > 0) then
-      call outside_band(self%snb, self%sbw, self%jac, self%capacity, i, j)
+      call outside_band(self%snb, self%sbw, self%jac, self%dense_capacity, i, j)
     else if (self%ssp > 0) then
-      call outside_pattern(self%ssp, self%spat, self%jac, self%capacity, i, j)
+      call outside_pattern(self%ssp, self%spat, self%jac, self%dense_capacity, i, j)
     end if
     if (i > 0) then
       res%reason = NEWTON_STRUCTURE; res%bad_row = i; res%bad_col = j; outside = .true.
@@ -678,22 +846,39 @@ contains
     if (self%block_stale .or. .not. self%border_chord .or. n <= self%reuse_min .or. self%block_ni /= ni .or. &
         self%snb > 0 .or. self%ssp > 0) then
       self%block_stale = .true.
-      if (.not. (structure_rows(self, ni, self%jac, self%capacity, self%brw) <= huge(1.0_dp))) return
-      call structured_factor(self, ni, self%jac, self%capacity, self%brw, info)
+      if (self%packed) then
+        if (.not. (self%bmat%row_weights(ni, self%brw) <= huge(1.0_dp))) return
+        call self%band%factor_packed(ni, self%bmat, self%brw, info)
+        self%fkind = FACTORS_BAND
+        if (info /= 0) self%fkind = FACTORS_WHOLE
+      else
+        if (.not. (structure_rows(self, ni, self%jac, self%dense_capacity, self%brw) <= huge(1.0_dp))) return
+        call structured_factor(self, ni, self%jac, self%dense_capacity, self%brw, info)
+      end if
       if (info /= 0) return
       self%bkind = self%fkind; self%block_ni = ni
       self%factorisations = self%factorisations + 1
       if (self%bkind /= FACTORS_BLOCK) self%structured_factorisations = self%structured_factorisations + 1
       self%block_stale = .false.; self%block_reused = .false.
     end if
-    select case (self%bkind)
-    case (FACTORS_BAND)
-      call self%bord%border(self%band, ni, self%jac, self%capacity, self%brw, info)
-    case (FACTORS_SPARSE)
-      call self%bord%border(self%sparse, ni, self%jac, self%capacity, self%brw, info)
-    case default
-      call self%bord%border(self%blockd, ni, self%jac, self%capacity, self%brw, info)
-    end select
+    if (self%packed) then
+      ! the border's row: the last border row over the band block's columns, then the last row of
+      ! the other border columns (the multipliers')
+      associate (mt => self%bmat, nb => self%bmat%nb, nd => self%bmat%nd)
+        self%bvec(1:nb) = mt%rows(nd, 1:nb)
+        self%bvec(nb + 1:ni) = mt%cols(n, 1:nd - 1)
+        call self%bord%border_parts(self%band, ni, mt%cols(1:ni, nd), self%bvec(1:ni), mt%cols(n, nd), self%brw, info)
+      end associate
+    else
+      select case (self%bkind)
+      case (FACTORS_BAND)
+        call self%bord%border(self%band, ni, self%jac, self%dense_capacity, self%brw, info)
+      case (FACTORS_SPARSE)
+        call self%bord%border(self%sparse, ni, self%jac, self%dense_capacity, self%brw, info)
+      case default
+        call self%bord%border(self%blockd, ni, self%jac, self%dense_capacity, self%brw, info)
+      end select
+    end if
     if (info /= 0) then
       self%block_stale = .true.; return
     end if
@@ -719,19 +904,51 @@ contains
     integer :: i, info
     real(dp) :: total
     factored = .false.
-    total = structure_rows(self, n, self%jac, self%capacity, self%rw)
+    if (self%packed) then
+      total = self%bmat%row_weights(n, self%rw)
+    else
+      total = structure_rows(self, n, self%jac, self%dense_capacity, self%rw)
+    end if
     do i = 1, n
       self%dx(i) = self%r(i) * self%rw(i)
     end do
     ! NaN/Inf in the matrix or r w: the dense path reports it (nothing non-finite goes to LAPACK)
     if (.not. (total <= huge(1.0_dp) .and. all_finite(self%dx(1:n)))) return
-    call structured_factor(self, n, self%jac, self%capacity, self%rw, info)
+    if (self%packed) then
+      call self%band%factor_packed(n, self%bmat, self%rw, info)
+      self%fkind = FACTORS_BAND
+      if (info /= 0) self%fkind = FACTORS_WHOLE
+    else
+      call structured_factor(self, n, self%jac, self%dense_capacity, self%rw, info)
+    end if
     if (info /= 0) return
     self%factorisations = self%factorisations + 1
     self%structured_factorisations = self%structured_factorisations + 1
     call lu_solve(self, n, self%dx)
     factored = all(ieee_is_finite(self%dx(1:n)))
   end subroutine structured_direction
+
+  !> Where this solve keeps Newton's matrix: in the declared band (bmat, packed) when the system
+  !> writes it there and the debug check is off (the check scans a dense matrix), else in the dense
+  !> jac, grown to n unknowns if reserve sized it smaller. stat: VCI_ERR_MEMORY when neither fits.
+  subroutine pose_storage(self, sys, n, stat)
+    type(vci_newton_t), intent(inout) :: self
+    class(vci_system_t), intent(inout) :: sys
+    integer, intent(in) :: n
+    integer, intent(out) :: stat
+    integer :: st
+    stat = VCI_OK
+    self%packed = .false.
+    if (self%snb > 0 .and. .not. self%scheck) then
+      if (sys%packs_band()) then
+        call self%bmat%size_for(self%snb, self%sbw, self%capacity - self%snb, st)
+        self%packed = st == 0
+      end if
+    end if
+    if (self%packed) return
+    call grow_dense(self, n, st)
+    if (st /= 0) stat = VCI_ERR_MEMORY
+  end subroutine pose_storage
 
   !> The posed structure of sys (n unknowns): a band (snb, sbw) or else a sparse pattern (ssp,
   !> spat), and whether to check it on every matrix (scheck).
@@ -926,7 +1143,7 @@ contains
     if (n <= self%small_lu_max) then
       call small_lu(n, self%lu, self%ipiv, info)
     else
-      call dgetrf(n, n, self%lu, self%capacity, self%ipiv, info)
+      call dgetrf(n, n, self%lu, self%dense_capacity, self%ipiv, info)
     end if
   end subroutine lu_factor
 
@@ -956,7 +1173,7 @@ contains
       if (n <= self%small_lu_max) then
         call small_lu_solve(n, self%lu, self%ipiv, b)
       else
-        call dgetrs('N', n, 1, self%lu, self%capacity, self%ipiv, b, size(b), info)
+        call dgetrs('N', n, 1, self%lu, self%dense_capacity, self%ipiv, b, size(b), info)
       end if
     end select
   end subroutine lu_solve

@@ -887,13 +887,14 @@ contains
       if (self%fused) call self%sys%substep_sensitivity(self%rhs(1:nx0), done)
       info = 0
       if (.not. done) then
+        ! (the Jacobian in the system's declared structure: with a band, no n x n array)
         call self%sys%residual(self%x(1:nx0), self%res(1:nx0), self%res_scale(1:nx0), stat)
-        if (stat == VCI_OK) call self%sys%jacobian(self%x(1:nx0), self%res(1:nx0), self%jac(1:nx0, 1:nx0), stat)
+        call self%sys%momentum_rhs(self%q_trial, self%rhs(1:nx0))
+        if (stat == VCI_OK) call self%newton%jacobian_solve(self%sys, self%x(1:nx0), self%res(1:nx0), self%jac, &
+                                                           self%rhs(1:nx0), info, stat)
         if (stat /= VCI_OK) then
           call set_cause(self, trim(what)//' initial guess'); return
         end if
-        call self%sys%momentum_rhs(self%q_trial, self%rhs(1:nx0))
-        call self%newton%linear_solve(nx0, self%jac, self%rhs, info, structured_as=self%sys)
       end if
       call self%sys%endpoint_direction(self%rhs(1:nx0), self%q_trial)   ! a sensitivity, not a point
       den = dot_product(self%sys%grad, self%q_trial)

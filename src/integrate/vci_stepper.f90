@@ -15,7 +15,8 @@ module vci_stepper
   use vci_status
   use vci_message, only: vci_set_message, vci_int_text, vci_real_text
   use vci_newton, only: vci_newton_t, vci_newton_result_t, NEWTON_MAX_ITERATIONS, NEWTON_NO_DESCENT, &
-                        NEWTON_SINGULAR, NEWTON_EVALUATION, NEWTON_NONFINITE, NEWTON_STRUCTURE
+                        NEWTON_SINGULAR, NEWTON_EVALUATION, NEWTON_NONFINITE, NEWTON_STRUCTURE, vci_large_system, &
+                        NEWTON_MEMORY
   use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_STAGE1, KIND_STAGE2, KIND_IMPULSE, &
                         VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN, VCI_IMPACT_BLENDED
   use vci_observer, only: vci_impact_t
@@ -165,7 +166,8 @@ contains
     class(vci_stepper_t), intent(inout) :: self
     class(vci_scheme_t), allocatable, intent(inout) :: scheme
     integer, intent(out) :: stat
-    integer :: n, m, ng, nx, ngw
+    integer :: n, m, ng, nx, ngw, nb, bw, nd
+    logical :: chk
     n = scheme%n; m = scheme%m; ng = scheme%n_gaps; ngw = max(1, ng)
     self%n = n; self%m = m; self%ng = ng
     self%stats = vci_solver_stats_t()
@@ -175,7 +177,12 @@ contains
     self%nsub = self%sys%unknowns(KIND_SUBSTEP)
     nx = max(self%sys%unknowns(KIND_STAGE1), self%sys%unknowns(KIND_STAGE2), self%sys%unknowns(KIND_IMPULSE))
     call release_workspace(self)
-    call self%newton%reserve(nx, stat)
+    ! a declared band (no debug check): Newton's matrices of vci_large_system unknowns or more are
+    ! kept in band storage, so the dense ones are only the small systems' and the impulse's
+    call self%sys%structure(nb, bw, chk)
+    nd = nx
+    if (nb > 0 .and. .not. chk) nd = min(nx, max(self%sys%unknowns(KIND_IMPULSE), vci_large_system - 1))
+    call self%newton%reserve(nx, stat, dense_max=nd)
     if (stat /= VCI_OK) return
     call self%newton%forget_factors()      ! another scheme's Jacobian is no chord matrix for this one
     ! Lobatto with constraints: one chord step before a second Jacobian (vci_newton's
@@ -189,7 +196,7 @@ contains
       if (m > 0) self%newton%polish_above = 8.0_dp
     end select
     call self%configure(self%settings)
-    allocate (self%x(nx), self%x_stage1(nx), self%x_saved(nx), self%x_low(nx), self%x_high(nx), self%x_full(nx), self%jac(nx, nx), &
+    allocate (self%x(nx), self%x_stage1(nx), self%x_saved(nx), self%x_low(nx), self%x_high(nx), self%x_full(nx), self%jac(nd, nd), &
               self%rhs(nx), self%res(nx), self%res_scale(nx), self%q_start(n), self%p_start(n), self%q_end(n), &
               self%q_wall(n), self%p_arrive(n), self%p_leave(n), self%chord_velocity(n), self%q_guess(n), &
               self%q_trial(n), self%gaps_start(ngw), self%gaps_end(ngw), self%gaps_trial(ngw), self%gap_grads(n, ngw), &
@@ -770,6 +777,9 @@ contains
       call explain_newton(self, nx)
     case (NEWTON_NONFINITE)
       self%cause = what//': residual or Newton matrix not finite (callback values overflow)'
+    case (NEWTON_MEMORY)
+      call vci_set_message(self%cause, what//': out of memory for a dense Newton matrix of '// &
+        trim(vci_int_text(nx))//' unknowns')
     case (NEWTON_STRUCTURE)      ! (the debug check of a declared Hessian bandwidth or pattern)
       call vci_set_message(self%cause, what//': the Newton matrix has a nonzero at ('//trim(vci_int_text(res%bad_row))// &
         ', '//trim(vci_int_text(res%bad_col))//') outside the Hessian bandwidth the model declared, or its sparse pattern')

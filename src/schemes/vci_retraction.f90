@@ -39,6 +39,8 @@ module vci_retraction
     procedure :: gap_gradient
     procedure :: impulse_inc
     procedure :: d1s_inc, pout_inc, energy_inc, jacobian_inc, constraint_inc
+    !> jacobian_inc into compact band storage (a declared bandwidth, no n x n array).
+    procedure :: jacobian_inc_band
   end type vci_retraction_model_t
 
 contains
@@ -409,6 +411,85 @@ contains
       end do
     end do
   end subroutine jacobian_inc
+
+  !> jacobian_inc on the declared band, into compact band storage ab(2 bw + 1, n) (entry (i, j) at
+  !> row bw + 1 + i - j, LAPACK's layout without fill-in rows): from the model's banded Hessians
+  !> when it gives them, else from its dense ones read on the band. O(n bw); stat as jacobian_inc's.
+  subroutine jacobian_inc_band(self, a, d, h, dir, ab, stat)
+    class(vci_retraction_model_t), intent(inout) :: self
+    real(dp), intent(in) :: a(:), d(:), h
+    integer, intent(in) :: dir
+    real(dp), intent(inout) :: ab(:, :)
+    integer, intent(inout) :: stat
+    integer :: s, i, j, n, bw, k
+    real(dp) :: t
+    bw = self%hessian_bandwidth; n = size(ab, 2); k = bw + 1
+    if (.not. self%work%has_hessians) then
+      ab = 0.0_dp
+      call self%not_provided(stat); return
+    end if
+    call segment_inc(self, a, d, h, dir)
+    s = VCI_OK
+    if (self%band_hessians) then
+      call lagrangian_band_hessians(self%lag, self%work, self%pt, self%w, bw, self%lqq, self%lqv, self%lvv, s)
+    else
+      call lagrangian_hessians(self%lag, self%work, self%pt, self%w, self%lqq, self%lqv, self%lvv, s)
+    end if
+    if (s /= VCI_OK) then
+      stat = failure_code(self, s); return
+    end if
+    if (self%band_hessians) then    ! (one loop per case: a branch per entry cost ~25 % more instructions)
+      if (self%rule == RETRACTION_LEFT) then
+        do j = 1, n
+          do i = max(1, j - bw), min(n, j + bw)
+            ab(k + i - j, j) = self%lqv(k + i - j, j) - self%lvv(k + i - j, j) / h
+          end do
+        end do
+      else
+        do j = 1, n
+          do i = max(1, j - bw), min(n, j + bw)
+            ab(k + i - j, j) = 0.25_dp * h * self%lqq(k + i - j, j) + 0.5_dp * (self%lqv(k + i - j, j) - &
+                               self%lqv(k + j - i, i)) - self%lvv(k + i - j, j) / h
+          end do
+        end do
+      end if
+    else
+      do j = 1, n
+        do i = max(1, j - bw), min(n, j + bw)
+          ab(k + i - j, j) = mixed_entry(self, h, i, j)
+        end do
+      end do
+    end if
+    if (dir >= 0) return
+    ! -transpose in place on the band: (i, j) and (j, i) sit at rows k + i - j and k + j - i
+    do j = 1, n
+      ab(k, j) = -ab(k, j)
+      do i = j + 1, min(n, j + bw)
+        t = ab(k + i - j, j); ab(k + i - j, j) = -ab(k + j - i, i); ab(k + j - i, i) = -t
+      end do
+    end do
+  end subroutine jacobian_inc_band
+
+  !> Entry (i, j), |i - j| <= bw, of mixed_block's D2 D1 L_d from the blocks as they are stored
+  !> (band storage with hessians_band, else dense).
+  pure real(dp) function mixed_entry(self, h, i, j) result(v)
+    class(vci_retraction_model_t), intent(in) :: self
+    real(dp), intent(in) :: h
+    integer, intent(in) :: i, j
+    real(dp) :: qq, qv, vq, vv
+    integer :: k
+    if (self%band_hessians) then
+      k = self%hessian_bandwidth + 1
+      qq = self%lqq(k + i - j, j); qv = self%lqv(k + i - j, j); vq = self%lqv(k + j - i, i); vv = self%lvv(k + i - j, j)
+    else
+      qq = self%lqq(i, j); qv = self%lqv(i, j); vq = self%lqv(j, i); vv = self%lvv(i, j)
+    end if
+    if (self%rule == RETRACTION_LEFT) then
+      v = qv - vv / h
+    else
+      v = 0.25_dp * h * qq + 0.5_dp * (qv - vq) - vv / h
+    end if
+  end function mixed_entry
 
   !> omega_d(a, b, h) = Omega(point)^T d / h with the rule's point of the segment based at a.
   subroutine constraint_inc(self, a, d, h, out, stat)

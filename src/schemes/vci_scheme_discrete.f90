@@ -20,6 +20,7 @@ module vci_scheme_discrete
   use vci_retraction, only: vci_retraction_model_t, RETRACTION_LEFT
   use vci_newton, only: vci_large_system, vci_newton_t, vci_newton_result_t
   use vci_sparse, only: vci_sparse_pattern_t
+  use vci_banded_matrix, only: vci_band_matrix_t
   use vci_kernels, only: momentum_terms, kinetic_and_floor, jacobian_sizes, band_jacobian_sizes
   use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_STAGE1, KIND_STAGE2, KIND_IMPULSE, KIND_PAIR, &
                         VCI_IMPACT_HAMILTONIAN, vci_fd_rel
@@ -49,6 +50,7 @@ module vci_scheme_discrete
     real(dp), allocatable, private :: cjo(:, :)   !< the model's d omega_d(a, b) / db
     real(dp), allocatable, private :: d1(:), hess(:, :), g(:), rp(:), rm(:), sp(:), sm(:), xp(:), bb(:)
     real(dp), allocatable, private :: gg1(:)   !< the wall's gap gradient at stage 1's b (its Jacobian's last row)
+    real(dp), allocatable, private :: fcol(:)  !< one differenced column, before it goes into band storage
     !> sum_j |dR_i/dx_j| |x_j| from the last Jacobian: the round-off floor of row i (positions are
     !> often large next to their change over a step), added to each row's scale
     real(dp), allocatable, private :: jscale(:)
@@ -85,6 +87,8 @@ module vci_scheme_discrete
     procedure :: substep_sensitivity
     procedure :: use_derivatives
     procedure :: structure => banded_structure
+    procedure :: packs_band => discrete_packs_band
+    procedure :: band_jacobian => step_band_jacobian
     procedure :: sparse_structure => declared_pattern
     procedure :: position_carry => discrete_position_carry
     procedure :: restore_position_carry => discrete_restore_carry
@@ -220,7 +224,7 @@ contains
     class(vci_scheme_discrete_t), intent(inout) :: self
     class(vci_model_t), target, intent(inout) :: model
     integer, intent(out) :: stat
-    integer :: n, m, nx, nf
+    integer :: n, m, nx, nf, nj, nh
     call self%setup_common(model, stat)
     if (stat /= 0) return
     self%model => model
@@ -237,7 +241,7 @@ contains
                                         self%xp, self%jscale, self%jabs, self%bb, self%start_key, &
                                         self%start_lo, self%end_key, self%end_lo, self%kin, self%cjo, self%sizes, &
                                         self%fjac, self%flu, self%fr, self%fsc, self%frt, self%fsct, self%fxt, &
-                                        self%fdx, self%frw, self%fx0, self%fpiv, self%gg1, &
+                                        self%fdx, self%frw, self%fx0, self%fpiv, self%gg1, self%fcol, &
                                         self%lkey, self%ld1, self%ld2, self%lhess)
     ! the fused solve's matrices only for the small systems it takes (vci_large_system; else 1 x 1:
     ! a chain of n = 4096 kept two n x n arrays here, one of them zeroed and so resident)
@@ -247,16 +251,24 @@ contains
               self%fx0(n + m), self%fpiv(n + m), stat=stat)
     if (stat /= 0) return
     self%fjac = 0.0_dp
-    allocate (self%cjo(m, n), self%sizes(nx), self%gg1(n), &
-              self%d1(n), self%hess(n, n), self%g(max(1, model%n_gaps)), self%bb(n), self%start_key(n), self%start_lo(n), &
+    ! with a declared band (no debug check) the large systems' Jacobians are written in band storage
+    ! (step_band_jacobian) and a retraction's mixed Hessian straight into it: |J| and the mixed
+    ! Hessian are n x n only for the small systems (below vci_large_system) or a user's L_d, whose
+    ! mixed_hessian callback is dense
+    nj = nx; nh = n
+    if (model%hessian_bandwidth >= 0 .and. .not. model%check_bandwidth) then
+      nj = min(nx, vci_large_system)
+      if (self%increments .and. n + m >= vci_large_system) nh = 1
+    end if
+    allocate (self%cjo(m, n), self%sizes(nx), self%gg1(n), self%fcol(nx), &
+              self%d1(n), self%hess(nh, nh), self%g(max(1, model%n_gaps)), self%bb(n), self%start_key(n), self%start_lo(n), &
               self%end_key(n), self%end_lo(n), self%kin(n), &
               self%rp(nx), self%rm(nx), self%sp(nx), self%sm(nx), self%xp(nx), self%jscale(nx), &
-              self%jabs(nx, nx), self%lkey(2, n), self%ld1(n), self%ld2(n), self%lhess(n, n), stat=stat)
+              self%jabs(nj, nj), self%lkey(2, n), self%ld1(n), self%ld2(n), self%lhess(nh, nh), stat=stat)
     if (stat /= 0) return
     self%l_known = .false.
     self%jscale = 0.0_dp
-    ! (a large banded system reads jabs on the band and the border only: untouched pages stay unmapped)
-    if (model%hessian_bandwidth < 0 .or. model%check_bandwidth .or. nx <= vci_large_system) self%jabs = 0.0_dp
+    self%jabs = 0.0_dp
     self%jac_known = .false.
     self%have_end = .false.
     self%start_key = huge(1.0_dp); self%start_lo = 0.0_dp
@@ -843,6 +855,16 @@ contains
     real(dp), intent(in) :: x(:), tau
     real(dp), intent(inout) :: jac(:, :)
     integer, intent(out) :: stat
+    call constraint_rows(self, x, tau, jac(self%n + 1:self%n + self%m, 1:self%n), stat)
+  end subroutine constraint_block
+
+  !> constraint_block's rows into cb(1:m, 1:n) (the rows alone: a matrix in band storage keeps its
+  !> border rows apart, vci_banded_matrix).
+  subroutine constraint_rows(self, x, tau, cb, stat)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:), tau
+    real(dp), intent(inout) :: cb(:, :)
+    integer, intent(out) :: stat
     integer :: i, j, n, m
     n = self%n; m = self%m
     stat = VCI_OK
@@ -851,7 +873,7 @@ contains
         ! left retraction: omega_d = Omega(a)^T d / tau is linear in d
         do j = 1, n
           do i = 1, m
-            jac(n + i, j) = self%omega(j, i) / tau
+            cb(i, j) = self%omega(j, i) / tau
           end do
         end do
         return
@@ -862,15 +884,170 @@ contains
       call self%model%discrete_constraint_jacobian(self%a, x(1:n), tau, self%cjo, stat)
       call self%check_matrix(stat, self%cjo, 'discrete constraint Jacobian')
       if (stat /= VCI_OK) return
-      jac(n + 1:n + m, 1:n) = self%cjo
+      cb(1:m, 1:n) = self%cjo
       return
     end if
     do j = 1, n
       call fd_constraint_column(self, x, j, tau, fd_step(position(self, x, j), motion(self, x, j)), &
-                                jac(n + 1:n + m, j), stat)
+                                cb(1:m, j), stat)
       if (stat /= VCI_OK) return
     end do
-  end subroutine constraint_block
+  end subroutine constraint_rows
+
+  !> Does the posed system write its Jacobian in band storage (step_band_jacobian)? With a declared
+  !> band, no debug check, and vci_large_system unknowns or more (smaller systems keep the n x n
+  !> path: it is small, and the fused solve and the kinetic sizes read it densely).
+  logical function discrete_packs_band(self)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    integer :: nb, bw
+    logical :: chk
+    call banded_structure(self, nb, bw, chk)
+    discrete_packs_band = nb > 0 .and. .not. chk .and. self%unknowns(self%kind) >= vci_large_system
+  end function discrete_packs_band
+
+  !> step_jacobian written in the declared structure (vci_banded_matrix; posed and zeroed by
+  !> Newton): the band of the position block, the constraint, gap or energy rows and the
+  !> multiplier and alpha or mu columns apart. The same entries as step_jacobian's on the band
+  !> (a differenced column's entries outside the band are zero by declaration and dropped), and
+  !> the same row sizes (jscale, kin); nothing of size n^2.
+  subroutine step_band_jacobian(self, x, r, mat, stat)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:), r(:)
+    type(vci_band_matrix_t), intent(inout) :: mat
+    integer, intent(out) :: stat
+    integer :: n, m, nx, i, j, k, last, bw, nd
+    real(dp) :: tau, d, hp, hm, t
+    n = self%n; m = self%m; nx = size(x); last = n + m + 1
+    bw = mat%bw; nd = nx - n; k = bw + 1
+    stat = VCI_OK
+    tau = step_length(self, x)
+    ! columns of b
+    if (self%has_hessian) then
+      call momentum_band(self, x, tau, mat, stat)
+      if (stat /= VCI_OK) return
+      if (nx > n .and. self%kind == KIND_SUBSTEP) then
+        if (m > 0) call constraint_rows(self, x, tau, mat%rows(1:m, 1:n), stat)
+        if (stat /= VCI_OK) return
+      else if (nx > n .and. analytic_last_row(self)) then
+        if (m > 0) call constraint_rows(self, x, tau, mat%rows(1:m, 1:n), stat)
+        if (stat /= VCI_OK) return
+        if (self%kind == KIND_STAGE1) then
+          call endpoint_of(self, x)
+          call self%eval_gap_gradient(self%bb, self%gap, self%gg1, stat)
+          if (stat /= VCI_OK) return
+          mat%rows(nd, 1:n) = self%gg1
+        end if
+      else if (nx > n) then
+        do j = 1, n
+          call fd_column(self, x, j, fd_step(position(self, x, j), motion(self, x, j)), .false., self%fcol(1:nx), stat)
+          if (stat /= VCI_OK) return
+          mat%rows(1:nd, j) = self%fcol(n + 1:nx)
+        end do
+      end if
+    else
+      do j = 1, n
+        call fd_column(self, x, j, fd_step(position(self, x, j), motion(self, x, j)), .true., self%fcol(1:nx), stat)
+        if (stat /= VCI_OK) return
+        do i = max(1, j - bw), min(n, j + bw)
+          mat%band(k + i - j, j) = self%fcol(i)
+        end do
+        mat%rows(1:nd, j) = self%fcol(n + 1:nx)
+      end do
+    end if
+    ! multiplier columns: d/d lambda of -Omega(a) lambda
+    do j = 1, m
+      do i = 1, n
+        mat%cols(i, j) = -self%omega(i, j)
+      end do
+    end do
+    select case (self%kind)
+    case (KIND_STAGE1)       ! alpha enters through the sub-step length; g_j(b) does not depend on it
+      d = vci_fd_rel * x(last)
+      call fd_column(self, x, last, d, .true., mat%cols(1:nx, nd), stat, gap_row=.false.)
+      mat%cols(last, nd) = 0.0_dp
+    case (KIND_STAGE2)    ! mu enters linearly in the momentum rows
+      mat%cols(1:n, nd) = self%grad
+      if (self%impact_energy == VCI_IMPACT_HAMILTONIAN) then
+        d = vci_fd_rel * max(abs(x(last)), sqrt(sum(self%pa**2)) / max(sqrt(sum(self%grad**2)), tiny(1.0_dp)))
+        self%pplus = self%pa + (x(last) + d) * self%grad
+        call self%hamiltonian(self%a, self%pplus, hp, stat)
+        if (stat /= VCI_OK) return
+        self%pplus = self%pa + (x(last) - d) * self%grad
+        call self%hamiltonian(self%a, self%pplus, hm, stat)
+        if (stat /= VCI_OK) return
+        mat%cols(last, nd) = (hp - hm) / (2.0_dp * d)
+      end if
+    end select
+    if (stat /= VCI_OK) return
+    ! the row sizes of step_jacobian: jscale(i) = sum_j |J_ij| size_j, kin(i) = sum_j |J_ij| motion_j
+    ! over the position block (its band)
+    do j = 1, nx
+      if (j <= n) then
+        self%sizes(j) = abs(position(self, x, j))
+      else
+        self%sizes(j) = abs(x(j))
+      end if
+    end do
+    self%jscale(1:nx) = 0.0_dp
+    self%kin = 0.0_dp
+    do j = 1, n
+      hp = motion(self, x, j)
+      do i = max(1, j - bw), min(n, j + bw)
+        t = abs(mat%band(k + i - j, j))
+        self%jscale(i) = self%jscale(i) + t * self%sizes(j)
+        self%kin(i) = self%kin(i) + t * hp
+      end do
+      do i = 1, nd
+        self%jscale(n + i) = self%jscale(n + i) + abs(mat%rows(i, j)) * self%sizes(j)
+      end do
+    end do
+    do j = 1, nd
+      do i = 1, nx
+        self%jscale(i) = self%jscale(i) + abs(mat%cols(i, j)) * self%sizes(n + j)
+      end do
+    end do
+    self%jac_known = .true.
+  end subroutine step_band_jacobian
+
+  !> momentum_block into band storage: a retraction's mixed Hessian written there by its own band
+  !> routine; a user's L_d's dense mixed Hessian (its callback's shape) read on the band.
+  subroutine momentum_band(self, x, tau, mat, stat)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:), tau
+    type(vci_band_matrix_t), intent(inout) :: mat
+    integer, intent(out) :: stat
+    integer :: i, j, n, bw, k
+    n = self%n; bw = mat%bw; k = bw + 1
+    stat = 0
+    if (self%increments) then
+      call self%ret%jacobian_inc_band(self%a, x(1:n), tau, self%dir, mat%band, stat)
+      call self%check_matrix(stat, mat%band, 'mixed Hessian')
+      return
+    end if
+    if (self%has_fused) then
+      if (self%dir > 0) then
+        call ld_at(self, self%a, x(1:n), tau, stat)
+      else
+        call ld_at(self, x(1:n), self%a, tau, stat)
+      end if
+      self%hess = self%lhess
+    else if (self%dir > 0) then
+      call self%model%mixed_hessian(self%a, x(1:n), tau, self%hess, stat)
+    else
+      call self%model%mixed_hessian(x(1:n), self%a, tau, self%hess, stat)
+    end if
+    call self%check_band(stat, self%hess, bw, 'mixed Hessian')
+    if (stat /= VCI_OK) return
+    do j = 1, n
+      do i = max(1, j - bw), min(n, j + bw)
+        if (self%dir > 0) then
+          mat%band(k + i - j, j) = self%hess(i, j)
+        else
+          mat%band(k + i - j, j) = -self%hess(j, i)
+        end if
+      end do
+    end do
+  end subroutine momentum_band
 
   !> A new solve starts: its Jacobian is not known yet (see jabs).
   subroutine forget_jacobian(self)

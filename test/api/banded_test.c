@@ -6,7 +6,10 @@
  *  2. the same with the debug check on (the band against central differences at the start);
  *  3. band 0 declared with the check on: the start is refused with VCI_ERR_ARGUMENT and a message
  *     naming L_qq(2, 1) outside the band;
- *  4. a separable model or a dead handle is refused. */
+ *  4. a separable model or a dead handle is refused;
+ *  5. vci_set_bordered_impacts: the banded run with the whole stage matrices (0) agrees with the
+ *     dense run to 1e-9 as the bordered one does, and solves no direction by bordering
+ *     (vci_get_bordered_directions 0; > 0 by default); on = 2, min_unknowns 1 or -1 are refused. */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -51,8 +54,11 @@ static int gap_grads(int n, int ng, const double *q, double *dg, void *u) {
   return 0;
 }
 
-/* bw < 0: dense hessians, no band; else band bw, hessians_band only, check as given. */
-static int run(int bw, int check, double *q, double *p, int64_t *impacts, char *msg, size_t len) {
+/* bw < 0: dense hessians, no band; else band bw, hessians_band only, check as given. bordered >= 0:
+ * vci_set_bordered_impacts(bordered, 0) (after its bad arguments are seen refused); *bdir: directions
+ * solved by bordering. */
+static int run_b(int bw, int check, int bordered, double *q, double *p, int64_t *impacts, int64_t *bdir,
+                 char *msg, size_t len) {
   vci_lagrangian_callbacks cb = VCI_LAGRANGIAN_CALLBACKS_INIT;
   vci_model model = NULL;
   vci_integrator it = NULL;
@@ -69,13 +75,25 @@ static int run(int bw, int check, double *q, double *p, int64_t *impacts, char *
   if (st == VCI_OK) st = vci_integrator_create(&it, model, 0.01);
   vci_model_destroy(&model);
   if (st == VCI_OK) st = vci_set_impact_energy(it, VCI_IMPACT_HAMILTONIAN);
+  if (st == VCI_OK && bordered >= 0) {
+    CHECK(vci_set_bordered_impacts(it, 2, 0) == VCI_ERR_ARGUMENT);
+    CHECK(vci_set_bordered_impacts(it, 1, 1) == VCI_ERR_ARGUMENT);
+    CHECK(vci_set_bordered_impacts(it, 1, -1) == VCI_ERR_ARGUMENT);
+    CHECK(vci_get_bordered_directions(it, NULL) == VCI_ERR_ARGUMENT);
+    st = vci_set_bordered_impacts(it, bordered, 0);
+  }
   if (st == VCI_OK) st = vci_init_from_momentum(it, 0.0, q0, p0);
   if (st == VCI_OK) st = vci_integrate(it, 100, 1);
   if (st == VCI_OK) st = vci_get_state(it, &t, q, p);
   if (st == VCI_OK) st = vci_get_stats(it, NULL, impacts, NULL);
+  if (st == VCI_OK && bdir) st = vci_get_bordered_directions(it, bdir);
   if (st != VCI_OK) vci_last_error(it, msg, len);
   vci_integrator_destroy(&it);
   return st;
+}
+
+static int run(int bw, int check, double *q, double *p, int64_t *impacts, char *msg, size_t len) {
+  return run_b(bw, check, -1, q, p, impacts, NULL, msg, len);
 }
 
 static double maxdiff(const double *a, const double *b) {
@@ -100,6 +118,18 @@ int main(void) {
     CHECK(id >= 10 && ib == id);
     CHECK(maxdiff(qb, qd) <= 1e-9 && maxdiff(pb, pd) <= 1e-9);
     CHECK(band_calls > 100);
+  }
+  {
+    int64_t bon = -1, boff = -1;
+    st = run_b(1, 0, -1, qb, pb, &ib, &bon, msg, sizeof msg);
+    CHECK(st == VCI_OK);
+    st = run_b(1, 0, 0, qb, pb, &ib, &boff, msg, sizeof msg);
+    if (st != VCI_OK) printf("  whole-stage run failed: %s\n", msg);
+    CHECK(st == VCI_OK);
+    printf("band 1, whole stage matrices: %lld impacts; |dq| = %.2e, |dp| = %.2e; bordered directions %lld "
+           "(default run %lld)\n", (long long)ib, maxdiff(qb, qd), maxdiff(pb, pd), (long long)boff, (long long)bon);
+    CHECK(ib == id && maxdiff(qb, qd) <= 1e-9 && maxdiff(pb, pd) <= 1e-9);
+    CHECK(boff == 0 && bon > 0);
   }
   st = run(0, 1, qb, pb, &ib, msg, sizeof msg);
   printf("band 0, check 1: %s: %s\n", vci_status_string(st), msg);
