@@ -858,12 +858,10 @@ Reference: the quad-precision order-30 Taylor event-driven integration, step 0.0
 they differ by {check} in the double results (state and impact times at T). Run by
 `vci_results_driver sweep FILE "" fpu_walls_1024` and the peers' drivers with the scene
 `fpu_walls_1024`. vci runs `midpoint` from L with the chain's tridiagonal Hessians declared
-(`declare_bandwidth(1)`, LAPACK band LU). **Not the explicit compositions**, although their regular
-step is O(n) and explicit: their stage 1 (the impact time along the composed map) costs ~0.07 s an
-impact here, 17 s a run (callgrind at T = 0.25: two thirds of the run in its trial maps along the
-sub-step; the likely cause, not yet confirmed, is its root iteration's stopping test, relative to the
-fraction of the sub-step and so below the gap's rounding when the root lies at a small fraction) —
-a defect to fix (issue 32), not the method's cost. Its dense rows (the hand-written
+(`declare_bandwidth(1)`, LAPACK band LU), and the explicit compositions of order 2 … 10 with the
+Hamiltonian condition (their stage 1 searches first the wall estimated to be crossed first, and keeps
+every wall's gap at the accepted point: 0.2–0.7 ms an impact here, where searching the walls in index
+order cost ~0.07 s; docs/bench/composition.md). Its dense rows (the hand-written
 L_d with an n × n mixed Hessian, Lobatto's stage systems) and CVODE-BDF (a dense 2n × 2n Newton
 matrix) are left out: each would spend the time budget on dense LU, and a user with this chain would
 not pick them. So is the compiled DOP853: its event location (written for the small scenes)

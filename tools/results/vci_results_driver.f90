@@ -309,11 +309,12 @@ contains
 
   !> Whether a variant runs on the large chain: its dense rows (the hand-written L_d's n x n mixed
   !> Hessian, Lobatto's (s + 1) n stage systems, which do not use the band) would spend the time
-  !> budget on dense LU; midpoint from L (banded) runs. The explicit compositions do not yet: their
-  !> stage 1 costs ~0.07 s an impact here, 17 s a run (docs/RESULTS.md says so).
+  !> budget on dense LU; midpoint from L (banded) and the explicit compositions run (their stage 1
+  !> searches the wall estimated first first, 0.2-0.7 ms an impact here since sep32f).
   logical function runs_on_large_chain(var)
     type(variant_t), intent(in) :: var
-    runs_on_large_chain = var%scheme == VCI_SCHEME_MIDPOINT .and. var%impact_mode == VCI_IMPACT_HAMILTONIAN
+    runs_on_large_chain = var%impact_mode == VCI_IMPACT_HAMILTONIAN .and. &
+      (var%scheme == VCI_SCHEME_MIDPOINT .or. var%scheme == VCI_SCHEME_COMPOSITION)
   end function runs_on_large_chain
 
   !> The step actually used for a nominal step, so that T = t_final is a grid point.
