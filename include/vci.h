@@ -464,8 +464,9 @@ int  vci_close_output(vci_integrator integ);
  *  --output; the run must go on from its last state in its direction, with the same n, m, ngaps
  *  and h (restore that state first with vci_restore_from_file). Finished like vci_open_output's.
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, path NULL or empty; VCI_ERR_IO: the file does not
- *  exist, is not a regular file, not an HDF5 file of this library or not writable, or this library
- *  was built without HDF5 (vci_last_error says which); VCI_ERR_MEMORY; VCI_ERR_STATE: busy.
+ *  exist, is not a regular file, not an HDF5 file of this library or not writable, the previous
+ *  output file could not be finished, or this library was built without HDF5 (vci_last_error says
+ *  which); VCI_ERR_MEMORY; VCI_ERR_STATE: busy.
  *  The first step after it returns VCI_ERR_IO (nothing written) when the run does not continue the
  *  file: another state, direction, n, m, ngaps or h. */
 int  vci_append_output(vci_integrator integ, const char *path);
@@ -627,8 +628,9 @@ int  vci_ensemble_run(vci_model model, const vci_ensemble_config *config, int64_
  *  process runs every member and mpi_comm is not looked at. An existing file is kept (VCI_ERR_IO)
  *  unless overwrite != 0. *members_failed (may be NULL) = members whose status is not VCI_OK.
  *  Returns VCI_OK when every member was run and written; the statuses of vci_ensemble_run, path
- *  NULL or empty (VCI_ERR_ARGUMENT), VCI_ERR_IO (the file, or no HDF5 in this library),
- *  VCI_ERR_STATE (MPI not initialised). */
+ *  NULL or empty or ranks given different member counts (VCI_ERR_ARGUMENT), VCI_ERR_IO (the file,
+ *  or no HDF5 in this library), VCI_ERR_STATE (MPI not initialised); under MPI the ranks all
+ *  return the same status (and message). */
 int  vci_ensemble_run_file(vci_model model, const vci_ensemble_config *config, int64_t members,
                            const double *t0, const double *q0, const double *v0, const char *path,
                            int overwrite, int mpi_comm, int64_t *members_failed);
