@@ -156,8 +156,8 @@ typedef struct vci_callbacks {
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: model or cb NULL, cb->size not that of a vci_callbacks of
  *  some header (the size field and a whole number of members: not initialised with
  *  VCI_CALLBACKS_INIT), a callback set that this library does not know (a newer
- *  header), n < 1, m < 0, m > n, ngaps < 0, n + m + 1 > 46340, n * ngaps >= 2^31, or a required
- *  callback NULL; VCI_ERR_MEMORY.
+ *  header), n < 1, m < 0, m > n, ngaps < 0, n + m + 1 > 46340, n * ngaps >= 2^31, a required
+ *  callback NULL, or a gaps callback given with ngaps = 0; VCI_ERR_MEMORY.
  *  (vci_model_create is a macro: the symbol vci_model_create keeps the 0.1 struct without `size`,
  *  for binaries built against vci 0.1.) */
 int  vci_model_create_v2(vci_model *model, int n, int m, int ngaps, const vci_callbacks *cb, void *user);
@@ -308,12 +308,15 @@ int  vci_model_create_separable(vci_model *model, int n, int m, int ngaps, int m
                                 const vci_separable_callbacks *cb, void *user);
 
 /** Choose the scheme of an integrator made from a continuous model: VCI_SCHEME_LEFT, _MIDPOINT,
- *  or _LOBATTO with `stages` = s in 1..VCI_LOBATTO_MAX_STAGES (ignored for the others). Call before
- *  initialising: the state is reset. Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, a discrete
- *  model, unknown scheme, s out of range (the integrator keeps its scheme);
- *  VCI_ERR_MEMORY: the scheme's workspace could not be allocated (about 3 (s n + 1)^2 doubles for
- *  lobatto): the integrator then has no usable scheme, and initialising it returns VCI_ERR_STATE
- *  until a vci_set_scheme succeeds; VCI_ERR_STATE: busy. */
+ *  or _LOBATTO with `stages` = s in 1..VCI_LOBATTO_MAX_STAGES, or VCI_SCHEME_COMPOSITION of order
+ *  `stages` (ignored for left and midpoint). Call after vci_integrator_create and before
+ *  initialising. Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, a discrete model, unknown scheme,
+ *  s out of range, a composition order not 2, 4, 6, 8 or 10, a composition for a model not made by
+ *  vci_model_create_separable (the integrator keeps its scheme); VCI_ERR_MEMORY: the scheme's
+ *  workspace could not be allocated (about 3 (s n + 1)^2 doubles for lobatto): the integrator then
+ *  has no usable scheme, and initialising it returns VCI_ERR_STATE until a vci_set_scheme
+ *  succeeds; VCI_ERR_STATE: busy, already initialised (the run stays as it was: create a new
+ *  integrator for another scheme), or an open output file holds steps. */
 int  vci_set_scheme(vci_integrator integ, int scheme, int stages);
 
 /** Release the model and set *model = NULL. NULL-safe (model or *model NULL: nothing happens).
@@ -322,8 +325,10 @@ int  vci_set_scheme(vci_integrator integ, int scheme, int stages);
 void vci_model_destroy(vci_model *model);
 
 /** Create an integrator of step length h (> 0, finite) for model. On failure *integ = NULL.
- *  Returns VCI_OK; VCI_ERR_ARGUMENT: integ NULL, model NULL or not live, h not positive and finite;
- *  VCI_ERR_MEMORY: the workspace (about 3 (n + m + 1)^2 doubles) could not be allocated. */
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT: integ NULL, model NULL or not live, h not positive and finite,
+ *  a declared sparse pattern that cannot be used (invalid, a bandwidth declared too, or this library
+ *  built without the sparse solver); VCI_ERR_MEMORY: the workspace (about 3 (n + m + 1)^2 doubles)
+ *  could not be allocated, or no handle is left. */
 int  vci_integrator_create(vci_integrator *integ, vci_model model, double h);
 
 /** Destroy the integrator (finishing its output file, if any) and set *integ = NULL. NULL-safe.
@@ -357,30 +362,42 @@ int  vci_set_step_splits(vci_integrator integ, int max_splits);
 /** Start from the pair q0[n] at t0 and q1[n] at t0 + h. The current state becomes
  *  (t0 + h, q1, p1) with p1 = D2 L_d(q0, q1, h), step index 1; the discrete energy is E_d(q0, q1, h).
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, q0 or q1 NULL, NaN/Inf in t0, q0 or q1, t0 + h
- *  overflows, a required constraint callback missing; VCI_ERR_INADMISSIBLE: q0 or q1 outside the
- *  admissible set; VCI_ERR_CALLBACK or VCI_ERR_NONFINITE: a callback failed or gave NaN/Inf;
- *  VCI_ERR_NEWTON: lobatto's interior stages of the pair could not be solved; VCI_ERR_MEMORY: the
- *  probes of the model could not be allocated; VCI_ERR_STATE: busy, an open output file already
- *  holds steps (close it first), or the last vci_set_scheme failed (no usable scheme). After a
- *  failure the integrator has no state (VCI_ERR_STATE from stepping) until initialised again. */
+ *  overflows, a required constraint callback missing, VCI_SCHEME_COMPOSITION (it starts from a
+ *  momentum: vci_init_from_momentum), or the debug check of a declared bandwidth (check != 0)
+ *  found an entry outside the band; VCI_ERR_INADMISSIBLE: q0 or q1 outside the admissible set;
+ *  VCI_ERR_CALLBACK or VCI_ERR_NONFINITE: a callback failed or gave NaN/Inf; VCI_ERR_NEWTON:
+ *  lobatto's interior stages of the pair could not be solved; VCI_ERR_MEMORY: the probes of the
+ *  model could not be allocated; VCI_ERR_STATE: busy, an open output file already holds steps
+ *  (close it first), or the last vci_set_scheme failed (no usable scheme). After a failure the
+ *  integrator has no state (VCI_ERR_STATE from stepping) until initialised again. */
 int  vci_init_from_pair(vci_integrator integ, double t0, const double *q0, const double *q1);
 
 /** Start from (q0[n], p0[n]) at t0, step index 0 (no discrete energy until the first step).
- *  Returns as vci_init_from_pair (p0 NULL instead of q1). */
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, q0 or p0 NULL, NaN/Inf in t0, q0 or p0, a
+ *  required constraint callback missing, or the debug check of a declared bandwidth (check != 0)
+ *  found an entry outside the band; VCI_ERR_INADMISSIBLE: q0 outside the admissible set;
+ *  VCI_ERR_CALLBACK: a callback failed or gave NaN/Inf at q0; VCI_ERR_NONFINITE: a Hessian of the
+ *  bandwidth check gave NaN/Inf; VCI_ERR_MEMORY, VCI_ERR_STATE: as vci_init_from_pair. Nothing is
+ *  solved (no VCI_ERR_NEWTON). After a failure the integrator has no state. */
 int  vci_init_from_momentum(vci_integrator integ, double t0, const double *q0, const double *p0);
 
 /** One step: direction +1 forward ((+) scheme), -1 backward ((-) scheme).
- *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle or direction; VCI_ERR_STATE: not initialised, busy,
- *  or an open output file holds a run in the other direction; VCI_ERR_NONFINITE: also when the
- *  time of the next state overflows;
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle or direction, or the debug check of a declared
+ *  bandwidth or pattern (check != 0) found a Newton matrix entry outside it; VCI_ERR_STATE: not
+ *  initialised, busy, an open output file holds a run in the other direction, or the integrator
+ *  was destroyed during the call (see Threads); VCI_ERR_NONFINITE: also when the time of the next
+ *  state overflows;
  *  VCI_ERR_CALLBACK, VCI_ERR_NONFINITE, VCI_ERR_NEWTON, VCI_ERR_IMPACT, VCI_ERR_TOO_MANY_IMPACTS,
  *  VCI_ERR_MEMORY: the step failed and the state stays at the last accepted step; VCI_ERR_CALLBACK
  *  also when the impact callback returned nonzero, VCI_ERR_IO when the output file failed (for
- *  these two the step was accepted). */
+ *  these two the step was accepted; VCI_ERR_IO before the step when the file could not start the
+ *  run). */
 int  vci_step(vci_integrator integ, int direction);                 /* +1 forward, -1 backward */
 
 /** nsteps (>= 0) steps in one direction; stops at the first failure (state = last accepted step).
- *  Returns as vci_step, and VCI_ERR_ARGUMENT for nsteps < 0. */
+ *  Returns as vci_step, VCI_ERR_ARGUMENT also for nsteps < 0, VCI_ERR_IO also when the output file
+ *  fails at the start or the end of the run, and VCI_STOPPED when the progress callback
+ *  (vci_set_progress) asked to stop (the state is that of the last step it was told of). */
 int  vci_integrate(vci_integrator integ, int64_t nsteps, int direction);
 
 /** The current state: *t, q[n], p[n]. Any of t, q, p may be NULL to skip it.
@@ -388,7 +405,8 @@ int  vci_integrate(vci_integrator integ, int64_t nsteps, int direction);
 int  vci_get_state(vci_integrator integ, double *t, double *q, double *p);
 
 /** The multipliers lambda[m] of the last step (nothing is written when m = 0).
- *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, lambda NULL with m > 0; VCI_ERR_STATE. */
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, lambda NULL with m > 0; VCI_ERR_STATE: not
+ *  initialised, busy. */
 int  vci_get_multipliers(vci_integrator integ, double *lambda);
 
 /** The discrete energy E_d of the last step (of its last sub-step if it had impacts); NaN after
@@ -423,8 +441,9 @@ int  vci_set_impact_callback(vci_integrator integ, vci_impact_fn fn, void *user)
  *  finished by vci_close_output, vci_integrator_destroy or the next vci_open_output. One file holds
  *  one run: steps in one direction from one initialisation (other calls give VCI_ERR_STATE).
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, path NULL or empty; VCI_ERR_IO: the file cannot
- *  be created, or this library was built without HDF5 (vci_last_error says which); VCI_ERR_MEMORY:
- *  the writer could not be allocated; VCI_ERR_STATE. */
+ *  be created, the previous output file could not be finished, or this library was built without
+ *  HDF5 (vci_last_error says which); VCI_ERR_MEMORY: the writer could not be allocated;
+ *  VCI_ERR_STATE: busy. */
 int  vci_open_output(vci_integrator integ, const char *path);      /* HDF5; VCI_ERR_IO when unavailable */
 
 /** vci_open_output keeping every `every`-th state (those whose index from the file's first state is
@@ -445,8 +464,9 @@ int  vci_close_output(vci_integrator integ);
  *  --output; the run must go on from its last state in its direction, with the same n, m, ngaps
  *  and h (restore that state first with vci_restore_from_file). Finished like vci_open_output's.
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, path NULL or empty; VCI_ERR_IO: the file does not
- *  exist, is not a regular file, not an HDF5 file of this library or not writable, or this library
- *  was built without HDF5 (vci_last_error says which); VCI_ERR_MEMORY; VCI_ERR_STATE: busy.
+ *  exist, is not a regular file, not an HDF5 file of this library or not writable, the previous
+ *  output file could not be finished, or this library was built without HDF5 (vci_last_error says
+ *  which); VCI_ERR_MEMORY; VCI_ERR_STATE: busy.
  *  The first step after it returns VCI_ERR_IO (nothing written) when the run does not continue the
  *  file: another state, direction, n, m, ngaps or h. */
 int  vci_append_output(vci_integrator integ, const char *path);
@@ -459,9 +479,10 @@ int  vci_append_output(vci_integrator integ, const char *path);
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, path NULL or empty, the file's n or m differ from
  *  the model's, or its h from the integrator's; VCI_ERR_IO: the file cannot be read (missing, not
  *  a regular file, not an HDF5 file of this library, damaged) or this library was built without
- *  HDF5; VCI_ERR_INADMISSIBLE, VCI_ERR_CALLBACK, VCI_ERR_NONFINITE: the file's state is refused as
- *  vci_init_from_momentum refuses one; VCI_ERR_STATE: busy, or an open output file already holds
- *  steps (close it first). After a failure the integrator has no state until initialised again. */
+ *  HDF5; VCI_ERR_ARGUMENT, VCI_ERR_INADMISSIBLE, VCI_ERR_CALLBACK, VCI_ERR_NONFINITE,
+ *  VCI_ERR_MEMORY: the file's state is refused as vci_init_from_momentum refuses one;
+ *  VCI_ERR_STATE: busy, an open output file already holds steps (close it first), or the last
+ *  vci_set_scheme failed. After a failure the integrator has no state until initialised again. */
 int  vci_restore_from_file(vci_integrator integ, const char *path);
 
 /** Copy the message of the last call on integ (empty after a success) into buffer[size],
@@ -492,7 +513,7 @@ typedef struct vci_progress {
 typedef int (*vci_progress_fn)(const vci_progress *info, void *user);
 /** Call fn at most once per `interval` seconds of wall time during vci_integrate, and after its last
  *  step; fn = NULL: no more reports. The library prints nothing itself. Returns VCI_OK;
- *  VCI_ERR_ARGUMENT: bad handle, interval < 0 or not finite; VCI_ERR_STATE: busy. */
+ *  VCI_ERR_ARGUMENT: bad handle, interval < 0, > 1e9 or NaN; VCI_ERR_STATE: busy. */
 int  vci_set_progress(vci_integrator integ, vci_progress_fn fn, double interval, void *user);
 
 /** The model checker: compares every derivative callback the model supplies with central
@@ -502,8 +523,10 @@ int  vci_set_progress(vci_integrator integ, vci_progress_fn fn, double interval,
  *  gradients). q[n], v[n]: the point (v the second configuration of L_d(q, v, h), or the velocity
  *  for L); tol <= 0: the default 1e-6. *passed = 1 when every worst relative mismatch <= tol,
  *  *worst = the largest; report (NULL: none) gets one line per comparison, truncated to size - 1.
- *  Returns VCI_OK when the check ran; VCI_ERR_ARGUMENT (NULL pointers, dead handle, h <= 0);
- *  VCI_ERR_CALLBACK: a callback failed at the point (vci_last_error(NULL, ...) names it). */
+ *  Returns VCI_OK when the check ran; VCI_ERR_ARGUMENT (NULL pointers, dead handle, h <= 0 or not
+ *  finite, NaN/Inf in q or v, report given with size < 1); VCI_ERR_CALLBACK: a callback failed at
+ *  the point (vci_last_error(NULL, ...) names it); VCI_ERR_MEMORY: the check's n x n work arrays
+ *  could not be allocated. */
 int  vci_check_model(vci_model model, const double *q, const double *v, double h, double tol, int *passed,
                      double *worst, char *report, int size);
 
@@ -590,8 +613,10 @@ typedef struct vci_ensemble_results {
  *  Returns VCI_OK when the ensemble ran, whatever its members did; VCI_ERR_ARGUMENT: model not
  *  live, config, t0, q0, v0 or results NULL, a struct size that is no header's (or members set
  *  that this library does not know), members < 1 or members * n >= 2^31, h, nsteps, direction,
- *  start_kind, scheme, stages, impact_energy or a count invalid, a scheme for a discrete model;
- *  VCI_ERR_MEMORY. The message: vci_last_error(NULL, ...). */
+ *  start_kind, scheme, stages, impact_energy or a count invalid or beyond an int, atol and rtol
+ *  both 0, a scheme for a discrete model, a separable model (vci_model_create_separable: not in
+ *  ensembles yet); VCI_ERR_MEMORY: the starts or the results (impact_cap and trajectory samples
+ *  per member) could not be allocated. The message: vci_last_error(NULL, ...). */
 int  vci_ensemble_run(vci_model model, const vci_ensemble_config *config, int64_t members, const double *t0,
                       const double *q0, const double *v0, const vci_ensemble_results *results);
 
@@ -603,8 +628,9 @@ int  vci_ensemble_run(vci_model model, const vci_ensemble_config *config, int64_
  *  process runs every member and mpi_comm is not looked at. An existing file is kept (VCI_ERR_IO)
  *  unless overwrite != 0. *members_failed (may be NULL) = members whose status is not VCI_OK.
  *  Returns VCI_OK when every member was run and written; the statuses of vci_ensemble_run, path
- *  NULL or empty (VCI_ERR_ARGUMENT), VCI_ERR_IO (the file, or no HDF5 in this library),
- *  VCI_ERR_STATE (MPI not initialised). */
+ *  NULL or empty or ranks given different member counts (VCI_ERR_ARGUMENT), VCI_ERR_IO (the file,
+ *  or no HDF5 in this library), VCI_ERR_STATE (MPI not initialised); under MPI the ranks all
+ *  return the same status (and message). */
 int  vci_ensemble_run_file(vci_model model, const vci_ensemble_config *config, int64_t members,
                            const double *t0, const double *q0, const double *v0, const char *path,
                            int overwrite, int mpi_comm, int64_t *members_failed);

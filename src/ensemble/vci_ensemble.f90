@@ -170,7 +170,8 @@ contains
 
   !> Run every member of `table` with OpenMP threads (config%threads) and keep the results in memory.
   !> `stat` is VCI_OK when the ensemble ran, whatever its members did (see results%status), or
-  !> VCI_ERR_ARGUMENT / VCI_ERR_STATE with `message` when the inputs are unusable or memory is short.
+  !> VCI_ERR_ARGUMENT with `message` when the inputs are unusable, VCI_ERR_MEMORY when the results
+  !> cannot be allocated.
   subroutine vci_ensemble_run(factory, config, table, results, stat, message)
     class(vci_model_factory_t), intent(in) :: factory
     type(vci_ensemble_config_t), intent(in) :: config
@@ -289,7 +290,7 @@ contains
     if (any(s /= 0)) then
       write (message, '(a,i0,a,i0,a)') 'ensemble: out of memory for the results of ', count, &
         ' members (', ns, ' trajectory samples each)'
-      stat = VCI_ERR_ARGUMENT
+      stat = VCI_ERR_MEMORY
       return
     end if
     results%status = VCI_MEMBER_NOT_RUN

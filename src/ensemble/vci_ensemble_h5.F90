@@ -15,9 +15,13 @@
 !> A write that fails (a full disk) ends the file's writing: its descriptor is pointed at a sink
 !> (vci_h5_io's h5io_discard_writes, as the run writer does), so that HDF5 closes it without touching
 !> the disk again, and the disk keeps the metadata flushed at creation and every block written
-!> before. Under MPI a failure inside create is made every rank's before the next collective call;
-!> abandoning, every rank discards its own writes before the collective close; a successful close
-!> leaves the totals to rank 0 alone, through the serial driver after the collective close.
+!> before. Under MPI no metadata are written in parallel: rank 0 alone lays the file out (groups,
+!> datasets, attributes) through the serial driver and closes it, then every rank opens it through
+!> MPI-IO and writes raw data only (parallel HDF5 1.10 cannot flush or close a file again after a
+!> metadata write failed, and crashed in MPI_Finalize). A failure inside create is made every
+!> rank's before the next collective call; abandoning, every rank discards its own writes before
+!> the collective flush and close; a successful close leaves the totals to rank 0 alone, through
+!> the serial driver after the collective close.
 module vci_ensemble_h5
   use, intrinsic :: iso_c_binding, only: c_ptr, c_loc, c_null_ptr
   use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
@@ -72,6 +76,7 @@ module vci_ensemble_h5
     integer(hid_t), private :: d(N_DSETS) = -1
     logical, private :: discarded = .false.   !< a write failed: nothing more reaches the file
     logical, private :: parallel = .false.    !< opened collectively through the MPI-IO driver
+    logical, private :: alone = .false.       !< under MPI, rank 0 laying the file out by itself
 #ifdef VCI_HAVE_MPI
     type(MPI_Comm), private :: comm
 #endif
@@ -110,13 +115,11 @@ contains
 #ifdef VCI_HAVE_MPI
     type(MPI_Comm), intent(in) :: comm
 #endif
-    integer(hid_t) :: fapl, g
     integer :: err, e2, nm
 #ifdef VCI_HAVE_MPI
     integer :: rank
 #endif
     logical :: replace
-    character(len=16) :: start_kind
 
     stat = VCI_OK
     self%message = ''
@@ -148,13 +151,57 @@ contains
     call check_room(self, stat)
     call sync(self, stat)
     if (stat /= VCI_OK) return
-    call h5pcreate_f(H5P_FILE_ACCESS_F, fapl, err)
 #ifdef VCI_HAVE_MPI
-    if (err == 0) call h5pset_fapl_mpio_f(fapl, comm%MPI_VAL, MPI_INFO_NULL%MPI_VAL, err)
+    ! The layout (groups, datasets, attributes: every metadata write) is made by rank 0 alone through
+    ! the serial driver, flushed and closed; then every rank opens the file through MPI-IO and
+    ! writes only raw data. A metadata flush that fails in parallel HDF5 (1.10: a full disk) leaves
+    ! its metadata cache unable to flush or close the file ever again ("slist already enabled"): the
+    ! file stayed open, and HDF5's own close at MPI_Finalize crashed every rank. In one process a
+    ! failed flush is completed into the discard sink (f_abandon), as in a serial run.
+    call MPI_Comm_rank(comm, rank, err)
+    if (rank == 0) then
+      self%parallel = .false.; self%alone = .true.
+      call create_layout(self, path, replace, config, ranks, threads, chunk, stat)
+      call close_layout(self, stat)
+      self%parallel = .true.; self%alone = .false.
+    end if
+    call sync(self, stat)
+    if (stat /= VCI_OK) return
+    call open_parallel(self, stat)
+    call sync(self, stat)
+    if (stat == VCI_OK) then
+      call fill_share(self, int(int(nm, i8) * rank / ranks) + 1, int(int(nm, i8) * (rank + 1) / ranks), stat)
+      call sync(self, stat)
+    end if
+    if (stat == VCI_OK) then
+      call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
+      if (err /= 0) call fail(self, 'cannot flush the new file'//os_cause(), stat)
+      call sync(self, stat)
+    end if
+    if (stat /= VCI_OK .and. self%is_open) call drop_new_file(self)
 #else
+    call create_layout(self, path, replace, config, ranks, threads, chunk, stat)
+#endif
+  end subroutine f_create
+
+  !> The file's layout: PATH created (replacing it when `replace`), every group and dataset (all
+  !> space allocated) and the root attributes, flushed to disk. On a failure the file is abandoned
+  !> and removed (drop_new_file). Serial: one process (under MPI rank 0 alone, `alone` set).
+  subroutine create_layout(self, path, replace, config, ranks, threads, chunk, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    character(len=*), intent(in) :: path
+    logical, intent(in) :: replace
+    type(vci_ensemble_config_t), intent(in) :: config
+    integer, intent(in) :: ranks, threads, chunk
+    integer, intent(inout) :: stat
+    integer(hid_t) :: fapl, g
+    integer :: err, e2, nm
+    character(len=16) :: start_kind
+    if (stat /= VCI_OK) return
+    nm = self%n_members
+    call h5pcreate_f(H5P_FILE_ACCESS_F, fapl, err)
     ! no data sieving: each block of members goes to the file when written, not when a buffer fills
     if (err == 0) call h5pset_sieve_buf_size_f(fapl, 0_size_t, err)
-#endif
     if (err == 0) then
       if (replace) then
         call h5fcreate_f(path, H5F_ACC_TRUNC_F, self%file, err, access_prp=fapl)
@@ -220,7 +267,7 @@ contains
     call new_dset(self, D_RANK, H5T_STD_I32LE, [nm], stat, fill_int=-1)
     call new_dset(self, D_THREAD, H5T_STD_I32LE, [nm], stat, fill_int=-1)
     call new_dset(self, D_SECONDS, H5T_IEEE_F64LE, [nm], stat, fill_nan=.true.)
-    if (stat /= VCI_OK) then     ! (new_dset made every rank see it)
+    if (stat /= VCI_OK) then
       call drop_new_file(self); return
     end if
 
@@ -254,20 +301,55 @@ contains
       if (err /= 0) call fail(self, 'cannot flush the new file'//os_cause(), stat)
     end if
     call sync(self, stat)
+    if (stat /= VCI_OK .and. self%is_open) call drop_new_file(self)
+  end subroutine create_layout
+
 #ifdef VCI_HAVE_MPI
-    if (stat == VCI_OK) then
-      call MPI_Comm_rank(comm, rank, err)
-      call fill_share(self, int(int(nm, i8) * rank / ranks) + 1, int(int(nm, i8) * (rank + 1) / ranks), stat)
-      call sync(self, stat)
+  !> Rank 0's layout closed again (its metadata are on disk: nothing is left to write), so that
+  !> every rank can open the file through MPI-IO.
+  subroutine close_layout(self, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    integer, intent(inout) :: stat
+    integer :: i, err
+    if (.not. self%is_open) return
+    do i = 1, N_DSETS
+      if (self%d(i) >= 0) call h5dclose_f(self%d(i), err)
+      self%d(i) = -1
+    end do
+    call h5fclose_f(self%file, err)
+    if (err /= 0) then
+      call fail(self, 'cannot close the new file'//os_cause(), stat)
+      call drop_new_file(self); return
     end if
-    if (stat == VCI_OK) then
-      call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
-      if (err /= 0) call fail(self, 'cannot flush the new file'//os_cause(), stat)
-      call sync(self, stat)
+    self%is_open = .false.
+  end subroutine close_layout
+
+  !> Every rank opens the file rank 0 laid out, through the MPI-IO driver (collective), and its
+  !> datasets; nothing is written.
+  subroutine open_parallel(self, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    integer, intent(inout) :: stat
+    integer(hid_t) :: fapl
+    integer :: err, e2, j
+    call h5pcreate_f(H5P_FILE_ACCESS_F, fapl, err)
+    if (err == 0) call h5pset_fapl_mpio_f(fapl, self%comm%MPI_VAL, MPI_INFO_NULL%MPI_VAL, err)
+    if (err == 0) call h5fopen_f(self%path, H5F_ACC_RDWR_F, self%file, err, access_prp=fapl)
+    call h5pclose_f(fapl, e2)
+    if (err /= 0) then
+      call fail(self, 'cannot open the new file on every rank'//os_cause(), stat); return
     end if
+    self%is_open = .true.
+    do j = 1, N_DSETS
+      if (j == D_PARAMS .and. self%n_params == 0) cycle
+      if ((j == D_IMPT .or. j == D_IMPGAP) .and. self%impact_cap == 0) cycle
+      if (j >= D_TRCOUNT .and. j <= D_TRP .and. self%samples == 0) cycle
+      call h5dopen_f(self%file, trim(names(j)), self%d(j), err)
+      if (err /= 0) then
+        call fail(self, 'cannot open dataset /'//trim(names(j))//' of the new file', stat); return
+      end if
+    end do
+  end subroutine open_parallel
 #endif
-    if (stat /= VCI_OK) call drop_new_file(self)
-  end subroutine f_create
 
 #ifdef VCI_HAVE_MPI
   !> The fill values ("not run") of members first .. last in every dataset, written by this rank
@@ -460,27 +542,57 @@ contains
     self%is_open = .false.
   end subroutine write_totals
 
-  !> Stop writing: what HDF5 still holds goes to a sink (serial files; see the module's head), then
-  !> close. The file keeps its metadata as flushed at creation and every block of members written
-  !> before: it opens, and holds every member whose status is not -1. Collective under MPI.
+  !> Stop writing: what HDF5 still holds goes to a sink (see the module's head), then close, leaving
+  !> no HDF5 object of the file open. The file keeps its metadata as flushed at creation and every
+  !> block of members written before: it opens, and holds every member whose status is not -1.
+  !> Collective under MPI: every rank makes the same calls in the same order.
   subroutine f_abandon(self)
     class(vci_ensemble_file_t), intent(inout) :: self
     integer :: i, err
     if (.not. self%is_open) return
     ! in parallel every rank points its own descriptor at the sink, failed or not: the collective
-    ! close's metadata flush (rank 0 writes) then cannot fail on one rank and hang the others
+    ! flush and close then cannot fail on one rank and hang the others
     if (.not. self%discarded .or. self%parallel) call discard(self)
     self%discarded = .true.
     ! a metadata flush that failed half-way (a full disk) is completed into the sink: HDF5 1.10
-    ! can neither close a file with such a flush pending nor leave it (it crashed at exit)
-    if (.not. self%parallel) call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
+    ! can neither close a file with such a flush pending nor leave it (it crashed at exit). (In
+    ! parallel the metadata were written by one process at creation: nothing is pending.)
+    call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
     do i = 1, N_DSETS
       if (self%d(i) >= 0) call h5dclose_f(self%d(i), err)
       self%d(i) = -1
     end do
+    call close_leftovers(self)
     call h5fclose_f(self%file, err)
     self%is_open = .false.
   end subroutine f_abandon
+
+  !> Objects of the file still open besides the file itself (groups, datasets, named types,
+  !> attributes that a failed call left behind: H5Fget_obj_count) are closed, so that the file's
+  !> close really closes it: an HDF5 file left open is closed by HDF5 at exit (under MPI inside
+  !> MPI_Finalize, where its collective calls crashed).
+  subroutine close_leftovers(self)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    integer(size_t) :: count, got
+    integer(hid_t), allocatable :: ids(:)
+    integer :: err, i, which, kind
+    which = ieor(H5F_OBJ_ALL_F, H5F_OBJ_FILE_F)     ! datasets, groups, named types, attributes
+    call h5fget_obj_count_f(self%file, which, count, err)
+    if (err /= 0 .or. count < 1) return
+    allocate (ids(count), stat=err)
+    if (err /= 0) return
+    call h5fget_obj_ids_f(self%file, which, count, ids, err, got)
+    if (err /= 0) return
+    do i = 1, int(min(got, count))
+      call h5iget_type_f(ids(i), kind, err)
+      if (err /= 0) cycle
+      if (kind == H5I_ATTR_F) then
+        call h5aclose_f(ids(i), err)
+      else
+        call h5oclose_f(ids(i), err)
+      end if
+    end do
+  end subroutine close_leftovers
 
   !> Creation failed (on some rank): close without writing more and remove the file, which holds no
   !> member and whose metadata never reached the disk. Collective under MPI.
@@ -526,6 +638,7 @@ contains
     integer, intent(inout) :: stat
 #ifdef VCI_HAVE_MPI
     integer :: owner, rank, ierr
+    if (self%alone) return          ! rank 0 laying the file out: the others wait at the next sync
     call MPI_Comm_rank(self%comm, rank, ierr)
     owner = huge(1)
     if (stat /= VCI_OK) owner = rank
@@ -706,9 +819,9 @@ contains
     ! space allocated now (parallel HDF5 requires it): later writes never touch metadata
     if (err == 0) call h5pset_alloc_time_f(dcpl, H5D_ALLOC_TIME_EARLY_F, err)
 #ifdef VCI_HAVE_MPI
-    ! parallel HDF5 writes fill values inside the collective H5Dcreate and waits at a barrier after:
-    ! a rank whose write failed (a full disk) leaves the others there for ever. Each rank writes its
-    ! share of the fill itself instead (fill_share), outside any collective call.
+    ! not by rank 0 alone at creation: every rank writes its share of the fill once the file is open
+    ! on all of them (fill_share; parallel HDF5 wrote it inside the collective H5Dcreate and waited
+    ! at a barrier after, where a rank whose write failed left the others for ever)
     if (err == 0) call h5pset_fill_time_f(dcpl, H5D_FILL_TIME_NEVER_F, err)
 #endif
     if (err == 0 .and. present(fill_nan)) then
@@ -723,7 +836,7 @@ contains
     if (err /= 0) call fail(self, 'cannot create dataset /'//trim(names(which))//os_cause(), stat)
     call h5pclose_f(dcpl, e2)
     call h5sclose_f(space, e2)
-    call sync(self, stat)       ! collective: no rank may go on to the next H5Dcreate alone
+    call sync(self, stat)
   end subroutine new_dset
 
   subroutine new_string_dset(self, which, nm, stat)

@@ -93,6 +93,14 @@ contains
     report%passed = report%worst <= report%tol
   end subroutine vci_check_model
 
+  !> The check's work arrays could not be allocated (the library never stops the program).
+  subroutine out_of_memory(stat, msg)
+    integer, intent(out) :: stat
+    character(len=*), intent(inout) :: msg
+    stat = VCI_ERR_MEMORY
+    msg = 'vci_check_model: cannot allocate the work arrays of the check (out of memory)'
+  end subroutine out_of_memory
+
   !> "name  against  mismatch  verdict" for item i (fixed length; trim it).
   function report_line(self, i) result(text)
     class(vci_check_report_t), intent(in) :: self
@@ -119,7 +127,10 @@ contains
     real(dp), allocatable :: qp(:), vp(:), fp(:), fm(:), j1(:, :), j2(:, :), hess(:, :), d3q(:), d3v(:), &
                              d1h(:), d2h(:), omega(:, :), jd(:, :), jfd(:, :), cp(:), cm(:)
     n = model%n; m = model%m
-    allocate (qp(n), vp(n), fp(n), fm(n), j1(n, n), j2(n, n), hess(n, n), d3q(n), d3v(n), d1h(n), d2h(n))
+    allocate (qp(n), vp(n), fp(n), fm(n), j1(n, n), j2(n, n), hess(n, n), d3q(n), d3v(n), d1h(n), d2h(n), stat=s)
+    if (s /= 0) then
+      call out_of_memory(stat, msg); return
+    end if
     stat = VCI_OK
     qp = q; vp = v
     do j = 1, n
@@ -153,7 +164,10 @@ contains
                max(mismatch2(hess, j1), mismatch2(hess, transpose(j2))))
     end if
     if (m == 0) return
-    allocate (omega(n, m), jd(m, n), jfd(m, n), cp(m), cm(m))
+    allocate (omega(n, m), jd(m, n), jfd(m, n), cp(m), cm(m), stat=s)
+    if (s /= 0) then
+      call out_of_memory(stat, msg); return
+    end if
     ! the discrete form's Jacobian along `other`, differenced at (q, v) and at (q, q)
     call dconstraint_fd(v, jfd); if (stat /= VCI_OK) return
     call model%clear_not_provided(); s = 0
@@ -234,7 +248,10 @@ contains
                              hqq(:, :), hqv(:, :), hvv(:, :), aqq(:, :), aqv(:, :), avv(:, :)
     n = model%n
     allocate (qp(n), vp(n), lq(n), lv(n), fdq(n), fdv(n), fp(n), fm(n), hqq(n, n), hqv(n, n), hvv(n, n), &
-              aqq(n, n), aqv(n, n), avv(n, n))
+              aqq(n, n), aqv(n, n), avv(n, n), stat=s)
+    if (s /= 0) then
+      call out_of_memory(stat, msg); return
+    end if
     stat = VCI_OK
     s = 0; call model%lagrangian(q, v, l0, s); if (.not. ok(s, 'lagrangian', [l0])) return
     s = 0; call model%dl_dq(q, v, lq, s); if (.not. ok(s, 'dl_dq', lq)) return
@@ -304,7 +321,10 @@ contains
     stat = VCI_OK
     n = model%n; ng = model%n_gaps
     if (ng == 0) return
-    allocate (qp(n), gp(ng), gm(ng), dg(n, ng), fd(n, ng))
+    allocate (qp(n), gp(ng), gm(ng), dg(n, ng), fd(n, ng), stat=s)
+    if (s /= 0) then
+      call out_of_memory(stat, msg); return
+    end if
     qp = q
     do j = 1, n
       dd = step(q(j))

@@ -86,7 +86,7 @@ program ens_driver
       print '(a,i0,a)', 'rank ', rank, ': '//trim(msg)
       flush (6)
 #ifdef VCI_HAVE_MPI
-      call MPI_Barrier(MPI_COMM_WORLD, ierr)   ! every rank's status printed before finish aborts
+      call MPI_Barrier(MPI_COMM_WORLD, ierr)   ! every rank's status printed before any rank ends
 #endif
       call finish(1)
     end if
@@ -157,11 +157,13 @@ contains
     read (v, *) int_arg
   end function int_arg
 
+  !> End every rank through MPI_Finalize, also after a failure: a run that failed must leave MPI
+  !> (and HDF5, whose library closes at exit) as cleanly as one that succeeded; MPI_Abort would hide
+  !> an object left open that crashes the finalisation (issue 24, item 5).
   subroutine finish(code)
     integer, intent(in) :: code
 #ifdef VCI_HAVE_MPI
     integer :: e
-    if (code /= 0) call MPI_Abort(MPI_COMM_WORLD, code, e)
     call MPI_Finalize(e)
 #endif
     if (code /= 0) error stop code
