@@ -10,6 +10,7 @@
 !> part (nd of them border columns).
 module vci_banded_matrix
   use vci_kinds, only: dp
+  use vci_kernels, only: invert_row_sizes
   implicit none
   private
 
@@ -131,18 +132,7 @@ contains
         rw(i) = max(rw(i), abs(self%cols(i, k)))
       end do
     end do
-    total = 0.0_dp
-    do i = 1, nx
-      if (.not. (rw(i) <= huge(1.0_dp))) then
-        total = rw(i); return          ! (NaN or Inf: max() may have dropped a NaN, so test here too)
-      end if
-      total = total + rw(i)
-      if (rw(i) > 0.0_dp) then
-        rw(i) = 1.0_dp / rw(i)
-      else
-        rw(i) = 1.0_dp
-      end if
-    end do
+    call invert_row_sizes(nx, rw, total)
   end function row_weights
 
   !> a(1:nx, 1:nx) = A, zeros outside the band written: O(nx^2), for the dense fallback only.

@@ -14,12 +14,34 @@ module vci_kernels
   implicit none
   private
 
-  public :: band_jacobian_sizes
+  public :: band_jacobian_sizes, invert_row_sizes
   public :: momentum_terms, kinetic_and_floor, jacobian_sizes, equilibrate, scaled_merit, small_lu, small_lu_solve
   public :: substep_rows, substep_direction, pivots_regular
   public :: lobatto_nodes, lobatto_forces, lobatto_blocks, total_of
 
 contains
+
+  !> Row equilibration of a structured matrix from its rows' largest entries rw: total = their sum
+  !> (or the first non-finite one, returned at once: max() may have dropped a NaN, so test here
+  !> too); rw(i) := 1 / rw(i), 1 for an empty row.
+  pure subroutine invert_row_sizes(n, rw, total)
+    integer, intent(in) :: n
+    real(dp), intent(inout) :: rw(n)
+    real(dp), intent(out) :: total
+    integer :: i
+    total = 0.0_dp
+    do i = 1, n
+      if (.not. (rw(i) <= huge(1.0_dp))) then
+        total = rw(i); return
+      end if
+      total = total + rw(i)
+      if (rw(i) > 0.0_dp) then
+        rw(i) = 1.0_dp / rw(i)
+      else
+        rw(i) = 1.0_dp
+      end if
+    end do
+  end subroutine invert_row_sizes
 
   !> r(i) = d1(i) + pa(i) - sum_mu omega(i, mu) lambda(mu), sc(i) = the sum of those terms' sizes.
   pure subroutine momentum_terms(n, m, d1, pa, omega, lambda, r, sc)

@@ -630,13 +630,7 @@ contains
     info = -1; st = 0
     snb = self%snb; sbw = self%sbw; ssp = self%ssp; chk = self%scheck; spat => self%spat; packed = self%packed
     call pose_structure(self, sys, n)
-    self%packed = .false.
-    if (self%snb > 0 .and. .not. self%scheck) then
-      if (sys%packs_band()) then
-        call self%bmat%size_for(self%snb, self%sbw, self%capacity - self%snb, st)
-        self%packed = st == 0
-      end if
-    end if
+    call choose_band(self, sys)
     if (self%packed) then
       call self%bmat%pose(n)
       call sys%band_jacobian(x, r, self%bmat, stat)
@@ -928,6 +922,21 @@ contains
     factored = all(ieee_is_finite(self%dx(1:n)))
   end subroutine structured_direction
 
+  !> packed: Newton's matrix goes into the declared band (bmat, sized here) when the system writes
+  !> it there, the debug check is off (the check scans a dense matrix) and the band storage fits.
+  subroutine choose_band(self, sys)
+    type(vci_newton_t), intent(inout) :: self
+    class(vci_system_t), intent(inout) :: sys
+    integer :: st
+    self%packed = .false.
+    if (self%snb > 0 .and. .not. self%scheck) then
+      if (sys%packs_band()) then
+        call self%bmat%size_for(self%snb, self%sbw, self%capacity - self%snb, st)
+        self%packed = st == 0
+      end if
+    end if
+  end subroutine choose_band
+
   !> Where this solve keeps Newton's matrix: in the declared band (bmat, packed) when the system
   !> writes it there and the debug check is off (the check scans a dense matrix), else in the dense
   !> jac, grown to n unknowns if reserve sized it smaller. stat: VCI_ERR_MEMORY when neither fits.
@@ -938,13 +947,7 @@ contains
     integer, intent(out) :: stat
     integer :: st
     stat = VCI_OK
-    self%packed = .false.
-    if (self%snb > 0 .and. .not. self%scheck) then
-      if (sys%packs_band()) then
-        call self%bmat%size_for(self%snb, self%sbw, self%capacity - self%snb, st)
-        self%packed = st == 0
-      end if
-    end if
+    call choose_band(self, sys)
     if (self%packed) return
     call grow_dense(self, n, st)
     if (st /= 0) stat = VCI_ERR_MEMORY

@@ -15,6 +15,7 @@
 module vci_sparse
   use, intrinsic :: iso_c_binding, only: c_int, c_double, c_ptr, c_null_ptr, c_associated
   use vci_kinds, only: dp
+  use vci_kernels, only: invert_row_sizes
   use vci_factor, only: vci_factor_t
   implicit none
   private
@@ -269,18 +270,7 @@ contains
         end do
       end if
     end do
-    total = 0.0_dp
-    do i = 1, n
-      if (.not. (rw(i) <= huge(1.0_dp))) then
-        total = rw(i); return            ! (NaN or Inf: max() may have dropped a NaN, so test here too)
-      end if
-      total = total + rw(i)
-      if (rw(i) > 0.0_dp) then
-        rw(i) = 1.0_dp / rw(i)
-      else
-        rw(i) = 1.0_dp
-      end if
-    end do
+    call invert_row_sizes(n, rw, total)
   end function pattern_rows
 
   !> Factorise diag(rw) jac(1:nx, 1:nx) (rows scaled as the values are gathered; jac is not

@@ -805,17 +805,8 @@ contains
     end if
     if (self%increments) then
       call self%ret%jacobian_inc(self%a, x(1:n), tau, self%dir, self%hess, stat)
-    else if (self%has_fused) then
-      if (self%dir > 0) then
-        call ld_at(self, self%a, x(1:n), tau, stat)
-      else
-        call ld_at(self, x(1:n), self%a, tau, stat)
-      end if
-      self%hess = self%lhess
-    else if (self%dir > 0) then
-      call self%model%mixed_hessian(self%a, x(1:n), tau, self%hess, stat)
     else
-      call self%model%mixed_hessian(x(1:n), self%a, tau, self%hess, stat)
+      call user_mixed_hessian(self, x(1:n), tau, stat)
     end if
     if (nb > 0 .and. .not. chk) then        ! a user's L_d: its dense Hessian, read on the band
       call self%check_band(stat, self%hess, bw, 'mixed Hessian')
@@ -1009,6 +1000,26 @@ contains
     self%jac_known = .true.
   end subroutine step_band_jacobian
 
+  !> self%hess = the user's L_d's mixed Hessian at (a, b) (forward) or (b, a) (backward), from the
+  !> fused callback when the model has one, else the separate one.
+  subroutine user_mixed_hessian(self, b, tau, stat)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: b(:), tau
+    integer, intent(inout) :: stat        !< preset to 0 by the caller (the callbacks' contract)
+    if (self%has_fused) then
+      if (self%dir > 0) then
+        call ld_at(self, self%a, b, tau, stat)
+      else
+        call ld_at(self, b, self%a, tau, stat)
+      end if
+      self%hess = self%lhess
+    else if (self%dir > 0) then
+      call self%model%mixed_hessian(self%a, b, tau, self%hess, stat)
+    else
+      call self%model%mixed_hessian(b, self%a, tau, self%hess, stat)
+    end if
+  end subroutine user_mixed_hessian
+
   !> momentum_block into band storage: a retraction's mixed Hessian written there by its own band
   !> routine; a user's L_d's dense mixed Hessian (its callback's shape) read on the band.
   subroutine momentum_band(self, x, tau, mat, stat)
@@ -1024,18 +1035,7 @@ contains
       call self%check_matrix(stat, mat%band, 'mixed Hessian')
       return
     end if
-    if (self%has_fused) then
-      if (self%dir > 0) then
-        call ld_at(self, self%a, x(1:n), tau, stat)
-      else
-        call ld_at(self, x(1:n), self%a, tau, stat)
-      end if
-      self%hess = self%lhess
-    else if (self%dir > 0) then
-      call self%model%mixed_hessian(self%a, x(1:n), tau, self%hess, stat)
-    else
-      call self%model%mixed_hessian(x(1:n), self%a, tau, self%hess, stat)
-    end if
+    call user_mixed_hessian(self, x(1:n), tau, stat)
     call self%check_band(stat, self%hess, bw, 'mixed Hessian')
     if (stat /= VCI_OK) return
     do j = 1, n
