@@ -20,6 +20,7 @@
  *   vci_fuzz [--reversal] SEED_FIRST SEED_COUNT [SECONDS]   run the seeds, stop after SECONDS (default 60)
  *   vci_fuzz [--reversal] -1 SEED                           run one seed in this process (for a debugger)
  */
+#include <limits.h>
 #include <math.h>
 #include <signal.h>
 #include <stdint.h>
@@ -339,7 +340,13 @@ static void program(uint64_t seed) {
       fn = "vci_set_step_splits";
       break;
     case 17: { /* a bandwidth, right or wrong, for integrators created later */
-      int bw = chance(70) ? (mkind[j] != KIND_DISCRETE_MODEL ? cmodel_bandwidth(&cmodels[j]) : 0) : wild_int(3) - 1;
+      int bw;
+      if (chance(70)) {
+        bw = mkind[j] != KIND_DISCRETE_MODEL ? cmodel_bandwidth(&cmodels[j]) : 0;
+      } else {
+        bw = wild_int(3);
+        if (bw != INT_MIN) bw -= 1; /* (INT_MIN - 1 overflows: UBSan stopped seeds 433 and 444) */
+      }
       s = vci_model_declare_bandwidth(chance(5) ? (vci_model)ih[0] : mh[j], chance(10) ? -1 : bw, chance(30));
       fn = "vci_model_declare_bandwidth"; about = NULL;
       break;
