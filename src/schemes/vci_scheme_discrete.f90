@@ -682,7 +682,7 @@ contains
     real(dp), intent(inout) :: jac(:, :)
     integer, intent(out) :: stat
     integer :: n, m, nx, i, j, last, nb, bw
-    real(dp) :: tau, d, hp, hm
+    real(dp) :: tau, d
     logical :: chk
     n = self%n; m = self%m; nx = size(x); last = n + m + 1
     stat = VCI_OK
@@ -731,14 +731,7 @@ contains
     case (KIND_STAGE2)    ! mu enters linearly in the momentum rows
       jac(1:n, last) = self%grad
       if (self%impact_energy == VCI_IMPACT_HAMILTONIAN) then
-        d = vci_fd_rel * max(abs(x(last)), sqrt(sum(self%pa**2)) / max(sqrt(sum(self%grad**2)), tiny(1.0_dp)))
-        self%pplus = self%pa + (x(last) + d) * self%grad
-        call self%hamiltonian(self%a, self%pplus, hp, stat)
-        if (stat /= VCI_OK) return
-        self%pplus = self%pa + (x(last) - d) * self%grad
-        call self%hamiltonian(self%a, self%pplus, hm, stat)
-        if (stat /= VCI_OK) return
-        jac(last, last) = (hp - hm) / (2.0_dp * d)
+        call hamiltonian_mu_slope(self, x(last), jac(last, last), stat)
       end if
     end select
     ! |J| for the kinetic term of the momentum rows, and the round-off floor sum_j |J_ij| |x_j|, sized on
@@ -907,7 +900,7 @@ contains
     type(vci_band_matrix_t), intent(inout) :: mat
     integer, intent(out) :: stat
     integer :: n, m, nx, i, j, k, last, bw, nd
-    real(dp) :: tau, d, hp, hm, t
+    real(dp) :: tau, d, hp, t
     n = self%n; m = self%m; nx = size(x); last = n + m + 1
     bw = mat%bw; nd = nx - n; k = bw + 1
     stat = VCI_OK
@@ -959,14 +952,7 @@ contains
     case (KIND_STAGE2)    ! mu enters linearly in the momentum rows
       mat%cols(1:n, nd) = self%grad
       if (self%impact_energy == VCI_IMPACT_HAMILTONIAN) then
-        d = vci_fd_rel * max(abs(x(last)), sqrt(sum(self%pa**2)) / max(sqrt(sum(self%grad**2)), tiny(1.0_dp)))
-        self%pplus = self%pa + (x(last) + d) * self%grad
-        call self%hamiltonian(self%a, self%pplus, hp, stat)
-        if (stat /= VCI_OK) return
-        self%pplus = self%pa + (x(last) - d) * self%grad
-        call self%hamiltonian(self%a, self%pplus, hm, stat)
-        if (stat /= VCI_OK) return
-        mat%cols(last, nd) = (hp - hm) / (2.0_dp * d)
+        call hamiltonian_mu_slope(self, x(last), mat%cols(last, nd), stat)
       end if
     end select
     if (stat /= VCI_OK) return
@@ -999,6 +985,23 @@ contains
     end do
     self%jac_known = .true.
   end subroutine step_band_jacobian
+
+  !> slope = d/dmu H(a, pa + mu grad) by a central difference (stage 2's Hamiltonian row).
+  subroutine hamiltonian_mu_slope(self, mu, slope, stat)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: mu
+    real(dp), intent(inout) :: slope
+    integer, intent(inout) :: stat
+    real(dp) :: d, hp, hm
+    d = vci_fd_rel * max(abs(mu), sqrt(sum(self%pa**2)) / max(sqrt(sum(self%grad**2)), tiny(1.0_dp)))
+    self%pplus = self%pa + (mu + d) * self%grad
+    call self%hamiltonian(self%a, self%pplus, hp, stat)
+    if (stat /= VCI_OK) return
+    self%pplus = self%pa + (mu - d) * self%grad
+    call self%hamiltonian(self%a, self%pplus, hm, stat)
+    if (stat /= VCI_OK) return
+    slope = (hp - hm) / (2.0_dp * d)
+  end subroutine hamiltonian_mu_slope
 
   !> self%hess = the user's L_d's mixed Hessian at (a, b) (forward) or (b, a) (backward), from the
   !> fused callback when the model has one, else the separate one.
