@@ -8,7 +8,9 @@
 !> `bandcb` (that and the model's hessians_band: no n x n Hessian block), `whole`
 !> (impact stages with the whole stage matrix factorised, set_bordered_impacts(.false.): the path
 !> before bordering), `steps=K` (only the first K steps), `lobatto` (Lobatto IIIA-IIIB, 2 stages, instead of
-!> the midpoint), `digest` (after each row, a line with the final state's bits folded into one
+!> the midpoint), `single` (a start where only the first mass meets a wall: x_i = 0.2 sin(2 pi
+!> i/(n+1)), v_i = 0, then x_1 = 0.595, v_1 = 2: impact steps of one impact each, to compare one
+!> impact with a regular step), `digest` (after each row, a line with the final state's bits folded into one
 !> 64-bit word and the impact count: two builds whose arithmetic should agree compare it) and the
 !> n to run (default 32 128 256). Not a test: tools/bench/run_chain.sh runs it with OpenBLAS on one thread.
 
@@ -26,12 +28,12 @@ program bench_chain_impacts
   real(dp), allocatable :: q0(:), p0(:), treg(:), timp(:)
   integer, allocatable :: ns(:)
   real(dp) :: pi, rss0, rss1
-  logical :: banded, bandcb, whole, lobatto, digest
+  logical :: banded, bandcb, whole, lobatto, digest, single
   integer :: max_steps
   character(len=32) :: arg
   real(dp), parameter :: h = 0.01_dp, t_end = 2.0_dp
   pi = acos(-1.0_dp)
-  banded = .false.; bandcb = .false.; whole = .false.; lobatto = .false.; digest = .false.; max_steps = huge(1)
+  banded = .false.; bandcb = .false.; whole = .false.; lobatto = .false.; digest = .false.; single = .false.; max_steps = huge(1)
   narg = command_argument_count()
   allocate (ns(0)); nn = 0
   do ia = 1, narg
@@ -48,6 +50,8 @@ program bench_chain_impacts
       lobatto = .true.
     else if (trim(arg) == 'digest') then
       digest = .true.
+    else if (trim(arg) == 'single') then
+      single = .true.
     else
       read (arg, *) k
       ns = [ns, k]
@@ -64,7 +68,14 @@ program bench_chain_impacts
     do k = 1, n
       q0(k) = 0.24_dp * sin(2.0_dp * pi * real(k, dp) / real(n + 1, dp))
       p0(k) = 1.2_dp * sin(3.0_dp * pi * real(k, dp) / real(n + 1, dp)) + 0.8_dp * sin(pi * real(k, dp) / real(n + 1, dp))
+      if (single) then
+        q0(k) = 0.2_dp * sin(2.0_dp * pi * real(k, dp) / real(n + 1, dp))
+        p0(k) = 0.0_dp
+      end if
     end do
+    if (single) then
+      q0(1) = 0.595_dp; p0(1) = 2.0_dp
+    end if
     nsteps = min(nint(t_end / h), max_steps)
     allocate (treg(nsteps), timp(nsteps))
     rss0 = peak_rss_mb()
