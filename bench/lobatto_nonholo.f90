@@ -1,9 +1,10 @@
 !> Regular and impact steps of the Lobatto scheme with a nonholonomic constraint (issue 25): the
 !> paper's pendulum in the cylinder (examples/scenes/vci_scene_pendulum.f90, n = 2, m = 1) from the
 !> exact start of docs/RESULTS.md (theta = 3 pi/4, phi = 0, thetadot = pi/4, phidot = f thetadot),
-!> T = 5 s (3 impacts), Newton rtol 1e-14 as the results' Lobatto rows, with s stages and step h.
+!> T = 5 s (3 impacts), Newton rtol 1e-14 as the results' Lobatto rows (or RTOL), with s stages and
+!> step h.
 !>
-!>   vci_bench_lobatto_nonholo [S [H [EPISODES [PART]]]]   (defaults 3, 0.05, 50, all; PART = run:
+!>   vci_bench_lobatto_nonholo [S [H [EPISODES [PART [RTOL]]]]]   (defaults 3, 0.05, 50, all, 1e-14; PART = run:
 !>                                                        the episodes only, for callgrind; PART =
 !>                                                        whole: whole runs timed as the results
 !>                                                        driver times them, see whole_runs)
@@ -29,9 +30,9 @@ program bench_lobatto_nonholo
   logical, allocatable :: hit(:)
   integer :: s, neps, stat, k, ep, nreg, nimp, rep, nsteps
   integer(i8) :: c0, c1, rate, treg, timp
-  real(dp) :: h, t_reg(nrep), t_imp(nrep), q0(2), p0(2), qd0(2)
+  real(dp) :: h, t_reg(nrep), t_imp(nrep), q0(2), p0(2), qd0(2), rtol
   character(len=32) :: arg, part
-  s = 3; h = 0.05_dp; neps = 50; part = 'all'
+  s = 3; h = 0.05_dp; neps = 50; part = 'all'; rtol = 1.0e-14_dp
   if (command_argument_count() >= 1) then
     call get_command_argument(1, arg); read (arg, *) s
   end if
@@ -42,6 +43,9 @@ program bench_lobatto_nonholo
     call get_command_argument(3, arg); read (arg, *) neps
   end if
   if (command_argument_count() >= 4) call get_command_argument(4, part)
+  if (command_argument_count() >= 5) then
+    call get_command_argument(5, arg); read (arg, *) rtol
+  end if
   nsteps = nint(t_end / h); h = t_end / nsteps
   q0 = [0.75_dp * pi, 0.0_dp]
   qd0 = [pi / 4.0_dp, pendulum_f(q0(1)) * pi / 4.0_dp]
@@ -52,7 +56,7 @@ program bench_lobatto_nonholo
   end if
   call integ%create(pend, h, stat)
   if (stat == VCI_OK) call integ%set_scheme(VCI_SCHEME_LOBATTO, s, stat)
-  if (stat == VCI_OK) call integ%set_tolerances(0.0_dp, 1.0e-14_dp, 30, stat)
+  if (stat == VCI_OK) call integ%set_tolerances(0.0_dp, rtol, 30, stat)
   if (stat == VCI_OK) call integ%set_impact_energy(VCI_IMPACT_HAMILTONIAN, stat)
   call must(stat)
   allocate (hit(nsteps))
@@ -97,9 +101,9 @@ contains
   !> Whole runs as tools/results/vci_results_driver times a row (create, set_scheme, tolerances,
   !> init_from_momentum, integrate over T; CPU time by cpu_time, median of repeats until they sum to
   !> 0.1 s, at least 9, at most 2001), at step sizes between the driver's, with the `discrete` and the
-  !> `hamiltonian` condition. One line per run: s, condition, h, steps, CPU ms, final configuration
-  !> (bench/nonholo_vs_cvode.sh compares it with the exact reference and CVODE-Adams's sweep), Newton
-  !> iterations per solve (with the polish) and impacts of the last repeat.
+  !> `hamiltonian` condition. One line per run: s, condition, h, steps, CPU ms, repeats, final
+  !> configuration (bench/nonholo_vs_cvode.sh compares it with the exact reference and CVODE-Adams's
+  !> sweep), Newton iterations per solve (with the polish), impacts of the last repeat and rtol.
   subroutine whole_runs()
     integer, parameter :: max_rep = 2001
     real(dp) :: cpus(max_rep), c0, c1, total
@@ -111,7 +115,7 @@ contains
         call cpu_time(c0)
         call w%create(pend, h, stat_w)
         if (stat_w == VCI_OK) call w%set_scheme(VCI_SCHEME_LOBATTO, s, stat_w)
-        if (stat_w == VCI_OK) call w%set_tolerances(0.0_dp, 1.0e-14_dp, 30, stat_w)
+        if (stat_w == VCI_OK) call w%set_tolerances(0.0_dp, rtol, 30, stat_w)
         if (stat_w == VCI_OK) call w%set_impact_energy(merge(VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN, mode == 1), &
                                                        stat_w)
         if (stat_w == VCI_OK) call w%init_from_momentum(0.0_dp, q0, p0, stat_w)
@@ -124,9 +128,10 @@ contains
         nrep_w = nrep_w + 1; cpus(nrep_w) = c1 - c0; total = total + (c1 - c0)
       end do
       st = w%statistics()
-      write (output_unit, '(a,i0,1x,a,es12.5,i7,es13.5,i6,2es25.16,f7.3,i4)') 'whole ', s, &
+      write (output_unit, '(a,i0,1x,a,es12.5,i7,es13.5,i6,2es25.16,f7.3,i4,es9.1)') 'whole ', s, &
         trim(merge('discrete   ', 'hamiltonian', mode == 1)), h, nsteps, 1.0e3_dp * median(cpus(1:nrep_w)), nrep_w, &
-        w%configuration(), real(st%newton_iterations, dp) / max(1.0_dp, real(st%newton_solves, dp)), int(st%impacts)
+        w%configuration(), real(st%newton_iterations, dp) / max(1.0_dp, real(st%newton_solves, dp)), int(st%impacts), &
+        rtol
     end do
   end subroutine whole_runs
 

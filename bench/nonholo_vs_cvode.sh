@@ -9,8 +9,10 @@
 # $RESULTS_BUILD) and bench/lobatto_nonholo.f90 (in $BUILD_DIR), then, back to back:
 #   1. cvode_results_driver sweep (pendulum)                    rtol = atol = 1e-3 ... 1e-13
 #   2. vci_results_driver sweep vci-lobatto (pendulum)          s = 1 ... 4, the report's step family
-#   3. vci_bench_lobatto_nonholo S H 1 whole                    s = 3, 4 at step sizes between the
-#                                                               family's (timed as the driver does)
+#   3. vci_bench_lobatto_nonholo S H 1 whole RTOL               s = 3, 4 at step sizes between the
+#                                                               family's (timed as the driver does),
+#                                                               Newton rtol 1e-14 (the report's), 1e-10,
+#                                                               1e-8, 1e-6: swept as CVODE's tol is
 #   4. cvode_results_driver sweep again; CVODE's cost per tolerance is the mean of the two sweeps
 # Errors: max-norm of the configuration error at T = 5 s against the exact reference
 # (`vci_results_driver reference`). CPU times are medians of repeats (>= 0.1 s each); compare the
@@ -36,9 +38,11 @@ BENCH="$BUILD_DIR/bin/vci_bench_lobatto_nonholo"
 "$RESULTS_BUILD/vci_results_driver" sweep "$WORK/vci.csv" vci-lobatto pendulum >/dev/null
 : >"$WORK/fine.txt"
 # N steps over T = 5 s: h = 5/N between the family's 0.1, 0.07, 0.05, 0.03, 0.02, 0.01
-for s in 3 4; do
-  for n in 60 65 80 90 110 120 130 140 150 200 300 400; do
-    "$BENCH" "$s" "$(awk -v n=$n 'BEGIN { printf "%.17g", 5 / n }')" 1 whole >>"$WORK/fine.txt"
+for rtol in 1e-14 1e-10 1e-8 1e-6; do
+  for s in 3 4; do
+    for n in 60 65 80 90 110 120 130 140 150 200 300 400; do
+      "$BENCH" "$s" "$(awk -v n=$n 'BEGIN { printf "%.17g", 5 / n }')" 1 whole "$rtol" >>"$WORK/fine.txt"
+    done
   done
 done
 "$RESULTS_BUILD/cvode_results_driver" sweep "$WORK/cvode2.csv" pendulum >/dev/null

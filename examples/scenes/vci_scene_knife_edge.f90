@@ -5,7 +5,7 @@
 !> at constant speed v; at a wall the speed along the blade reverses (v -> -v, w unchanged).
 !> A continuous model (the library discretises it by the scheme chosen at run time), with its exact
 !> solution (`knife_exact`: closed form, or RK4 of the same motion as a second construction), shared
-!> by examples/knife_edge.f90 and test/core/test_nonholo.pf.
+!> by examples/knife_edge.f90, test/core/test_nonholo.pf and bench/lobatto_nonholo_corridor.f90.
 module vci_scene_knife_edge
   use vci, only: dp, i8, vci_lagrangian_t, vci_observer_t, vci_impact_t
   implicit none
@@ -29,6 +29,10 @@ module vci_scene_knife_edge
   !> The order scene and the example's: 2.7 and 3.6 rad of turn between impacts, each at 76 degrees
   !> to its wall (6 impacts in 20 s).
   type(knife_scene_t), parameter, public :: turning_knife = knife_scene_t(1.0_dp, 1.0_dp, 0.6_dp, 0.8_dp)
+  !> A corridor (issue 25, several impacts per step): walls at x = +-0.1, spin 4 (circle radius 0.25),
+  !> 7 impacts in 2 s, 0.22 ... 0.40 s apart (0.9 ... 1.6 rad of turn), each at >= 25 degrees to its
+  !> wall: steps h >= 0.3 span one or more impacts each, h <= 0.1 less than half the time between two.
+  type(knife_scene_t), parameter, public :: corridor_knife = knife_scene_t(1.0_dp, 4.0_dp, 0.3_dp, 0.1_dp)
 
   !> Watches a run: the impact times and the largest constraint residual at the step ends
   !> (knife_constraint_residual), for the example's comparison with knife_exact.

@@ -361,6 +361,9 @@ contains
     if (present(lcb)) then
       if (ngaps == 0 .and. c_associated(lcb%gaps)) what = 'x'
     end if
+    if (present(scb)) then
+      if (ngaps == 0 .and. c_associated(scb%gaps)) what = 'x'
+    end if
     if (what /= '') then
       call set_thread_message(caller//': a gaps callback is given but ngaps = 0: its walls '// &
         'would never be seen; pass ngaps = the number of gap functions, or leave the callback NULL'); return

@@ -171,6 +171,9 @@ static void suite_bad(void) {
   cb = pendulum_callbacks(); cb.gap_gradients = NULL;
   CHECK(vci_model_create_separable(&model, 1, 0, 2, VCI_MASS_DIAGONAL, &one, &cb, NULL) == VCI_ERR_ARGUMENT);
   CHECK(thread_message_has("gap_gradients"));
+  cb = pendulum_callbacks(); /* walls given but ngaps = 0: refused as for the other model kinds */
+  CHECK(vci_model_create_separable(&model, 1, 0, 0, VCI_MASS_DIAGONAL, &one, &cb, NULL) == VCI_ERR_ARGUMENT);
+  CHECK(model == NULL && thread_message_has("ngaps = 0"));
   cb = pendulum_callbacks();
   CHECK(vci_model_create_separable(&model, 1, 0, 2, 2, &one, &cb, NULL) == VCI_ERR_ARGUMENT);
   CHECK(thread_message_has("mass_kind"));

@@ -106,30 +106,33 @@ lobatto_table() {
     echo "## With a nonholonomic constraint: the paper's pendulum (issue 25)"
     echo
     echo "The pendulum in the cylinder (n = 2, m = 1; examples/scenes/vci_scene_pendulum.f90) from the exact"
-    echo "start of docs/RESULTS.md, T = 5 s (3 impacts), \`hamiltonian\` condition, rtol 1e-14 (the results'"
-    echo "Lobatto rows), at the step sizes RESULTS.md names for s = 3, 4 (\`vci_bench_lobatto_nonholo S H\`,"
+    echo "start of docs/RESULTS.md, T = 5 s (3 impacts), \`hamiltonian\` condition, Newton rtol 1e-14 (the results'"
+    echo "Lobatto rows) or looser (the rtol column: the 1e-6 level's runs, see the next section), at the step sizes"
+    echo "RESULTS.md names for s = 3, 4 (\`vci_bench_lobatto_nonholo S H 50 all RTOL\`,"
     echo "bench/lobatto_nonholo.f90). Instructions per step: \`valgrind --tool=callgrind"
     echo "--toggle-collect='*counted_regular_step*'\` (likewise \`'*counted_impact_step*'\`) on"
-    echo "\`vci_bench_lobatto_nonholo S H 1 run\` (one 5 s episode); times from \`vci_bench_lobatto_nonholo S H 50\`."
+    echo "\`vci_bench_lobatto_nonholo S H 1 run RTOL\` (one 5 s episode); times from \`vci_bench_lobatto_nonholo S H 50 all RTOL\`."
     echo "Newton takes one chord step on the first iteration's factors before a second Jacobian (vci_newton's"
     echo "\`chord_after_newton\`, set for Lobatto with m > 0); iterations per solve count the chord and polishing steps."
     echo
-    echo "| s | h | instructions/regular step | instructions/impact step | impact/regular (instructions) | ns/regular step | ns/impact step | Newton iterations per solve |"
-    echo "|---|---|---:|---:|---:|---:|---:|---:|"
+    echo "| s | h | rtol | instructions/regular step | instructions/impact step | impact/regular (instructions) | ns/regular step | ns/impact step | Newton iterations per solve |"
+    echo "|---|---|---:|---:|---:|---:|---:|---:|---:|"
     NEXE="$BUILD_DIR/bin/vci_bench_lobatto_nonholo"
-    for sh in "3 0.05" "3 0.02" "4 0.03" "4 0.01"; do
+    # (h = 5/120: the 1e-6 level's step for s = 4, docs/bench/lobatto.md's next section)
+    for sh in "3 0.05 1e-14" "3 0.05 1e-8" "3 0.02 1e-14" "4 0.0416666666666667 1e-14" "4 0.0416666666666667 1e-8" \
+              "4 0.03 1e-14" "4 0.01 1e-14"; do
       set -- $sh
-      nt=$(OPENBLAS_NUM_THREADS=1 "$NEXE" "$1" "$2" 50)
-      nc() { valgrind --tool=callgrind --callgrind-out-file=/dev/null --toggle-collect="$1" "$NEXE" "$2" "$3" 1 run 2>&1 |
+      nt=$(OPENBLAS_NUM_THREADS=1 "$NEXE" "$1" "$2" 50 all "$3")
+      nc() { valgrind --tool=callgrind --callgrind-out-file=/dev/null --toggle-collect="$1" "$NEXE" "$2" "$3" 1 run "$4" 2>&1 |
         awk '/Collected/ {print $4}'; }
-      ir=$(OPENBLAS_NUM_THREADS=1 nc '*counted_regular_step*' "$1" "$2")
-      ii=$(OPENBLAS_NUM_THREADS=1 nc '*counted_impact_step*' "$1" "$2")
-      echo "$nt" | awk -v s="$1" -v h="$2" -v ir="$ir" -v ii="$ii" '
+      ir=$(OPENBLAS_NUM_THREADS=1 nc '*counted_regular_step*' "$1" "$2" "$3")
+      ii=$(OPENBLAS_NUM_THREADS=1 nc '*counted_impact_step*' "$1" "$2" "$3")
+      echo "$nt" | awk -v s="$1" -v h="$(printf '%.4g' "$2")" -v rt="$3" -v ir="$ir" -v ii="$ii" '
         /regular steps/ { for (i = 1; i <= NF; i++) { if ($i == "steps" && $(i - 1) == "regular") nr = $(i + 1) / 50
                                                       if ($i == "steps" && $(i - 1) == "impact") ni = $(i + 1) / 50 } }
         /ns\/regular step/ { tr = $3; ti = $6 }
         /Newton iterations/ { it = $NF }
-        END { printf "| %s | %s | %.0f | %.0f | %.2f | %.0f | %.0f | %s |\n", s, h, ir / nr, ii / ni, (ii / ni) / (ir / nr), tr, ti, it }'
+        END { printf "| %s | %s | %s | %.0f | %.0f | %.2f | %.0f | %.0f | %s |\n", s, h, rt, ir / nr, ii / ni, (ii / ni) / (ir / nr), tr, ti, it }'
     done
   } >"$LOBATTO_OUT"
   # issue 25 item 5: the same scene against CVODE-Adams at every error level (its own section)

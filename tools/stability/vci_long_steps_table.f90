@@ -76,7 +76,7 @@ contains
       text = 'none of the ladder'
     else
       write (text, '(f0.2,a,es8.1,a)') ladders(ih, scene), ' (', e, ')'
-      if (text(1:1) == '.') text = '0'//text
+      if (text(1:1) == '.') text = '0'//trim(text)
       if (ih == n_h) text = trim(text)//', the whole ladder'
     end if
   end function cell
