@@ -7,7 +7,12 @@
 !> memory's growth over the run and at its end. Arguments: `banded` (declare the chain's bandwidth 1),
 !> `bandcb` (that and the model's hessians_band: no n x n Hessian block), `whole`
 !> (impact stages with the whole stage matrix factorised, set_bordered_impacts(.false.): the path
-!> before bordering), `steps=K` (only the first K steps) and the n to run (default 32 128 256). Not a test: tools/bench/run_chain.sh runs it with OpenBLAS on one thread.
+!> before bordering), `steps=K` (only the first K steps), `lobatto` (Lobatto IIIA-IIIB, 2 stages, instead of
+!> the midpoint), `single` (a start where only the first mass meets a wall: x_i = 0.2 sin(2 pi
+!> i/(n+1)), v_i = 0, then x_1 = 0.595, v_1 = 2: impact steps of one impact each, to compare one
+!> impact with a regular step), `digest` (after each row, a line with the final state's bits folded into one
+!> 64-bit word and the impact count: two builds whose arithmetic should agree compare it) and the
+!> n to run (default 32 128 256). Not a test: tools/bench/run_chain.sh runs it with OpenBLAS on one thread.
 
 program bench_chain_impacts
   use, intrinsic :: iso_fortran_env, only: output_unit
@@ -23,12 +28,12 @@ program bench_chain_impacts
   real(dp), allocatable :: q0(:), p0(:), treg(:), timp(:)
   integer, allocatable :: ns(:)
   real(dp) :: pi, rss0, rss1
-  logical :: banded, bandcb, whole
+  logical :: banded, bandcb, whole, lobatto, digest, single
   integer :: max_steps
   character(len=32) :: arg
   real(dp), parameter :: h = 0.01_dp, t_end = 2.0_dp
   pi = acos(-1.0_dp)
-  banded = .false.; bandcb = .false.; whole = .false.; max_steps = huge(1)
+  banded = .false.; bandcb = .false.; whole = .false.; lobatto = .false.; digest = .false.; single = .false.; max_steps = huge(1)
   narg = command_argument_count()
   allocate (ns(0)); nn = 0
   do ia = 1, narg
@@ -41,6 +46,12 @@ program bench_chain_impacts
       read (arg(7:), *) max_steps
     else if (trim(arg) == 'whole') then
       whole = .true.
+    else if (trim(arg) == 'lobatto') then
+      lobatto = .true.
+    else if (trim(arg) == 'digest') then
+      digest = .true.
+    else if (trim(arg) == 'single') then
+      single = .true.
     else
       read (arg, *) k
       ns = [ns, k]
@@ -57,14 +68,22 @@ program bench_chain_impacts
     do k = 1, n
       q0(k) = 0.24_dp * sin(2.0_dp * pi * real(k, dp) / real(n + 1, dp))
       p0(k) = 1.2_dp * sin(3.0_dp * pi * real(k, dp) / real(n + 1, dp)) + 0.8_dp * sin(pi * real(k, dp) / real(n + 1, dp))
+      if (single) then
+        q0(k) = 0.2_dp * sin(2.0_dp * pi * real(k, dp) / real(n + 1, dp))
+        p0(k) = 0.0_dp
+      end if
     end do
+    if (single) then
+      q0(1) = 0.595_dp; p0(1) = 2.0_dp
+    end if
     nsteps = min(nint(t_end / h), max_steps)
     allocate (treg(nsteps), timp(nsteps))
     rss0 = peak_rss_mb()
     if (banded) call model%declare_bandwidth(1)
     model%band_hessians = bandcb
     call integ%create(model, h, stat)
-    if (stat == VCI_OK) call integ%set_scheme(VCI_SCHEME_MIDPOINT, 1, stat)
+    if (stat == VCI_OK .and. lobatto) call integ%set_scheme(VCI_SCHEME_LOBATTO, 2, stat)
+    if (stat == VCI_OK .and. .not. lobatto) call integ%set_scheme(VCI_SCHEME_MIDPOINT, 1, stat)
     call integ%set_bordered_impacts(.not. whole)
     if (stat == VCI_OK) call integ%set_impact_energy(VCI_IMPACT_HAMILTONIAN, stat)
     if (stat == VCI_OK) call integ%set_max_impacts(max(16, 2 * n), stat)
@@ -99,9 +118,21 @@ program bench_chain_impacts
       nsteps, nimp, imp_total, &
       1.0e6_dp * median(treg(1:nreg)), 1.0e6_dp * median(timp(1:nimp)), median(timp(1:nimp)) / median(treg(1:nreg)), &
       real(f_reg, dp) / max(nreg, 1), real(f_imp, dp) / max(nimp, 1), rss1 - rss0, rss1
+    if (digest) write (output_unit, '("digest n = ",i0,": ",z16.16,", impacts ",i0)') n, &
+      fold_bits([integ%configuration(), integ%momentum()]), imp_total
     deallocate (q0, p0, treg, timp)
   end do
 contains
+  !> The bits of x folded into one word (rotate and exclusive or): any changed bit changes it.
+  integer(i8) function fold_bits(x)
+    real(dp), intent(in) :: x(:)
+    integer :: j
+    fold_bits = 0_i8
+    do j = 1, size(x)
+      fold_bits = ieor(ishftc(fold_bits, 7), transfer(x(j), 0_i8))
+    end do
+  end function fold_bits
+
   !> Peak resident memory (VmHWM of /proc/self/status) in MB; 0 where that file is absent.
   real(dp) function peak_rss_mb()
     integer :: u, ios, kb

@@ -102,8 +102,10 @@ contains
     call take_sizes(self, nx, nb, bw, info)
     if (info /= 0) return
     nd = nx - nb
+    ! the fill rows zero: the whole columns in one contiguous fill (row 1:bw column by column was
+    ! a library call per column)
+    self%ab(:, 1:nb) = 0.0_dp
     do j = 1, nb
-      self%ab(1:bw, j) = 0.0_dp
       do i = max(1, j - bw), min(nb, j + bw)
         self%ab(2 * bw + 1 + i - j, j) = rw(i) * mat%band(bw + 1 + i - j, j)
       end do

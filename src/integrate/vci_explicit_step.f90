@@ -48,7 +48,7 @@ module vci_explicit_step
     real(dp), allocatable :: g_root(:)            !< every wall's gap at (q_root, p_root)
     real(dp) :: root_alpha = -1.0_dp
     logical :: root_known = .false.
-    real(dp), allocatable :: g_start(:), g_end(:), g_trial(:), grads(:, :), sorted(:), g_samples(:, :)
+    real(dp), allocatable :: g_start(:), g_end(:), g_trial(:), grad(:), sorted(:), g_samples(:, :)
     integer, allocatable :: order(:)
     integer(i8) :: root_maps = 0      !< composed maps evaluated by stage 1 (statistics)
     !> Stage 2's condition (the integrator's setting, set by the stepper before each step):
@@ -59,6 +59,8 @@ module vci_explicit_step
     !> The model's one-wall gradient (gap_gradient): 0 not probed yet, 1 provided (O(n) a wall),
     !> 2 not provided (every wall's gradients, O(n n_gaps), for the one wanted)
     integer :: one_wall_gradient = 0
+    !> every wall's gradients, only for a model without gap_gradient (allocated at its first use)
+    real(dp), allocatable :: all_grads(:, :)
   contains
     procedure :: setup => explicit_setup
     procedure :: advance => explicit_advance
@@ -81,14 +83,15 @@ contains
     self%n = n; self%ng = model%n_gaps
     self%one_wall_gradient = 0
     if (allocated(self%a)) deallocate (self%a, self%pa, self%qe, self%pe, self%qt, self%pt, self%stage_q, &
-                                       self%g_start, self%g_end, self%g_trial, self%grads, self%sorted, self%order, &
+                                       self%g_start, self%g_end, self%g_trial, self%grad, self%sorted, self%order, &
                                        self%g_samples, self%q_run, self%p_run, self%q_root, self%p_root, &
                                        self%v_scratch, self%g_sample_min, self%g_root)
+    if (allocated(self%all_grads)) deallocate (self%all_grads)
     allocate (self%q_run(n), self%p_run(n), self%q_root(n), self%p_root(n), self%v_scratch(n), self%g_sample_min(ng), &
               self%g_root(ng), &
               self%a(n), self%pa(n), self%qe(n), self%pe(n), self%qt(n), &
               self%pt(n), self%stage_q(n, s), &
-              self%g_start(ng), self%g_end(ng), self%g_trial(ng), self%grads(n, ng), self%sorted(s), &
+              self%g_start(ng), self%g_end(ng), self%g_trial(ng), self%grad(n), self%sorted(s), &
               self%order(s), self%g_samples(ng, s), stat=stat)
     if (stat /= 0) then
       stat = VCI_ERR_MEMORY; return
@@ -291,8 +294,8 @@ contains
       if (stat /= VCI_OK) then
         call fail(self, 'stage 2 (reflection)', stat, cause); return
       end if
-      call self%map%model%inverse_mass_times(self%grads(:, jbest), self%qe)   ! qe: M⁻¹∇g (scratch)
-      mu = dot_product(self%grads(:, jbest), self%qe)
+      call self%map%model%inverse_mass_times(self%grad, self%qe)   ! qe: M⁻¹∇g (scratch)
+      mu = dot_product(self%grad, self%qe)
       if (.not. mu > 0.0_dp) then
         stat = VCI_ERR_IMPACT
         write (cause, '(a,i0,a)') 'stage 2: gradient of gap ', jbest, ' vanishes at the impact point'
@@ -317,7 +320,7 @@ contains
         call fail(self, 'impact record', stat, cause); return
       end if
       self%a = self%qt
-      self%pa = self%pt + mu * self%grads(:, jbest)
+      self%pa = self%pt + mu * self%grad
       tau = h - elapsed
     end do
     call copy(self%n, self%qe, q_new); call copy(self%n, self%pe, p_new)
@@ -339,7 +342,7 @@ contains
     logical :: solved
     condition = VCI_IMPACT_HAMILTONIAN; e_after = e_before; residual = 0.0_dp
     call self%energy%step_energy(self%map, self%a, self%pa, dir * before, e_arrive, stat)
-    if (stat == VCI_OK) call self%energy%discrete_impulse(self%map, self%qt, self%pt, self%grads(:, j), dir * after, &
+    if (stat == VCI_OK) call self%energy%discrete_impulse(self%map, self%qt, self%pt, self%grad, dir * after, &
                                                            e_arrive, mu, e_after, residual, solved, stat)
     if (stat /= VCI_OK) then
       self%map%failed_stat = self%energy%failed_stat; return
@@ -380,10 +383,10 @@ contains
     end if
     call gap_gradient_of(self, self%a, j, stat)
     if (stat /= VCI_OK) return
-    on_wall = self%g_start(j) <= 64.0_dp * epsilon(1.0_dp) * sum(abs(self%grads(:, j)) * max(abs(self%a), 1.0_dp))
+    on_wall = self%g_start(j) <= 64.0_dp * epsilon(1.0_dp) * sum(abs(self%grad) * max(abs(self%a), 1.0_dp))
     if (on_wall) then
       call self%map%model%inverse_mass_times(self%pa, self%qt)
-      if (dir * dot_product(self%grads(:, j), self%qt) < 0.0_dp) then
+      if (dir * dot_product(self%grad, self%qt) < 0.0_dp) then
         alpha = 0.0_dp; return
       end if
       if (.not. self%g_end(j) < 0.0_dp) return
@@ -471,7 +474,7 @@ contains
       ! precision g has: accept it if admissible, else the admissible end of the bracket if that
       ! is as close (else go on: the next point lands on either side of the noisy root).
       ! (At most √ε: a graze, slope → 0, leaves the root that ill-determined anyway.)
-      floor = min(8.0_dp * epsilon(1.0_dp) * sum(abs(self%grads(:, j)) * abs(self%qt)) / abs(slope), &
+      floor = min(8.0_dp * epsilon(1.0_dp) * sum(abs(self%grad) * abs(self%qt)) / abs(slope), &
                   sqrt(epsilon(1.0_dp)))
       if (abs(delta) <= floor .and. delta_prev /= 0.0_dp .and. abs(delta) > 0.5_dp * abs(delta_prev)) then
         if (gs > 0.0_dp) then
@@ -567,11 +570,11 @@ contains
     call gap_gradient_of(self, self%a, j, stat)
     if (stat /= VCI_OK) return
     call self%map%model%inverse_mass_times(self%pa, self%qt)
-    d0 = dir * tau * dot_product(self%grads(:, j), self%qt)
+    d0 = dir * tau * dot_product(self%grad, self%qt)
     call gap_gradient_of(self, self%qe, j, stat)
     if (stat /= VCI_OK) return
     call self%map%model%inverse_mass_times(self%pe, self%qt)
-    d1 = dir * tau * dot_product(self%grads(:, j), self%qt)
+    d1 = dir * tau * dot_product(self%grad, self%qt)
     g0 = self%g_start(j); g1 = self%g_end(j)
     a = lo; b = hi
     fa = cubic(a); fb = cubic(b)
@@ -610,7 +613,7 @@ contains
     call gap_gradient_of(self, self%qt, j, stat)
     if (stat /= VCI_OK) return
     call self%map%model%inverse_mass_times(self%pt, self%v_scratch)
-    slope = dir * tau * dot_product(self%grads(:, j), self%v_scratch)
+    slope = dir * tau * dot_product(self%grad, self%v_scratch)
   end subroutine slope_on_map
 
   !> Stage 1 ends on the point of the last gap_on_map (fraction c): keep its state for stage 2
@@ -684,8 +687,9 @@ contains
     call callback_status(self, s, all(abs(g(1:self%ng)) <= huge(1.0_dp)), stat)
   end subroutine gaps
 
-  !> grads(:, j) = the gradient of wall j's gap at q (only that column is needed anywhere): the
-  !> model's one-wall gradient when it has one (probed at the first call), else every wall's.
+  !> grad = the gradient of wall j's gap at q (every use reads the wall it just asked for): the
+  !> model's one-wall gradient when it has one (probed at the first call), else column j of every
+  !> wall's (all_grads, n x n_gaps, allocated then only: VCI_ERR_MEMORY when that fails).
   !> A chain of n particles has 2n walls: all gradients would cost O(n^2) per call.
   subroutine gap_gradient_of(self, q, j, stat)
     type(vci_explicit_t), intent(inout) :: self
@@ -696,16 +700,23 @@ contains
     s = 0
     if (self%one_wall_gradient /= 2) then
       if (self%one_wall_gradient == 0) call self%map%model%clear_not_provided()
-      call self%map%model%gap_gradient(q, j, self%grads(:, j), s)
+      call self%map%model%gap_gradient(q, j, self%grad, s)
       if (self%one_wall_gradient == 0) then
         self%one_wall_gradient = merge(2, 1, self%map%model%answered_not_provided())
         if (self%one_wall_gradient == 2) s = 0
       end if
     end if
     if (self%one_wall_gradient == 2) then
-      call self%map%model%gap_gradients(q, self%grads(:, 1:self%ng), s)
+      if (.not. allocated(self%all_grads)) then
+        allocate (self%all_grads(self%n, self%ng), stat=s)
+        if (s /= 0) then
+          self%grad = 0.0_dp; stat = VCI_ERR_MEMORY; return
+        end if
+      end if
+      call self%map%model%gap_gradients(q, self%all_grads, s)
+      self%grad = self%all_grads(:, j)
     end if
-    call callback_status(self, s, all(abs(self%grads(:, j)) <= huge(1.0_dp)), stat)
+    call callback_status(self, s, all(abs(self%grad) <= huge(1.0_dp)), stat)
   end subroutine gap_gradient_of
 
   subroutine callback_status(self, s, finite, stat)
@@ -745,15 +756,15 @@ contains
       imp%gap = j
       imp%q = self%qt
       imp%p_before = self%pt
-      imp%p_after = self%pt + mu * self%grads(:, j)
-      imp%grad_g = self%grads(:, j)
+      imp%p_after = self%pt + mu * self%grad
+      imp%grad_g = self%grad
       imp%impulse = real(dir, dp) * mu
       imp%condition = VCI_IMPACT_HAMILTONIAN
       imp%energy_before = e_before
       call self%map%hamiltonian(self%qt, imp%p_after, e_after, stat)
       imp%energy_after = e_after
       call self%map%model%inverse_mass_times(imp%p_after, self%qe)
-      imp%leave_rate = real(dir, dp) * dot_product(self%grads(:, j), self%qe)
+      imp%leave_rate = real(dir, dp) * dot_product(self%grad, self%qe)
       imp%stage1_residual = 0.0_dp
       imp%stage2_residual = 0.0_dp
       if (present(condition)) then

@@ -57,7 +57,7 @@ contains
       if (stat /= VCI_OK) then
         call set_cause(self, 'gap evaluation at the start of the sub-step'); return
       end if
-      self%grad_at_start(1:self%ng) = .false.   ! (each wall's gradient when first needed)
+      call forget_start_gradients(self)         ! (each wall's gradient when first needed)
 
       ! Already on a wall and moving into it: the impact is at the start of this sub-step.
       jstar = 0
@@ -66,7 +66,7 @@ contains
         if (self%gaps_end(j) >= 0.0_dp) cycle
         call start_gradient(self, j, stat)
         if (stat /= VCI_OK) return
-        if (on_wall(self, j) .and. dot_product(self%gap_grads(:, j), self%q_end - self%q_start) < 0.0_dp) then
+        if (on_wall(self, j) .and. dot_product(self%grad_cache(:, self%grad_slot(j)), self%q_end - self%q_start) < 0.0_dp) then
           ! the chord points into the wall; so must the motion as it departs (a curved sub-step
           ! may leave the wall first and come back: that is stage 1's business)
           if (departs_into(self, j, tau, stat)) then
@@ -638,19 +638,34 @@ contains
     end do
   end function first_by_chord
 
-  !> gap_grads(:, j) = wall j's gradient at q_start, unless it already holds it.
+  !> grad_cache(:, grad_slot(j)) = wall j's gradient at q_start, unless a column already holds it
+  !> (else the column after the last one written, whose wall loses it).
   subroutine start_gradient(self, j, stat)
     type(vci_stepper_t), intent(inout) :: self
     integer, intent(in) :: j
     integer, intent(out) :: stat
+    integer :: k
     stat = VCI_OK
-    if (self%grad_at_start(j)) return
-    call self%sys%eval_gap_gradient(self%q_start, j, self%gap_grads(:, j), stat)
+    if (self%grad_slot(j) > 0) return
+    k = mod(self%last_slot, size(self%slot_wall)) + 1
+    if (self%slot_wall(k) > 0) self%grad_slot(self%slot_wall(k)) = 0
+    self%slot_wall(k) = 0
+    call self%sys%eval_gap_gradient(self%q_start, j, self%grad_cache(:, k), stat)
     if (stat /= VCI_OK) then
       call set_cause(self, 'gap gradient at the start of the sub-step'); return
     end if
-    self%grad_at_start(j) = .true.
+    self%slot_wall(k) = j; self%grad_slot(j) = k; self%last_slot = k
   end subroutine start_gradient
+
+  !> A new q_start: no column holds a wall's gradient there (O(GRAD_SLOTS), not O(n_gaps)).
+  subroutine forget_start_gradients(self)
+    type(vci_stepper_t), intent(inout) :: self
+    integer :: k
+    do k = 1, size(self%slot_wall)
+      if (self%slot_wall(k) > 0) self%grad_slot(self%slot_wall(k)) = 0
+      self%slot_wall(k) = 0
+    end do
+  end subroutine forget_start_gradients
 
   !> Is configuration a (the sub-step's start) on wall j, to solver tolerance?
   logical function on_wall(self, j)
@@ -658,7 +673,8 @@ contains
     integer, intent(in) :: j
     real(dp) :: scale
     ! the size of g's terms and of its change over the sub-step (as in stage 1's gap row)
-    scale = abs(self%gaps_start(j)) + sum(abs(self%gap_grads(:, j)) * (abs(self%q_start) + abs(self%q_end - self%q_start)))
+    scale = abs(self%gaps_start(j)) + sum(abs(self%grad_cache(:, self%grad_slot(j))) * &
+                                          (abs(self%q_start) + abs(self%q_end - self%q_start)))
     on_wall = self%gaps_start(j) <= 10.0_dp * (self%settings%atol + self%settings%rtol * scale)
   end function on_wall
 
@@ -719,7 +735,7 @@ contains
     call self%sys%put_endpoint(self%x, self%q_start, self%q_guess)
     call substep(self, self%q_start, self%p_start, eps_frac * tau, stat)
     call self%sys%get_endpoint(self%x, self%q_trial)
-    departs_into = stat == VCI_OK .and. dot_product(self%gap_grads(:, j), self%q_trial - self%q_start) < 0.0_dp
+    departs_into = stat == VCI_OK .and. dot_product(self%grad_cache(:, self%grad_slot(j)), self%q_trial - self%q_start) < 0.0_dp
     self%x(1:nx) = self%x_saved(1:nx)
   end function departs_into
 
@@ -839,7 +855,7 @@ contains
     character(len=*), intent(in) :: what
     integer, intent(out) :: stat
     call self%sys%put_extra(self%x, KIND_STAGE1, alpha)
-    call self%sys%pose_stage1(self%q_start, self%p_start, tau, j, self%gap_grads(:, j), stat)
+    call self%sys%pose_stage1(self%q_start, self%p_start, tau, j, self%grad_cache(:, self%grad_slot(j)), stat)
     if (stat /= VCI_OK) then
       call set_cause(self, 'constraint forms'); return
     end if
@@ -861,12 +877,11 @@ contains
     n = self%n; m = self%m; nx0 = self%nsub
     self%impact_condition = self%settings%impact_energy
     what = wall_label('stage 2 (reflecting at wall ', j)
-    self%grad_at_start(j) = .false.      ! (column j now holds the gradient at q_wall)
-    call self%sys%eval_gap_gradient(self%q_wall, j, self%gap_grads(:, j), stat)
+    call self%sys%eval_gap_gradient(self%q_wall, j, self%wall_grad, stat)
     if (stat /= VCI_OK) then
       call set_cause(self, 'gap gradients at the wall'); return
     end if
-    call self%sys%set_wall_normal(self%gap_grads(:, j))
+    call self%sys%set_wall_normal(self%wall_grad)
     ! the motion with no impulse, and its sensitivity d = d(q_next, lambda)/d mu
     self%q_guess = self%q_wall + tau2 * self%chord_velocity
     call self%sys%put_endpoint(self%x, self%q_wall, self%q_guess)

@@ -728,8 +728,7 @@ contains
     ! optional procedures: each is probed once (vci_model_base: not_provided)
     allocate (hess(n, merge(n, 1, associated(self%discrete))), omega(n, max(1, self%model%m)), &
               g(self%model%n_gaps), w(self%model%m), &
-              cjo(self%model%m, n), dg1(n), fd(n, 2), &
-              dg(n, self%model%n_gaps), w2(self%model%n_gaps), stat=s)
+              cjo(self%model%m, n), dg1(n), fd(n, 2), w2(self%model%n_gaps), stat=s)
     if (s /= 0) then
       self%last_message = who//': cannot allocate the probes of the model (out of memory)'
       call finish(self, VCI_ERR_MEMORY, stat); return
@@ -808,6 +807,12 @@ contains
       call self%model%clear_not_provided(); s = 0
       call self%model%gap_gradient(q0, 1, dg1, s)
       if (self%model%answered_not_provided()) then
+        ! (every wall's gradients, n x n_gaps, only for a model without the one-wall gradient)
+        allocate (dg(n, self%model%n_gaps), stat=s)
+        if (s /= 0) then
+          self%last_message = who//': cannot allocate the probe of gap_gradients (out of memory)'
+          call finish(self, VCI_ERR_MEMORY, stat); return
+        end if
         call self%model%clear_not_provided(); s = 0
         call self%model%gap_gradients(q0, dg, s)
         call self%stepper%use_model_derivatives(gap_gradients=.not. self%model%answered_not_provided(), &

@@ -46,6 +46,10 @@ module vci_stepper
   !> stiff spring at h omega >= 10 misses by 1.0-3.6, the firm reversal scenes by at most 0.18)
   real(dp), parameter :: POKE_PATH_FRACTION = 0.25_dp
   real(dp), parameter :: CHORD_WIDTH = 1.0e-9_dp
+  !> Wall gradients kept in a sub-step (grad_cache): every use follows its wall's start_gradient,
+  !> so one would be correct; a few spare a second gradient for a wall examined on_wall and then
+  !> in stage 1 when the sub-step ends beyond several walls.
+  integer, parameter :: GRAD_SLOTS = 8
 
   type, public :: vci_stepper_t
     private
@@ -76,10 +80,15 @@ module vci_stepper
     real(dp), allocatable :: q_guess(:), q_trial(:)  !< a Newton start; an end point being examined
     ! Walls (n_gaps) and constraints (m):
     real(dp), allocatable :: gaps_start(:), gaps_end(:), gaps_trial(:)
-    real(dp), allocatable :: gap_grads(:, :)  !< at q_start (stage 1), at q_wall (stage 2)
-    !> gap_grads(:, j) holds wall j's gradient at q_start (computed wall by wall, when first needed:
-    !> O(n) a wall with the model's gap_gradient, instead of every wall's at every sub-step)
-    logical, allocatable :: grad_at_start(:)
+    !> Wall gradients at q_start, computed wall by wall when first needed (O(n) a wall with the
+    !> model's gap_gradient) and kept for the sub-step in GRAD_SLOTS columns, reused round robin:
+    !> grad_cache(:, grad_slot(j)) is wall j's when grad_slot(j) > 0, slot_wall(k) the wall in
+    !> column k (0: none). O(n) memory where a table of every wall's was n x n_gaps (issue 28).
+    real(dp), allocatable :: grad_cache(:, :)
+    integer, allocatable :: grad_slot(:)
+    integer :: slot_wall(GRAD_SLOTS) = 0
+    integer :: last_slot = 0                  !< the column written last
+    real(dp), allocatable :: wall_grad(:)     !< stage 2's wall gradient at q_wall
     logical, allocatable :: wall_tried(:)     !< stage 1 solved for this wall in this sub-step
     real(dp), allocatable :: lambda_start(:), zero_lambda(:)
     real(dp), allocatable :: x_try(:)         !< stage 2's start: a point on the impulse line
@@ -199,8 +208,8 @@ contains
     allocate (self%x(nx), self%x_stage1(nx), self%x_saved(nx), self%x_low(nx), self%x_high(nx), self%x_full(nx), self%jac(nd, nd), &
               self%rhs(nx), self%res(nx), self%res_scale(nx), self%q_start(n), self%p_start(n), self%q_end(n), &
               self%q_wall(n), self%p_arrive(n), self%p_leave(n), self%chord_velocity(n), self%q_guess(n), &
-              self%q_trial(n), self%gaps_start(ngw), self%gaps_end(ngw), self%gaps_trial(ngw), self%gap_grads(n, ngw), &
-              self%grad_at_start(ngw), self%wall_tried(ngw), &
+              self%q_trial(n), self%gaps_start(ngw), self%gaps_end(ngw), self%gaps_trial(ngw), self%grad_cache(n, GRAD_SLOTS), &
+              self%grad_slot(ngw), self%wall_grad(n), self%wall_tried(ngw), &
               self%lambda_start(m), self%zero_lambda(m), self%constraint_impulse(m), &
               self%x_try(nx), self%q_new(n), self%p_new(n), self%lambda_new(m), stat=stat)
     if (stat /= 0) then
@@ -208,6 +217,7 @@ contains
       stat = VCI_ERR_MEMORY; return
     end if
     self%x = 0.0_dp; self%zero_lambda = 0.0_dp
+    self%grad_slot = 0; self%slot_wall = 0; self%last_slot = 0
     allocate (self%tie_x(nx, 2), self%tie_q(n, 3), self%poke_half(n, 4), self%poke_gaps(ngw, 2), &
               self%poke_lambda(m), stat=stat)
     if (stat /= 0) then
@@ -225,8 +235,8 @@ contains
     call free1(self%res_scale); call free1(self%q_start); call free1(self%p_start); call free1(self%q_end)
     call free1(self%q_wall); call free1(self%p_arrive); call free1(self%p_leave); call free1(self%chord_velocity)
     call free1(self%q_guess); call free1(self%q_trial); call free1(self%gaps_start); call free1(self%gaps_end)
-    call free1(self%gaps_trial); call free2(self%gap_grads)
-    if (allocated(self%grad_at_start)) deallocate (self%grad_at_start)
+    call free1(self%gaps_trial); call free2(self%grad_cache); call free1(self%wall_grad)
+    if (allocated(self%grad_slot)) deallocate (self%grad_slot)
     if (allocated(self%wall_tried)) deallocate (self%wall_tried)
     call free1(self%lambda_start)
     call free1(self%zero_lambda); call free1(self%constraint_impulse); call free1(self%x_try)

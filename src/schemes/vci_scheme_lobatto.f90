@@ -120,7 +120,7 @@ contains
                                         self%nuw, self%osz, self%ypoly, self%lpoly, self%exq, self%exl)
     allocate (self%y(n, 0:s), self%v(n, 0:s), self%lq(n, 0:s), self%lv(n, 0:s), self%lval(0:s), self%f(n, 0:s), &
               self%fs(n, 0:s), self%hqq(n, n, 0:s), self%hqv(n, n, 0:s), self%hvv(n, n, 0:s), &
-              self%g(max(1, lag%n_gaps)), self%dg(n, max(1, lag%n_gaps)), self%tmp(n), self%jscale(nx), &
+              self%g(max(1, lag%n_gaps)), self%dg(n, 1), self%tmp(n), self%jscale(nx), &
               self%x_eval(nx), self%a_eval(n), self%wdd(0:s, 0:s - 1, s), self%wbd(0:s, 0:s), stat=stat)
     if (stat /= 0) then
       stat = VCI_ERR_MEMORY; return
@@ -649,9 +649,9 @@ contains
         end do
         jac(j * n + 1:(j + 1) * n, last) = rs * self%tau * self%tmp
       end do
-      call self%eval_gap_gradients(self%y(:, s), self%dg(:, 1:self%n_gaps), stat)
+      call self%eval_gap_gradient(self%y(:, s), self%gap, self%dg(:, 1), stat)   ! (this wall's only)
       if (stat /= VCI_OK) return
-      jac(last, (s - 1) * n + 1:s * n) = self%dg(:, self%gap)
+      jac(last, (s - 1) * n + 1:s * n) = self%dg(:, 1)
     case (KIND_STAGE2)
       jac(1:n, last) = self%grad
       ! dE_d/dy_k = b_k (Lqv_k V_k - Lq_k) + (dir/tau) sum_i b_i D_ik Lvv_i V_i

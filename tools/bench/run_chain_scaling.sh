@@ -12,6 +12,8 @@
 #   NS="32 64 128" CG_MAX=128 tools/bench/run_chain_scaling.sh
 #   WHOLE=1 OUT=/tmp/whole.md tools/bench/run_chain_scaling.sh   # impact stages as whole matrices
 #                                                                # (no bordering: the path before it)
+#   SINGLE=1 OUT=docs/bench/chain_single_impact.md tools/bench/run_chain_scaling.sh
+#        # a start where only the first mass meets a wall: one impact per impact step
 set -eu
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
 BUILD_DIR=${BUILD_DIR:-$ROOT/build}
@@ -20,6 +22,7 @@ NS=${NS:-"32 64 128 256 512 1024 2048 4096"}
 CG_MAX=${CG_MAX:-1024}
 ARGS="bandcb"
 [ "${WHOLE:-0}" = 1 ] && ARGS="bandcb whole"
+[ "${SINGLE:-0}" = 1 ] && ARGS="$ARGS single"
 cmake --build "$BUILD_DIR" --target vci_bench_chain_impacts -j1 >/dev/null
 EXE="$BUILD_DIR/bin/vci_bench_chain_impacts"
 export OPENBLAS_NUM_THREADS=1
@@ -39,7 +42,12 @@ fit() {
   echo "$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)). \`OPENBLAS_NUM_THREADS=1 vci_bench_chain_impacts $ARGS N\`"
   echo "(bench/chain_impacts.f90), one process per n: the FPU-beta chain between walls |x_i| <= 0.6, midpoint"
   echo "from L, declared bandwidth 1 with the model's \`hessians_band\`, \`hamiltonian\` impacts, h = 0.01,"
-  echo "T = 2, docs/RESULTS.md's start scaled to n. Times: medians of individually timed steps."
+  if [ "${SINGLE:-0}" = 1 ]; then
+    echo "T = 2, a start where only the first mass meets a wall (x_i = 0.2 sin(2 pi i/(n+1)), v_i = 0,"
+    echo "then x_1 = 0.595, v_1 = 2: one impact per impact step). Times: medians of individually timed steps."
+  else
+    echo "T = 2, docs/RESULTS.md's start scaled to n. Times: medians of individually timed steps."
+  fi
   if [ "${WHOLE:-0}" = 1 ]; then
     echo "Impact stages: the whole stage matrix factorised (band block with the alpha/mu border) at every Newton iteration."
   else
@@ -86,16 +94,15 @@ fit() {
       printf "| %d | %.0f | %.0f | %.0f | %.2f |\n", n, reg, imp, per, imp / reg }' "$rows"
   done
   echo
-  echo "Each impact step of this start crosses more walls as n grows (impacts per impact step ~ n^$ifit),"
   met=$(awk -F'|' '$9 + 0 <= 4 { c++ } END { print c + 0 }' "$rows")
-  echo "so an impact step costs ~ n^$(fit 8) while its cost per impact grows ~ n^$pfit. Issue 28's target of an"
-  echo "impact step <= 4 regular steps (impact / regular above) is met at $met of the $(echo $NS | wc -w) sizes: an"
-  echo "impact step resolves all its impacts (the column impacts / impact steps), each with a stage 1 and"
-  echo "a stage 2 solve of its own, so the ratio grows with the walls one step crosses. Memory: Newton's matrices are kept in band storage with their border apart"
-  echo "(vci_banded_matrix; no n x n array, test band_memory), the Hessian blocks are band-sized and the"
-  echo "fused solve's matrices 1 x 1 at this size. What still grows faster than n over a run is the"
-  echo "stepper's wall-gradient table, allocated n x n_gaps (n_gaps = 2n here) and written one column of"
-  echo "n per wall an impact examines (docs/DESIGN.md, \"Structured Newton matrices\")."
+  echo "Impacts per impact step ~ n^$ifit; an impact step costs ~ n^$(fit 8) and its cost per impact ~ n^$pfit."
+  echo "Issue 28's target of an impact step <= 4 regular steps (impact / regular above) is met at $met of the"
+  echo "$(echo $NS | wc -w) sizes: an impact step resolves all its impacts (the column impacts / impact steps), each"
+  echo "with a stage 1 and a stage 2 solve of its own (and stage 2 with a free sub-step and its sensitivity)."
+  echo "Memory: Newton's matrices are kept in band storage with their border apart (vci_banded_matrix),"
+  echo "the Hessian blocks are band-sized, and the wall gradients are those of the walls a sub-step"
+  echo "examines, in 8 columns of n (no n x n or n x n_gaps array: test band_memory; docs/DESIGN.md,"
+  echo "\"Structured Newton matrices\")."
 } >"$OUT"
 rm -f "$rows"
 echo "wrote $OUT"
