@@ -483,7 +483,7 @@ static int reversal(uint64_t seed) {
   else if (s == VCI_OK && (split_f != split_b || fb_f != fb_b)) verdict = EXIT_REVERSAL_ONE_SIDED;
   else if (s != VCI_OK || split_f + split_b + fb_f + fb_b > 0) verdict = EXIT_REVERSAL_UNJUDGED;
   else if (!(err_q <= tol && err_p <= tol) || k != 0 || imp_f != imp_b) verdict = EXIT_REVERSAL_BROKEN;
-  if (verbose || verdict == EXIT_REVERSAL_BROKEN) {
+  if (verbose || verdict == EXIT_REVERSAL_BROKEN || verdict == EXIT_REVERSAL_ONE_SIDED) { /* (one-sided: to sort them) */
     char msg[300] = "";
     if (s != VCI_OK) vci_last_error(it, msg, sizeof msg);
     printf("reversal seed %llu: kind %d n %d ng %d %s s %d h %.4f N %d rtol %.1e: status %d, impacts %lld/%lld, "
