@@ -424,7 +424,8 @@ int  vci_get_stats(vci_integrator integ, int64_t *steps, int64_t *impacts, int64
 /** Soft impacts (the normal kinetic energy comparable to E_d's O(h^2) mismatch with H) at which the
  *  discrete energy condition was blended with H (a reversible condition, docs/BACKWARD.md) or, as a
  *  last resort or with constraints, H(q, p) was kept instead; only with a model that supplies energy
- *  (else an impact without a discrete root fails the step). count may be NULL.
+ *  (else an impact without a discrete root fails the step). Only impacts of the steps taken count:
+ *  not those of an attempt the safety net discarded (vci_set_step_splits). count may be NULL.
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle; VCI_ERR_STATE: busy. */
 int  vci_get_energy_fallbacks(vci_integrator integ, int64_t *count);
 

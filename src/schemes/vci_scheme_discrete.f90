@@ -614,12 +614,16 @@ contains
       call self%eval_gaps(self%bb, self%g(1:self%n_gaps), stat)
       if (stat /= VCI_OK) return
       r(last) = self%g(self%gap)
-      ! g's size: its value, its terms (grad g . q) and its change over the sub-step
-      ol = 0.0_dp
+      ! g's size: its value, its terms (grad g . q) and its change over the sub-step; and |grad g|
+      ! times the sub-step's largest motion in any coordinate: a hop from a wall at coordinate 0
+      ! back to it has value, terms and normal change all ~0 at the root (reversal seed 126: a
+      ! scale of 2e-34, which Newton's line search could not meet)
+      ol = 0.0_dp; e = 0.0_dp
       do i = 1, n
         ol = ol + self%gscale(i) * (abs(self%bb(i)) + motion(self, x, i))
+        e = max(e, motion(self, x, i))
       end do
-      sc(last) = abs(r(last)) + ol
+      sc(last) = abs(r(last)) + ol + sum(self%gscale) * e
     case (KIND_STAGE2)
       if (self%impact_energy == VCI_IMPACT_HAMILTONIAN) then
         self%pplus = self%pa + x(last) * self%grad

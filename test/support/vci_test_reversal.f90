@@ -44,7 +44,7 @@ module vci_test_reversal
     integer :: touches = 0               !< impacts with no impulse (tangential touches), both directions
   end type reversal_result_t
 
-  public :: random_scene, round_trip, scene_label
+  public :: random_scene, round_trip, scene_label, forward_growth
 
 contains
 
@@ -154,6 +154,53 @@ contains
     end if
     call run(integ, s, r)
   end function round_trip
+
+  !> How much the scene's forward run amplifies a perturbation of its start: N steps from
+  !> (q0, q0 + h v0) and from the start with v0 moved by eps |v0| along a fixed direction; the
+  !> relative distance of the two ends in (q, p) over eps. A reversal error near
+  !> growth * rtol is the scene's chaos acting on the solves' tolerance (docs/BACKWARD.md).
+  !> Negative when a run failed.
+  real(dp) function forward_growth(s, eps) result(growth)
+    type(reversal_scene_t), intent(in) :: s
+    real(dp), intent(in) :: eps
+    real(dp) :: qa(2), pa(2), qb(2), pb(2)
+    type(reversal_scene_t) :: t
+    logical :: ok
+    growth = -1.0_dp
+    call forward_end(s, qa, pa, ok)
+    if (.not. ok) return
+    t = s
+    t%v0 = s%v0 + eps * norm2(s%v0) * [0.6_dp, -0.8_dp]
+    call forward_end(t, qb, pb, ok)
+    if (.not. ok) return
+    growth = max(norm2(qb - qa) / norm2(qa), norm2(pb - pa) / norm2(pa)) / eps
+  end function forward_growth
+
+  subroutine forward_end(s, q, p, ok)
+    type(reversal_scene_t), intent(in) :: s
+    real(dp), intent(out) :: q(2), p(2)
+    logical, intent(out) :: ok
+    type(reversal_lag_t), target :: lag
+    type(reversal_ld_t), target :: ld
+    type(vci_integrator_t) :: integ
+    integer :: stat, i
+    lag%n = 2; lag%n_gaps = 4; lag%s = s
+    ld%n = 2; ld%n_gaps = 4; ld%s = s
+    if (s%scheme == VCI_SCHEME_DISCRETE) then
+      call integ%create(ld, s%h, stat)
+    else
+      call integ%create(lag, s%h, stat)
+      if (stat == VCI_OK) call integ%set_scheme(s%scheme, s%stages, stat)
+    end if
+    if (stat == VCI_OK) call integ%set_poke_samples(.true., stat)
+    if (stat == VCI_OK) call integ%init_from_pair(0.0_dp, s%q0, s%q0 + s%h * s%v0, stat)
+    do i = 1, s%nsteps
+      if (stat /= VCI_OK) exit
+      call integ%step(1, stat)
+    end do
+    ok = stat == VCI_OK
+    q = integ%configuration(); p = integ%momentum()
+  end subroutine forward_end
 
   subroutine run(integ, s, r)
     type(vci_integrator_t), intent(inout) :: integ
