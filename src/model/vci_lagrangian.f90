@@ -183,13 +183,16 @@ contains
 
   !> Size the workspace for n coordinates; band (optional, >= 0): the Hessian blocks come from
   !> hessians_band with that half-bandwidth, so they are (2 bw + 1) x n (lvv: 3 bw + 1 rows), not
-  !> n x n (work%has_band_hessians).
+  !> n x n (work%has_band_hessians); pattern (optional): they come from hessians_sparse in that
+  !> declared pattern, so the dense blocks are 1 x 1 and O(nnz) arrays hold them (lagrangian_sparse_setup).
   !> stat /= 0: out of memory.
-  subroutine lagrangian_work_setup(work, n, stat, band)
+  subroutine lagrangian_work_setup(work, n, stat, band, pattern)
     type(vci_lagrangian_work_t), intent(inout) :: work
     integer, intent(in) :: n
     integer, intent(out) :: stat
     integer, intent(in), optional :: band
+    !> the model's hessians_sparse is used with this declared pattern: no dense blocks at all
+    type(vci_sparse_pattern_t), intent(in), optional :: pattern
     integer :: rows, rows_vv
     ! array by array: after an allocate that failed part-way some are allocated and some not
     if (allocated(work%qp)) deallocate (work%qp)
@@ -212,6 +215,9 @@ contains
         work%has_band_hessians = .true.
       end if
     end if
+    if (present(pattern)) then
+      rows = 1; rows_vv = 1
+    end if
     allocate (work%qp(n), work%vp(n), work%fp(n), work%fm(n), work%w(n), work%dw(n), work%lv(n), &
               work%lvv(rows_vv, n), work%lqq(rows, n), work%lqv(rows, n), work%ipiv(n), stat=stat)
     if (stat == 0) then
@@ -221,6 +227,7 @@ contains
         allocate (work%bvv(1, 1), stat=stat)
       end if
     end if
+    if (stat == 0 .and. present(pattern)) call lagrangian_sparse_setup(work, pattern, stat)
   end subroutine lagrangian_work_setup
 
   !> The model's banded Hessian blocks at (q, v) in band storage, each (2 bw + 1) x n (contiguous:

@@ -19,7 +19,7 @@ module vci_retraction
   use vci_model, only: vci_model_t
   use vci_lagrangian, only: vci_lagrangian_t, vci_lagrangian_work_t, lagrangian_work_setup, &
                             lagrangian_hessians, lagrangian_hamiltonian, lagrangian_band_hessians, &
-                            lagrangian_sparse_hessians, lagrangian_sparse_setup
+                            lagrangian_sparse_hessians
   use vci_sparse, only: vci_sparse_pattern_t
   implicit none
   private
@@ -81,10 +81,11 @@ contains
     end if
     if (self%band_hessians) then
       call lagrangian_work_setup(self%work, n, stat, band=lag%hessian_bandwidth)
+    else if (self%sparse_hessians) then
+      call lagrangian_work_setup(self%work, n, stat, pattern=lag%hessian_pattern)
     else
       call lagrangian_work_setup(self%work, n, stat)
     end if
-    if (stat == 0 .and. self%sparse_hessians) call lagrangian_sparse_setup(self%work, lag%hessian_pattern, stat)
     if (stat /= 0) return
     self%work%has_hessians = has_hessians .or. self%band_hessians .or. self%sparse_hessians
     self%has_model_energy = has_energy
