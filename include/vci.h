@@ -194,6 +194,13 @@ typedef int (*vci_lagrangian_hessians_fn)(int n, const double *q, const double *
 typedef int (*vci_lagrangian_band_hessians_fn)(int n, int bw, const double *q, const double *v, double *lqq,
                                                double *lqv, double *lvv, void *user);
 
+/** The three Hessian blocks in a declared sparse pattern (vci_model_declare_pattern), each an array
+ *  of the declared nnz = colptr[n] values in the declared order: lqq[k] = d2L/dq_i dq_j for
+ *  i = rowind[k] in column j (colptr[j] <= k < colptr[j+1]), and so lqv, lvv. Entries the library
+ *  adds to the pattern (transposes, the diagonal) not declared are zero: declare every nonzero. */
+typedef int (*vci_lagrangian_sparse_hessians_fn)(int n, int nnz, const double *q, const double *v, double *lqq,
+                                                 double *lqv, double *lvv, void *user);
+
 /** The callbacks of a continuous model, a struct of its own with its own leading size (same
  *  rules as vci_callbacks: initialise with VCI_LAGRANGIAN_CALLBACKS_INIT; members are only ever
  *  added at the end). Same return contract and conventions as the discrete callbacks. */
@@ -209,13 +216,16 @@ typedef struct vci_lagrangian_callbacks {
   vci_energy_fn energy;                         /**< optional H(q, p) (NULL: Legendre inversion of dl_dv) */
   vci_lagrangian_band_hessians_fn hessians_band; /**< optional, used with a declared bandwidth by
                                                       VCI_SCHEME_LEFT and _MIDPOINT (no n x n block) */
+  vci_lagrangian_sparse_hessians_fn hessians_sparse; /**< optional, used with a declared pattern by
+                                                          VCI_SCHEME_LEFT and _MIDPOINT (Newton's matrix
+                                                          assembled in the pattern, no n x n block) */
   /* new members here */
 } vci_lagrangian_callbacks;
 
 /** Initialiser: `vci_lagrangian_callbacks cb = VCI_LAGRANGIAN_CALLBACKS_INIT;` (size set, every
  *  callback NULL), as VCI_CALLBACKS_INIT. */
 #ifdef __cplusplus
-#define VCI_LAGRANGIAN_CALLBACKS_INIT {sizeof(vci_lagrangian_callbacks), 0, 0, 0, 0, 0, 0, 0, 0, 0}
+#define VCI_LAGRANGIAN_CALLBACKS_INIT {sizeof(vci_lagrangian_callbacks), 0, 0, 0, 0, 0, 0, 0, 0, 0, 0}
 #else
 #define VCI_LAGRANGIAN_CALLBACKS_INIT {.size = sizeof(vci_lagrangian_callbacks)}
 #endif

@@ -56,6 +56,8 @@ typedef int (*vci_lagrangian_hessians_fn)(int n, const double *q, const double *
                                           double *lvv, void *user);
 typedef int (*vci_lagrangian_band_hessians_fn)(int n, int bw, const double *q, const double *v, double *lqq,
                                                double *lqv, double *lvv, void *user);
+typedef int (*vci_lagrangian_sparse_hessians_fn)(int n, int nnz, const double *q, const double *v, double *lqq,
+                                                 double *lqv, double *lvv, void *user);
 typedef int (*vci_potential_fn)(int n, const double *q, double *out, void *user);
 
 int  vci_model_create_v2(vci_model *model, int n, int m, int ngaps, const vci_callbacks *cb, void *user);
@@ -130,6 +132,7 @@ typedef struct vci_lagrangian_callbacks {
   vci_gap_grads_fn gap_gradients;
   vci_energy_fn energy;
   vci_lagrangian_band_hessians_fn hessians_band;
+  vci_lagrangian_sparse_hessians_fn hessians_sparse;
 } vci_lagrangian_callbacks;
 
 typedef struct vci_separable_callbacks {

@@ -124,6 +124,7 @@ contains
       case (7); local%gap_gradients = fps(i)
       case (8); local%energy = fps(i)
       case (9); local%hessians_band = fps(i)
+      case (10); local%hessians_sparse = fps(i)
       end select
     end do
     what = ''

@@ -46,6 +46,7 @@ module vci_capi_models
     type(c_funptr) :: hessians = c_null_funptr, constraint_forms = c_null_funptr
     type(c_funptr) :: gaps = c_null_funptr, gap_gradients = c_null_funptr, energy = c_null_funptr
     type(c_funptr) :: hessians_band = c_null_funptr   !< added after 0.2 (at the end)
+    type(c_funptr) :: hessians_sparse = c_null_funptr !< added in issue 28 (at the end)
   end type vci_lagrangian_callbacks_c
 
   !> Mirror of `struct vci_separable_callbacks` in vci.h (separable models: constant M, V(q)):
@@ -83,6 +84,14 @@ module vci_capi_models
       real(c_double), intent(inout) :: lqq(*), lqv(*), lvv(*)
       type(c_ptr), value :: user
     end function c_lhess_band_fn
+    !> f(n, nnz, q, v, lqq, lqv, lvv, user): the Hessian blocks in the declared pattern's order.
+    integer(c_int) function c_lhess_sparse_fn(n, nnz, q, v, lqq, lqv, lvv, user) bind(C)
+      import :: c_int, c_double, c_ptr
+      integer(c_int), value :: n, nnz
+      real(c_double), intent(in) :: q(*), v(*)
+      real(c_double), intent(inout) :: lqq(*), lqv(*), lvv(*)
+      type(c_ptr), value :: user
+    end function c_lhess_sparse_fn
     integer(c_int) function c_ld_grad_fn(n, q, v, h, out, user) bind(C)
       import :: c_int, c_double, c_ptr
       integer(c_int), value :: n
@@ -174,6 +183,7 @@ module vci_capi_models
     procedure :: dl_dv => cl_dl_dv
     procedure :: hessians => cl_hessians
     procedure :: hessians_band => cl_hessians_band
+    procedure :: hessians_sparse => cl_hessians_sparse
     procedure :: constraint_forms => cl_forms
     procedure :: gaps => cl_gaps
     procedure :: gap_gradients => cl_gap_grads
@@ -507,6 +517,27 @@ contains
     call record%note(rc, 'the C callback hessians_band', all(ieee_is_finite(lqq)) .and. &
                           all(ieee_is_finite(lqv)) .and. all(ieee_is_finite(lvv)), stat)
   end subroutine cl_hessians_band
+
+  !> The blocks in the declared sparse pattern (declared order) from the C callback hessians_sparse.
+  subroutine cl_hessians_sparse(self, q, v, lqq, lqv, lvv, stat)
+    class(c_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: lqq(:), lqv(:), lvv(:)
+    integer, intent(inout) :: stat
+    procedure(c_lhess_sparse_fn), pointer :: f
+    type(vci_callback_record_t), pointer :: record
+    type(c_ptr) :: user
+    integer :: rc
+    lqq = 0.0_dp; lqv = 0.0_dp; lvv = 0.0_dp   ! defined even where a failing callback left them unwritten
+    if (.not. c_associated(self%cb%hessians_sparse)) then
+      call self%not_provided(stat); return
+    end if
+    call c_context(self, record, user)
+    call c_f_procpointer(self%cb%hessians_sparse, f)
+    rc = f(self%n, size(lqq), q, v, lqq, lqv, lvv, user)
+    call record%note(rc, 'the C callback hessians_sparse', all(ieee_is_finite(lqq)) .and. &
+                          all(ieee_is_finite(lqv)) .and. all(ieee_is_finite(lvv)), stat)
+  end subroutine cl_hessians_sparse
 
   subroutine cl_forms(self, q, omega, stat)
     class(c_lagrangian_t), intent(inout) :: self

@@ -60,6 +60,10 @@
 !>     TASK 18: OUT(1:3*(2*IBW+1)*N) = the same blocks on the band |i - j| <= IBW that VCIBND
 !>              declared, each in LAPACK band storage ((2*IBW+1) x N column-major, entry (i, j)
 !>              in row IBW+1+i-j of column j), one after the other                (IOPT bit 64)
+!>     TASK 20: OUT(1:3*NNZ) = the same blocks in the pattern VCIPAT declared, each NNZ values in
+!>              IROW's order (entry (IROW(k), J) for ICOLP(J) <= k < ICOLP(J+1)), one after the
+!>              other; entries the library adds (transposes, diagonal) not declared are zero
+!>                                                                                (IOPT bit 256)
 !>
 !> A separable L = ½ Vᵀ M V − V(Q) with a constant M (IOPT bit 16; every scheme of a continuous
 !> model, and the explicit compositions VCISCH(IH, 4, ORDER, ...); M must be 0, H is derived):
@@ -118,11 +122,12 @@ module vci_legacy
                                 TASK_DCONSTRAINT = 6, TASK_GAPS = 7, TASK_GAP_GRADS = 8, TASK_ENERGY = 9, &
                                 TASK_LAGRANGIAN = 10, TASK_DL_DQ = 11, TASK_DL_DV = 12, TASK_L_HESSIANS = 13, &
                                 TASK_POTENTIAL = 14, TASK_POTENTIAL_GRAD = 15, TASK_POTENTIAL_HESSIAN = 16, &
-                                TASK_MASS = 17, TASK_L_HESSIANS_BAND = 18, TASK_LD_FUSED = 19
+                                TASK_MASS = 17, TASK_L_HESSIANS_BAND = 18, TASK_LD_FUSED = 19, &
+                                TASK_L_HESSIANS_SPARSE = 20
   !> IOPT bits: which optional tasks the model routine supplies, and whether it is a continuous L.
   integer, parameter, public :: IOPT_HESSIAN = 1, IOPT_GAP_GRADS = 2, IOPT_ENERGY = 4, IOPT_CONTINUOUS = 8, &
                                 IOPT_SEPARABLE = 16, IOPT_DENSE_MASS = 32, IOPT_BAND_HESSIANS = 64, &
-                                IOPT_LD_FUSED = 128
+                                IOPT_LD_FUSED = 128, IOPT_SPARSE_HESSIANS = 256
   !> IERR with which the model routine answers "this TASK is not provided" (no other value means it).
   integer, parameter, public :: IERR_NOT_PROVIDED = -999
 
@@ -173,12 +178,14 @@ module vci_legacy
     type(legacy_routine_t) :: routine
     real(dp), allocatable :: hwork(:)   !< OUT of TASK 13 (3 n^2), when IOPT has bit 1
     real(dp), allocatable :: bwork(:)   !< OUT of TASK 18 (3 (2 bw + 1) n), when IOPT has bit 64
+    real(dp), allocatable :: swork(:)   !< OUT of TASK 20 (3 nnz), when IOPT has bit 256
   contains
     procedure :: lagrangian => ll_value
     procedure :: dl_dq => ll_dl_dq
     procedure :: dl_dv => ll_dl_dv
     procedure :: hessians => ll_hessians
     procedure :: hessians_band => ll_hessians_band
+    procedure :: hessians_sparse => ll_hessians_sparse
     procedure :: constraint_forms => ll_forms
     procedure :: gaps => ll_gaps
     procedure :: gap_gradients => ll_gap_grads
@@ -502,6 +509,34 @@ contains
     lvv = reshape(self%bwork(2 * nb + 1:3 * nb), [2 * bw + 1, self%n])
   end subroutine ll_hessians_band
 
+  !> TASK 20: the three blocks in the declared pattern's order, one after the other in OUT(1:3*NNZ).
+  subroutine ll_hessians_sparse(self, q, v, lqq, lqv, lvv, stat)
+    class(legacy_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: lqq(:), lqv(:), lvv(:)
+    integer, intent(inout) :: stat
+    integer :: nz, st
+    logical :: declined
+    lqq = 0.0_dp; lqv = 0.0_dp; lvv = 0.0_dp
+    if (iand(self%routine%iopt, IOPT_SPARSE_HESSIANS) == 0) then
+      call self%not_provided(stat); return
+    end if
+    nz = size(lqq)
+    if (allocated(self%swork)) then
+      if (size(self%swork) /= 3 * nz) deallocate (self%swork)
+    end if
+    if (.not. allocated(self%swork)) then
+      allocate (self%swork(max(1, 3 * nz)), stat=st)
+      if (st /= 0) then
+        stat = -1; return        ! (unrecoverable: the step stops, naming hessians)
+      end if
+    end if
+    call call_task(self%routine, self%n, self%m, self%n_gaps, TASK_L_HESSIANS_SPARSE, q, v, 0.0_dp, self%swork, &
+                   3 * nz, stat, declined)
+    if (declined) call decline(self, stat)
+    lqq = self%swork(1:nz); lqv = self%swork(nz + 1:2 * nz); lvv = self%swork(2 * nz + 1:3 * nz)
+  end subroutine ll_hessians_sparse
+
   subroutine ll_forms(self, q, omega, stat)
     class(legacy_lagrangian_t), intent(inout) :: self
     real(dp), intent(in) :: q(:)
@@ -750,10 +785,10 @@ contains
     integer :: i
     ih = 0
     if (iopt < 0 .or. iopt > IOPT_HESSIAN + IOPT_GAP_GRADS + IOPT_ENERGY + IOPT_CONTINUOUS + IOPT_SEPARABLE + &
-        IOPT_DENSE_MASS + IOPT_BAND_HESSIANS + IOPT_LD_FUSED) then
+        IOPT_DENSE_MASS + IOPT_BAND_HESSIANS + IOPT_LD_FUSED + IOPT_SPARSE_HESSIANS) then
       write (global_message, '(a,i0,a)') 'VCINEW: IOPT = ', iopt, &
         ' (need a sum of 1: Hessian, 2: gap gradients, 4: energy, 8: continuous L, 16: separable L, 32: dense M,'// &
-        ' 64: banded Hessians, 128: fused L_d)'
+        ' 64: banded Hessians, 128: fused L_d, 256: sparse Hessians)'
       stat = VCI_ERR_ARGUMENT; return
     end if
     if (iand(iopt, IOPT_LD_FUSED) /= 0 .and. iand(iopt, IOPT_CONTINUOUS + IOPT_SEPARABLE) /= 0) then
@@ -768,6 +803,10 @@ contains
     end if
     if (iand(iopt, IOPT_BAND_HESSIANS) /= 0 .and. iand(iopt, IOPT_CONTINUOUS + IOPT_SEPARABLE) /= IOPT_CONTINUOUS) then
       global_message = 'VCINEW: IOPT bit 64 (TASK 18, banded Hessians of L) needs a continuous L (bit 8, not 16)'
+      stat = VCI_ERR_ARGUMENT; return
+    end if
+    if (iand(iopt, IOPT_SPARSE_HESSIANS) /= 0 .and. iand(iopt, IOPT_CONTINUOUS + IOPT_SEPARABLE) /= IOPT_CONTINUOUS) then
+      global_message = 'VCINEW: IOPT bit 256 (TASK 20, sparse Hessians of L) needs a continuous L (bit 8, not 16)'
       stat = VCI_ERR_ARGUMENT; return
     end if
     if (separable_refused(n, m, ng, iopt, stat)) return

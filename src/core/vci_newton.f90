@@ -19,6 +19,7 @@ module vci_newton
   use vci_kernels, only: equilibrate, scaled_merit, small_lu, small_lu_solve, pivots_regular
   use vci_banded, only: vci_banded_lu_t, outside_band
   use vci_banded_matrix, only: vci_band_matrix_t
+  use vci_sparse_matrix, only: vci_sparse_matrix_t
   use vci_sparse, only: vci_sparse_lu_t, vci_sparse_pattern_t, outside_pattern, pattern_rows
   use vci_factor, only: vci_dense_lu_t
   use vci_bordered, only: vci_bordered_t
@@ -75,6 +76,10 @@ module vci_newton
     procedure :: packs_band => never_packs
     !> jac = dR/dx written in the declared structure (vci_band_matrix_t, no n x n array).
     procedure :: band_jacobian => no_band_jacobian
+    !> Does the posed system write its Jacobian in its declared sparse pattern? (default: no)
+    procedure :: packs_sparse => never_packs
+    !> jac = dR/dx written in the declared pattern (vci_sparse_matrix_t, no n x n array).
+    procedure :: sparse_jacobian => no_sparse_jacobian
   end type vci_system_t
 
   abstract interface
@@ -153,6 +158,9 @@ module vci_newton
     !> Newton's matrix in its declared band (vci_banded_matrix) when the system writes it there
     type(vci_band_matrix_t), private :: bmat
     logical, private :: packed = .false.           !< this solve's Jacobian is in bmat
+    !> Newton's matrix in its declared sparse pattern (vci_sparse_matrix) when the system writes it there
+    type(vci_sparse_matrix_t), private :: smat
+    logical, private :: spacked = .false.          !< this solve's Jacobian is in smat
     integer, allocatable, private :: ipiv(:), iwork(:)
     !> Factorisations in a declared structure (band or sparse pattern, with their dense border)
     integer(i8) :: structured_factorisations = 0
@@ -250,6 +258,15 @@ contains
     integer, intent(out) :: stat
     stat = VCI_ERR_ARGUMENT
   end subroutine no_band_jacobian
+
+  !> Not called unless packs_sparse says so: a system that packs its pattern overrides it.
+  subroutine no_sparse_jacobian(self, x, r, mat, stat)
+    class(vci_system_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:), r(:)
+    type(vci_sparse_matrix_t), intent(inout) :: mat
+    integer, intent(out) :: stat
+    stat = VCI_ERR_ARGUMENT
+  end subroutine no_sparse_jacobian
 
   !> Unknowns at the end of x that border the rest: none unless the system says so.
   integer function no_border(self)
@@ -479,6 +496,9 @@ contains
       if (self%packed) then
         call self%bmat%pose(n)
         call sys%band_jacobian(x, self%r(1:n), self%bmat, stat)
+      else if (self%spacked) then
+        call self%smat%pose(n)
+        call sys%sparse_jacobian(x, self%r(1:n), self%smat, stat)
       else
         call sys%jacobian(x, self%r(1:n), self%jac(1:n, 1:n), stat)
       end if
@@ -624,16 +644,21 @@ contains
     real(dp), intent(inout) :: b(:)
     integer, intent(out) :: info, stat
     integer :: n, snb, sbw, ssp, st
-    logical :: chk, packed
+    logical :: chk, packed, spacked
     type(vci_sparse_pattern_t), pointer :: spat
     n = size(x)
     info = -1; st = 0
     snb = self%snb; sbw = self%sbw; ssp = self%ssp; chk = self%scheck; spat => self%spat; packed = self%packed
+    spacked = self%spacked
     call pose_structure(self, sys, n)
     call choose_band(self, sys)
     if (self%packed) then
       call self%bmat%pose(n)
       call sys%band_jacobian(x, r, self%bmat, stat)
+      if (stat == VCI_OK) call packed_linear_solve(self, n, b, info)
+    else if (self%spacked) then
+      call self%smat%pose(n)
+      call sys%sparse_jacobian(x, r, self%smat, stat)
       if (stat == VCI_OK) call packed_linear_solve(self, n, b, info)
     else
       stat = VCI_OK
@@ -646,10 +671,12 @@ contains
       if (stat == VCI_OK) call posed_linear_solve(self, n, jac, b, info)
     end if
     self%snb = snb; self%sbw = sbw; self%ssp = ssp; self%scheck = chk; self%spat => spat; self%packed = packed
+    self%spacked = spacked
   end subroutine jacobian_solve
 
-  !> linear_solve of the matrix in bmat (its declared band): factorised there; when the band
-  !> block or its border is singular, densely from a copy (n^2, made only then), as linear_solve.
+  !> linear_solve of the matrix kept in its declared structure (bmat's band or smat's sparse
+  !> pattern): factorised there; when the block or its border is singular, densely from a copy
+  !> (n^2, made only then), as linear_solve.
   subroutine packed_linear_solve(self, n, b, info)
     type(vci_newton_t), intent(inout) :: self
     integer, intent(in) :: n
@@ -658,12 +685,11 @@ contains
     integer :: i, st
     real(dp), allocatable :: a(:, :)
     info = -1
-    if (.not. (self%bmat%row_weights(n, self%rw) <= huge(1.0_dp) .and. all_finite(b(1:n)))) return
+    if (.not. (packed_rows(self, n, self%rw) <= huge(1.0_dp) .and. all_finite(b(1:n)))) return
     self%rt(1:n) = b(1:n)
     self%have_lu = .false.            ! the factors below are not a Newton matrix's
-    call self%band%factor_packed(n, self%bmat, self%rw, info)
+    call packed_factor(self, n, self%rw, info)
     if (info == 0) then
-      self%fkind = FACTORS_BAND
       do i = 1, n
         b(i) = b(i) * self%rw(i)
       end do
@@ -676,7 +702,7 @@ contains
     if (st /= 0) then
       info = -1; return
     end if
-    call self%bmat%to_dense(a, n)
+    call packed_to_dense(self, a, n)
     self%snb = 0; self%ssp = 0; self%scheck = .false.
     call posed_linear_solve(self, n, a, b, info)
   end subroutine packed_linear_solve
@@ -764,12 +790,12 @@ contains
       ! decides, on the matrix with its zeros outside the band written (the assembly wrote the band
       ! alone; a sparse pattern's matrix is dense in memory); a matrix kept in its band is copied
       ! out to a dense one, made (n^2) only now
-      if (self%packed) then
+      if (self%packed .or. self%spacked) then
         call grow_dense(self, n, info)
         if (info /= 0) then
           res%reason = NEWTON_MEMORY; return
         end if
-        call self%bmat%to_dense(self%jac, self%dense_capacity)
+        call packed_to_dense(self, self%jac, self%dense_capacity)
       else if (self%snb > 0 .and. .not. self%scheck) then
         call zero_outside_band(self%snb, self%sbw, self%jac, self%dense_capacity)
       end if
@@ -840,11 +866,9 @@ contains
     if (self%block_stale .or. .not. self%border_chord .or. n <= self%reuse_min .or. self%block_ni /= ni .or. &
         self%snb > 0 .or. self%ssp > 0) then
       self%block_stale = .true.
-      if (self%packed) then
-        if (.not. (self%bmat%row_weights(ni, self%brw) <= huge(1.0_dp))) return
-        call self%band%factor_packed(ni, self%bmat, self%brw, info)
-        self%fkind = FACTORS_BAND
-        if (info /= 0) self%fkind = FACTORS_WHOLE
+      if (self%packed .or. self%spacked) then
+        if (.not. (packed_rows(self, ni, self%brw) <= huge(1.0_dp))) return
+        call packed_factor(self, ni, self%brw, info)
       else
         if (.not. (structure_rows(self, ni, self%jac, self%dense_capacity, self%brw) <= huge(1.0_dp))) return
         call structured_factor(self, ni, self%jac, self%dense_capacity, self%brw, info)
@@ -862,6 +886,13 @@ contains
         self%bvec(1:nb) = mt%rows(nd, 1:nb)
         self%bvec(nb + 1:ni) = mt%cols(n, 1:nd - 1)
         call self%bord%border_parts(self%band, ni, mt%cols(1:ni, nd), self%bvec(1:ni), mt%cols(n, nd), self%brw, info)
+      end associate
+    else if (self%spacked) then
+      associate (mt => self%smat, nb => self%smat%nb, nd => self%smat%nd)
+        self%bvec(1:nb) = mt%rows(nd, 1:nb)
+        self%bvec(nb + 1:ni) = mt%cols(n, 1:nd - 1)
+        call self%bord%border_parts(self%sparse, ni, mt%cols(1:ni, nd), self%bvec(1:ni), mt%cols(n, nd), self%brw, &
+                                    info)
       end associate
     else
       select case (self%bkind)
@@ -898,8 +929,8 @@ contains
     integer :: i, info
     real(dp) :: total
     factored = .false.
-    if (self%packed) then
-      total = self%bmat%row_weights(n, self%rw)
+    if (self%packed .or. self%spacked) then
+      total = packed_rows(self, n, self%rw)
     else
       total = structure_rows(self, n, self%jac, self%dense_capacity, self%rw)
     end if
@@ -908,10 +939,8 @@ contains
     end do
     ! NaN/Inf in the matrix or r w: the dense path reports it (nothing non-finite goes to LAPACK)
     if (.not. (total <= huge(1.0_dp) .and. all_finite(self%dx(1:n)))) return
-    if (self%packed) then
-      call self%band%factor_packed(n, self%bmat, self%rw, info)
-      self%fkind = FACTORS_BAND
-      if (info /= 0) self%fkind = FACTORS_WHOLE
+    if (self%packed .or. self%spacked) then
+      call packed_factor(self, n, self%rw, info)
     else
       call structured_factor(self, n, self%jac, self%dense_capacity, self%rw, info)
     end if
@@ -928,14 +957,62 @@ contains
     type(vci_newton_t), intent(inout) :: self
     class(vci_system_t), intent(inout) :: sys
     integer :: st
-    self%packed = .false.
+    self%packed = .false.; self%spacked = .false.
     if (self%snb > 0 .and. .not. self%scheck) then
       if (sys%packs_band()) then
         call self%bmat%size_for(self%snb, self%sbw, self%capacity - self%snb, st)
         self%packed = st == 0
       end if
+    else if (self%ssp > 0 .and. .not. self%scheck) then
+      if (sys%packs_sparse()) then
+        call self%smat%size_for(self%spat, self%capacity - self%ssp, st)
+        self%spacked = st == 0
+      end if
     end if
   end subroutine choose_band
+
+  !> packed_rows / packed_factor / packed_to_dense: the matrix kept in its declared structure (band
+  !> in bmat, or sparse pattern in smat) — row weights of its leading nx x nx, its factors (fkind
+  !> names them; FACTORS_WHOLE when they failed), its dense copy for the fallback.
+  real(dp) function packed_rows(self, nx, rw) result(total)
+    type(vci_newton_t), intent(inout) :: self
+    integer, intent(in) :: nx
+    real(dp), intent(out) :: rw(:)
+    if (self%spacked) then
+      total = self%smat%row_weights(nx, rw)
+    else
+      total = self%bmat%row_weights(nx, rw)
+    end if
+  end function packed_rows
+
+  !> Factorise diag(rw) times the leading nx x nx of the packed matrix in its structure.
+  subroutine packed_factor(self, nx, rw, info)
+    type(vci_newton_t), intent(inout) :: self
+    integer, intent(in) :: nx
+    real(dp), intent(in) :: rw(:)
+    integer, intent(out) :: info
+    if (self%spacked) then
+      call self%sparse%factor_parts(nx, self%smat%nb, self%smat%pat, self%smat%val, self%smat%rows, &
+                                    self%smat%cols, rw, info)
+      self%fkind = FACTORS_SPARSE
+    else
+      call self%band%factor_packed(nx, self%bmat, rw, info)
+      self%fkind = FACTORS_BAND
+    end if
+    if (info /= 0) self%fkind = FACTORS_WHOLE
+  end subroutine packed_factor
+
+  !> a(1:nx, 1:nx) = the packed matrix (O(nx^2): the dense fallback only).
+  subroutine packed_to_dense(self, a, lda)
+    type(vci_newton_t), intent(inout) :: self
+    integer, intent(in) :: lda
+    real(dp), intent(inout) :: a(lda, *)
+    if (self%spacked) then
+      call self%smat%to_dense(a, lda)
+    else
+      call self%bmat%to_dense(a, lda)
+    end if
+  end subroutine packed_to_dense
 
   !> Where this solve keeps Newton's matrix: in the declared band (bmat, packed) when the system
   !> writes it there and the debug check is off (the check scans a dense matrix), else in the dense
@@ -948,7 +1025,7 @@ contains
     integer :: st
     stat = VCI_OK
     call choose_band(self, sys)
-    if (self%packed) return
+    if (self%packed .or. self%spacked) return
     call grow_dense(self, n, st)
     if (st /= 0) stat = VCI_ERR_MEMORY
   end subroutine pose_storage

@@ -29,6 +29,11 @@ module vci_sparse
     integer :: n = 0                      !< columns (0: no pattern declared)
     integer, allocatable :: colptr(:)     !< n + 1 column starts into rowind
     integer, allocatable :: rowind(:)     !< row indices, column by column
+    !> tpos(k): the place in rowind of the transpose of entry k (the pattern is symmetric)
+    integer, allocatable :: tpos(:)
+    !> upos(k): the place in rowind of the k-th entry as declared (the declared rowind's order,
+    !> which a sparse Hessian callback gives its values in; repeats map to the same place)
+    integer, allocatable :: upos(:)
   end type vci_sparse_pattern_t
 
   !> One analysed pattern (a system size) and its last numeric factors.
@@ -47,6 +52,8 @@ module vci_sparse
   contains
     !> Factorise diag(rw) jac(1:nx, 1:nx): block nb with the pattern pat, a dense border.
     procedure :: factor
+    !> The same from the matrix's parts (block values in pattern order, border rows and columns).
+    procedure :: factor_parts
     !> b(1:nx) := matrix^{-1} b with the last factors.
     procedure :: solve
     !> Free every factor and analysis (C memory).
@@ -83,7 +90,7 @@ module vci_sparse
     end subroutine vci_klu_free
   end interface
 
-  public :: sparse_available, make_pattern, outside_pattern, pattern_rows, pattern_arrays_error
+  public :: sparse_available, make_pattern, outside_pattern, pattern_rows, pattern_arrays_error, pattern_find
 
 contains
 
@@ -160,8 +167,42 @@ contains
       call sort_rows(pat%rowind(pat%colptr(j):q))
     end do
     pat%n = n
+    ! where each entry's transpose and each declared entry sit (O(nnz log) searches, once)
+    allocate (pat%tpos(q), pat%upos(nnz), stat=stat)
+    if (stat /= 0) then
+      stat = 2; msg = 'out of memory for the pattern'; pat%n = 0; return
+    end if
+    do j = 1, n
+      do k = pat%colptr(j), pat%colptr(j + 1) - 1
+        pat%tpos(k) = pattern_find(pat, j, pat%rowind(k))
+      end do
+      do k = colptr(j), colptr(j + 1) - 1
+        pat%upos(k) = pattern_find(pat, rowind(k), j)
+      end do
+    end do
     stat = 0
   end subroutine make_pattern
+
+  !> The place in pat%rowind of entry (i, j), or 0 when it is outside the pattern (binary search
+  !> in column j's sorted rows).
+  pure integer function pattern_find(pat, i, j) result(k)
+    type(vci_sparse_pattern_t), intent(in) :: pat
+    integer, intent(in) :: i, j
+    integer :: lo, hi, mid
+    k = 0
+    if (j < 1 .or. j > pat%n) return
+    lo = pat%colptr(j); hi = pat%colptr(j + 1) - 1
+    do while (lo <= hi)
+      mid = (lo + hi) / 2
+      if (pat%rowind(mid) == i) then
+        k = mid; return
+      else if (pat%rowind(mid) < i) then
+        lo = mid + 1
+      else
+        hi = mid - 1
+      end if
+    end do
+  end function pattern_find
 
   !> The strict check of a pattern given through the C or legacy entry (make_pattern itself is
   !> lenient): colptr(1:n + 1) starts at base and never decreases, column j's rows
@@ -311,6 +352,43 @@ contains
     self%last = s
     self%ready = info == 0
   end subroutine factor
+
+  !> factor from the matrix's parts, as vci_sparse_matrix keeps them (no dense copy): the block's
+  !> values val(1:nnz) in pat's order, the border rows rows(k, j) = A(nb + k, j) for j <= nb and
+  !> the border columns cols(i, k) = A(i, nb + k); rows scaled by rw. info as factor's.
+  subroutine factor_parts(self, nx, nb, pat, val, rows, cols, rw, info)
+    class(vci_sparse_lu_t), intent(inout) :: self
+    integer, intent(in) :: nx, nb
+    type(vci_sparse_pattern_t), intent(in) :: pat
+    real(dp), intent(in) :: val(:), rows(:, :), cols(:, :), rw(*)
+    integer, intent(out) :: info
+    integer :: s, i, j, k, q
+    self%ready = .false.
+    info = -1
+    if (nb < 1 .or. nb > nx .or. pat%n /= nb) return
+    s = find_slot(self, nx, nb, pat)
+    if (s == 0) return
+    associate (sl => self%slot(s))
+      q = 0
+      do j = 1, nx
+        if (j <= nb) then
+          do k = pat%colptr(j), pat%colptr(j + 1) - 1
+            q = q + 1; sl%ax(q) = rw(pat%rowind(k)) * val(k)
+          end do
+          do i = nb + 1, nx
+            q = q + 1; sl%ax(q) = rw(i) * rows(i - nb, j)
+          end do
+        else
+          do i = 1, nx
+            q = q + 1; sl%ax(q) = rw(i) * cols(i, j - nb)
+          end do
+        end if
+      end do
+      info = vci_klu_factor(sl%handle, sl%ap, sl%ai, sl%ax)
+    end associate
+    self%last = s
+    self%ready = info == 0
+  end subroutine factor_parts
 
   !> b(1:nx) := matrix^{-1} b with the last factors (b unchanged when there are none).
   subroutine solve(self, b)

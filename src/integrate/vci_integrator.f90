@@ -211,7 +211,7 @@ contains
     self%lag => model
     ! which procedures the model supplies (the values at these probe points are discarded)
     allocate (q(model%n), v(model%n), stat=ierr)
-    if (ierr == 0 .and. .not. supplies_band_hessians(model)) &
+    if (ierr == 0 .and. .not. (supplies_band_hessians(model) .or. supplies_sparse_hessians(model))) &
       allocate (hq(model%n, model%n), hv(model%n, model%n), hw(model%n, model%n), stat=ierr)
     if (ierr == 0 .and. .not. allocated(hq)) allocate (hq(model%n, 1), stat=ierr)
     if (ierr /= 0) then
@@ -232,7 +232,8 @@ contains
       call finish(self, VCI_ERR_ARGUMENT, stat); return
     end if
     self%lag_hessians = .false.
-    if (.not. supplies_band_hessians(model)) then   ! (else no n x n probe: the band's schemes use the band)
+    if (.not. (supplies_band_hessians(model) .or. supplies_sparse_hessians(model))) then
+      ! (else no n x n probe: the band's or the pattern's schemes use those callbacks)
       call model%clear_not_provided(); s = 0; call model%hessians(q, v, hq, hv, hw, s)
       self%lag_hessians = .not. model%answered_not_provided()
     end if
@@ -260,6 +261,24 @@ contains
     yes = .not. model%answered_not_provided()
     call model%clear_not_provided()
   end function supplies_band_hessians
+
+  !> A continuous model with a declared sparse pattern (and no debug check) that supplies
+  !> hessians_sparse: as supplies_band_hessians, its dense hessians are never probed.
+  logical function supplies_sparse_hessians(model) result(yes)
+    class(vci_lagrangian_t), intent(inout) :: model
+    real(dp), allocatable :: z(:), b1(:), b2(:), b3(:)
+    integer :: s, nu
+    yes = .false.
+    if (model%hessian_bandwidth >= 0 .or. model%hessian_pattern%n /= model%n .or. model%check_pattern) return
+    nu = size(model%hessian_pattern%upos)
+    allocate (z(model%n), b1(nu), b2(nu), b3(nu), stat=s)
+    if (s /= 0) return
+    z = 0.0_dp
+    call model%clear_not_provided(); s = 0
+    call model%hessians_sparse(z, z, b1, b2, b3, s)
+    yes = .not. model%answered_not_provided()
+    call model%clear_not_provided()
+  end function supplies_sparse_hessians
 
   !> Checks and state common to both kinds of model.
   subroutine bind_sizes(self, model, h, stat)
@@ -344,7 +363,8 @@ contains
         type is (vci_scheme_discrete_t)
           call sch%setup(self%retraction, stat)
           ! (the model's banded Hessians serve the mixed Hessian too: vci_retraction's band_hessians)
-          call sch%use_derivatives(mixed_hessian=self%lag_hessians .or. self%retraction%band_hessians)
+          call sch%use_derivatives(mixed_hessian=self%lag_hessians .or. self%retraction%band_hessians .or. &
+                                   self%retraction%sparse_hessians)
         end select
       end if
       if (stat /= 0) stat = VCI_ERR_MEMORY

@@ -26,6 +26,7 @@ module vci_stepper
   use vci_predictor, only: vci_predict_start
   use vci_explicit_step, only: vci_explicit_t
   use vci_checkpoint, only: vci_checkpoint_t
+  use vci_sparse, only: vci_sparse_pattern_t
   implicit none
   private
 
@@ -177,6 +178,7 @@ contains
     integer, intent(out) :: stat
     integer :: n, m, ng, nx, ngw, nb, bw, nd
     logical :: chk
+    type(vci_sparse_pattern_t), pointer :: spat
     n = scheme%n; m = scheme%m; ng = scheme%n_gaps; ngw = max(1, ng)
     self%n = n; self%m = m; self%ng = ng
     self%stats = vci_solver_stats_t()
@@ -190,6 +192,8 @@ contains
     ! kept in band storage, so the dense ones are only the small systems' and the impulse's
     call self%sys%structure(nb, bw, chk)
     nd = nx
+    if (nb > 0 .and. .not. chk) nd = min(nx, max(self%sys%unknowns(KIND_IMPULSE), vci_large_system - 1))
+    call self%sys%sparse_structure(nb, spat, chk)     ! (a declared sparse pattern: likewise, smat)
     if (nb > 0 .and. .not. chk) nd = min(nx, max(self%sys%unknowns(KIND_IMPULSE), vci_large_system - 1))
     call self%newton%reserve(nx, stat, dense_max=nd)
     if (stat /= VCI_OK) return

@@ -16,6 +16,7 @@ module vci_lagrangian
   use vci_model_base, only: vci_model_base_t
   use vci_lapack, only: dgetrf, dgetrs
   use vci_banded, only: band_lu, band_solve
+  use vci_sparse, only: vci_sparse_lu_t, vci_sparse_pattern_t
   implicit none
   private
 
@@ -35,6 +36,12 @@ module vci_lagrangian
     !> (2 bw + 1) x n): lqq(bw + 1 + i - j, j) = d2L/dq_i dq_j, and so lqv, lvv. Optional; with a
     !> declared bandwidth the `left` and `midpoint` schemes then keep no n x n Hessian block.
     procedure :: hessians_band => not_provided_hessians_band
+    !> The same blocks in a declared sparse pattern (declare_pattern): lqq(k) = d2L/dq_i dq_j for
+    !> the k-th declared entry (i = rowind(k) in column j, the declared arrays' order; repeated
+    !> entries are summed), and so lqv, lvv; each of the declared length colptr(n + 1) - 1.
+    !> Optional; with a declared pattern the `left` and `midpoint` schemes then keep no n x n
+    !> Hessian block and assemble Newton's matrix in the pattern (O(nnz)).
+    procedure :: hessians_sparse => not_provided_hessians_sparse
   end type vci_lagrangian_t
 
   abstract interface
@@ -67,10 +74,17 @@ module vci_lagrangian
     real(dp), allocatable :: qp(:), vp(:), fp(:), fm(:), w(:), dw(:), lv(:), lvv(:, :), lqq(:, :), lqv(:, :)
     real(dp), allocatable :: bvv(:, :)   !< hessians_band's velocity block, (2 bw + 1) x n (else 1 x 1)
     integer, allocatable :: ipiv(:)
+    !> the model's hessians_sparse is used (a declared pattern): the dense blocks above are 1 x 1,
+    !> uqq, uqv, uvv take the callback's values (declared order), sqq, sqv, svv the pattern's
+    !> (vci_sparse_pattern_t order), and the Legendre inversion factorises svv by KLU (slu)
+    logical :: has_sparse_hessians = .false.
+    real(dp), allocatable :: uqq(:), uqv(:), uvv(:), sqq(:), sqv(:), svv(:), ones(:), none(:, :)
+    type(vci_sparse_lu_t) :: slu
   end type vci_lagrangian_work_t
 
   public :: lagrangian_work_setup, lagrangian_hessians, lagrangian_energy, lagrangian_hamiltonian
   public :: lagrangian_band_hessians, lagrangian_check_band
+  public :: lagrangian_sparse_hessians, lagrangian_sparse_setup
 
   real(dp), parameter :: fd_rel = 6.0e-6_dp   ! ~ eps**(1/3): central differences
 
@@ -98,15 +112,87 @@ contains
     call self%not_provided(stat)
   end subroutine not_provided_hessians_band
 
+  !> The sparse blocks (declared order, each of the declared pattern's length).
+  subroutine not_provided_hessians_sparse(self, q, v, lqq, lqv, lvv, stat)
+    class(vci_lagrangian_t), intent(inout) :: self
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: lqq(:), lqv(:), lvv(:)
+    integer, intent(inout) :: stat
+    lqq = 0.0_dp; lqv = 0.0_dp; lvv = 0.0_dp
+    call self%not_provided(stat)
+  end subroutine not_provided_hessians_sparse
+
+  !> Size the workspace for the model's sparse Hessians (hessians_sparse, with the declared pattern
+  !> pat of nnz_user declared entries): the dense blocks shrink to 1 x 1 (after
+  !> lagrangian_work_setup), O(nnz) arrays instead. stat /= 0: out of memory.
+  subroutine lagrangian_sparse_setup(work, pat, stat)
+    type(vci_lagrangian_work_t), intent(inout) :: work
+    type(vci_sparse_pattern_t), intent(in) :: pat
+    integer, intent(out) :: stat
+    integer :: nnz, nu
+    nnz = pat%colptr(pat%n + 1) - 1; nu = size(pat%upos)
+    if (allocated(work%lvv)) deallocate (work%lvv)
+    if (allocated(work%lqq)) deallocate (work%lqq)
+    if (allocated(work%lqv)) deallocate (work%lqv)
+    if (allocated(work%uqq)) deallocate (work%uqq)
+    if (allocated(work%uqv)) deallocate (work%uqv)
+    if (allocated(work%uvv)) deallocate (work%uvv)
+    if (allocated(work%sqq)) deallocate (work%sqq)
+    if (allocated(work%sqv)) deallocate (work%sqv)
+    if (allocated(work%svv)) deallocate (work%svv)
+    if (allocated(work%ones)) deallocate (work%ones)
+    if (allocated(work%none)) deallocate (work%none)
+    allocate (work%lvv(1, 1), work%lqq(1, 1), work%lqv(1, 1), work%uqq(nu), work%uqv(nu), work%uvv(nu), &
+              work%sqq(nnz), work%sqv(nnz), work%svv(nnz), work%ones(pat%n), work%none(1, 1), stat=stat)
+    if (stat /= 0) return
+    work%ones = 1.0_dp
+    work%has_sparse_hessians = .true.
+  end subroutine lagrangian_sparse_setup
+
+  !> The model's sparse Hessian blocks at (q, v) in the pattern's order (lqq(k): entry
+  !> (pat%rowind(k), j)), gathered from the callback's declared order (repeats summed; entries of
+  !> the pattern the declaration lacks — transposes, the diagonal — are zero). O(nnz). stat:
+  !> VCI_OK, VCI_ERR_CALLBACK (code in work%code) or VCI_ERR_NONFINITE.
+  subroutine lagrangian_sparse_hessians(lag, work, pat, q, v, lqq, lqv, lvv, stat)
+    class(vci_lagrangian_t), intent(inout) :: lag
+    type(vci_lagrangian_work_t), intent(inout) :: work
+    type(vci_sparse_pattern_t), intent(in) :: pat
+    real(dp), intent(in) :: q(:), v(:)
+    real(dp), intent(out) :: lqq(:), lqv(:), lvv(:)
+    integer, intent(out) :: stat
+    integer :: s, k, p
+    stat = VCI_OK
+    s = 0
+    call lag%hessians_sparse(q, v, work%uqq, work%uqv, work%uvv, s)
+    if (s /= 0) then
+      work%code = s
+      stat = VCI_ERR_CALLBACK; return
+    end if
+    if (.not. (abs(sum(work%uqq) + sum(work%uqv) + sum(work%uvv)) <= huge(1.0_dp))) then
+      if (.not. (all(ieee_is_finite(work%uqq)) .and. all(ieee_is_finite(work%uqv)) .and. &
+                 all(ieee_is_finite(work%uvv)))) then
+        stat = VCI_ERR_NONFINITE; return
+      end if
+    end if
+    lqq = 0.0_dp; lqv = 0.0_dp; lvv = 0.0_dp
+    do k = 1, size(pat%upos)
+      p = pat%upos(k)
+      lqq(p) = lqq(p) + work%uqq(k); lqv(p) = lqv(p) + work%uqv(k); lvv(p) = lvv(p) + work%uvv(k)
+    end do
+  end subroutine lagrangian_sparse_hessians
+
   !> Size the workspace for n coordinates; band (optional, >= 0): the Hessian blocks come from
   !> hessians_band with that half-bandwidth, so they are (2 bw + 1) x n (lvv: 3 bw + 1 rows), not
-  !> n x n (work%has_band_hessians).
+  !> n x n (work%has_band_hessians); pattern (optional): they come from hessians_sparse in that
+  !> declared pattern, so the dense blocks are 1 x 1 and O(nnz) arrays hold them (lagrangian_sparse_setup).
   !> stat /= 0: out of memory.
-  subroutine lagrangian_work_setup(work, n, stat, band)
+  subroutine lagrangian_work_setup(work, n, stat, band, pattern)
     type(vci_lagrangian_work_t), intent(inout) :: work
     integer, intent(in) :: n
     integer, intent(out) :: stat
     integer, intent(in), optional :: band
+    !> the model's hessians_sparse is used with this declared pattern: no dense blocks at all
+    type(vci_sparse_pattern_t), intent(in), optional :: pattern
     integer :: rows, rows_vv
     ! array by array: after an allocate that failed part-way some are allocated and some not
     if (allocated(work%qp)) deallocate (work%qp)
@@ -122,12 +208,15 @@ contains
     if (allocated(work%ipiv)) deallocate (work%ipiv)
     if (allocated(work%bvv)) deallocate (work%bvv)
     rows = n; rows_vv = n
-    work%has_band_hessians = .false.
+    work%has_band_hessians = .false.; work%has_sparse_hessians = .false.
     if (present(band)) then
       if (band >= 0) then
         rows = 2 * band + 1; rows_vv = 3 * band + 1
         work%has_band_hessians = .true.
       end if
+    end if
+    if (present(pattern)) then
+      rows = 1; rows_vv = 1
     end if
     allocate (work%qp(n), work%vp(n), work%fp(n), work%fm(n), work%w(n), work%dw(n), work%lv(n), &
               work%lvv(rows_vv, n), work%lqq(rows, n), work%lqv(rows, n), work%ipiv(n), stat=stat)
@@ -138,6 +227,7 @@ contains
         allocate (work%bvv(1, 1), stat=stat)
       end if
     end if
+    if (stat == 0 .and. present(pattern)) call lagrangian_sparse_setup(work, pattern, stat)
   end subroutine lagrangian_work_setup
 
   !> The model's banded Hessian blocks at (q, v) in band storage, each (2 bw + 1) x n (contiguous:
@@ -465,7 +555,19 @@ contains
       work%dw(1:n) = work%lv(1:n) - p
       if (it > 1 .and. maxval(abs(work%dw(1:n))) <= 4.0_dp * epsilon(1.0_dp) * max(size_p, &
           maxval(abs(work%lv(1:n))), tiny(1.0_dp))) exit
-      if (work%has_band_hessians) then      ! (the velocity block's band LU: O(n bw^2), no n x n array)
+      if (work%has_sparse_hessians) then    ! (the velocity block's sparse LU by KLU: no n x n array)
+        call lagrangian_sparse_hessians(lag, work, lag%hessian_pattern, q, work%w(1:n), work%sqq, work%sqv, &
+                                        work%svv, stat)
+        if (stat /= VCI_OK) return
+        if (.not. all(ieee_is_finite(work%dw(1:n)))) then
+          stat = VCI_ERR_NONFINITE; return
+        end if
+        call work%slu%factor_parts(n, n, lag%hessian_pattern, work%svv, work%none, work%none, work%ones, info)
+        if (info /= 0) then
+          stat = VCI_ERR_NEWTON; return
+        end if
+        call work%slu%solve(work%dw(1:n))
+      else if (work%has_band_hessians) then      ! (the velocity block's band LU: O(n bw^2), no n x n array)
         ! the velocity block into rows bw + 1 .. 3 bw + 1 of lvv, bw zero rows above it for the fill-in
         call lagrangian_band_hessians(lag, work, q, work%w(1:n), lag%hessian_bandwidth, work%lqq, work%lqv, &
                                       work%bvv, stat)

@@ -18,7 +18,9 @@ module vci_retraction
   use vci_status, only: VCI_OK, VCI_ERR_CALLBACK
   use vci_model, only: vci_model_t
   use vci_lagrangian, only: vci_lagrangian_t, vci_lagrangian_work_t, lagrangian_work_setup, &
-                            lagrangian_hessians, lagrangian_hamiltonian, lagrangian_band_hessians
+                            lagrangian_hessians, lagrangian_hamiltonian, lagrangian_band_hessians, &
+                            lagrangian_sparse_hessians
+  use vci_sparse, only: vci_sparse_pattern_t
   implicit none
   private
 
@@ -31,6 +33,10 @@ module vci_retraction
     !> the model's banded Hessians are used (hessians_band, with a declared bandwidth): lqq, lqv,
     !> lvv are then band storage, (2 bw + 1) x n, entry (i, j) at row bw + 1 + i - j
     logical :: band_hessians = .false.
+    !> the model's sparse Hessians are used (hessians_sparse, with a declared pattern): sqq, sqv,
+    !> svv hold them in the pattern's order and lqq, lqv, lvv are 1 x 1
+    logical :: sparse_hessians = .false.
+    real(dp), allocatable, private :: sqq(:), sqv(:), svv(:)
     type(vci_lagrangian_work_t) :: work
     real(dp), allocatable, private :: pt(:), w(:), lq(:), lv(:), lqq(:, :), lqv(:, :), lvv(:, :), om(:, :)
   contains
@@ -41,6 +47,8 @@ module vci_retraction
     procedure :: d1s_inc, pout_inc, energy_inc, jacobian_inc, constraint_inc
     !> jacobian_inc into compact band storage (a declared bandwidth, no n x n array).
     procedure :: jacobian_inc_band
+    !> jacobian_inc into the values of a declared sparse pattern (no n x n array).
+    procedure :: jacobian_inc_sparse
   end type vci_retraction_model_t
 
 contains
@@ -66,13 +74,20 @@ contains
       call probe_band_hessians(self, lag, stat)
       if (stat /= 0) return
     end if
+    self%sparse_hessians = .false.
+    if (lag%hessian_bandwidth < 0 .and. lag%hessian_pattern%n == n) then
+      call probe_sparse_hessians(self, lag, stat)
+      if (stat /= 0) return
+    end if
     if (self%band_hessians) then
       call lagrangian_work_setup(self%work, n, stat, band=lag%hessian_bandwidth)
+    else if (self%sparse_hessians) then
+      call lagrangian_work_setup(self%work, n, stat, pattern=lag%hessian_pattern)
     else
       call lagrangian_work_setup(self%work, n, stat)
     end if
     if (stat /= 0) return
-    self%work%has_hessians = has_hessians .or. self%band_hessians
+    self%work%has_hessians = has_hessians .or. self%band_hessians .or. self%sparse_hessians
     self%has_model_energy = has_energy
     ! array by array: after an allocate that failed part-way some are allocated and some not
     if (allocated(self%pt)) deallocate (self%pt)
@@ -85,9 +100,17 @@ contains
     if (allocated(self%om)) deallocate (self%om)
     allocate (self%pt(n), self%w(n), self%lq(n), self%lv(n), self%om(n, max(1, lag%m)), stat=stat)
     if (stat /= 0) return
+    if (allocated(self%sqq)) deallocate (self%sqq)
+    if (allocated(self%sqv)) deallocate (self%sqv)
+    if (allocated(self%svv)) deallocate (self%svv)
     if (self%band_hessians) then
       allocate (self%lqq(2 * self%hessian_bandwidth + 1, n), self%lqv(2 * self%hessian_bandwidth + 1, n), &
                 self%lvv(2 * self%hessian_bandwidth + 1, n), stat=stat)
+    else if (self%sparse_hessians) then
+      associate (nnz => lag%hessian_pattern%colptr(n + 1) - 1)
+        allocate (self%lqq(1, 1), self%lqv(1, 1), self%lvv(1, 1), self%sqq(nnz), self%sqv(nnz), self%svv(nnz), &
+                  stat=stat)
+      end associate
     else
       allocate (self%lqq(n, n), self%lqv(n, n), self%lvv(n, n), stat=stat)
     end if
@@ -110,6 +133,24 @@ contains
     self%band_hessians = .not. lag%answered_not_provided()
     call lag%clear_not_provided()
   end subroutine probe_band_hessians
+
+  !> Does the model supply hessians_sparse? One call at q = v = 0 into arrays of the declared length
+  !> (values discarded; a failure there still means "supplied"). stat /= 0: out of memory.
+  subroutine probe_sparse_hessians(self, lag, stat)
+    class(vci_retraction_model_t), intent(inout) :: self
+    class(vci_lagrangian_t), intent(inout) :: lag
+    integer, intent(out) :: stat
+    real(dp), allocatable :: z(:), a(:), b(:), c(:)
+    integer :: s, nu
+    nu = size(lag%hessian_pattern%upos)
+    allocate (z(lag%n), a(nu), b(nu), c(nu), stat=stat)
+    if (stat /= 0) return
+    z = 0.0_dp
+    call lag%clear_not_provided(); s = 0
+    call lag%hessians_sparse(z, z, a, b, c, s)
+    self%sparse_hessians = .not. lag%answered_not_provided()
+    call lag%clear_not_provided()
+  end subroutine probe_sparse_hessians
 
   !> The evaluation point and velocity of the segment (q, v, h).
   subroutine point_velocity(self, q, v, h)
@@ -205,6 +246,16 @@ contains
       end if
       if (self%check_bandwidth) hess = 0.0_dp   ! (Newton's matrix is then not zeroed on the band alone)
       call band_stored_mixed_block(self, h, hess)
+      return
+    end if
+    if (self%sparse_hessians) then   ! (small systems, or the debug check: the dense matrix from the pattern)
+      call lagrangian_sparse_hessians(self%lag, self%work, self%hessian_pattern, self%pt, self%w, self%sqq, &
+                                      self%sqv, self%svv, s)
+      if (s /= VCI_OK) then
+        stat = failure_code(self, s); return
+      end if
+      hess = 0.0_dp
+      call sparse_mixed_values(self, h, self%hessian_pattern, hess_dense=hess)
       return
     end if
     call lagrangian_hessians(self%lag, self%work, self%pt, self%w, self%lqq, self%lqv, self%lvv, s)
@@ -469,6 +520,74 @@ contains
       end do
     end do
   end subroutine jacobian_inc_band
+
+  !> jacobian_inc into the values val(k) of a declared sparse pattern pat (entry (pat%rowind(k), j)):
+  !> from the model's sparse Hessians when it gives them (O(nnz)), else from its dense ones (or their
+  !> differences) read in the pattern. stat as jacobian_inc's.
+  subroutine jacobian_inc_sparse(self, a, d, h, dir, pat, val, stat)
+    class(vci_retraction_model_t), intent(inout) :: self
+    real(dp), intent(in) :: a(:), d(:), h
+    integer, intent(in) :: dir
+    type(vci_sparse_pattern_t), intent(in) :: pat
+    real(dp), intent(inout) :: val(:)
+    integer, intent(inout) :: stat
+    integer :: s, i, j, k
+    real(dp) :: t
+    if (.not. self%work%has_hessians) then
+      val = 0.0_dp
+      call self%not_provided(stat); return
+    end if
+    call segment_inc(self, a, d, h, dir)
+    s = VCI_OK
+    if (self%sparse_hessians) then
+      call lagrangian_sparse_hessians(self%lag, self%work, pat, self%pt, self%w, self%sqq, self%sqv, self%svv, s)
+    else
+      call lagrangian_hessians(self%lag, self%work, self%pt, self%w, self%lqq, self%lqv, self%lvv, s)
+    end if
+    if (s /= VCI_OK) then
+      stat = failure_code(self, s); return
+    end if
+    if (self%sparse_hessians) then
+      call sparse_mixed_values(self, h, pat, val=val)
+    else
+      do j = 1, pat%n
+        do k = pat%colptr(j), pat%colptr(j + 1) - 1
+          i = pat%rowind(k)
+          val(k) = mixed_entry(self, h, i, j)
+        end do
+      end do
+    end if
+    if (dir >= 0) return
+    ! -transpose in place in the (symmetric) pattern: entry k's transpose sits at tpos(k)
+    do k = 1, size(val)
+      if (pat%tpos(k) < k) cycle
+      t = val(k); val(k) = -val(pat%tpos(k)); val(pat%tpos(k)) = -t
+    end do
+  end subroutine jacobian_inc_sparse
+
+  !> mixed_block's formulas from the blocks in the pattern's order (sqq, sqv, svv; L_vq(i, j) =
+  !> L_qv(j, i) at tpos): into val (pattern order) or the dense hess_dense (entries outside the
+  !> pattern untouched). O(nnz).
+  subroutine sparse_mixed_values(self, h, pat, val, hess_dense)
+    class(vci_retraction_model_t), intent(inout) :: self
+    real(dp), intent(in) :: h
+    type(vci_sparse_pattern_t), intent(in) :: pat
+    real(dp), intent(inout), optional :: val(:), hess_dense(:, :)
+    integer :: i, j, k
+    real(dp) :: v
+    do j = 1, pat%n
+      do k = pat%colptr(j), pat%colptr(j + 1) - 1
+        i = pat%rowind(k)
+        if (self%rule == RETRACTION_LEFT) then
+          v = self%sqv(k) - self%svv(k) / h
+        else
+          v = 0.25_dp * h * self%sqq(k) + 0.5_dp * (self%sqv(k) - self%sqv(pat%tpos(k))) - self%svv(k) / h
+        end if
+        if (present(val)) val(k) = v
+        if (present(hess_dense)) hess_dense(i, j) = v
+      end do
+    end do
+  end subroutine sparse_mixed_values
 
   !> Entry (i, j), |i - j| <= bw, of mixed_block's D2 D1 L_d from the blocks as they are stored
   !> (band storage with hessians_band, else dense).

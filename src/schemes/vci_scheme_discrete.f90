@@ -21,6 +21,7 @@ module vci_scheme_discrete
   use vci_newton, only: vci_large_system, vci_newton_t, vci_newton_result_t
   use vci_sparse, only: vci_sparse_pattern_t
   use vci_banded_matrix, only: vci_band_matrix_t
+  use vci_sparse_matrix, only: vci_sparse_matrix_t
   use vci_kernels, only: momentum_terms, kinetic_and_floor, jacobian_sizes, band_jacobian_sizes
   use vci_scheme, only: vci_scheme_t, KIND_SUBSTEP, KIND_STAGE1, KIND_STAGE2, KIND_IMPULSE, KIND_PAIR, &
                         VCI_IMPACT_HAMILTONIAN, vci_fd_rel
@@ -90,6 +91,8 @@ module vci_scheme_discrete
     procedure :: packs_band => discrete_packs_band
     procedure :: band_jacobian => step_band_jacobian
     procedure :: sparse_structure => declared_pattern
+    procedure :: packs_sparse => discrete_packs_sparse
+    procedure :: sparse_jacobian => step_sparse_jacobian
     procedure :: position_carry => discrete_position_carry
     procedure :: restore_position_carry => discrete_restore_carry
   end type vci_scheme_discrete_t
@@ -256,7 +259,9 @@ contains
     ! Hessian are n x n only for the small systems (below vci_large_system) or a user's L_d, whose
     ! mixed_hessian callback is dense
     nj = nx; nh = n
-    if (model%hessian_bandwidth >= 0 .and. .not. model%check_bandwidth) then
+    if ((model%hessian_bandwidth >= 0 .and. .not. model%check_bandwidth) .or. &
+        (model%hessian_pattern%n == n .and. model%hessian_bandwidth < 0 .and. .not. model%check_pattern)) then
+      ! (likewise with a declared sparse pattern: step_sparse_jacobian writes in the pattern)
       nj = min(nx, vci_large_system)
       if (self%increments .and. n + m >= vci_large_system) nh = 1
     end if
@@ -989,6 +994,149 @@ contains
     end do
     self%jac_known = .true.
   end subroutine step_band_jacobian
+
+  !> Does the posed system write its Jacobian in the declared sparse pattern (step_sparse_jacobian)?
+  !> With a declared pattern, no debug check, and vci_large_system unknowns or more (smaller systems
+  !> keep the n x n path, as for the band).
+  logical function discrete_packs_sparse(self)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    integer :: nb
+    logical :: chk
+    type(vci_sparse_pattern_t), pointer :: pat
+    call declared_pattern(self, nb, pat, chk)
+    discrete_packs_sparse = nb > 0 .and. .not. chk .and. self%unknowns(self%kind) >= vci_large_system
+  end function discrete_packs_sparse
+
+  !> step_band_jacobian in the declared sparse pattern (vci_sparse_matrix; posed and zeroed by
+  !> Newton): the pattern's values of the position block, the constraint, gap or energy rows and
+  !> the multiplier and alpha or mu columns apart. The same entries as step_jacobian's in the
+  !> pattern (a differenced column's entries outside it are zero by declaration and dropped), the
+  !> same row sizes (jscale, kin); nothing of size n^2 unless a user's L_d gives its dense mixed
+  !> Hessian (read in the pattern).
+  subroutine step_sparse_jacobian(self, x, r, mat, stat)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:), r(:)
+    type(vci_sparse_matrix_t), intent(inout) :: mat
+    integer, intent(out) :: stat
+    integer :: n, m, nx, i, j, k, last, nd
+    real(dp) :: tau, d, hp, t
+    n = self%n; m = self%m; nx = size(x); last = n + m + 1
+    nd = nx - n
+    stat = VCI_OK
+    tau = step_length(self, x)
+    associate (pat => mat%pat)
+      ! columns of b
+      if (self%has_hessian) then
+        call momentum_sparse(self, x, tau, mat, stat)
+        if (stat /= VCI_OK) return
+        if (nx > n .and. self%kind == KIND_SUBSTEP) then
+          if (m > 0) call constraint_rows(self, x, tau, mat%rows(1:m, 1:n), stat)
+          if (stat /= VCI_OK) return
+        else if (nx > n .and. analytic_last_row(self)) then
+          if (m > 0) call constraint_rows(self, x, tau, mat%rows(1:m, 1:n), stat)
+          if (stat /= VCI_OK) return
+          if (self%kind == KIND_STAGE1) then
+            call endpoint_of(self, x)
+            call self%eval_gap_gradient(self%bb, self%gap, self%gg1, stat)
+            if (stat /= VCI_OK) return
+            mat%rows(nd, 1:n) = self%gg1
+          end if
+        else if (nx > n) then
+          do j = 1, n
+            call fd_column(self, x, j, fd_step(position(self, x, j), motion(self, x, j)), .false., self%fcol(1:nx), stat)
+            if (stat /= VCI_OK) return
+            mat%rows(1:nd, j) = self%fcol(n + 1:nx)
+          end do
+        end if
+      else
+        do j = 1, n
+          call fd_column(self, x, j, fd_step(position(self, x, j), motion(self, x, j)), .true., self%fcol(1:nx), stat)
+          if (stat /= VCI_OK) return
+          do k = pat%colptr(j), pat%colptr(j + 1) - 1
+            mat%val(k) = self%fcol(pat%rowind(k))
+          end do
+          mat%rows(1:nd, j) = self%fcol(n + 1:nx)
+        end do
+      end if
+      ! multiplier columns: d/d lambda of -Omega(a) lambda
+      do j = 1, m
+        do i = 1, n
+          mat%cols(i, j) = -self%omega(i, j)
+        end do
+      end do
+      select case (self%kind)
+      case (KIND_STAGE1)       ! alpha enters through the sub-step length; g_j(b) does not depend on it
+        d = vci_fd_rel * x(last)
+        call fd_column(self, x, last, d, .true., mat%cols(1:nx, nd), stat, gap_row=.false.)
+        mat%cols(last, nd) = 0.0_dp
+      case (KIND_STAGE2)    ! mu enters linearly in the momentum rows
+        mat%cols(1:n, nd) = self%grad
+        if (self%impact_energy == VCI_IMPACT_HAMILTONIAN) then
+          call hamiltonian_mu_slope(self, x(last), mat%cols(last, nd), stat)
+        end if
+      end select
+      if (stat /= VCI_OK) return
+      ! the row sizes of step_jacobian over the position block's pattern and the border
+      do j = 1, nx
+        if (j <= n) then
+          self%sizes(j) = abs(position(self, x, j))
+        else
+          self%sizes(j) = abs(x(j))
+        end if
+      end do
+      self%jscale(1:nx) = 0.0_dp
+      self%kin = 0.0_dp
+      do j = 1, n
+        hp = motion(self, x, j)
+        do k = pat%colptr(j), pat%colptr(j + 1) - 1
+          i = pat%rowind(k)
+          t = abs(mat%val(k))
+          self%jscale(i) = self%jscale(i) + t * self%sizes(j)
+          self%kin(i) = self%kin(i) + t * hp
+        end do
+        do i = 1, nd
+          self%jscale(n + i) = self%jscale(n + i) + abs(mat%rows(i, j)) * self%sizes(j)
+        end do
+      end do
+      do j = 1, nd
+        do i = 1, nx
+          self%jscale(i) = self%jscale(i) + abs(mat%cols(i, j)) * self%sizes(n + j)
+        end do
+      end do
+    end associate
+    self%jac_known = .true.
+  end subroutine step_sparse_jacobian
+
+  !> momentum_block into the sparse pattern: a retraction's mixed Hessian written there by its own
+  !> routine (from the model's sparse Hessians, or its dense ones read in the pattern); a user's
+  !> L_d's dense mixed Hessian (its callback's shape) read in the pattern.
+  subroutine momentum_sparse(self, x, tau, mat, stat)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:), tau
+    type(vci_sparse_matrix_t), intent(inout) :: mat
+    integer, intent(out) :: stat
+    integer :: i, j, k, n
+    n = self%n
+    stat = 0
+    if (self%increments) then
+      call self%ret%jacobian_inc_sparse(self%a, x(1:n), tau, self%dir, mat%pat, mat%val, stat)
+      call self%check(stat, mat%val, 'mixed Hessian')
+      return
+    end if
+    call user_mixed_hessian(self, x(1:n), tau, stat)
+    call self%check_matrix(stat, self%hess, 'mixed Hessian')
+    if (stat /= VCI_OK) return
+    do j = 1, n
+      do k = mat%pat%colptr(j), mat%pat%colptr(j + 1) - 1
+        i = mat%pat%rowind(k)
+        if (self%dir > 0) then
+          mat%val(k) = self%hess(i, j)
+        else
+          mat%val(k) = -self%hess(j, i)
+        end if
+      end do
+    end do
+  end subroutine momentum_sparse
 
   !> slope = d/dmu H(a, pa + mu grad) by a central difference (stage 2's Hamiltonian row).
   subroutine hamiltonian_mu_slope(self, mu, slope, stat)

@@ -198,7 +198,7 @@ static void suite_bad(void) {
       vci_last_error(NULL, msg, sizeof msg);
       CHECK(contains(msg, "VCI_LAGRANGIAN_CALLBACKS_INIT"));
     }
-    CHECK(whole == 3); /* gap_gradients, energy, hessians_band: the whole sizes after gaps */
+    CHECK(whole == 4); /* gap_gradients, energy, hessians_band, hessians_sparse: the whole sizes after gaps */
   }
   /* SIZE_MAX is printed as C prints a size_t, not as -1 */
   cb = pendulum_callbacks(1);

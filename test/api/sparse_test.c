@@ -5,6 +5,8 @@
  *     closes under transposition), midpoint and left schemes, debug check off and on: the same
  *     impacts and end state as the dense run to 1e-9 (each Newton solve meets rtol 1e-12; KLU's
  *     and LAPACK's rounding differ by ~1e-15 a step);
+ *     With the hessians_sparse member alone (no dense hessians; the tridiagonal pattern, Newton's
+ *     matrix assembled in it, issue 28): the same, and the callback called;
  *  2. the pattern withdrawn (n = 0): the dense run bit for bit;
  *  3. the diagonal alone with the check on (midpoint): the first Newton matrix has (2, 1) outside
  *     it and the step fails with VCI_ERR_ARGUMENT naming that entry;
@@ -52,21 +54,45 @@ static int offsets_pattern(int n, const int *offs, int noff, int *colptr, int *r
   return q;
 }
 
-static vci_model chain_model(void) {
+/* The declared pattern hessians_sparse fills (the tridiagonal one, both triangles) and its calls. */
+static int sp_colptr[N + 1], sp_rowind[3 * N], sp_calls = 0;
+
+/* The chain's blocks in the declared pattern's order: lqq[k] = d2L/dq_i dq_j, i = sp_rowind[k]. */
+static int l_hess_sparse(int n, int nnz, const double *q, const double *v, double *lqq, double *lqv, double *lvv,
+                         void *u) {
+  (void)v; (void)u; double r[N + 1];
+  if (nnz != sp_colptr[n]) return -1;
+  stretches(n, q, r);
+  for (int j = 0; j < n; j++)
+    for (int k = sp_colptr[j]; k < sp_colptr[j + 1]; k++) {
+      int i = sp_rowind[k];
+      lqv[k] = 0.0;
+      lvv[k] = i == j ? 1.0 : 0.0;
+      if (i == j) lqq[k] = -(2.0 + 3.0 * beta * (r[i] * r[i] + r[i + 1] * r[i + 1]));
+      else { int lo = i < j ? i : j; lqq[k] = 1.0 + 3.0 * beta * r[lo + 1] * r[lo + 1]; }
+    }
+  sp_calls++;
+  return 0;
+}
+
+static vci_model chain_model_cb(int sparse) {
   vci_lagrangian_callbacks cb = VCI_LAGRANGIAN_CALLBACKS_INIT;
   vci_model model = NULL;
-  cb.lagrangian = l_value; cb.dl_dq = l_dq; cb.dl_dv = l_dv; cb.hessians = l_hess;
+  cb.lagrangian = l_value; cb.dl_dq = l_dq; cb.dl_dv = l_dv;
+  if (sparse) cb.hessians_sparse = l_hess_sparse; else cb.hessians = l_hess;
   cb.gaps = gaps; cb.gap_gradients = gap_grads;
   if (vci_model_create_lagrangian(&model, N, 0, 2 * N, &cb, NULL) != VCI_OK) return NULL;
   return model;
 }
 
+static vci_model chain_model(void) { return chain_model_cb(0); }
+
 /* pattern: 0 dense; 1 tridiagonal (both triangles); 2 its lower triangle; 3 the diagonal alone;
- * 4 declared, then withdrawn (n = 0). */
+ * 4 declared, then withdrawn (n = 0); 5 tridiagonal with hessians_sparse alone. */
 static int run(int scheme, int pattern, int check, double *q, double *p, int64_t *impacts, char *msg, size_t len) {
   static const int tri[] = {-1, 0, 1}, lower[] = {0, 1}, diag[] = {0};
   int colptr[N + 1], rowind[3 * N];
-  vci_model model = chain_model();
+  vci_model model = chain_model_cb(pattern == 5);
   vci_integrator it = NULL;
   double q0[N], p0[N], t, pi = acos(-1.0);
   for (int i = 1; i <= N; i++) {
@@ -76,6 +102,10 @@ static int run(int scheme, int pattern, int check, double *q, double *p, int64_t
   msg[0] = '\0';
   int st = model ? VCI_OK : VCI_ERR_MEMORY;
   if (pattern == 1 || pattern == 4) offsets_pattern(N, tri, 3, colptr, rowind);
+  if (pattern == 5) {
+    offsets_pattern(N, tri, 3, sp_colptr, sp_rowind);
+    memcpy(colptr, sp_colptr, sizeof colptr); memcpy(rowind, sp_rowind, sizeof rowind);
+  }
   if (pattern == 2) offsets_pattern(N, lower, 2, colptr, rowind);
   if (pattern == 3) offsets_pattern(N, diag, 1, colptr, rowind);
   if (st == VCI_OK && pattern > 0) st = vci_model_declare_pattern(model, N, colptr, rowind, check);
@@ -197,6 +227,13 @@ int main(void) {
         CHECK(id >= 10 && is == id);
         CHECK(maxdiff(qs, qd) <= 1e-9 && maxdiff(ps, pd) <= 1e-9);
       }
+    sp_calls = 0;
+    st = run(schemes[s], 5, 0, qs, ps, &is, msg, sizeof msg);
+    if (st != VCI_OK) printf("  sparse-callback run failed: %s\n", msg);
+    printf("scheme %d, hessians_sparse alone: %lld impacts (dense %lld); |dq| = %.2e, |dp| = %.2e; %d calls\n",
+           schemes[s], (long long)is, (long long)id, maxdiff(qs, qd), maxdiff(ps, pd), sp_calls);
+    CHECK(st == VCI_OK && sp_calls > 0 && is == id);
+    CHECK(maxdiff(qs, qd) <= 1e-9 && maxdiff(ps, pd) <= 1e-9);
     st = run(schemes[s], 4, 0, qs, ps, &is, msg, sizeof msg);
     CHECK(st == VCI_OK && is == id && maxdiff(qs, qd) == 0.0 && maxdiff(ps, pd) == 0.0);
     /* (left's Newton matrix is h D1 D2 L_d = -L_vv/h + L_qv terms, diagonal for the chain: only

@@ -5,7 +5,10 @@ C     midpoint, h = 0.01, 100 steps, hamiltonian impacts, TASK 13).
 C     With the sparse solver (VCI_SPARSE): 1. the tridiagonal pattern,
 C     debug check off and on, against the dense run: the same impacts
 C     and end state to 1E-9 (each solve meets rtol 1E-12); 2. the
-C     pattern withdrawn (NNZ = -1): the dense run bit for bit; 3. the
+C     pattern withdrawn (NNZ = -1): the dense run bit for bit; and the
+C     tridiagonal pattern with TASK 20 alone (IOPT bit 256, no TASK 13:
+C     Newton's matrix assembled in the pattern), equal to dense to
+C     1E-9 with TASK 20 called (counted in IPAR(1)); 3. the
 C     diagonal alone with the check: the run fails with ISTAT = 1 and
 C     VCIMSG names the entry (2, 1); 4. bad patterns (ICOLP(N+1) not
 C     NNZ + 1, ICOLP(1) not 1, a row outside 1..N, rows unsorted or
@@ -68,12 +71,17 @@ C     without the sparse solver: refused naming the option
       CALL VCIDEL(IH)
 C
 C     1., 2. dense (K = 1), tridiagonal with the check off (K = 2) and
-C     on (K = 3), declared and withdrawn (K = 4)
-      DO 20 K = 1, 4
-        CALL VCINEW(CPMOD, N, M, NG, 15, H, RPAR, IPAR, IH, ISTAT)
+C     on (K = 3), declared and withdrawn (K = 4), TASK 20 alone (K = 5)
+      DO 20 K = 1, 5
+        IPAR(1) = 0
+        IF (K .LT. 5) THEN
+          CALL VCINEW(CPMOD, N, M, NG, 15, H, RPAR, IPAR, IH, ISTAT)
+        ELSE
+          CALL VCINEW(CPMOD, N, M, NG, 270, H, RPAR, IPAR, IH, ISTAT)
+        END IF
         CALL CHECKI('VCINEW', ISTAT, 0, NBAD)
         IF (K .GE. 2) THEN
-          CALL VCIPAT(IH, NNZ, ICOLP, IROW, K - 2, ISTAT)
+          CALL VCIPAT(IH, NNZ, ICOLP, IROW, MOD(K - 2, 3), ISTAT)
           CALL CHECKI('VCIPAT', ISTAT, 0, NBAD)
         END IF
         IF (K .EQ. 4) THEN
@@ -108,7 +116,12 @@ C     on (K = 3), declared and withdrawn (K = 4)
      &      ': impacts dense, sparse:', NIMPD, NIMP,
      &      '  |dq|, |dp|:', DQ, DP
           CALL CHECKI('sparse impacts = dense', NIMP, NIMPD, NBAD)
-          IF (K .LT. 4) THEN
+          IF (K .EQ. 5) THEN
+            WRITE (*, '(A, I6)') ' TASK 20 calls:', IPAR(1)
+            IF (IPAR(1) .LT. 1)
+     &        CALL CHECKI('TASK 20 called', 0, 1, NBAD)
+          END IF
+          IF (K .NE. 4) THEN
             CALL CHECKR('sparse q - dense q', DQ, 0.0D0, 1.0D-9, NBAD)
             CALL CHECKR('sparse p - dense p', DP, 0.0D0, 1.0D-9, NBAD)
           ELSE
@@ -181,7 +194,7 @@ C     of R**2/2 + R**4/4, R(0) = X(1), R(J) = X(J+1) - X(J), R(N) = -X(N).
       INTEGER TASK, N, M, NG, IPAR(*), IERR
       DOUBLE PRECISION Q(N), V(N), H, OUT(*), RPAR(*)
       DOUBLE PRECISION R(0:64), F(0:64), S, KJ
-      INTEGER I, J, NN
+      INTEGER I, J, NN, K, NZ
       R(0) = Q(1)
       DO 5 J = 1, N - 1
         R(J) = Q(J + 1) - Q(J)
@@ -222,6 +235,25 @@ C     of R**2/2 + R**4/4, R(0) = X(1), R(J) = X(J+1) - X(J), R(N) = -X(N).
             OUT(I + 1 + N * (I - 1)) = KJ
           END IF
    41   CONTINUE
+      ELSE IF (TASK .EQ. 20) THEN
+C       the blocks in the tridiagonal pattern's order (column J: rows
+C       J-1, J, J+1 within 1..N), L_qq, L_qv, L_vv one after the other
+        IPAR(1) = IPAR(1) + 1
+        NZ = 3 * N - 2
+        K = 0
+        DO 51 J = 1, N
+          DO 50 I = MAX(1, J - 1), MIN(N, J + 1)
+            K = K + 1
+            OUT(NZ + K) = 0.0D0
+            IF (I .EQ. J) THEN
+              OUT(K) = -(2.0D0 + 3.0D0 * (R(I-1)**2 + R(I)**2))
+              OUT(2 * NZ + K) = 1.0D0
+            ELSE
+              OUT(K) = 1.0D0 + 3.0D0 * R(MIN(I, J))**2
+              OUT(2 * NZ + K) = 0.0D0
+            END IF
+   50     CONTINUE
+   51   CONTINUE
       ELSE IF (TASK .EQ. 7) THEN
         DO 70 I = 1, N
           OUT(I) = 0.6D0 - Q(I)

@@ -93,9 +93,10 @@ C        answered "not provided") is refused by VCINEW, naming it
       CALL CHECKS('no dL/dv names TASK 12', MSG, 'TASK = 12', NBAD)
       IPAR(1) = 0
 C     unknown IOPT bits (16, 32: separable, sepw77.f; 64: banded
-C     Hessians, chainb77.f; 128: the fused TASK 19, ellipse77.f)
-      CALL VCINEW(PWMOD, N, M, NG, 256, H, RPAR, IPAR, IH, ISTAT)
-      CALL CHECKI('VCINEW with IOPT = 256', ISTAT, 1, NBAD)
+C     Hessians, chainb77.f; 128: the fused TASK 19, ellipse77.f; 256:
+C     sparse Hessians, chainp77.f)
+      CALL VCINEW(PWMOD, N, M, NG, 512, H, RPAR, IPAR, IH, ISTAT)
+      CALL CHECKI('VCINEW with IOPT = 512', ISTAT, 1, NBAD)
 C     unknown scheme, stages out of range (the model stays usable)
       CALL VCINEW(PWMOD, N, M, NG, 8, H, RPAR, IPAR, IH, ISTAT)
       CALL CHECKI('VCINEW', ISTAT, 0, NBAD)
