@@ -124,6 +124,9 @@ contains
       read (arg, *) st_
       call ig%set_bordered_impacts(.true., st_)
     end if
+    ! VCI_BENCH_POKE=0: the poke screen off (set_poke_samples(.false.)), for its cost (docs/bench/poke.md)
+    call get_environment_variable('VCI_BENCH_POKE', arg, status=st_)
+    if (st_ == 0 .and. trim(arg) == '0') call ig%set_poke_samples(.false., st_)
     ! VCI_BENCH_REUSE_MIN=k: Newton keeps factors across solves from k unknowns (an experiment)
     call get_environment_variable('VCI_BENCH_REUSE_MIN', arg, status=st_)
     if (st_ == 0) then

@@ -223,6 +223,15 @@ contains
         end do
       end do
     end if
+    ! VCI_BENCH_POKE=0: the poke screen off (set_poke_samples(.false.)), for its cost (docs/bench/poke.md)
+    call get_environment_variable('VCI_BENCH_POKE', env, status=stat)
+    if (stat == 0 .and. env == '0') then
+      do k = 1, 2
+        do i = 1, size(integ, 1)
+          call integ(i, k)%set_poke_samples(.false., stat)
+        end do
+      end do
+    end if
     ! VCI_BENCH_WHOLE_IMPACTS=1: impact stages with the whole stage matrix factorised (the path
     ! before bordering, set_bordered_impacts(.false.)), for the before/after comparison
     call get_environment_variable('VCI_BENCH_WHOLE_IMPACTS', env, status=stat)

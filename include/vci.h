@@ -369,6 +369,14 @@ int  vci_set_max_impacts(vci_integrator integ, int max_impacts);
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, max_splits outside 1..1024; VCI_ERR_STATE: busy. */
 int  vci_set_step_splits(vci_integrator integ, int max_splits);
 
+/** The poke screen (docs/BACKWARD.md, "A wall poked within one sub-step"): 1 (the default) looks
+ *  inside each sub-step that may come near a wall for a wall crossed and left again within it (the
+ *  grid-point test alone misses it: a graze, or a second bounce off the same wall in one long step),
+ *  where the sub-step resolves the motion; 0 tests the gaps at the sub-steps' ends only (cheaper;
+ *  docs/bench/poke.md). Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, on not 0 or 1;
+ *  VCI_ERR_STATE: busy. */
+int  vci_set_poke_samples(vci_integrator integ, int on);
+
 /** Start from the pair q0[n] at t0 and q1[n] at t0 + h. The current state becomes
  *  (t0 + h, q1, p1) with p1 = D2 L_d(q0, q1, h), step index 1; the discrete energy is E_d(q0, q1, h).
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, q0 or q1 NULL, NaN/Inf in t0, q0 or q1, t0 + h

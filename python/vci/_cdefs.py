@@ -74,6 +74,7 @@ int  vci_set_tolerances(vci_integrator integ, double atol, double rtol, int max_
 int  vci_set_impact_energy(vci_integrator integ, int mode);
 int  vci_set_max_impacts(vci_integrator integ, int max_impacts);
 int  vci_set_step_splits(vci_integrator integ, int max_splits);
+int  vci_set_poke_samples(vci_integrator integ, int on);
 int  vci_init_from_pair(vci_integrator integ, double t0, const double *q0, const double *q1);
 int  vci_init_from_momentum(vci_integrator integ, double t0, const double *q0, const double *p0);
 int  vci_step(vci_integrator integ, int direction);

@@ -429,6 +429,11 @@ class Integrator:
         """The safety net's bound: retry a failed step as up to max_splits equal sub-steps (1: off)."""
         self._check(lib.vci_set_step_splits(self._h[0], int(max_splits)))
 
+    def set_poke_samples(self, on=True):
+        """The poke screen (on, the default): a wall crossed and left again within one sub-step is an
+        impact; off: the gaps are tested at the sub-steps' ends only (docs/BACKWARD.md)."""
+        self._check(lib.vci_set_poke_samples(self._h[0], 1 if on else 0))
+
     def set_bordered_impacts(self, on=True, min_unknowns=0):
         """Impact stages by bordering (on, the default: the sub-step's block factorised in its own
         structure, the alpha/mu border by its Schur complement) or whole (off); min_unknowns >= 2:

@@ -29,6 +29,7 @@ module vci_capi
   public :: vci_get_state, vci_get_multipliers, vci_get_energy, vci_get_index, vci_get_stats
   public :: vci_get_energy_fallbacks
   public :: vci_set_step_splits, vci_get_split_steps
+  public :: vci_set_poke_samples
   public :: vci_set_bordered_impacts, vci_get_bordered_directions
   public :: vci_set_impact_callback, vci_open_output, vci_open_output_every, vci_close_output
   public :: vci_append_output, vci_restore_from_file
@@ -608,6 +609,24 @@ contains
     end if
     vci_set_step_splits = stat
   end function vci_set_step_splits
+
+  !> int vci_set_poke_samples(vci_integrator integ, int on): the poke screen (1, the default) or not (0).
+  integer(c_int) function vci_set_poke_samples(integ, on) bind(C, name='vci_set_poke_samples')
+    type(c_ptr), value :: integ
+    integer(c_int), value :: on
+    type(c_integrator_t), pointer :: ip
+    integer :: stat
+    call enter(integ, 'vci_set_poke_samples', ip, stat)
+    if (stat == VCI_OK) then
+      if (on == 0 .or. on == 1) then
+        call ip%integ%set_poke_samples(on == 1, stat)
+      else
+        stat = fail(ip, VCI_ERR_ARGUMENT, 'vci_set_poke_samples: on must be 0 or 1')
+      end if
+      call leave(ip)
+    end if
+    vci_set_poke_samples = stat
+  end function vci_set_poke_samples
 
   !> int vci_set_scheme(vci_integrator integ, int scheme, int stages): the scheme of a continuous model.
   integer(c_int) function vci_set_scheme(integ, scheme, stages) bind(C, name='vci_set_scheme')

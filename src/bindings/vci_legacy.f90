@@ -1355,6 +1355,26 @@ subroutine vcispl(ih, maxspl, istat)
   if (istat == VCI_OK) call integ%set_step_splits(maxspl, istat)
 end subroutine vcispl
 
+!> The poke screen (docs/BACKWARD.md, "A wall poked within one sub-step"): ION = 1 (the default)
+!> meets a wall crossed and left again within one sub-step, ION = 0 tests the gaps at the sub-steps'
+!> ends only. ISTAT = 1 for any other ION.
+subroutine vcipok(ih, ion, istat)
+  use vci_status, only: VCI_OK, VCI_ERR_ARGUMENT
+  use vci_integrator, only: vci_integrator_t
+  use vci_legacy, only: legacy_get
+  implicit none
+  integer, intent(in) :: ih, ion
+  integer, intent(out) :: istat
+  type(vci_integrator_t), pointer :: integ
+  call legacy_get(ih, 'VCIPOK', integ, istat)
+  if (istat /= VCI_OK) return
+  if (ion /= 0 .and. ion /= 1) then
+    call integ%report_failure(VCI_ERR_ARGUMENT, 'VCIPOK: ION must be 0 or 1')
+    istat = VCI_ERR_ARGUMENT; return
+  end if
+  call integ%set_poke_samples(ion == 1, istat)
+end subroutine vcipok
+
 !> The safety net's counts: NSPLIT steps taken as equal sub-steps, MOSTSP the most sub-steps one of
 !> them needed (0 when none), over the handle's life.
 subroutine vcinet(ih, nsplit, mostsp, istat)

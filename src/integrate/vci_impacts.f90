@@ -40,7 +40,7 @@ contains
       ! previous step's start says it may come near a wall (gap evaluations only: may_poke).
       poked = 0
       if (.not. self%settings%poke_samples) then
-        continue                          ! (off by default: set_poke_samples)
+        continue                          ! (switched off: set_poke_samples(.false.))
       else if (impacts%count > 0 .or. any(self%gaps_end(1:self%ng) < 0.0_dp)) then
         call find_poke(self, tau, 0, poked, p_lo, p_hi, p_glo, p_ghi, stat)
       else if (may_poke(self, state, dir, tau, stat)) then
@@ -503,6 +503,13 @@ contains
       end if
     end associate
     self%x(1:nm) = self%x_high(1:nm)
+    ! x holds increments from the posed start: pose the sub-step from a again, or the caller's x
+    ! (xw, restored) reads as a motion from the half-way point (the walled pendulum at h = 1: a
+    ! touch at 0.876 became an end at 1.223 beyond the wall, docs/BACKWARD.md)
+    call self%sys%pose_substep(a, pa, tau, st)
+    if (st /= VCI_OK) then
+      stat = st; call set_cause(self, 'constraint forms')
+    end if
   end function samples_are_path
 
   !> Might the whole step (no impact so far, its end admissible) pass a wall and come back? The
@@ -591,14 +598,22 @@ contains
     call self%sys%put_endpoint(self%x, self%q_wall, self%q_guess)
     call substep(self, self%q_wall, self%p_arrive, eps_frac * tau2, st)
     if (st /= VCI_OK) then
-      if (self%sys%unrecoverable) stat = st
       self%x(1:nx) = self%x_saved(1:nx)
+      if (self%sys%unrecoverable) then
+        stat = st
+      else
+        call self%sys%pose_substep(self%q_wall, self%p_arrive, tau2, stat)
+      end if
       return
     end if
     call self%sys%get_endpoint(self%x, self%q_guess)
     rate = dot_product(self%sys%grad, self%q_guess - self%q_wall) / eps_frac
     self%x(1:nx) = self%x_saved(1:nx)
-    if (.not. rate < 0.0_dp) return
+    if (.not. rate < 0.0_dp) then
+      call self%sys%pose_substep(self%q_wall, self%p_arrive, tau2, stat)   ! (the free motion's again)
+      if (stat /= VCI_OK) call set_cause(self, 'constraint forms')
+      return
+    end if
     ! a departure into the wall and a free end off it are one motion only where the sub-step over
     ! tau2 resolves it (samples_are_path, from a half sub-step): a stiff spring turns by more than
     ! a right angle in one sub-step, and an impulse here took its energy to 1e197
@@ -610,6 +625,8 @@ contains
       resolved = samples_are_path(self, self%q_wall, self%p_arrive, self%q_trial, self%x_saved, tau2, self%poke_lambda, stat)
     else if (self%sys%unrecoverable) then
       stat = st
+    else
+      call self%sys%pose_substep(self%q_wall, self%p_arrive, tau2, stat)
     end if
     self%x(1:nx) = self%x_saved(1:nx)
     if (stat /= VCI_OK .or. .not. resolved) return

@@ -109,7 +109,7 @@ module vci_integrator
     procedure :: set_impact_energy
     !> Bound on impacts resolved inside one step (default max(16, 4 n_gaps): vci_default_max_impacts).
     procedure :: set_max_impacts
-    !> Sample sub-steps inside for walls poked within one (off by default; docs/BACKWARD.md).
+    !> Sample sub-steps inside for walls poked within one (on by default; docs/BACKWARD.md).
     procedure :: set_poke_samples
     !> The safety net: retry a failed step as up to max_splits equal sub-steps (1: off).
     procedure :: set_step_splits
@@ -610,9 +610,10 @@ contains
 
   !> Look for a wall that the motion crosses and leaves again within one sub-step (docs/BACKWARD.md,
   !> "A wall poked within one sub-step"): with it on, N steps back return through such grazes too
-  !> (m = 0); it costs 13-32 % a step. Used only where two half sub-steps compose to the whole one
-  !> (a stiff motion the step does not resolve keeps the grid-point test). Off by default: with it
-  !> on the walled pendulum (midpoint, h = 1) stops at t = 8 (docs/BACKWARD.md).
+  !> (m = 0), and a touch between grid points is an impact (docs/STABILITY.md). Used only where two
+  !> half sub-steps compose to the whole one (a stiff motion the step does not resolve keeps the
+  !> grid-point test). On by default; off tests the gaps at the sub-steps' ends only (the cost:
+  !> docs/bench/poke.md).
   subroutine set_poke_samples(self, on, stat)
     class(vci_integrator_t), intent(inout) :: self
     logical, intent(in) :: on

@@ -29,9 +29,9 @@ module vci_settings
     logical :: bordered_impacts = .true.
     integer :: border_min = 16     !< ... for stage systems of at least this many unknowns
     !> Sample sub-steps inside for a wall poked within one (docs/BACKWARD.md, "A wall poked within
-    !> one sub-step"): set_poke_samples; off by default (cost, and the walled pendulum's ladder at
-    !> h = 1: docs/BACKWARD.md); used only where the sub-step resolves the motion (samples_are_path)
-    logical :: poke_samples = .false.
+    !> one sub-step"): set_poke_samples; on by default (off: the gaps at the sub-steps' ends only);
+    !> used only where the sub-step resolves the motion (samples_are_path)
+    logical :: poke_samples = .true.
   end type vci_settings_t
 
   public :: vci_default_max_impacts, vci_too_many_impacts_cause

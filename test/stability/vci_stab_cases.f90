@@ -28,7 +28,7 @@ contains
     integer, intent(in) :: mode
     integer(i8), intent(in) :: nsteps
     type(run_summary_t), intent(out) :: s
-    logical, intent(in), optional :: poke   !< set_poke_samples (absent: the default, off)
+    logical, intent(in), optional :: poke   !< set_poke_samples (absent: the default, on)
     type(particle_t), target :: model
     type(vci_integrator_t) :: integ
     real(dp), parameter :: h = 1.0e-3_dp
@@ -101,7 +101,7 @@ contains
   subroutine graze_ceiling_case(depth, t_apex, s, poke)
     real(dp), intent(in) :: depth, t_apex
     type(run_summary_t), intent(out) :: s
-    logical, intent(in), optional :: poke   !< set_poke_samples (absent: the default, off)
+    logical, intent(in), optional :: poke   !< set_poke_samples (absent: the default, on)
     type(particle_t), target :: model
     type(vci_integrator_t) :: integ
     real(dp), parameter :: g = 9.8_dp
