@@ -1,11 +1,12 @@
 !> One run of a Kepler scene of docs/STABILITY.md's "Long steps" (test/stability/vci_long_cases.f90),
 !> step by step: time, q, p, H - H0 and the impacts of each step (alpha, the point on the wall, p-
-!> and p+, the condition and its energies), the state to 17 digits on the line `full`, and the steps
+!> and p+, the condition and its energies; alpha, q, p-, p+ to 17 digits on the line `full alpha`),
+!> the state to 17 digits on the line `full`, and the steps
 !> the safety net split so far. Usage (from the build directory):
 !>
 !>   bin/vci_long_steps_trace SCENE STAGES H SPLITS WALLS
 !>
-!> SCENE 2 (Kepler in the circle) or 4 (Kepler below the wall), STAGES of the lobatto scheme, step
+!> SCENE 2 (Kepler in the circle) or 4 (Kepler below the wall), STAGES of the lobatto scheme (0: midpoint), step
 !> H, the net's bound SPLITS (1: off), WALLS 1 (the scene) or 0 (its free flight). Issue 27's
 !> analysis of the rows that end with status 0 far off reads these traces.
 program vci_long_steps_trace
@@ -46,7 +47,8 @@ program vci_long_steps_trace
   model%n = 2
   call long_start(scene, q0, p0)
   call integ%create(model, h, stat)
-  if (stat == VCI_OK) call integ%set_scheme(VCI_SCHEME_LOBATTO, stages, stat)
+  if (stat == VCI_OK .and. stages == 0) call integ%set_scheme(VCI_SCHEME_MIDPOINT, 1, stat)
+  if (stat == VCI_OK .and. stages > 0) call integ%set_scheme(VCI_SCHEME_LOBATTO, stages, stat)
   if (stat == VCI_OK) call integ%set_step_splits(splits, stat)
   if (stat == VCI_OK) call integ%init_from_momentum(0.0_dp, q0, p0, stat)
   if (stat /= VCI_OK) then
@@ -66,6 +68,7 @@ program vci_long_steps_trace
       imp = integ%impact(i)
       write (*, '(a,f8.4,a,2f9.4,a,2f9.4,a,2f9.4,a,i0,a,2es11.3)') '    alpha', imp%alpha, ' q', imp%q, ' p-', imp%p_before, &
         ' p+', imp%p_after, ' cond ', imp%condition, ' E-/E+', imp%energy_before, imp%energy_after
+      write (*, '(a,7es25.17)') '    full alpha q p- p+', imp%alpha, imp%q, imp%p_before, imp%p_after
     end do
     if (stat /= 0) then
       print *, 'status', stat, trim(integ%message()); exit
