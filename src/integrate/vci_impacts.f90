@@ -1050,12 +1050,13 @@ contains
       integer, intent(out) :: stat
       integer, parameter :: max_probes = 40, max_refine = 60
       integer :: k, kept
-      real(dp) :: mu_lo, mu_hi, f_lo, f_hi, mu, f, tol, step, wlo, whi
+      real(dp) :: mu_lo, mu_hi, f_lo, f_hi, mu, f, tol, step, wlo, whi, delta0
       mu = mu0
       stat = VCI_OK
       if (.not. blended_at(mu, f, tol)) then
         stat = stat_b; return
       end if
+      delta0 = self%sys%blend_delta     ! the scheme's offset at the start (see blend_resolved)
       ! to well below the row's tolerance (1e-4 of it, or the bracket at round-off): the state
       ! leaving a soft impact moves by the energy's error over the normal velocity, which is small
       if (abs(f) > 1.0e-4_dp * tol .and. f /= 0.0_dp) then
@@ -1113,6 +1114,14 @@ contains
       ! the weight and energies at the root (reflected() may have posed another system)
       call blend_weight(self, j, tau2, e_minus, stat)
       if (stat /= VCI_OK) return
+      if (self%sys%blend_w < 1.0_dp .and. .not. blend_resolved(self%sys%blend_w, self%sys%blend_delta, delta0, tol)) then
+        stat = VCI_ERR_IMPACT
+        call vci_set_message(self%cause, trim(what)//': the blended energy condition''s root changes H by '// &
+          trim(vci_real_text(self%sys%blend_w * abs(self%sys%blend_delta), '(es9.2)'))//', more than twice the '// &
+          'scheme''s energy offset at the reflection ('//trim(vci_real_text(abs(delta0), '(es9.2)'))// &
+          '): the leaving sub-step does not resolve the motion; a shorter step does')
+        return
+      end if
       if (self%sys%blend_w < 1.0_dp) then
         self%impact_condition = VCI_IMPACT_BLENDED
         self%e_fallback = self%sys%blend_e_before
@@ -1218,6 +1227,24 @@ contains
     if (stat == VCI_OK) call self%sys%blended_row(e_out, self%sys%get_extra(self%x, KIND_STAGE2), r, sc, stat)
     if (stat /= VCI_OK) call set_cause(self, 'stage 2: the weight of the blended energy condition')
   end subroutine blend_weight
+
+  !> Does a blended root (weight w < 1, offset delta there) stay within what the scheme's truncation
+  !> allows? (issue 27) At the root H+ - H- = -w delta, with delta = (E_d+ - H+) - (E_d- - H-) the
+  !> difference of the two sub-steps' energy offsets, O(tau^2) for the midpoint rule and O(tau^(2s))
+  !> for Lobatto. The blended condition assumes delta a property of the sub-step lengths, nearly
+  !> independent of the impulse (uniform gravity: g^2 h^2 (2 alpha - 1), docs/BACKWARD.md); so H
+  !> may move by about |delta0|, the offset at the search's start (the reflection that keeps H or
+  !> the discrete solve's start). Where the search has reached an impulse whose leaving sub-step no
+  !> longer resolves the motion, delta there is O(1) and many times delta0: Kepler below the wall,
+  !> lobatto s = 2, h = 0.6, delta 1.14 against 0.103, H down by 0.72 into an orbit with pericentre
+  !> 0.12, the sub-step's own H change then 1.72. Measured on every blend of the default suite's
+  !> stability, reversal and fuzz tests and the long-steps table: |w delta| <= 1.17 |delta0| on the
+  !> motion's branch; 6.9 and 2.8 (the walled pendulum, midpoint at h omega = 2.5) where not. The
+  !> bound 2 |delta0| (plus the row's tolerance, for delta0 at round-off) lies between.
+  pure logical function blend_resolved(w, delta, delta0, tol)
+    real(dp), intent(in) :: w, delta, delta0, tol
+    blend_resolved = w * abs(delta) <= 2.0_dp * abs(delta0) + tol
+  end function blend_resolved
 
   !> Stage 2's second start, when Newton from the mirror failed or found the pass-through root. The
   !> mirror mirrors the end of the free sub-step: where a force bends that sub-step back towards the

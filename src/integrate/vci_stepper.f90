@@ -165,6 +165,9 @@ module vci_stepper
   ! For the submodule vci_impacts. Public because gfortran 12 (-O2 and above) inlines a private
   ! procedure into its callers in this module and then emits no symbol for the submodule's calls.
   public :: substep, run_newton, set_cause
+  ! Public so that it keeps its own symbol: callgrind counts its instructions apart from the step's
+  ! (docs/bench/reversal_check.md); called only after a damped Newton solve.
+  public :: confirm_by_reversal
 
   real(dp), parameter :: landing_fraction = 1.0e-10_dp  ! stage 1 within this of the step's end: landed on the wall
 

@@ -64,6 +64,7 @@ module vci_scheme
     !> condition"): H and the normal kinetic energy of p_minus, and the last row's weight and energies
     real(dp) :: h_minus = 0.0_dp, ke_minus = 0.0_dp
     real(dp) :: blend_w = 1.0_dp, blend_e_before = 0.0_dp, blend_e_after = 0.0_dp
+    real(dp) :: blend_delta = 0.0_dp   !< the last row's offset delta, (E_d+ - H+) - (E_d- - H-)
     real(dp), allocatable, private :: all_grads(:, :)   !< every wall's gradient, for eval_gap_gradient's fallback
     real(dp), allocatable, private :: gp(:), gm(:), qp(:), vout(:), xsave(:), ip(:), im(:), isp(:), ism(:)
     real(dp), allocatable, private :: pj_a(:), pj_pa(:), pj_om(:, :), pj_x(:), pj_jac(:, :), pj_rhs(:, :)
@@ -310,6 +311,7 @@ contains
     r = (hp - self%h_minus) + w * delta
     sc = abs(hp) + abs(self%h_minus) + abs(e_out) + abs(self%e_minus)
     self%blend_w = w
+    self%blend_delta = delta
     self%blend_e_before = w * self%e_minus + (1.0_dp - w) * self%h_minus
     self%blend_e_after = w * e_out + (1.0_dp - w) * hp
   end subroutine blended_row

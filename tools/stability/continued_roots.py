@@ -97,6 +97,19 @@ def main():
         q1, p1, res = continued_step(qs, ps, 0.6, s)
         print(f"  s = {s}: q1 = ({q1[0]:.15f}, {q1[1]:.15f}), H - H0 = {energy(q1, p1) - energy(qs, ps):.16f}, "
               f"residual {res:.1e}")
+    # below the wall, s = 2, h = 0.8: step 10 (vci_long_steps_trace 4 2 0.8 16 1), no impact in it
+    st = [2.08966092948540738e-01, -3.30385964245238306e-01, -1.77861532818925294e+00, -9.95332119977030860e-01]
+    qs, ps = np.array(st[:2]), np.array(st[2:])
+    q1, p1, res = continued_step(qs, ps, 0.8, 2)
+    print(f"close pericentre passage at h = 0.8, s = 2: q1 = ({q1[0]:.15f}, {q1[1]:.15f}), "
+          f"H - H0 = {energy(q1, p1) - energy(qs, ps):.16f}, residual {res:.1e}")
+    # below the wall, s = 2, h = 0.6: step 12's impact (vci_long_steps_trace 4 2 0.6 1 1 before the
+    # blended root was refused): the leaving sub-step of (1 - alpha) h from the wall with the blended
+    # root's p+ is the continued root too; what went wrong is the impulse, not the sub-step's branch
+    qt, pp = np.array([5.90487595910294538e-01, 1.0e-1]), np.array([-4.83983089690613211e-01, -8.46399921239833652e-01])
+    q1, p1, res = continued_step(qt, pp, (1.0 - 1.96320195628199884e-01) * 0.6, 2)
+    print(f"blended impact at h = 0.6, s = 2, leaving sub-step: q1 = ({q1[0]:.15f}, {q1[1]:.15f}), "
+          f"H(q1, p1) - H(q~, p+) = {energy(q1, p1) - energy(qt, pp):.4f}, residual {res:.1e}")
 
 
 if __name__ == "__main__":

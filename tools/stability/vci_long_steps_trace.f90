@@ -1,23 +1,27 @@
 !> One run of a Kepler scene of docs/STABILITY.md's "Long steps" (test/stability/vci_long_cases.f90),
 !> step by step: time, q, p, H - H0 and the impacts of each step (alpha, the point on the wall, p-
-!> and p+, the condition and its energies), the state to 17 digits on the line `full`, and the steps
+!> and p+, the condition and its energies; alpha, q, p-, p+ to 17 digits on the line `full alpha`),
+!> the state to 17 digits on the line `full`, and the steps
 !> the safety net split so far. Usage (from the build directory):
 !>
-!>   bin/vci_long_steps_trace SCENE STAGES H SPLITS WALLS
+!>   bin/vci_long_steps_trace SCENE STAGES H SPLITS WALLS [REST]
 !>
-!> SCENE 2 (Kepler in the circle) or 4 (Kepler below the wall), STAGES of the lobatto scheme, step
-!> H, the net's bound SPLITS (1: off), WALLS 1 (the scene) or 0 (its free flight). Issue 27's
+!> SCENE 2 (Kepler in the circle) or 4 (Kepler below the wall), STAGES of the lobatto scheme (0: midpoint), step
+!> H, the net's bound SPLITS (1: off), WALLS 1 (the scene) or 0 (its free flight), REST 1: the first
+!> step's predictor starts at rest (a checkpoint with velocity 0). Issue 27's
 !> analysis of the rows that end with status 0 far off reads these traces.
 program vci_long_steps_trace
   use vci
   use vci_long_cases
   use vci_test_kepler, only: kepler_t
   use vci_kepler_wall, only: kepler_wall_t
+  use vci_checkpoint, only: vci_checkpoint_t
   implicit none
   class(vci_lagrangian_t), allocatable, target :: model
   type(vci_integrator_t) :: integ
   type(vci_impact_t) :: imp
   type(vci_stats_t) :: st
+  type(vci_checkpoint_t) :: cp
   real(dp), allocatable :: q0(:), p0(:), q(:), p(:)
   real(dp) :: h, h0, hh
   integer :: scene, stages, splits, stat, k, nsteps, i, walls
@@ -46,9 +50,20 @@ program vci_long_steps_trace
   model%n = 2
   call long_start(scene, q0, p0)
   call integ%create(model, h, stat)
-  if (stat == VCI_OK) call integ%set_scheme(VCI_SCHEME_LOBATTO, stages, stat)
+  if (stat == VCI_OK .and. stages == 0) call integ%set_scheme(VCI_SCHEME_MIDPOINT, 1, stat)
+  if (stat == VCI_OK .and. stages > 0) call integ%set_scheme(VCI_SCHEME_LOBATTO, stages, stat)
   if (stat == VCI_OK) call integ%set_step_splits(splits, stat)
   if (stat == VCI_OK) call integ%init_from_momentum(0.0_dp, q0, p0, stat)
+  if (stat == VCI_OK .and. command_argument_count() >= 6) then
+    call get_command_argument(6, arg)
+    if (trim(arg) == '1') then
+      ! REST 1: the predictor starts the first step at rest (a checkpoint with velocity 0), as in
+      ! test_kepler_spurious_root_reversal: its Newton solve is damped and the reversal check runs
+      cp = integ%checkpoint()
+      cp%velocity = 0.0_dp
+      call integ%restore(cp, stat)
+    end if
+  end if
   if (stat /= VCI_OK) then
     write (*, '(a,i0,a,a)') 'status ', stat, ' ', trim(integ%message())
     stop 1
@@ -66,6 +81,7 @@ program vci_long_steps_trace
       imp = integ%impact(i)
       write (*, '(a,f8.4,a,2f9.4,a,2f9.4,a,2f9.4,a,i0,a,2es11.3)') '    alpha', imp%alpha, ' q', imp%q, ' p-', imp%p_before, &
         ' p+', imp%p_after, ' cond ', imp%condition, ' E-/E+', imp%energy_before, imp%energy_after
+      write (*, '(a,7es25.17)') '    full alpha q p- p+', imp%alpha, imp%q, imp%p_before, imp%p_after
     end do
     if (stat /= 0) then
       print *, 'status', stat, trim(integ%message()); exit
