@@ -908,35 +908,17 @@ contains
     real(dp), intent(in) :: x(:), r(:)
     type(vci_band_matrix_t), intent(inout) :: mat
     integer, intent(out) :: stat
-    integer :: n, m, nx, i, j, k, last, bw, nd
-    real(dp) :: tau, d, hp, t
-    n = self%n; m = self%m; nx = size(x); last = n + m + 1
-    bw = mat%bw; nd = nx - n; k = bw + 1
+    integer :: n, nx, i, j, k, bw
+    real(dp) :: tau, hp, t
+    n = self%n; nx = size(x)
+    bw = mat%bw; k = bw + 1
     stat = VCI_OK
     tau = step_length(self, x)
     ! columns of b
     if (self%has_hessian) then
       call momentum_band(self, x, tau, mat, stat)
       if (stat /= VCI_OK) return
-      if (nx > n .and. self%kind == KIND_SUBSTEP) then
-        if (m > 0) call constraint_rows(self, x, tau, mat%rows(1:m, 1:n), stat)
-        if (stat /= VCI_OK) return
-      else if (nx > n .and. analytic_last_row(self)) then
-        if (m > 0) call constraint_rows(self, x, tau, mat%rows(1:m, 1:n), stat)
-        if (stat /= VCI_OK) return
-        if (self%kind == KIND_STAGE1) then
-          call endpoint_of(self, x)
-          call self%eval_gap_gradient(self%bb, self%gap, self%gg1, stat)
-          if (stat /= VCI_OK) return
-          mat%rows(nd, 1:n) = self%gg1
-        end if
-      else if (nx > n) then
-        do j = 1, n
-          call fd_column(self, x, j, fd_step(position(self, x, j), motion(self, x, j)), .false., self%fcol(1:nx), stat)
-          if (stat /= VCI_OK) return
-          mat%rows(1:nd, j) = self%fcol(n + 1:nx)
-        end do
-      end if
+      call border_rows(self, x, tau, mat%rows, stat)
     else
       do j = 1, n
         call fd_column(self, x, j, fd_step(position(self, x, j), motion(self, x, j)), .true., self%fcol(1:nx), stat)
@@ -944,38 +926,15 @@ contains
         do i = max(1, j - bw), min(n, j + bw)
           mat%band(k + i - j, j) = self%fcol(i)
         end do
-        mat%rows(1:nd, j) = self%fcol(n + 1:nx)
+        mat%rows(1:nx - n, j) = self%fcol(n + 1:nx)
       end do
     end if
-    ! multiplier columns: d/d lambda of -Omega(a) lambda
-    do j = 1, m
-      do i = 1, n
-        mat%cols(i, j) = -self%omega(i, j)
-      end do
-    end do
-    select case (self%kind)
-    case (KIND_STAGE1)       ! alpha enters through the sub-step length; g_j(b) does not depend on it
-      d = vci_fd_rel * x(last)
-      call fd_column(self, x, last, d, .true., mat%cols(1:nx, nd), stat, gap_row=.false.)
-      mat%cols(last, nd) = 0.0_dp
-    case (KIND_STAGE2)    ! mu enters linearly in the momentum rows
-      mat%cols(1:n, nd) = self%grad
-      if (self%impact_energy == VCI_IMPACT_HAMILTONIAN) then
-        call hamiltonian_mu_slope(self, x(last), mat%cols(last, nd), stat)
-      end if
-    end select
+    if (stat /= VCI_OK) return
+    call border_columns(self, x, mat%cols, stat)
     if (stat /= VCI_OK) return
     ! the row sizes of step_jacobian: jscale(i) = sum_j |J_ij| size_j, kin(i) = sum_j |J_ij| motion_j
-    ! over the position block (its band)
-    do j = 1, nx
-      if (j <= n) then
-        self%sizes(j) = abs(position(self, x, j))
-      else
-        self%sizes(j) = abs(x(j))
-      end if
-    end do
-    self%jscale(1:nx) = 0.0_dp
-    self%kin = 0.0_dp
+    ! over the position block (its band), then the border's
+    call start_row_sizes(self, x)
     do j = 1, n
       hp = motion(self, x, j)
       do i = max(1, j - bw), min(n, j + bw)
@@ -983,15 +942,8 @@ contains
         self%jscale(i) = self%jscale(i) + t * self%sizes(j)
         self%kin(i) = self%kin(i) + t * hp
       end do
-      do i = 1, nd
-        self%jscale(n + i) = self%jscale(n + i) + abs(mat%rows(i, j)) * self%sizes(j)
-      end do
     end do
-    do j = 1, nd
-      do i = 1, nx
-        self%jscale(i) = self%jscale(i) + abs(mat%cols(i, j)) * self%sizes(n + j)
-      end do
-    end do
+    call border_row_sizes(self, x, mat%rows, mat%cols)
     self%jac_known = .true.
   end subroutine step_band_jacobian
 
@@ -1018,10 +970,9 @@ contains
     real(dp), intent(in) :: x(:), r(:)
     type(vci_sparse_matrix_t), intent(inout) :: mat
     integer, intent(out) :: stat
-    integer :: n, m, nx, i, j, k, last, nd
-    real(dp) :: tau, d, hp, t
-    n = self%n; m = self%m; nx = size(x); last = n + m + 1
-    nd = nx - n
+    integer :: n, nx, i, j, k
+    real(dp) :: tau, hp, t
+    n = self%n; nx = size(x)
     stat = VCI_OK
     tau = step_length(self, x)
     associate (pat => mat%pat)
@@ -1029,25 +980,7 @@ contains
       if (self%has_hessian) then
         call momentum_sparse(self, x, tau, mat, stat)
         if (stat /= VCI_OK) return
-        if (nx > n .and. self%kind == KIND_SUBSTEP) then
-          if (m > 0) call constraint_rows(self, x, tau, mat%rows(1:m, 1:n), stat)
-          if (stat /= VCI_OK) return
-        else if (nx > n .and. analytic_last_row(self)) then
-          if (m > 0) call constraint_rows(self, x, tau, mat%rows(1:m, 1:n), stat)
-          if (stat /= VCI_OK) return
-          if (self%kind == KIND_STAGE1) then
-            call endpoint_of(self, x)
-            call self%eval_gap_gradient(self%bb, self%gap, self%gg1, stat)
-            if (stat /= VCI_OK) return
-            mat%rows(nd, 1:n) = self%gg1
-          end if
-        else if (nx > n) then
-          do j = 1, n
-            call fd_column(self, x, j, fd_step(position(self, x, j), motion(self, x, j)), .false., self%fcol(1:nx), stat)
-            if (stat /= VCI_OK) return
-            mat%rows(1:nd, j) = self%fcol(n + 1:nx)
-          end do
-        end if
+        call border_rows(self, x, tau, mat%rows, stat)
       else
         do j = 1, n
           call fd_column(self, x, j, fd_step(position(self, x, j), motion(self, x, j)), .true., self%fcol(1:nx), stat)
@@ -1055,37 +988,14 @@ contains
           do k = pat%colptr(j), pat%colptr(j + 1) - 1
             mat%val(k) = self%fcol(pat%rowind(k))
           end do
-          mat%rows(1:nd, j) = self%fcol(n + 1:nx)
+          mat%rows(1:nx - n, j) = self%fcol(n + 1:nx)
         end do
       end if
-      ! multiplier columns: d/d lambda of -Omega(a) lambda
-      do j = 1, m
-        do i = 1, n
-          mat%cols(i, j) = -self%omega(i, j)
-        end do
-      end do
-      select case (self%kind)
-      case (KIND_STAGE1)       ! alpha enters through the sub-step length; g_j(b) does not depend on it
-        d = vci_fd_rel * x(last)
-        call fd_column(self, x, last, d, .true., mat%cols(1:nx, nd), stat, gap_row=.false.)
-        mat%cols(last, nd) = 0.0_dp
-      case (KIND_STAGE2)    ! mu enters linearly in the momentum rows
-        mat%cols(1:n, nd) = self%grad
-        if (self%impact_energy == VCI_IMPACT_HAMILTONIAN) then
-          call hamiltonian_mu_slope(self, x(last), mat%cols(last, nd), stat)
-        end if
-      end select
       if (stat /= VCI_OK) return
-      ! the row sizes of step_jacobian over the position block's pattern and the border
-      do j = 1, nx
-        if (j <= n) then
-          self%sizes(j) = abs(position(self, x, j))
-        else
-          self%sizes(j) = abs(x(j))
-        end if
-      end do
-      self%jscale(1:nx) = 0.0_dp
-      self%kin = 0.0_dp
+      call border_columns(self, x, mat%cols, stat)
+      if (stat /= VCI_OK) return
+      ! the row sizes of step_jacobian over the position block's pattern, then the border's
+      call start_row_sizes(self, x)
       do j = 1, n
         hp = motion(self, x, j)
         do k = pat%colptr(j), pat%colptr(j + 1) - 1
@@ -1094,18 +1004,106 @@ contains
           self%jscale(i) = self%jscale(i) + t * self%sizes(j)
           self%kin(i) = self%kin(i) + t * hp
         end do
-        do i = 1, nd
-          self%jscale(n + i) = self%jscale(n + i) + abs(mat%rows(i, j)) * self%sizes(j)
-        end do
       end do
-      do j = 1, nd
-        do i = 1, nx
-          self%jscale(i) = self%jscale(i) + abs(mat%cols(i, j)) * self%sizes(n + j)
-        end do
-      end do
+      call border_row_sizes(self, x, mat%rows, mat%cols)
     end associate
     self%jac_known = .true.
   end subroutine step_sparse_jacobian
+
+  !> The border rows of a structured Jacobian (band or pattern) from analytic Hessians: the
+  !> constraint rows, stage 1's gap row, or (no analytic last row) the differenced rows of every
+  !> position column. rows(i, j): row n + i, column j.
+  subroutine border_rows(self, x, tau, rows, stat)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:), tau
+    real(dp), intent(inout) :: rows(:, :)
+    integer, intent(out) :: stat
+    integer :: n, m, nx, nd, j
+    n = self%n; m = self%m; nx = size(x); nd = nx - n
+    stat = VCI_OK
+    if (nx > n .and. self%kind == KIND_SUBSTEP) then
+      if (m > 0) call constraint_rows(self, x, tau, rows(1:m, 1:n), stat)
+    else if (nx > n .and. analytic_last_row(self)) then
+      if (m > 0) call constraint_rows(self, x, tau, rows(1:m, 1:n), stat)
+      if (stat /= VCI_OK) return
+      if (self%kind == KIND_STAGE1) then
+        call endpoint_of(self, x)
+        call self%eval_gap_gradient(self%bb, self%gap, self%gg1, stat)
+        if (stat /= VCI_OK) return
+        rows(nd, 1:n) = self%gg1
+      end if
+    else if (nx > n) then
+      do j = 1, n
+        call fd_column(self, x, j, fd_step(position(self, x, j), motion(self, x, j)), .false., self%fcol(1:nx), stat)
+        if (stat /= VCI_OK) return
+        rows(1:nd, j) = self%fcol(n + 1:nx)
+      end do
+    end if
+  end subroutine border_rows
+
+  !> The border columns of a structured Jacobian: d/d lambda of -Omega(a) lambda, then stage 1's
+  !> alpha column (differenced) or stage 2's mu column. cols(i, j): row i, column n + j.
+  subroutine border_columns(self, x, cols, stat)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:)
+    real(dp), intent(inout) :: cols(:, :)
+    integer, intent(out) :: stat
+    integer :: n, m, nx, nd, last, i, j
+    real(dp) :: d
+    n = self%n; m = self%m; nx = size(x); nd = nx - n; last = n + m + 1
+    stat = VCI_OK
+    do j = 1, m
+      do i = 1, n
+        cols(i, j) = -self%omega(i, j)
+      end do
+    end do
+    select case (self%kind)
+    case (KIND_STAGE1)       ! alpha enters through the sub-step length; g_j(b) does not depend on it
+      d = vci_fd_rel * x(last)
+      call fd_column(self, x, last, d, .true., cols(1:nx, nd), stat, gap_row=.false.)
+      cols(last, nd) = 0.0_dp
+    case (KIND_STAGE2)    ! mu enters linearly in the momentum rows
+      cols(1:n, nd) = self%grad
+      if (self%impact_energy == VCI_IMPACT_HAMILTONIAN) then
+        call hamiltonian_mu_slope(self, x(last), cols(last, nd), stat)
+      end if
+    end select
+  end subroutine border_columns
+
+  !> The unknowns' sizes and the row sizes (jscale, kin) set to zero, before a structured
+  !> Jacobian's block adds its part.
+  subroutine start_row_sizes(self, x)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:)
+    integer :: j
+    do j = 1, size(x)
+      if (j <= self%n) then
+        self%sizes(j) = abs(position(self, x, j))
+      else
+        self%sizes(j) = abs(x(j))
+      end if
+    end do
+    self%jscale(1:size(x)) = 0.0_dp
+    self%kin = 0.0_dp
+  end subroutine start_row_sizes
+
+  !> The border's part of the row sizes of step_jacobian (rows n+1.., then every row's border columns).
+  subroutine border_row_sizes(self, x, rows, cols)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:), rows(:, :), cols(:, :)
+    integer :: n, nx, nd, i, j
+    n = self%n; nx = size(x); nd = nx - n
+    do j = 1, n
+      do i = 1, nd
+        self%jscale(n + i) = self%jscale(n + i) + abs(rows(i, j)) * self%sizes(j)
+      end do
+    end do
+    do j = 1, nd
+      do i = 1, nx
+        self%jscale(i) = self%jscale(i) + abs(cols(i, j)) * self%sizes(n + j)
+      end do
+    end do
+  end subroutine border_row_sizes
 
   !> momentum_block into the sparse pattern: a retraction's mixed Hessian written there by its own
   !> routine (from the model's sparse Hessians, or its dense ones read in the pattern); a user's
