@@ -10,7 +10,7 @@
 !> part (nd of them border columns).
 module vci_banded_matrix
   use vci_kinds, only: dp
-  use vci_kernels, only: invert_row_sizes
+  use vci_kernels, only: invert_row_sizes, border_row_maxima
   implicit none
   private
 
@@ -124,22 +124,15 @@ contains
     class(vci_band_matrix_t), intent(in) :: self
     integer, intent(in) :: nx
     real(dp), intent(out) :: rw(:)
-    integer :: i, j, k, nb, bw
+    integer :: i, j, nb, bw
     nb = self%nb; bw = self%bw
     rw(1:nx) = 0.0_dp
     do j = 1, nb
       do i = max(1, j - bw), min(nb, j + bw)
         rw(i) = max(rw(i), abs(self%band(bw + 1 + i - j, j)))
       end do
-      do k = 1, nx - nb
-        rw(nb + k) = max(rw(nb + k), abs(self%rows(k, j)))
-      end do
     end do
-    do k = 1, nx - nb
-      do i = 1, nx
-        rw(i) = max(rw(i), abs(self%cols(i, k)))
-      end do
-    end do
+    call border_row_maxima(nb, nx, self%rows, self%cols, rw)
     call invert_row_sizes(nx, rw, total)
   end function row_weights
 

@@ -14,7 +14,7 @@ module vci_kernels
   implicit none
   private
 
-  public :: band_jacobian_sizes, invert_row_sizes
+  public :: band_jacobian_sizes, invert_row_sizes, border_row_maxima
   public :: momentum_terms, kinetic_and_floor, jacobian_sizes, equilibrate, scaled_merit, small_lu, small_lu_solve
   public :: substep_rows, substep_direction, pivots_regular
   public :: lobatto_nodes, lobatto_forces, lobatto_blocks, total_of
@@ -42,6 +42,26 @@ contains
       end if
     end do
   end subroutine invert_row_sizes
+
+  !> rw(i) := max(rw(i), the largest |entry| of row i in the border) for a structured nb x nb block
+  !> bordered by nx - nb rows (rows(k, j), j <= nb) and columns (cols(i, k), i <= nx): the part of
+  !> the row sizes that the band and the sparse matrix share.
+  pure subroutine border_row_maxima(nb, nx, rows, cols, rw)
+    integer, intent(in) :: nb, nx
+    real(dp), intent(in) :: rows(:, :), cols(:, :)
+    real(dp), intent(inout) :: rw(:)
+    integer :: i, j, k
+    do j = 1, nb
+      do k = 1, nx - nb
+        rw(nb + k) = max(rw(nb + k), abs(rows(k, j)))
+      end do
+    end do
+    do k = 1, nx - nb
+      do i = 1, nx
+        rw(i) = max(rw(i), abs(cols(i, k)))
+      end do
+    end do
+  end subroutine border_row_maxima
 
   !> r(i) = d1(i) + pa(i) - sum_mu omega(i, mu) lambda(mu), sc(i) = the sum of those terms' sizes.
   pure subroutine momentum_terms(n, m, d1, pa, omega, lambda, r, sc)

@@ -10,7 +10,7 @@
 !> system uses its leading part.
 module vci_sparse_matrix
   use vci_kinds, only: dp
-  use vci_kernels, only: invert_row_sizes
+  use vci_kernels, only: invert_row_sizes, border_row_maxima
   use vci_sparse, only: vci_sparse_pattern_t, pattern_find
   implicit none
   private
@@ -113,15 +113,8 @@ contains
         i = self%pat%rowind(k)
         rw(i) = max(rw(i), abs(self%val(k)))
       end do
-      do k = 1, nx - nb
-        rw(nb + k) = max(rw(nb + k), abs(self%rows(k, j)))
-      end do
     end do
-    do k = 1, nx - nb
-      do i = 1, nx
-        rw(i) = max(rw(i), abs(self%cols(i, k)))
-      end do
-    end do
+    call border_row_maxima(nb, nx, self%rows, self%cols, rw)
     call invert_row_sizes(nx, rw, total)
   end function row_weights
 
