@@ -690,59 +690,27 @@ contains
     real(dp), intent(in) :: x(:), r(:)
     real(dp), intent(inout) :: jac(:, :)
     integer, intent(out) :: stat
-    integer :: n, m, nx, i, j, last, nb, bw
-    real(dp) :: tau, d
+    integer :: n, nx, i, j, nb, bw
+    real(dp) :: tau
     logical :: chk
-    n = self%n; m = self%m; nx = size(x); last = n + m + 1
+    n = self%n; nx = size(x)
     stat = VCI_OK
     tau = step_length(self, x)
     ! columns of b
     if (self%has_hessian) then
       call momentum_block(self, x, tau, jac, stat)
       if (stat /= VCI_OK) return
-      if (nx > n .and. self%kind == KIND_SUBSTEP) then
-        call constraint_block(self, x, tau, jac, stat)   ! only the m constraint rows depend on b besides
-        if (stat /= VCI_OK) return
-      else if (nx > n .and. analytic_last_row(self)) then
-        ! no differenced columns of b: stage 2's Hamiltonian row does not depend on b, stage 1's
-        ! gap row g_j(b) has the gradient grad g_j(b) (d b / d x = I in both layouts)
-        if (m > 0) call constraint_block(self, x, tau, jac, stat)
-        if (stat /= VCI_OK) return
-        if (self%kind == KIND_STAGE1) then
-          call endpoint_of(self, x)
-          call self%eval_gap_gradient(self%bb, self%gap, self%gg1, stat)
-          if (stat /= VCI_OK) return
-          jac(last, 1:n) = self%gg1
-        end if
-      else if (nx > n) then
-        do j = 1, n
-          call fd_column(self, x, j, fd_step(position(self, x, j), motion(self, x, j)), .false., jac(:, j), stat)
-          if (stat /= VCI_OK) return
-        end do
-      end if
+      ! no differenced columns of b where the rows are known: border_rows
+      call border_rows(self, x, tau, jac(n + 1:nx, 1:n), stat)
+      if (stat /= VCI_OK) return
     else
       do j = 1, n
         call fd_column(self, x, j, fd_step(position(self, x, j), motion(self, x, j)), .true., jac(:, j), stat)
         if (stat /= VCI_OK) return
       end do
     end if
-    ! multiplier columns: d/d lambda of -Omega(a) lambda
-    do j = 1, m
-      do i = 1, n
-        jac(i, n + j) = -self%omega(i, j)
-      end do
-    end do
-    select case (self%kind)
-    case (KIND_STAGE1)       ! alpha enters through the sub-step length; g_j(b) does not depend on it
-      d = vci_fd_rel * x(last)
-      call fd_column(self, x, last, d, .true., jac(:, last), stat, gap_row=.false.)
-      jac(last, last) = 0.0_dp
-    case (KIND_STAGE2)    ! mu enters linearly in the momentum rows
-      jac(1:n, last) = self%grad
-      if (self%impact_energy == VCI_IMPACT_HAMILTONIAN) then
-        call hamiltonian_mu_slope(self, x(last), jac(last, last), stat)
-      end if
-    end select
+    ! multiplier columns and stage 1's alpha or stage 2's mu column
+    call border_columns(self, x, jac(1:nx, n + 1:nx), stat)
     ! |J| for the kinetic term of the momentum rows, and the round-off floor sum_j |J_ij| |x_j|, sized on
     ! positions in both layouts (a user's L_d rounds b - a to ulps of |b|; a retraction rounds
     ! a + d/2 where forces are evaluated); explicit loops: array syntax on these sections costs more
