@@ -57,6 +57,9 @@ program bench_lobatto_nonholo
   call integ%create(pend, h, stat)
   if (stat == VCI_OK) call integ%set_scheme(VCI_SCHEME_LOBATTO, s, stat)
   if (stat == VCI_OK) call integ%set_tolerances(0.0_dp, rtol, 30, stat)
+  ! VCI_BENCH_POKE=0: the poke screen off (set_poke_samples(.false.)), for its cost (docs/bench/poke.md)
+  call get_environment_variable('VCI_BENCH_POKE', arg, status=k)
+  if (stat == VCI_OK .and. k == 0 .and. trim(arg) == '0') call integ%set_poke_samples(.false., stat)
   if (stat == VCI_OK) call integ%set_impact_energy(VCI_IMPACT_HAMILTONIAN, stat)
   call must(stat)
   allocate (hit(nsteps))
@@ -87,7 +90,10 @@ program bench_lobatto_nonholo
     t_imp(rep) = 1.0e9_dp * real(timp, dp) / real(rate, dp) / max(1, nimp)
     if (part == 'run') exit
   end do
-  if (part == 'run') stop
+  if (part == 'run') then
+    write (output_unit, '(a,i0,a,i0)') 'regular ', nreg, ' impact ', nimp   ! (for callgrind's counts)
+    stop
+  end if
   st = integ%statistics()
   write (output_unit, '(a,i0,a,es9.2,a,i0,a,i0,a,i0)') 'nonholonomic pendulum, lobatto s = ', s, '  h = ', h, &
     ':  regular steps ', nreg, '  impact steps ', nimp, '  episodes ', neps

@@ -88,6 +88,7 @@ program bench_lobatto_steps
       t_hand(rep) = 1.0e9_dp * real(c1 - c0, dp) / real(rate, dp) / (neps * nsteps)
     end if
   end do
+  if (part == 'walled') write (output_unit, '(a,i0,a,i0)') 'regular ', nrep * nreg, ' impact ', nrep * nimp   ! (callgrind's counts: every repeat)
   if (part /= 'all') stop
   ! the hand loop and the library reach the same free state (solver tolerance)
   call integ_free%init_from_momentum(0.0_dp, [0.0_dp], [4.0_dp], stat)

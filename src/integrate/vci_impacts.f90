@@ -8,6 +8,9 @@
 !> A submodule of vci_stepper: it works on the stepper's scheme, Newton and workspace.
 submodule (vci_stepper) vci_impacts
   implicit none
+  !> The highest stage-polynomial degree stage_screen takes (Lobatto's VCI_LOBATTO_MAX_STAGES);
+  !> beyond it, or below 2, the parabola screen
+  integer, parameter :: PATH_MAX_DEGREE = 8
 
 contains
 
@@ -378,21 +381,29 @@ contains
     integer, intent(out) :: stat
     real(dp) :: s, f, best
     integer :: nm, k, jj, st
-    logical :: screened
+    logical :: screened, stage_path
     nm = self%nsub
     associate (g_prev => self%poke_gaps(1:self%ng, 1), lam => self%poke_lambda)
-    poked = 0; lo = 0.0_dp; hi = 1.0_dp; glo = 0.0_dp; ghi = 0.0_dp
+    poked = 0; lo = 0.0_dp; hi = 1.0_dp; glo = 0.0_dp; ghi = 0.0_dp; screened = .false.
     self%x_full(1:nm) = self%x(1:nm)
     call self%sys%eval_gaps(self%q_start, g_prev, stat)
     if (stat /= VCI_OK) then
-      call set_cause(self, 'gap evaluation at the start of the sub-step'); return
+      call set_cause(self, 'gap evaluation at the start of the sub-step'); self%x(1:nm) = self%x_full(1:nm); return
+    end if
+    ! a scheme with interior stages screens on their polynomial: no solve unless it comes near a wall
+    stage_path = self%sys%path_degree() >= 2 .and. self%sys%path_degree() <= PATH_MAX_DEGREE
+    if (stage_path) then
+      screened = stage_screen(self, only, stat)
+      if (stat /= VCI_OK .or. .not. screened) return
     end if
     call self%sys%get_multipliers(self%x_full, lam)
     call self%sys%put_endpoint(self%x_low, self%q_start, self%q_start)
     call self%sys%put_multipliers(self%x_low, lam)
-    ! The screen: one solve at s = 1/2 and the parabola through the start, that point and the end,
-    ! its bend doubled for a margin, at s = 1/8 .. 7/8 (gap evaluations). Only where it comes below
-    ! a wall that the end is not beyond is the trajectory sampled (most impacts: one solve here).
+    ! The screen (schemes without a stage polynomial): one solve at s = 1/2 and the parabola through
+    ! the start, that point and the end, its bend doubled for a margin, at s = 1/8 .. 7/8 (gap
+    ! evaluations). Only where it comes below a wall that the end is not beyond is the trajectory
+    ! sampled (most impacts: one solve here). With a stage polynomial the half sub-step is solved
+    ! only once that screen has passed: samples_are_path starts from it.
     self%x(1:nm) = 0.5_dp * (self%x_low(1:nm) + self%x_full(1:nm))
     call substep(self, self%q_start, self%p_start, 0.5_dp * tau, st)
     if (st /= VCI_OK) then
@@ -402,8 +413,7 @@ contains
     end if
     call self%sys%get_endpoint(self%x, self%q_guess)
     self%q_guess = self%q_guess - 0.5_dp * (self%q_start + self%q_end)   ! the bend at s = 1/2
-    screened = .false.
-    do k = 1, POKE_SAMPLES
+    do k = 1, merge(0, POKE_SAMPLES, stage_path)
       s = real(k, dp) / real(POKE_SAMPLES + 1, dp)
       self%q_trial = self%q_start + s * (self%q_end - self%q_start) + 8.0_dp * s * (1.0_dp - s) * self%q_guess
       call self%sys%eval_gaps(self%q_trial, self%gaps_trial(1:self%ng), stat)
@@ -459,6 +469,80 @@ contains
     self%x(1:nm) = self%x_full(1:nm)
     end associate
   end subroutine find_poke
+
+  !> The poke screen of a scheme with interior stages (issue 25; docs/DESIGN.md, "A wall poked within
+  !> one sub-step"): the solved sub-step's positions are the polynomial of degree d = path_degree
+  !> through its stage points, so the gap of each wall is evaluated at the d - 1 interior points (no
+  !> solve) and the polynomial P through the gaps at all d + 1 points bounds it in between. The
+  !> margin is the parabola screen's: P's departure from the chord of its end values doubled,
+  !> M = 2 P - chord; the screen passes when M stays at or above min(0, g(start)) on [0, 1] (the
+  !> start may lie on a wall, to round-off, after an impact), which the least Bernstein coefficient
+  !> of M proves, refined by subdivision (bernstein_dips). Only walls the end is not beyond (and
+  !> only that wall when only > 0) count. Gaps at the start in poke_gaps(:, 1), at the end in
+  !> gaps_end; q_trial and gaps_trial are scratch.
+  logical function stage_screen(self, only, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: only
+    integer, intent(out) :: stat
+    real(dp) :: w(0:PATH_MAX_DEGREE, 0:PATH_MAX_DEGREE), b(0:PATH_MAX_DEGREE), c, g0, g1
+    integer :: d, i, j, k
+    stage_screen = .true.
+    d = self%sys%path_degree()
+    call self%sys%path_bernstein(w(0:d, 0:d))
+    associate (gn => self%poke_gaps(1:self%ng, 3:3 + d))
+      gn(:, 1) = self%poke_gaps(1:self%ng, 1)
+      gn(:, d + 1) = self%gaps_end(1:self%ng)
+      do i = 1, d - 1
+        call self%sys%path_point(self%x, i, self%q_trial, c)
+        call self%sys%eval_gaps(self%q_trial, gn(:, i + 1), stat)
+        if (stat /= VCI_OK) then
+          call set_cause(self, 'gap evaluation at a stage point'); return
+        end if
+      end do
+      do j = 1, self%ng
+        if (self%gaps_end(j) < 0.0_dp .or. (only > 0 .and. j /= only)) cycle
+        g0 = gn(j, 1); g1 = gn(j, d + 1)
+        do k = 0, d
+          b(k) = 2.0_dp * dot_product(w(k, 0:d), gn(j, :)) - (g0 + real(k, dp) / real(d, dp) * (g1 - g0)) &
+                 - min(0.0_dp, g0)
+        end do
+        b(0) = max(b(0), 0.0_dp); b(d) = max(b(d), 0.0_dp)   ! (M's end values, exactly, before round-off)
+        if (bernstein_dips(b(0:d))) return
+      end do
+    end associate
+    stage_screen = .false.
+  end function stage_screen
+
+  !> Might the polynomial with Bernstein coefficients b(0:d) on [0, 1] be negative there? False when
+  !> every coefficient of it, or of each piece after up to BERNSTEIN_SPLITS halvings (de Casteljau),
+  !> is >= 0 (the convex hull property); true at a negative value (a piece's end) or when pieces are
+  !> still undecided after the last halving.
+  pure logical function bernstein_dips(b)
+    real(dp), intent(in) :: b(0:)
+    integer, parameter :: BERNSTEIN_SPLITS = 4
+    real(dp) :: stack(0:PATH_MAX_DEGREE, 0:BERNSTEIN_SPLITS + 1), left(0:PATH_MAX_DEGREE), t(0:PATH_MAX_DEGREE)
+    integer :: level(0:BERNSTEIN_SPLITS + 1), top, d, r, k, lv
+    d = ubound(b, 1)
+    bernstein_dips = .true.
+    top = 0; stack(0:d, 0) = b; level(0) = 0
+    do while (top >= 0)
+      t(0:d) = stack(0:d, top); lv = level(top); top = top - 1
+      if (t(0) < 0.0_dp .or. t(d) < 0.0_dp) return
+      if (minval(t(0:d)) >= 0.0_dp) cycle
+      if (lv == BERNSTEIN_SPLITS) return
+      ! halve: left piece's coefficients are the first column of de Casteljau's triangle, the right's the last row
+      left(0) = t(0)
+      do r = 1, d
+        do k = 0, d - r
+          t(k) = 0.5_dp * (t(k) + t(k + 1))
+        end do
+        left(r) = t(0)
+      end do
+      top = top + 1; stack(0:d, top) = t(0:d); level(top) = lv + 1     ! right piece
+      top = top + 1; stack(0:d, top) = left(0:d); level(top) = lv + 1  ! left piece (next)
+    end do
+    bernstein_dips = .false.
+  end function bernstein_dips
 
   !> Are the ends of shorter sub-steps from (a, pa) a path between the ends a, b of the sub-step of
   !> length tau, solved in xw (find_poke's samples; poke_departure's short sub-step)? Only where
@@ -529,6 +613,8 @@ contains
     stat = VCI_OK
     may_poke = .true.
     if (state%predictor_depth * dir <= 0) return
+    ! a stage polynomial screens at least as tightly, without the previous step (find_poke)
+    if (self%sys%path_degree() >= 2 .and. self%sys%path_degree() <= PATH_MAX_DEGREE) return
     ! (gaps_start and gaps_trial as scratch: an impact that follows evaluates them again)
     call self%sys%eval_gaps(self%q_start, self%gaps_start(1:self%ng), stat)
     self%q_trial = 0.5_dp * (self%q_start + self%q_end)

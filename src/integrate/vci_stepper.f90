@@ -101,7 +101,8 @@ module vci_stepper
     !> momentum of the whole sub-step (:, 3) and of the two halves (:, 4)
     real(dp), allocatable :: poke_half(:, :)
     !> find_poke's gaps at the last sample (:, 1) and may_poke's at the step's middle (:, 2), and
-    !> the multipliers the samples start from: workspace, so that a regular step allocates nothing
+    !> the multipliers the samples start from: workspace, so that a regular step allocates nothing;
+    !> (:, 3 + i), i = 0 .. path_degree: the gaps at the stage polynomial's points (stage_screen)
     real(dp), allocatable :: poke_gaps(:, :), poke_lambda(:)
     !> The impact condition stage 2 used (the setting, or VCI_IMPACT_HAMILTONIAN where the discrete
     !> energy condition has no solution) and, then, H(qt, p-).
@@ -225,7 +226,7 @@ contains
     end if
     self%x = 0.0_dp; self%zero_lambda = 0.0_dp
     self%grad_slot = 0; self%slot_wall = 0; self%last_slot = 0
-    allocate (self%tie_x(nx, 2), self%tie_q(n, 3), self%poke_half(n, 4), self%poke_gaps(ngw, 2), &
+    allocate (self%tie_x(nx, 2), self%tie_q(n, 3), self%poke_half(n, 4), self%poke_gaps(ngw, 3 + self%sys%path_degree()), &
               self%poke_lambda(m), stat=stat)
     if (stat /= 0) then
       call release_workspace(self)

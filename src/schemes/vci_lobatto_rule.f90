@@ -14,6 +14,10 @@ module vci_lobatto_rule
   type, public :: vci_lobatto_rule_t
     integer :: s = 0
     real(dp), allocatable :: c(:), b(:), d(:, :)   !< c(0:s), b(0:s), d(0:s, 0:s)
+    !> bern(k, i), k, i = 0..s: the Bernstein coefficients of the polynomial of degree s through
+    !> values Y_i at the nodes are sum_i bern(k, i) Y_i (issue 25: the poke screen bounds a gap along
+    !> the stage polynomial by the least of them, the convex hull property on [0, 1])
+    real(dp), allocatable :: bern(:, :)
   end type vci_lobatto_rule_t
 
   public :: lobatto_rule
@@ -30,7 +34,7 @@ contains
     integer :: i, j, it
     stat = 1
     if (s < 1 .or. s > VCI_LOBATTO_MAX_STAGES) return
-    allocate (rule%c(0:s), rule%b(0:s), rule%d(0:s, 0:s), stat=stat)
+    allocate (rule%c(0:s), rule%b(0:s), rule%d(0:s, 0:s), rule%bern(0:s, 0:s), stat=stat)
     if (stat /= 0) return
     rule%s = s
     ! nodes on [-1, 1], ascending: the ends and the roots of P_s'
@@ -71,8 +75,44 @@ contains
         rule%d(i, i) = rule%d(i, i) - rule%d(i, j)
       end do
     end do
+    call bernstein_from_nodes(s, rule%c, rule%bern)
     stat = 0
   end subroutine lobatto_rule
+
+  !> w = A^-1 with A(i, k) = binom(s, k) c_i^k (1 - c_i)^(s - k), the Bernstein basis at the nodes
+  !> (Gauss-Jordan with partial pivoting; A is well conditioned for s <= 8: the nodes spread over
+  !> [0, 1] and include both ends, where A is the identity's first and last rows).
+  pure subroutine bernstein_from_nodes(s, c, w)
+    integer, intent(in) :: s
+    real(dp), intent(in) :: c(0:s)
+    real(dp), intent(out) :: w(0:s, 0:s)
+    real(dp) :: a(0:s, 0:s), binom, row(0:s)
+    integer :: i, k, piv
+    do i = 0, s
+      binom = 1.0_dp
+      do k = 0, s
+        a(i, k) = binom * c(i)**k * (1.0_dp - c(i))**(s - k)
+        binom = binom * real(s - k, dp) / real(k + 1, dp)
+      end do
+    end do
+    w = 0.0_dp
+    do i = 0, s
+      w(i, i) = 1.0_dp
+    end do
+    do k = 0, s
+      piv = k - 1 + maxloc(abs(a(k:s, k)), dim=1)
+      if (piv /= k) then
+        row = a(k, :); a(k, :) = a(piv, :); a(piv, :) = row
+        row = w(k, :); w(k, :) = w(piv, :); w(piv, :) = row
+      end if
+      w(k, :) = w(k, :) / a(k, k); a(k, :) = a(k, :) / a(k, k)
+      do i = 0, s
+        if (i == k) cycle
+        w(i, :) = w(i, :) - a(i, k) * w(k, :)
+        a(i, :) = a(i, :) - a(i, k) * a(k, :)
+      end do
+    end do
+  end subroutine bernstein_from_nodes
 
   !> P_s(x), P_s'(x), P_s''(x) by the three-term recurrence (x inside (-1, 1) for the derivatives;
   !> at x = +-1 the closed values are used).

@@ -105,6 +105,11 @@ module vci_scheme
     !> (issue 27) the velocity at the end of a solved sub-step from the scheme's own polynomial
     procedure :: end_velocity
     procedure :: put_multiplier_history
+    !> (issue 25) the sub-step's stage polynomial, for the poke screen: its degree (0: none), its
+    !> interior stage points and the weights of its Bernstein coefficients
+    procedure :: path_degree
+    procedure :: path_point
+    procedure :: path_bernstein
     procedure :: forget_jacobian
     procedure :: fused_substep => no_fused_substep
     procedure :: substep_sensitivity => no_substep_sensitivity
@@ -961,4 +966,31 @@ contains
       call self%check(stat, values(:, j), what)
     end do
   end subroutine check_matrix
+
+  !> The degree of the polynomial in which a solved sub-step's stage points lie, its path from the
+  !> posed start (the point c = 0) to the new point (c = 1); 0: the scheme has no interior stages, so
+  !> nothing between the sub-step's ends is known without another solve (the default).
+  pure integer function path_degree(self)
+    class(vci_scheme_t), intent(in) :: self
+    path_degree = 0
+  end function path_degree
+
+  !> Stage point k (1 <= k < path_degree) of the sub-step solved in x: its position q and its node
+  !> c in [0, 1]. The default (no stages) returns the posed start at c = 0.
+  subroutine path_point(self, x, k, q, c)
+    class(vci_scheme_t), intent(in) :: self
+    real(dp), intent(in) :: x(:)
+    integer, intent(in) :: k
+    real(dp), intent(out) :: q(:), c
+    q = self%a; c = 0.0_dp
+  end subroutine path_point
+
+  !> w(k, i), k, i = 0..path_degree: the Bernstein coefficients of the path's polynomial through
+  !> values Y_i at its points i = 0 (start), 1 .. path_degree - 1 (path_point), path_degree (end)
+  !> are sum_i w(k, i) Y_i. The default (degree 0) has none.
+  subroutine path_bernstein(self, w)
+    class(vci_scheme_t), intent(in) :: self
+    real(dp), intent(out) :: w(0:, 0:)
+    w = 0.0_dp
+  end subroutine path_bernstein
 end module vci_scheme

@@ -78,6 +78,8 @@ module vci_scheme_lobatto
     procedure :: put_quadratic_start
     procedure :: end_velocity
     procedure :: put_multiplier_history
+    ! (issue 25) the stage polynomial for the poke screen
+    procedure :: path_degree, path_point, path_bernstein
     ! (issue 24) the polynomial start in checkpoints
     procedure :: start_memory => lobatto_start_memory
     procedure :: restore_start_memory => lobatto_restore_start
@@ -215,6 +217,30 @@ contains
     real(dp), intent(out) :: v(:)
     v = self%a + x((self%s - 1) * self%n + 1:self%s * self%n)
   end subroutine get_endpoint
+
+  !> The sub-step's positions are the polynomial of degree s through its stage points (issue 25).
+  pure integer function path_degree(self)
+    class(vci_scheme_lobatto_t), intent(in) :: self
+    path_degree = self%s
+  end function path_degree
+
+  !> Stage point k (1 <= k < s) of the sub-step solved in x, a + (y_k - a), at node c_k (from the
+  !> posed start a, as get_endpoint).
+  subroutine path_point(self, x, k, q, c)
+    class(vci_scheme_lobatto_t), intent(in) :: self
+    real(dp), intent(in) :: x(:)
+    integer, intent(in) :: k
+    real(dp), intent(out) :: q(:), c
+    q = self%a + x((k - 1) * self%n + 1:k * self%n)
+    c = self%rule%c(k)
+  end subroutine path_point
+
+  !> The rule's weights from node values to Bernstein coefficients (vci_lobatto_rule).
+  subroutine path_bernstein(self, w)
+    class(vci_scheme_lobatto_t), intent(in) :: self
+    real(dp), intent(out) :: w(0:, 0:)
+    w(0:self%s, 0:self%s) = self%rule%bern
+  end subroutine path_bernstein
 
   !> The endpoint's part of a change dx of the unknowns: the last increment's.
   subroutine endpoint_direction(self, x, v)
