@@ -5,7 +5,9 @@
 !> h = 0.01, from docs/RESULTS.md's chain start. Every step is timed on its own and classed as
 !> regular or impact step (medians; each step's class on stderr). Arguments: dense | banded |
 !> sparse (the pattern, dense Hessian callback) | sparsecb (the pattern and hessians_sparse alone),
-!> the number of steps, then the n to run. The last column is the peak resident memory (kB).
+!> the number of steps, then the n to run (and `digest`: after each row, a line with the final
+!> state's bits folded into one 64-bit word, which two builds whose arithmetic should agree compare).
+!> The last column is the peak resident memory (kB).
 !> Not a test: docs/bench/sparse.md gives the command (OpenBLAS on one thread).
 program bench_sparse_chain
   use, intrinsic :: iso_fortran_env, only: output_unit
@@ -22,14 +24,20 @@ program bench_sparse_chain
   real(dp), allocatable :: q0(:), p0(:), treg(:), timp(:)
   integer, allocatable :: ns(:)
   real(dp) :: pi
+  logical :: digest
   character(len=32) :: arg, mode
   real(dp), parameter :: h = 0.01_dp
   pi = acos(-1.0_dp)
   call get_command_argument(1, mode)
   call get_command_argument(2, arg); read (arg, *) nsteps
   allocate (ns(0))
+  digest = .false.
   do ia = 3, command_argument_count()
-    call get_command_argument(ia, arg); read (arg, *) k
+    call get_command_argument(ia, arg)
+    if (trim(arg) == 'digest') then
+      digest = .true.; cycle
+    end if
+    read (arg, *) k
     ns = [ns, k]
   end do
   do i = 1, size(ns)
@@ -79,11 +87,23 @@ program bench_sparse_chain
                         &" | ",i0," |")') &
       n, l, trim(mode), nsteps, nimp, st1%impacts, 1.0e6_dp * median(treg(1:nreg)), 1.0e6_dp * median(timp(1:nimp)), &
       sum(integ%configuration()**2), peak_kb()
+    if (digest) write (output_unit, '("digest n = ",i0,": ",z16.16,", impacts ",i0)') n, &
+      fold_bits([integ%configuration(), integ%momentum()]), st1%impacts
     deallocate (q0, p0, treg, timp)
     call model%declare_bandwidth(-1)
     call model%declare_pattern([integer ::], [integer ::])
   end do
 contains
+  !> The bits of x folded into one word (rotate and exclusive or): any changed bit changes it.
+  integer(i8) function fold_bits(x)
+    real(dp), intent(in) :: x(:)
+    integer :: j
+    fold_bits = 0_i8
+    do j = 1, size(x)
+      fold_bits = ieor(ishftc(fold_bits, 7), transfer(x(j), 0_i8))
+    end do
+  end function fold_bits
+
   !> The process's peak resident memory so far (VmHWM of /proc/self/status, kB; 0 if unreadable).
   integer function peak_kb()
     integer :: u, ios

@@ -382,7 +382,9 @@ int  vci_set_poke_samples(vci_integrator integ, int on);
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, q0 or q1 NULL, NaN/Inf in t0, q0 or q1, t0 + h
  *  overflows, a required constraint callback missing, VCI_SCHEME_COMPOSITION (it starts from a
  *  momentum: vci_init_from_momentum), or the debug check of a declared bandwidth (check != 0)
- *  found an entry outside the band; VCI_ERR_INADMISSIBLE: q0 or q1 outside the admissible set;
+ *  found an entry outside the band, or the check of a hessians_sparse callback (once, against
+ *  differences of the gradients) found a wrong value or a nonzero outside the declared pattern;
+ *  VCI_ERR_INADMISSIBLE: q0 or q1 outside the admissible set;
  *  VCI_ERR_CALLBACK or VCI_ERR_NONFINITE: a callback failed or gave NaN/Inf; VCI_ERR_NEWTON:
  *  lobatto's interior stages of the pair could not be solved; VCI_ERR_MEMORY: the probes of the
  *  model could not be allocated; VCI_ERR_STATE: busy, an open output file already holds steps
@@ -393,7 +395,8 @@ int  vci_init_from_pair(vci_integrator integ, double t0, const double *q0, const
 /** Start from (q0[n], p0[n]) at t0, step index 0 (no discrete energy until the first step).
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, q0 or p0 NULL, NaN/Inf in t0, q0 or p0, a
  *  required constraint callback missing, or the debug check of a declared bandwidth (check != 0)
- *  found an entry outside the band; VCI_ERR_INADMISSIBLE: q0 outside the admissible set;
+ *  found an entry outside the band, or the check of a hessians_sparse callback found a wrong value
+ *  or a nonzero outside the declared pattern; VCI_ERR_INADMISSIBLE: q0 outside the admissible set;
  *  VCI_ERR_CALLBACK: a callback failed or gave NaN/Inf at q0; VCI_ERR_NONFINITE: a Hessian of the
  *  bandwidth check gave NaN/Inf; VCI_ERR_MEMORY, VCI_ERR_STATE: as vci_init_from_pair. Nothing is
  *  solved (no VCI_ERR_NEWTON). After a failure the integrator has no state. */

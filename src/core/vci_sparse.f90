@@ -325,32 +325,27 @@ contains
     real(dp), intent(in) :: jac(ld, *), rw(*)
     integer, intent(out) :: info
     integer :: s, i, j, k, q
-    self%ready = .false.
-    info = -1
-    if (nb < 1 .or. nb > nx .or. pat%n /= nb) return
-    s = find_slot(self, nx, nb, pat)
+    s = claim_slot(self, nx, nb, pat, info)
     if (s == 0) return
-    associate (sl => self%slot(s))
+    associate (ax => self%slot(s)%ax)
       q = 0
       do j = 1, nx
         if (j <= nb) then
           do k = pat%colptr(j), pat%colptr(j + 1) - 1
             i = pat%rowind(k)
-            q = q + 1; sl%ax(q) = rw(i) * jac(i, j)
+            q = q + 1; ax(q) = rw(i) * jac(i, j)
           end do
           do i = nb + 1, nx
-            q = q + 1; sl%ax(q) = rw(i) * jac(i, j)
+            q = q + 1; ax(q) = rw(i) * jac(i, j)
           end do
         else
           do i = 1, nx
-            q = q + 1; sl%ax(q) = rw(i) * jac(i, j)
+            q = q + 1; ax(q) = rw(i) * jac(i, j)
           end do
         end if
       end do
-      info = vci_klu_factor(sl%handle, sl%ap, sl%ai, sl%ax)
     end associate
-    self%last = s
-    self%ready = info == 0
+    call factor_slot(self, s, info)
   end subroutine factor
 
   !> factor from the matrix's parts, as vci_sparse_matrix keeps them (no dense copy): the block's
@@ -363,32 +358,52 @@ contains
     real(dp), intent(in) :: val(:), rows(:, :), cols(:, :), rw(*)
     integer, intent(out) :: info
     integer :: s, i, j, k, q
-    self%ready = .false.
-    info = -1
-    if (nb < 1 .or. nb > nx .or. pat%n /= nb) return
-    s = find_slot(self, nx, nb, pat)
+    s = claim_slot(self, nx, nb, pat, info)
     if (s == 0) return
-    associate (sl => self%slot(s))
+    associate (ax => self%slot(s)%ax)
       q = 0
       do j = 1, nx
         if (j <= nb) then
           do k = pat%colptr(j), pat%colptr(j + 1) - 1
-            q = q + 1; sl%ax(q) = rw(pat%rowind(k)) * val(k)
+            q = q + 1; ax(q) = rw(pat%rowind(k)) * val(k)
           end do
           do i = nb + 1, nx
-            q = q + 1; sl%ax(q) = rw(i) * rows(i - nb, j)
+            q = q + 1; ax(q) = rw(i) * rows(i - nb, j)
           end do
         else
           do i = 1, nx
-            q = q + 1; sl%ax(q) = rw(i) * cols(i, j - nb)
+            q = q + 1; ax(q) = rw(i) * cols(i, j - nb)
           end do
         end if
       end do
-      info = vci_klu_factor(sl%handle, sl%ap, sl%ai, sl%ax)
     end associate
+    call factor_slot(self, s, info)
+  end subroutine factor_parts
+
+  !> What factor and factor_parts do before gathering the values (where the values come from is
+  !> all that differs between them): no factors until new ones succeed, the sizes checked, the slot
+  !> analysed for (nx, nb, pat). 0 with info = -1: wrong sizes, no KLU or no memory.
+  integer function claim_slot(self, nx, nb, pat, info) result(s)
+    type(vci_sparse_lu_t), intent(inout) :: self
+    integer, intent(in) :: nx, nb
+    type(vci_sparse_pattern_t), intent(in) :: pat
+    integer, intent(out) :: info
+    self%ready = .false.
+    info = -1
+    s = 0
+    if (nb < 1 .or. nb > nx .or. pat%n /= nb) return
+    s = find_slot(self, nx, nb, pat)
+  end function claim_slot
+
+  !> KLU on slot s's gathered values; its factors become the last ones (ready when info = 0).
+  subroutine factor_slot(self, s, info)
+    type(vci_sparse_lu_t), intent(inout) :: self
+    integer, intent(in) :: s
+    integer, intent(out) :: info
+    info = vci_klu_factor(self%slot(s)%handle, self%slot(s)%ap, self%slot(s)%ai, self%slot(s)%ax)
     self%last = s
     self%ready = info == 0
-  end subroutine factor_parts
+  end subroutine factor_slot
 
   !> b(1:nx) := matrix^{-1} b with the last factors (b unchanged when there are none).
   subroutine solve(self, b)

@@ -515,8 +515,9 @@ contains
 #endif
   end subroutine f_close
 
-  !> The totals and `complete` written into the open file (one process), flushed and closed; on a
-  !> failure the file is abandoned (its descriptor discarded) and closed all the same.
+  !> The totals and then `complete` written into the open file (one process), each flushed, and the
+  !> file closed; on a failure the file is abandoned (its descriptor discarded) and closed all the
+  !> same, and `complete` stays 0 on disk.
   subroutine write_totals(self, members_run, members_failed, stat)
     type(vci_ensemble_file_t), intent(inout) :: self
     integer, intent(in) :: members_run, members_failed
@@ -524,15 +525,27 @@ contains
     integer :: i, err
     call h5io_put_attr(self%file, 'members_run', members_run, stat, self%message, who(self))
     call h5io_put_attr(self%file, 'members_failed', members_failed, stat, self%message, who(self))
-    call h5io_put_attr(self%file, 'complete', merge(1, 0, members_run == self%n_members), stat, self%message, who(self))
     ! flushed before closing: a full disk here must not leave HDF5 a metadata flush it cannot finish
     if (stat == VCI_OK) then
       call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
       if (err /= 0) call fail(self, 'cannot record the totals'//os_cause(), stat)
     end if
+    ! `complete` last and alone, once everything else is on disk: a flush that fails part-way may
+    ! have written some of its blocks, so the totals' flush must not carry it
+    call h5io_put_attr(self%file, 'complete', merge(1, 0, members_run == self%n_members), stat, self%message, who(self))
+    if (stat == VCI_OK) then
+      call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
+      if (err /= 0) call fail(self, 'cannot mark the file complete'//os_cause(), stat)
+    end if
     if (stat /= VCI_OK) then
       call f_abandon(self); return
     end if
+    ! Everything is on disk. The close would still rewrite the superblock (HDF5 gives back the
+    ! unused end of its metadata block): that goes to the sink, so that a full disk cannot fail
+    ! the close after `complete` = 1 reached the disk (a status contradicting the file), nor leave
+    ! HDF5 a half-closed file that crashed the process at exit (the on-disk superblock keeps the
+    ! end of allocation flushed above, which the file's size covers)
+    call discard(self)
     do i = 1, N_DSETS
       if (self%d(i) >= 0) call h5dclose_f(self%d(i), err)
       self%d(i) = -1

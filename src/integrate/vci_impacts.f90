@@ -824,14 +824,15 @@ contains
   end subroutine stage_wall
 
   !> Does the motion from (a, pa) depart into wall j? Sign of grad g_j . (b_eps - a) for the end
-  !> b_eps of a regular sub-step of length 1e-3 tau. Leaves x as it found it.
+  !> b_eps of a regular sub-step of length 1e-3 tau. Leaves x, and the sub-step posed, as it found
+  !> them.
   logical function departs_into(self, j, tau, stat)
     type(vci_stepper_t), intent(inout) :: self
     integer, intent(in) :: j
     real(dp), intent(in) :: tau
     integer, intent(out) :: stat
     real(dp), parameter :: eps_frac = 1.0e-3_dp
-    integer :: nx
+    integer :: nx, st
     nx = self%nsub
     self%x_saved(1:nx) = self%x(1:nx)
     self%q_guess = self%q_start + eps_frac * (self%q_end - self%q_start)
@@ -840,6 +841,13 @@ contains
     call self%sys%get_endpoint(self%x, self%q_trial)
     departs_into = stat == VCI_OK .and. dot_product(self%grad_cache(:, self%grad_slot(j)), self%q_trial - self%q_start) < 0.0_dp
     self%x(1:nx) = self%x_saved(1:nx)
+    ! the caller's sub-step posed again, as samples_are_path does: the same start, but a posed length
+    ! of 1e-3 tau would be read by anything asking for the sub-step's own length (a Lobatto
+    ! momentum_out compares it with its tau)
+    call self%sys%pose_substep(self%q_start, self%p_start, tau, st)
+    if (st /= VCI_OK .and. stat == VCI_OK) then
+      stat = st; departs_into = .false.; call set_cause(self, 'constraint forms')
+    end if
   end function departs_into
 
   !> Bracket the first crossing of wall j on s in [0, 1] (s = 1 is the end of the sub-step, known to

@@ -16,6 +16,7 @@ module vci_integrator
   use vci_model_base, only: vci_model_base_t
   use vci_model, only: vci_model_t
   use vci_lagrangian, only: vci_lagrangian_t, lagrangian_check_band
+  use vci_sparse_hessian_check, only: lagrangian_check_sparse
   use vci_limits, only: vci_size_problem
   use vci_sparse, only: sparse_available
   use vci_settings, only: vci_settings_t, vci_solver_stats_t, vci_default_max_impacts
@@ -765,6 +766,14 @@ contains
     if (associated(self%lag) .and. self%model%check_bandwidth) then
       ! the debug check of a declared band: hessians_band against the dense blocks (vci_lagrangian)
       call lagrangian_check_band(self%lag, q0, v0, self%last_message, s)
+      if (s /= VCI_OK) then
+        self%last_message = who//': '//trim(self%last_message)
+        call finish(self, s, stat); return
+      end if
+    end if
+    if (associated(self%lag)) then
+      ! a model's hessians_sparse against differences of its gradients, once (vci_sparse_hessian_check)
+      call lagrangian_check_sparse(self%lag, q0, v0, self%last_message, s)
       if (s /= VCI_OK) then
         self%last_message = who//': '//trim(self%last_message)
         call finish(self, s, stat); return

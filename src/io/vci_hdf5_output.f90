@@ -272,9 +272,19 @@ contains
   end subroutine w_failure_cause
 
   !> Close the file without a run end (e.g. when a run could not start). Safe to call twice.
+  !> What HDF5 holds is flushed first; then the descriptor goes to the sink, so that the close
+  !> itself writes nothing to the disk (it rewrites the superblock when HDF5 gives back the unused
+  !> end of its metadata block): a full disk there failed the close after the file's last flush,
+  !> and HDF5's own close of the half-closed file at exit crashed the process (SIGSEGV).
   subroutine w_close(self)
     class(vci_hdf5_writer_t), intent(inout) :: self
     integer :: err
+    if (self%is_open) then
+      if (.not. self%discarded) call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
+      call h5io_discard_writes(self%file)
+      self%discarded = .true.
+      call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)   ! (a flush that failed half-way, completed into the sink)
+    end if
     call h5io_close_dset(self%d_t); call h5io_close_dset(self%d_q); call h5io_close_dset(self%d_p)
     call h5io_close_dset(self%d_e); call h5io_close_dset(self%d_l); call h5io_close_dset(self%d_k)
     call h5io_close_dset(self%d_it); call h5io_close_dset(self%d_is); call h5io_close_dset(self%d_ia)
@@ -846,7 +856,7 @@ contains
     integer, intent(in) :: status
     character(len=*), intent(in) :: message
     integer, intent(inout) :: stat
-    integer :: s
+    integer :: s, err
     if (.not. self%started) then
       call w_close(self); return
     end if
@@ -860,13 +870,23 @@ contains
       call buffer_step(self, self%lt, self%lq, self%lp, self%ll, self%le)
       self%last_stored = .true.
     end if
+    call flush_file(self, s)
+    ! the run's status after everything it vouches for is on disk, in a flush of its own: a full
+    ! disk part-way leaves the status `running` (as a killed run), never a status beside missing steps
     call h5io_put_attr(self%file, 'status', status, s, self%message, self%path)
     if (status == VCI_OK .and. len_trim(message) == 0) then
       call h5io_put_attr(self%file, 'status_message', 'ok', s, self%message, self%path)
     else
       call h5io_put_attr(self%file, 'status_message', trim(message), s, self%message, self%path)
     end if
-    call flush_file(self, s)
+    if (s == VCI_OK) then
+      call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
+      if (err /= 0) then
+        call fail(self, 'H5Fflush failed: '//trim(h5io_os_cause()), s)
+        call h5io_discard_writes(self%file)
+        self%discarded = .true.
+      end if
+    end if
     call w_close(self)
     if (s /= VCI_OK) stat = VCI_ERR_IO
   end subroutine w_finish
@@ -908,7 +928,10 @@ contains
     end if
     call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
     if (err /= 0) then
-      call fail(self, 'H5Fflush failed: '//trim(h5io_os_cause()), stat); return
+      call fail(self, 'H5Fflush failed: '//trim(h5io_os_cause()), stat)
+      call h5io_discard_writes(self%file)   ! the disk keeps the last complete flush
+      self%discarded = .true.
+      return
     end if
     self%rows = self%rows + self%ns; self%steps = self%steps + self%ne; self%impacts = self%impacts + self%ni
     self%ns = 0; self%ne = 0; self%ni = 0
@@ -923,7 +946,11 @@ contains
     call h5io_put_attr(self%file, 'steps_completed', self%steps, stat, self%message, self%path)
     if (stat /= VCI_OK) return
     call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
-    if (err /= 0) call fail(self, 'H5Fflush failed: '//trim(h5io_os_cause()), stat)
+    if (err /= 0) then
+      call fail(self, 'H5Fflush failed: '//trim(h5io_os_cause()), stat)
+      call h5io_discard_writes(self%file)
+      self%discarded = .true.
+    end if
   end subroutine flush_file
 
   !> /checkpoint/record: the file's last row followed by the checkpoint's record (vci_checkpoint:
