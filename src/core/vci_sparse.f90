@@ -427,6 +427,9 @@ contains
     do s = 1, max_slots
       if (self%slot(s)%nx == nx .and. self%slot(s)%nb == nb .and. self%slot(s)%nnz_block == nnz .and. &
           c_associated(self%slot(s)%handle)) then
+        ! the sizes alone do not name the analysis: another pattern of as many entries gathers its
+        ! values in another order (O(nnz) integer compares, next to a numeric factorisation)
+        if (.not. same_block(self%slot(s), nb, pat)) cycle
         self%slot(s)%used = self%clock; return
       end if
     end do
@@ -468,6 +471,24 @@ contains
       sl%nx = nx; sl%nb = nb; sl%nnz_block = nnz; sl%used = self%clock
     end associate
   end function find_slot
+
+  !> Was slot sl analysed for pat's block (its nb columns' rows, in order)?
+  logical function same_block(sl, nb, pat)
+    type(klu_slot_t), intent(in) :: sl
+    integer, intent(in) :: nb
+    type(vci_sparse_pattern_t), intent(in) :: pat
+    integer :: j, k, q
+    same_block = .false.
+    do j = 1, nb
+      q = sl%ap(j)
+      if (sl%ap(j + 1) - q /= pat%colptr(j + 1) - pat%colptr(j) + (sl%nx - nb)) return
+      do k = pat%colptr(j), pat%colptr(j + 1) - 1
+        q = q + 1
+        if (sl%ai(q) /= pat%rowind(k) - 1) return
+      end do
+    end do
+    same_block = .true.
+  end function same_block
 
   !> Free one slot's analysis, factors and arrays.
   subroutine free_slot(sl)
