@@ -66,6 +66,8 @@ module vci_newton
     procedure :: admissible => always_admissible
     !> A nonzero key names a family of systems whose Jacobians may share LU factors (default 0: none).
     procedure :: reuse_key => never_reuse
+    !> Chord steps on the kept factors of another key of the family: their scale (default 0: none).
+    procedure :: chord_ratio => no_chord_ratio
     !> The Jacobian's structure: a banded leading block and a dense border (default: dense).
     procedure :: structure => no_structure
     !> A declared sparse pattern of the leading block instead (default: none; vci_sparse).
@@ -196,6 +198,9 @@ module vci_newton
     logical, private :: block_stale = .true.       !< refactorise the bordered block at the next direction
     integer, private :: nbord = 0                  !< the posed system's border (0 or 1)
     logical, private :: block_reused = .false.     !< the last bordered direction used an earlier block
+    !> Chord directions on the kept factors are scaled by this: 1 for the key they were made for,
+    !> sys%chord_ratio for another key of the family (issue 28: sub-steps of other lengths)
+    real(dp), private :: lu_ratio = 1.0_dp
   contains
     !> Allocate workspace for systems of up to nmax unknowns (call once, outside the step loop).
     procedure :: reserve
@@ -223,6 +228,14 @@ contains
     class(vci_system_t), intent(inout) :: self
     never_reuse = 0.0_dp
   end function never_reuse
+
+  !> The factor by which a chord direction from factors kept for key old_key is scaled to serve
+  !> this system (whose reuse_key differs); 0: those factors are not used. Default: never.
+  real(dp) function no_chord_ratio(self, old_key)
+    class(vci_system_t), intent(inout) :: self
+    real(dp), intent(in) :: old_key
+    no_chord_ratio = 0.0_dp
+  end function no_chord_ratio
 
   !> The Jacobian's structure: unknowns 1..nb form a block whose entries vanish outside |i - j| <= bw,
   !> the others a dense border; check: verify the band on every matrix. nb = 0 or bw < 0: dense.
@@ -425,7 +438,7 @@ contains
     real(dp), intent(inout) :: x(:)
     type(vci_newton_result_t), intent(out) :: res
     integer :: n, stat, it, ib, trial_stat, i
-    real(dp) :: phi, phit, step, key
+    real(dp) :: phi, phit, step, key, ratio
     logical :: factored
 
     n = size(x)
@@ -459,13 +472,21 @@ contains
     ! Simplified Newton: chord steps on the factors of an earlier solve of the same family, kept
     ! while each contracts the scaled residual by reuse_contraction or better; if they stop above
     ! the tolerance, full Newton (a new Jacobian and factors) takes over from there
-    if (key /= 0.0_dp .and. self%have_lu .and. self%lu_n == n .and. key == self%lu_key) then
+    ! (factors of another key of the family serve with their directions scaled: sys%chord_ratio)
+    ratio = 0.0_dp
+    if (key /= 0.0_dp .and. self%have_lu .and. self%lu_n == n) then
+      ratio = 1.0_dp
+      if (key /= self%lu_key) ratio = sys%chord_ratio(self%lu_key)
+    end if
+    self%lu_ratio = 1.0_dp
+    if (ratio > 0.0_dp) then
+      self%lu_ratio = ratio
       factored = .true.
       do it = 1, self%max_iterations
         ! cheap steps: go on below the tolerance, to about round-off (chord steps converge linearly)
         if (phi <= 1.0e-3_dp) exit
         do i = 1, n
-          self%dx(i) = self%r(i) * self%rw(i)
+          self%dx(i) = self%lu_ratio * (self%r(i) * self%rw(i))
         end do
         call lu_solve(self, n, self%dx)
         self%xt(1:n) = x - self%dx(1:n)
@@ -521,6 +542,7 @@ contains
         res%status = VCI_ERR_NONFINITE; return
       end if
       self%have_lu = factored .and. key /= 0.0_dp
+      self%lu_ratio = 1.0_dp
       self%lu_n = n; self%lu_key = key
       if (res%reason == NEWTON_SINGULAR) then
         res%status = VCI_ERR_NEWTON; return
@@ -1167,7 +1189,7 @@ contains
     real(dp) :: phit
     taken = .false.
     do i = 1, n
-      self%dx(i) = self%r(i) * self%rw(i)
+      self%dx(i) = self%lu_ratio * (self%r(i) * self%rw(i))
     end do
     if (.not. all_finite(self%dx(1:n))) return
     call lu_solve(self, n, self%dx)
@@ -1194,7 +1216,7 @@ contains
     integer :: i, stat
     real(dp) :: phit
     do i = 1, n
-      self%dx(i) = self%r(i) * self%rw(i)
+      self%dx(i) = self%lu_ratio * (self%r(i) * self%rw(i))
     end do
     if (.not. all_finite(self%dx(1:n))) return
     call lu_solve(self, n, self%dx)
