@@ -68,6 +68,8 @@ module vci_newton
     procedure :: reuse_key => never_reuse
     !> Chord steps on the kept factors of another key of the family: their scale (default 0: none).
     procedure :: chord_ratio => no_chord_ratio
+    !> The family key of a bordered system's block at its solution x (default 0: not kept).
+    procedure :: block_key => no_block_key
     !> The Jacobian's structure: a banded leading block and a dense border (default: dense).
     procedure :: structure => no_structure
     !> A declared sparse pattern of the leading block instead (default: none; vci_sparse).
@@ -236,6 +238,15 @@ contains
     real(dp), intent(in) :: old_key
     no_chord_ratio = 0.0_dp
   end function no_chord_ratio
+
+  !> A bordered system's block is the Newton matrix of another system (an impact stage's block is a
+  !> sub-step's): the reuse_key of that family at the solution x, under which the block's factors
+  !> are kept for it; 0: they are not. Default: never.
+  real(dp) function no_block_key(self, x)
+    class(vci_system_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:)
+    no_block_key = 0.0_dp
+  end function no_block_key
 
   !> The Jacobian's structure: unknowns 1..nb form a block whose entries vanish outside |i - j| <= bw,
   !> the others a dense border; check: verify the band on every matrix. nb = 0 or bw < 0: dense.
@@ -431,8 +442,32 @@ contains
   end subroutine release
 
   !> Solve sys%residual(x) = 0 for x(1:n), starting from the given x. On failure x holds the best
-  !> iterate found and res says why.
+  !> iterate found and res says why. A small system (fewer than reuse_min unknowns, no structure)
+  !> is factorised densely apart from a large system's kept band or sparse factors, which stay kept
+  !> across it (issue 28: an impact's impulse, solved between the sub-steps of its stage 2).
   subroutine solve(self, sys, x, res)
+    class(vci_newton_t), intent(inout) :: self
+    class(vci_system_t), intent(inout) :: sys
+    real(dp), intent(inout) :: x(:)
+    type(vci_newton_result_t), intent(out) :: res
+    integer :: n, kind0, n0
+    real(dp) :: key0, rw0(size(x))
+    logical :: keep
+    n = size(x)
+    keep = n < self%reuse_min .and. self%have_lu .and. (self%fkind == FACTORS_BAND .or. self%fkind == FACTORS_SPARSE)
+    if (keep) then
+      kind0 = self%fkind; n0 = self%lu_n; key0 = self%lu_key; rw0 = self%rw(1:n)
+    end if
+    call solve_system(self, sys, x, res)
+    ! (kept only where the small solve used no structured storage: dense whole-matrix factors)
+    if (keep .and. self%snb == 0 .and. self%ssp == 0 .and. self%nbord == 0 .and. &
+        (self%fkind == FACTORS_WHOLE .or. self%fkind == kind0)) then
+      self%fkind = kind0; self%lu_n = n0; self%lu_key = key0; self%rw(1:n) = rw0
+      self%have_lu = .true.; self%lu_ratio = 1.0_dp
+    end if
+  end subroutine solve
+
+  subroutine solve_system(self, sys, x, res)
     class(vci_newton_t), intent(inout) :: self
     class(vci_system_t), intent(inout) :: sys
     real(dp), intent(inout) :: x(:)
@@ -595,7 +630,25 @@ contains
     end if
     if (self%polish .and. factored .and. phi > 0.0_dp .and. phi * self%rtol > self%polish_above * epsilon(1.0_dp)) &
       call polish_step(self, sys, x, n, phi, res)
-  end subroutine solve
+    if (factored .and. self%fkind == FACTORS_BORDERED) call keep_block(self, sys, x, n)
+  end subroutine solve_system
+
+  !> After a bordered solve: its block's factors (of the last direction) become the kept factors of
+  !> the family sys%block_key(x) names, with the block's row weights (issue 28: stage 1's block is
+  !> the sub-step matrix of length alpha tau, stage 2's that of the leaving sub-step; the sub-steps
+  !> of stage 2 and the poke screen then start with chord steps on it, see chord_ratio).
+  subroutine keep_block(self, sys, x, n)
+    type(vci_newton_t), intent(inout) :: self
+    class(vci_system_t), intent(inout) :: sys
+    real(dp), intent(in) :: x(:)
+    integer, intent(in) :: n
+    real(dp) :: bkey
+    bkey = sys%block_key(x(1:n))
+    if (bkey == 0.0_dp .or. n - 1 < self%reuse_min .or. self%block_ni /= n - 1) return
+    self%fkind = self%bkind
+    self%rw(1:n - 1) = self%brw(1:n - 1)
+    self%have_lu = .true.; self%lu_n = n - 1; self%lu_key = bkey; self%lu_ratio = 1.0_dp
+  end subroutine keep_block
 
   !> After a solve of n unknowns that failed on convergence (not on an evaluation): the row with
   !> the largest scaled residual at the iterate left in x (the message names its equation).

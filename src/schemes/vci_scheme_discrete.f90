@@ -85,6 +85,7 @@ module vci_scheme_discrete
     procedure :: impact_momentum
     procedure :: forget_jacobian
     procedure :: chord_ratio => substep_chord_ratio
+    procedure :: block_key => stage_block_key
     procedure :: fused_substep
     procedure :: substep_sensitivity
     procedure :: use_derivatives
@@ -1189,6 +1190,18 @@ contains
     key = self%reuse_key()
     if (key / old_key > 0.0_dp) substep_chord_ratio = key / old_key
   end function substep_chord_ratio
+
+  !> An impact stage's block (the unknowns before alpha or mu) is the Newton matrix of a regular
+  !> sub-step: of length alpha tau for stage 1 (alpha at the solution x), tau (the rest of the
+  !> sub-step) for stage 2; its key as substep_key names it. 0 with multipliers (as chord_ratio).
+  real(dp) function stage_block_key(self, x)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:)
+    stage_block_key = 0.0_dp
+    if (self%m > 0) return
+    if (self%kind == KIND_STAGE1) stage_block_key = real(self%dir, dp) * x(size(x)) * self%tau
+    if (self%kind == KIND_STAGE2) stage_block_key = real(self%dir, dp) * self%tau
+  end function stage_block_key
 
   !> A new solve starts: its Jacobian is not known yet (see jabs).
   subroutine forget_jacobian(self)
