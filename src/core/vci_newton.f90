@@ -443,26 +443,33 @@ contains
 
   !> Solve sys%residual(x) = 0 for x(1:n), starting from the given x. On failure x holds the best
   !> iterate found and res says why. A small system (fewer than reuse_min unknowns, no structure)
-  !> is factorised densely apart from a large system's kept band or sparse factors, which stay kept
-  !> across it (issue 28: an impact's impulse, solved between the sub-steps of its stage 2).
+  !> leaves a large system's kept factors kept (issue 28: an impact's impulse, solved between the
+  !> sub-steps of its stage 2): it factorises in the dense lu, apart from band, sparse or block
+  !> factors, and the leading n x n of kept dense factors is put back after it.
   subroutine solve(self, sys, x, res)
     class(vci_newton_t), intent(inout) :: self
     class(vci_system_t), intent(inout) :: sys
     real(dp), intent(inout) :: x(:)
     type(vci_newton_result_t), intent(out) :: res
-    integer :: n, kind0, n0
-    real(dp) :: key0, rw0(size(x))
+    integer :: n, kind0, n0, ipiv0(size(x))
+    real(dp) :: key0, rw0(size(x)), lu0(size(x), size(x))
     logical :: keep
     n = size(x)
-    keep = n < self%reuse_min .and. self%have_lu .and. (self%fkind == FACTORS_BAND .or. self%fkind == FACTORS_SPARSE)
+    keep = n < self%reuse_min .and. self%have_lu .and. self%lu_n > n
     if (keep) then
       kind0 = self%fkind; n0 = self%lu_n; key0 = self%lu_key; rw0 = self%rw(1:n)
+      if (kind0 == FACTORS_WHOLE) then
+        lu0 = self%lu(1:n, 1:n); ipiv0 = self%ipiv(1:n)
+      end if
     end if
     call solve_system(self, sys, x, res)
-    ! (kept only where the small solve used no structured storage: dense whole-matrix factors)
+    ! (only where the small solve used no structured or bordered storage)
     if (keep .and. self%snb == 0 .and. self%ssp == 0 .and. self%nbord == 0 .and. &
         (self%fkind == FACTORS_WHOLE .or. self%fkind == kind0)) then
       self%fkind = kind0; self%lu_n = n0; self%lu_key = key0; self%rw(1:n) = rw0
+      if (kind0 == FACTORS_WHOLE) then
+        self%lu(1:n, 1:n) = lu0; self%ipiv(1:n) = ipiv0
+      end if
       self%have_lu = .true.; self%lu_ratio = 1.0_dp
     end if
   end subroutine solve
