@@ -651,6 +651,9 @@ contains
     integer, intent(in) :: n
     real(dp) :: bkey
     bkey = sys%block_key(x(1:n))
+    ! (band and sparse blocks only: a dense block's factors would be kept in no checkpoint, and a
+    ! dense run's restart is bit for bit with the factors it keeps, docs/DESIGN.md)
+    if (self%bkind /= FACTORS_BAND .and. self%bkind /= FACTORS_SPARSE) return
     if (bkey == 0.0_dp .or. n - 1 < self%reuse_min .or. self%block_ni /= n - 1) return
     self%fkind = self%bkind
     self%rw(1:n - 1) = self%brw(1:n - 1)
