@@ -451,24 +451,25 @@ contains
     class(vci_system_t), intent(inout) :: sys
     real(dp), intent(inout) :: x(:)
     type(vci_newton_result_t), intent(out) :: res
-    integer :: n, kind0, n0, ipiv0(size(x))
-    real(dp) :: key0, rw0(size(x)), lu0(size(x), size(x))
+    ! (fixed-size copies: an automatic array would be a heap allocation in every solve)
+    integer :: n, kind0, n0, ipiv0(vci_large_system)
+    real(dp) :: key0, rw0(vci_large_system), lu0(vci_large_system, vci_large_system)
     logical :: keep
     n = size(x)
-    keep = n < self%reuse_min .and. self%have_lu .and. self%lu_n > n
+    keep = n < self%reuse_min .and. n <= vci_large_system .and. self%have_lu .and. self%lu_n > n
     if (keep) then
-      kind0 = self%fkind; n0 = self%lu_n; key0 = self%lu_key; rw0 = self%rw(1:n)
+      kind0 = self%fkind; n0 = self%lu_n; key0 = self%lu_key; rw0(1:n) = self%rw(1:n)
       if (kind0 == FACTORS_WHOLE) then
-        lu0 = self%lu(1:n, 1:n); ipiv0 = self%ipiv(1:n)
+        lu0(1:n, 1:n) = self%lu(1:n, 1:n); ipiv0(1:n) = self%ipiv(1:n)
       end if
     end if
     call solve_system(self, sys, x, res)
     ! (only where the small solve used no structured or bordered storage)
     if (keep .and. self%snb == 0 .and. self%ssp == 0 .and. self%nbord == 0 .and. &
         (self%fkind == FACTORS_WHOLE .or. self%fkind == kind0)) then
-      self%fkind = kind0; self%lu_n = n0; self%lu_key = key0; self%rw(1:n) = rw0
+      self%fkind = kind0; self%lu_n = n0; self%lu_key = key0; self%rw(1:n) = rw0(1:n)
       if (kind0 == FACTORS_WHOLE) then
-        self%lu(1:n, 1:n) = lu0; self%ipiv(1:n) = ipiv0
+        self%lu(1:n, 1:n) = lu0(1:n, 1:n); self%ipiv(1:n) = ipiv0(1:n)
       end if
       self%have_lu = .true.; self%lu_ratio = 1.0_dp
     end if
