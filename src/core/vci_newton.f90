@@ -66,6 +66,10 @@ module vci_newton
     procedure :: admissible => always_admissible
     !> A nonzero key names a family of systems whose Jacobians may share LU factors (default 0: none).
     procedure :: reuse_key => never_reuse
+    !> Chord steps on the kept factors of another key of the family: their scale (default 0: none).
+    procedure :: chord_ratio => no_chord_ratio
+    !> The family key of a bordered system's block at its solution x (default 0: not kept).
+    procedure :: block_key => no_block_key
     !> The Jacobian's structure: a banded leading block and a dense border (default: dense).
     procedure :: structure => no_structure
     !> A declared sparse pattern of the leading block instead (default: none; vci_sparse).
@@ -196,6 +200,9 @@ module vci_newton
     logical, private :: block_stale = .true.       !< refactorise the bordered block at the next direction
     integer, private :: nbord = 0                  !< the posed system's border (0 or 1)
     logical, private :: block_reused = .false.     !< the last bordered direction used an earlier block
+    !> Chord directions on the kept factors are scaled by this: 1 for the key they were made for,
+    !> sys%chord_ratio for another key of the family (issue 28: sub-steps of other lengths)
+    real(dp), private :: lu_ratio = 1.0_dp
   contains
     !> Allocate workspace for systems of up to nmax unknowns (call once, outside the step loop).
     procedure :: reserve
@@ -223,6 +230,23 @@ contains
     class(vci_system_t), intent(inout) :: self
     never_reuse = 0.0_dp
   end function never_reuse
+
+  !> The factor by which a chord direction from factors kept for key old_key is scaled to serve
+  !> this system (whose reuse_key differs); 0: those factors are not used. Default: never.
+  real(dp) function no_chord_ratio(self, old_key)
+    class(vci_system_t), intent(inout) :: self
+    real(dp), intent(in) :: old_key
+    no_chord_ratio = 0.0_dp
+  end function no_chord_ratio
+
+  !> A bordered system's block is the Newton matrix of another system (an impact stage's block is a
+  !> sub-step's): the reuse_key of that family at the solution x, under which the block's factors
+  !> are kept for it; 0: they are not. Default: never.
+  real(dp) function no_block_key(self, x)
+    class(vci_system_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:)
+    no_block_key = 0.0_dp
+  end function no_block_key
 
   !> The Jacobian's structure: unknowns 1..nb form a block whose entries vanish outside |i - j| <= bw,
   !> the others a dense border; check: verify the band on every matrix. nb = 0 or bw < 0: dense.
@@ -418,14 +442,46 @@ contains
   end subroutine release
 
   !> Solve sys%residual(x) = 0 for x(1:n), starting from the given x. On failure x holds the best
-  !> iterate found and res says why.
+  !> iterate found and res says why. A small system (fewer than reuse_min unknowns, no structure)
+  !> leaves a large system's kept factors kept (issue 28: an impact's impulse, solved between the
+  !> sub-steps of its stage 2): it factorises in the dense lu, apart from band, sparse or block
+  !> factors, and the leading n x n of kept dense factors is put back after it.
   subroutine solve(self, sys, x, res)
     class(vci_newton_t), intent(inout) :: self
     class(vci_system_t), intent(inout) :: sys
     real(dp), intent(inout) :: x(:)
     type(vci_newton_result_t), intent(out) :: res
+    ! (fixed-size copies: an automatic array would be a heap allocation in every solve)
+    integer :: n, kind0, n0, ipiv0(vci_large_system)
+    real(dp) :: key0, rw0(vci_large_system), lu0(vci_large_system, vci_large_system)
+    logical :: keep
+    n = size(x)
+    keep = n < self%reuse_min .and. n <= vci_large_system .and. self%have_lu .and. self%lu_n > n
+    if (keep) then
+      kind0 = self%fkind; n0 = self%lu_n; key0 = self%lu_key; rw0(1:n) = self%rw(1:n)
+      if (kind0 == FACTORS_WHOLE) then
+        lu0(1:n, 1:n) = self%lu(1:n, 1:n); ipiv0(1:n) = self%ipiv(1:n)
+      end if
+    end if
+    call solve_system(self, sys, x, res)
+    ! (only where the small solve used no structured or bordered storage)
+    if (keep .and. self%snb == 0 .and. self%ssp == 0 .and. self%nbord == 0 .and. &
+        (self%fkind == FACTORS_WHOLE .or. self%fkind == kind0)) then
+      self%fkind = kind0; self%lu_n = n0; self%lu_key = key0; self%rw(1:n) = rw0(1:n)
+      if (kind0 == FACTORS_WHOLE) then
+        self%lu(1:n, 1:n) = lu0(1:n, 1:n); self%ipiv(1:n) = ipiv0(1:n)
+      end if
+      self%have_lu = .true.; self%lu_ratio = 1.0_dp
+    end if
+  end subroutine solve
+
+  subroutine solve_system(self, sys, x, res)
+    class(vci_newton_t), intent(inout) :: self
+    class(vci_system_t), intent(inout) :: sys
+    real(dp), intent(inout) :: x(:)
+    type(vci_newton_result_t), intent(out) :: res
     integer :: n, stat, it, ib, trial_stat, i
-    real(dp) :: phi, phit, step, key
+    real(dp) :: phi, phit, step, key, ratio
     logical :: factored
 
     n = size(x)
@@ -459,13 +515,21 @@ contains
     ! Simplified Newton: chord steps on the factors of an earlier solve of the same family, kept
     ! while each contracts the scaled residual by reuse_contraction or better; if they stop above
     ! the tolerance, full Newton (a new Jacobian and factors) takes over from there
-    if (key /= 0.0_dp .and. self%have_lu .and. self%lu_n == n .and. key == self%lu_key) then
+    ! (factors of another key of the family serve with their directions scaled: sys%chord_ratio)
+    ratio = 0.0_dp
+    if (key /= 0.0_dp .and. self%have_lu .and. self%lu_n == n) then
+      ratio = 1.0_dp
+      if (key /= self%lu_key) ratio = sys%chord_ratio(self%lu_key)
+    end if
+    self%lu_ratio = 1.0_dp
+    if (ratio > 0.0_dp) then
+      self%lu_ratio = ratio
       factored = .true.
       do it = 1, self%max_iterations
         ! cheap steps: go on below the tolerance, to about round-off (chord steps converge linearly)
         if (phi <= 1.0e-3_dp) exit
         do i = 1, n
-          self%dx(i) = self%r(i) * self%rw(i)
+          self%dx(i) = self%lu_ratio * (self%r(i) * self%rw(i))
         end do
         call lu_solve(self, n, self%dx)
         self%xt(1:n) = x - self%dx(1:n)
@@ -521,6 +585,7 @@ contains
         res%status = VCI_ERR_NONFINITE; return
       end if
       self%have_lu = factored .and. key /= 0.0_dp
+      self%lu_ratio = 1.0_dp
       self%lu_n = n; self%lu_key = key
       if (res%reason == NEWTON_SINGULAR) then
         res%status = VCI_ERR_NEWTON; return
@@ -573,7 +638,28 @@ contains
     end if
     if (self%polish .and. factored .and. phi > 0.0_dp .and. phi * self%rtol > self%polish_above * epsilon(1.0_dp)) &
       call polish_step(self, sys, x, n, phi, res)
-  end subroutine solve
+    if (factored .and. self%fkind == FACTORS_BORDERED) call keep_block(self, sys, x, n)
+  end subroutine solve_system
+
+  !> After a bordered solve: its block's factors (of the last direction) become the kept factors of
+  !> the family sys%block_key(x) names, with the block's row weights (issue 28: stage 1's block is
+  !> the sub-step matrix of length alpha tau, stage 2's that of the leaving sub-step; the sub-steps
+  !> of stage 2 and the poke screen then start with chord steps on it, see chord_ratio).
+  subroutine keep_block(self, sys, x, n)
+    type(vci_newton_t), intent(inout) :: self
+    class(vci_system_t), intent(inout) :: sys
+    real(dp), intent(in) :: x(:)
+    integer, intent(in) :: n
+    real(dp) :: bkey
+    bkey = sys%block_key(x(1:n))
+    ! (band and sparse blocks only: a dense block's factors would be kept in no checkpoint, and a
+    ! dense run's restart is bit for bit with the factors it keeps, docs/DESIGN.md)
+    if (self%bkind /= FACTORS_BAND .and. self%bkind /= FACTORS_SPARSE) return
+    if (bkey == 0.0_dp .or. n - 1 < self%reuse_min .or. self%block_ni /= n - 1) return
+    self%fkind = self%bkind
+    self%rw(1:n - 1) = self%brw(1:n - 1)
+    self%have_lu = .true.; self%lu_n = n - 1; self%lu_key = bkey; self%lu_ratio = 1.0_dp
+  end subroutine keep_block
 
   !> After a solve of n unknowns that failed on convergence (not on an evaluation): the row with
   !> the largest scaled residual at the iterate left in x (the message names its equation).
@@ -1167,7 +1253,7 @@ contains
     real(dp) :: phit
     taken = .false.
     do i = 1, n
-      self%dx(i) = self%r(i) * self%rw(i)
+      self%dx(i) = self%lu_ratio * (self%r(i) * self%rw(i))
     end do
     if (.not. all_finite(self%dx(1:n))) return
     call lu_solve(self, n, self%dx)
@@ -1194,7 +1280,7 @@ contains
     integer :: i, stat
     real(dp) :: phit
     do i = 1, n
-      self%dx(i) = self%r(i) * self%rw(i)
+      self%dx(i) = self%lu_ratio * (self%r(i) * self%rw(i))
     end do
     if (.not. all_finite(self%dx(1:n))) return
     call lu_solve(self, n, self%dx)

@@ -1257,12 +1257,15 @@ contains
   !> small_lu_max unknowns (0: LAPACK always), factor reuse for systems of at least reuse_min
   !> unknowns (huge: full Newton always), and `fused` (default on): the regular sub-step of a small
   !> system with analytic derivatives solved by the scheme's fused routine (vci_scheme_discrete_fused).
+  !> `rates_first` (default on): stage 2 under the hamiltonian condition without constraints takes
+  !> the impulse from the rates along the impulse line where they decide, without solving the free
+  !> motion first (off: the free motion always, as before issue 28's cut).
   !> For tests and benchmarks that compare the paths.
-  subroutine set_solver_paths(self, small_lu_max, reuse_min, fused)
+  subroutine set_solver_paths(self, small_lu_max, reuse_min, fused, rates_first)
     class(vci_integrator_t), intent(inout) :: self
     integer, intent(in) :: small_lu_max, reuse_min
-    logical, intent(in), optional :: fused
-    call self%stepper%set_solver_paths(small_lu_max, reuse_min, fused)
+    logical, intent(in), optional :: fused, rates_first
+    call self%stepper%set_solver_paths(small_lu_max, reuse_min, fused, rates_first)
   end subroutine set_solver_paths
 
   !> Status of the last call (VCI_OK or a VCI_ERR_*).

@@ -61,6 +61,9 @@ module vci_stepper
     integer :: n = 0, m = 0, ng = 0
     integer :: nsub = 0                             !< unknowns of a regular sub-step (the scheme's)
     logical :: fused = .true.                       !< try the scheme's fused regular-step solve first
+    !> stage 2 under the hamiltonian condition without constraints: the impulse from the rates where
+    !> they decide, no free motion first (issue 28; false: the free motion always, the path before)
+    logical :: rates_first = .true.
     character(len=VCI_MSG_LEN) :: cause = ''       !< why the last step failed
     real(dp) :: last_residual = 0.0_dp              !< scaled residual of the last Newton solve
     integer :: last_parts = 1                       !< equal sub-steps the last step took (1: whole)
@@ -292,13 +295,14 @@ contains
   !> Which linear-algebra paths Newton may take: the in-line LU up to small_lu_max unknowns, factor
   !> reuse from reuse_min unknowns, the scheme's fused regular-step solve when `fused` (default on;
   !> tests and benchmarks compare each path with LAPACK / full Newton / the general solve).
-  subroutine set_solver_paths(self, small_lu_max, reuse_min, fused)
+  subroutine set_solver_paths(self, small_lu_max, reuse_min, fused, rates_first)
     class(vci_stepper_t), intent(inout) :: self
     integer, intent(in) :: small_lu_max, reuse_min
-    logical, intent(in), optional :: fused
+    logical, intent(in), optional :: fused, rates_first
     self%newton%small_lu_max = small_lu_max
     self%newton%reuse_min = reuse_min
     if (present(fused)) self%fused = fused
+    if (present(rates_first)) self%rates_first = rates_first
   end subroutine set_solver_paths
 
   !> Newton directions of impact stages solved by bordering so far.

@@ -84,6 +84,8 @@ module vci_scheme_discrete
     procedure :: momentum_out, energy_out, hamiltonian
     procedure :: impact_momentum
     procedure :: forget_jacobian
+    procedure :: chord_ratio => substep_chord_ratio
+    procedure :: block_key => stage_block_key
     procedure :: fused_substep
     procedure :: substep_sensitivity
     procedure :: use_derivatives
@@ -1169,6 +1171,37 @@ contains
       end do
     end do
   end subroutine momentum_band
+
+  !> A regular sub-step of length tau on the factors kept from one of length tau_old in the same
+  !> direction (old_key = dir tau_old; issue 28): its momentum rows' Jacobian D2 D1 L_d is
+  !> -M / tau + O(1) + O(tau) (the kinetic term of L_d = tau L(., (b - a)/tau)), so the old Newton
+  !> step times tau / tau_old is the new one up to the force terms' (tau_old^2 - tau^2) share,
+  !> ~ h^2 |Hessian of V| / |M| (1e-4 on the FPU chain at h = 0.01). The sub-steps inside an impact
+  !> (stage 2's, the poke screen's half sub-steps, the 1e-3 departures) then take chord steps on the
+  !> last factors instead of a new Jacobian each; Newton keeps a chord step only where it contracts
+  !> the residual by reuse_contraction, else it factorises as before. Not with multipliers (their
+  !> columns and the constraint rows do not scale with 1/tau) and not for stage systems.
+  real(dp) function substep_chord_ratio(self, old_key)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: old_key
+    real(dp) :: key
+    substep_chord_ratio = 0.0_dp
+    if (self%kind /= KIND_SUBSTEP .or. self%m > 0) return
+    key = self%reuse_key()
+    if (key / old_key > 0.0_dp) substep_chord_ratio = key / old_key
+  end function substep_chord_ratio
+
+  !> An impact stage's block (the unknowns before alpha or mu) is the Newton matrix of a regular
+  !> sub-step: of length alpha tau for stage 1 (alpha at the solution x), tau (the rest of the
+  !> sub-step) for stage 2; its key as substep_key names it. 0 with multipliers (as chord_ratio).
+  real(dp) function stage_block_key(self, x)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    real(dp), intent(in) :: x(:)
+    stage_block_key = 0.0_dp
+    if (self%m > 0) return
+    if (self%kind == KIND_STAGE1) stage_block_key = real(self%dir, dp) * x(size(x)) * self%tau
+    if (self%kind == KIND_STAGE2) stage_block_key = real(self%dir, dp) * self%tau
+  end function stage_block_key
 
   !> A new solve starts: its Jacobian is not known yet (see jabs).
   subroutine forget_jacobian(self)

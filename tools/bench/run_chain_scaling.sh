@@ -14,6 +14,8 @@
 #                                                                # (no bordering: the path before it)
 #   SINGLE=1 OUT=docs/bench/chain_single_impact.md tools/bench/run_chain_scaling.sh
 #        # a start where only the first mass meets a wall: one impact per impact step
+#   EXE=/path/to/old/vci_bench_chain_impacts OUT=/tmp/before.md tools/bench/run_chain_scaling.sh
+#        # another build's executable (before/after comparisons; nothing is rebuilt)
 set -eu
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
 BUILD_DIR=${BUILD_DIR:-$ROOT/build}
@@ -23,8 +25,12 @@ CG_MAX=${CG_MAX:-1024}
 ARGS="bandcb"
 [ "${WHOLE:-0}" = 1 ] && ARGS="bandcb whole"
 [ "${SINGLE:-0}" = 1 ] && ARGS="$ARGS single"
-cmake --build "$BUILD_DIR" --target vci_bench_chain_impacts -j1 >/dev/null
-EXE="$BUILD_DIR/bin/vci_bench_chain_impacts"
+if [ -n "${EXE:-}" ]; then
+  :   # a given executable (e.g. an earlier build's, with its LD_LIBRARY_PATH): not rebuilt
+else
+  cmake --build "$BUILD_DIR" --target vci_bench_chain_impacts -j1 >/dev/null
+  EXE="$BUILD_DIR/bin/vci_bench_chain_impacts"
+fi
 export OPENBLAS_NUM_THREADS=1
 rows=$(mktemp)
 for n in $NS; do
@@ -98,7 +104,9 @@ fit() {
   echo "Impacts per impact step ~ n^$ifit; an impact step costs ~ n^$(fit 8) and its cost per impact ~ n^$pfit."
   echo "Issue 28's target of an impact step <= 4 regular steps (impact / regular above) is met at $met of the"
   echo "$(echo $NS | wc -w) sizes: an impact step resolves all its impacts (the column impacts / impact steps), each"
-  echo "with a stage 1 and a stage 2 solve of its own (and stage 2 with a free sub-step and its sensitivity)."
+  echo "with a stage 1 (Newton on the band block bordered by alpha, the block refactorised at each iteration) and a"
+  echo "stage 2 (hamiltonian: the impulse from the rates along the impulse line where they decide, then the leaving"
+  echo "sub-step with chord steps on stage 1's kept block; docs/DESIGN.md, \"The impact step's cost\")."
   echo "Memory: Newton's matrices are kept in band storage with their border apart (vci_banded_matrix),"
   echo "the Hessian blocks are band-sized, and the wall gradients are those of the walls a sub-step"
   echo "examines, in 8 columns of n (no n x n or n x n_gaps array: test band_memory; docs/DESIGN.md,"
