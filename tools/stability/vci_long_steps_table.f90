@@ -16,7 +16,8 @@ program vci_long_steps_table
     0.05_dp, 0.1_dp, 0.2_dp, 0.3_dp, 0.4_dp, 0.5_dp, 0.6_dp, 0.8_dp, 1.0_dp, &
     0.05_dp, 0.1_dp, 0.2_dp, 0.3_dp, 0.4_dp, 0.5_dp, 0.6_dp, 0.8_dp, 1.0_dp, &
     0.02_dp, 0.05_dp, 0.1_dp, 0.15_dp, 0.2_dp, 0.25_dp, 0.3_dp, 0.4_dp, 0.5_dp, &
-    0.05_dp, 0.1_dp, 0.2_dp, 0.3_dp, 0.4_dp, 0.5_dp, 0.6_dp, 0.8_dp, 1.0_dp], [n_h, LONG_SCENES])
+    0.05_dp, 0.1_dp, 0.2_dp, 0.3_dp, 0.4_dp, 0.5_dp, 0.6_dp, 0.8_dp, 1.0_dp, &
+    0.5_dp, 1.0_dp, 1.5_dp, 2.0_dp, 2.5_dp, 3.0_dp, 3.5_dp, 4.0_dp, 5.0_dp], [n_h, LONG_SCENES])
   integer, parameter :: schemes(n_schemes) = [VCI_SCHEME_MIDPOINT, VCI_SCHEME_LOBATTO, VCI_SCHEME_LOBATTO, &
                                               VCI_SCHEME_LOBATTO]
   integer, parameter :: stages(n_schemes) = [1, 2, 3, 4]
@@ -48,9 +49,10 @@ program vci_long_steps_table
           case (2); call long_run(scene, schemes(is), stages(is), ladders(ih, scene), 1, r)
           case (3); call long_run(scene, schemes(is), stages(is), ladders(ih, scene), 16, r)
           end select
-          if (verbose) write (*, '(a,a,a,f5.2,a,i0,a,i0,a,es9.2,a,es9.2,a,i0,a,i0,a,i0,a,a)') trim(long_scene_name(scene)), &
+          if (verbose) write (*, '(a,a,a,f5.2,a,i0,a,i0,a,es9.2,a,es9.2,a,i0,a,i0,a,i0,a,i0,a,a)') trim(long_scene_name(scene)), &
             ' ', scheme_label(is), ladders(ih, scene), ' mode ', mode, ' status ', r%status, ' error ', r%error, &
-            ' |H - H0| ', r%energy_error, ' impacts ', r%impacts, ' split ', r%split_steps, ' / ', r%largest_split, ' ', &
+            ' |H - H0| ', r%energy_error, ' impacts ', r%impacts, ' exact ', r%exact_impacts, ' split ', &
+            r%split_steps, ' / ', r%largest_split, ' ', &
             trim(r%message(1:200))
           ! runs: to the end with no failure status (the error says how good the motion is there)
           if (r%status == VCI_OK .and. r%error < huge(1.0_dp)) then
