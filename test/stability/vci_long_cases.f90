@@ -22,6 +22,10 @@
 !>   nonholonomic constraint, 6 impacts in 20 s, 2.7 and 3.6 rad of turn between them) to t = 20;
 !>   closed-form reference knife_exact (vci_scene_knife_edge; without walls the blade runs on a
 !>   circle of radius 1).
+!> - LONG_NH_PENDULUM: the paper's nonholonomic pendulum in a cylinder (examples/pendulum, docs/DESIGN.md
+!>   §8; constraint phi' = f(theta) theta', 3 impacts in 5 s) to t = 5 from the exact (q(0), p(0));
+!>   reference vci_ref_pendulum (order-8 Gauss-Legendre on the reduced 1-DOF equation; without
+!>   walls the same equation with the cylinder out of reach).
 module vci_long_cases
   use vci
   use vci_test_kepler, only: kepler_t, kepler_exact
@@ -31,16 +35,18 @@ module vci_long_cases
   use vci_kepler_wall, only: kepler_wall_t, kepler_wall_exact
   use vci_ref_fpu_walls, only: fpu_walls_params, fpu_walls_run
   use vci_scene_knife_edge, only: knife_walls_t, knife_scene_t, knife_model, knife_start, knife_exact, turning_knife
+  use vci_scene_pendulum, only: pendulum_lagrangian_model, pendulum_f
+  use vci_ref_pendulum, only: pendulum_params, pendulum_exact
   implicit none
   private
 
   integer, parameter, public :: LONG_PENDULUM = 1, LONG_KEPLER_CIRCLE = 2, LONG_FPU = 3, LONG_KEPLER_WALL = 4, &
-                                LONG_KNIFE = 5
-  integer, parameter, public :: LONG_SCENES = 5
+                                LONG_KNIFE = 5, LONG_NH_PENDULUM = 6
+  integer, parameter, public :: LONG_SCENES = 6
   character(len=24), parameter, public :: long_scene_name(LONG_SCENES) = &
     [character(len=24) :: 'walled pendulum', 'Kepler in a circle', 'FPU chain n = 32', 'Kepler below a wall', &
-     'knife between walls']
-  real(dp), parameter, public :: long_t_final(LONG_SCENES) = [10.0_dp, 20.0_dp, 2.0_dp, 20.0_dp, 20.0_dp]
+     'knife between walls', 'paper''s pendulum']
+  real(dp), parameter, public :: long_t_final(LONG_SCENES) = [10.0_dp, 20.0_dp, 2.0_dp, 20.0_dp, 20.0_dp, 5.0_dp]
   !> The straight wall's height in LONG_KEPLER_WALL.
   real(dp), parameter, public :: kepler_wall_w = 0.1_dp
 
@@ -146,10 +152,12 @@ contains
     type(pendulum_walls_params) :: pw
     real(dp) :: times(1), knife_times(64), speed
     type(knife_scene_t) :: knife
+    type(pendulum_params) :: nh
+    real(dp), allocatable :: nh_times(:)
     real(dp), allocatable :: q0(:), p0(:), qr(:), pr(:), q(:), p(:)
     integer(i8) :: k, nsteps
     integer :: stat, nimp
-    real(dp) :: th, om, w, pmin
+    real(dp) :: th, om, w, pmin, thd
     logical :: with_walls
     with_walls = .true.
     if (present(walls)) with_walls = walls
@@ -180,6 +188,9 @@ contains
       model%n = 2
     case (LONG_KNIFE)
       allocate (model, source=knife_model(turning_knife))
+      if (.not. with_walls) model%n_gaps = 0
+    case (LONG_NH_PENDULUM)
+      allocate (model, source=pendulum_lagrangian_model())
       if (.not. with_walls) model%n_gaps = 0
     case default
       allocate (model, source=fpu_walls_lagrangian_model(fpu_n, fpu_beta, w))
@@ -237,6 +248,13 @@ contains
         pr = [model%mass * speed * cos(qr(3)), model%mass * speed * sin(qr(3)), model%inertia * knife%w]
       end select
       if (with_walls) r%exact_impacts = nimp
+    case (LONG_NH_PENDULUM)
+      ! without walls: the cylinder out of reach (R = 1e30); p = m l^2 (theta', sin^2 theta phi')
+      if (.not. with_walls) nh%radius = 1.0e30_dp
+      call pendulum_exact(nh, q0(1), p0(1) / (nh%m * nh%ell**2), q0(2), r%t_end, th, om, thd, nh_times, nimp)
+      qr = [th, om]
+      pr = nh%m * nh%ell**2 * [thd, sin(th)**2 * pendulum_f(th) * thd]
+      if (with_walls) r%exact_impacts = nimp
     case default
       call fpu_walls_run(fpu_walls_params(beta=fpu_beta, w=w, step=0.01_dp), q0, p0, r%t_end, qr, pr, nimp)
       if (with_walls) r%exact_impacts = nimp
@@ -261,6 +279,10 @@ contains
     case (LONG_KEPLER_CIRCLE, LONG_KEPLER_WALL)
       allocate (q0(2), p0(2))
       call kepler_exact(kepler_e, 0.0_dp, q0, p0)
+    case (LONG_NH_PENDULUM)
+      ! q(0) = (0.75 pi, 0), qdot(0) = (pi/4, (pi + 1/2) pi/4), p = m l^2 (theta', sin^2 theta phi')
+      q0 = [0.75_dp * pi, 0.0_dp]
+      p0 = 4.0_dp * [pi / 4.0_dp, sin(q0(1))**2 * (pi + 0.5_dp) * pi / 4.0_dp]
     case (LONG_KNIFE)
       allocate (q0(3), p0(3))
       knife = knife_model(turning_knife)
