@@ -1511,8 +1511,9 @@ contains
     real(dp) :: d, hp, hm
     rate = 0.0_dp; noise = 0.0_dp
     d = rel * max(abs(mu), maxval(abs(self%p_arrive)) / max(maxval(abs(self%sys%grad)), tiny(1.0_dp)))
-    block
-      real(dp) :: p_plus(self%n)       ! p+ (with m > 0 its admissible part); n numbers on the stack
+    ! p+ (with m > 0 its admissible part) in q_guess, as scratch: every use of q_guess sets it first
+    ! (an automatic array here would be a heap allocation in every impact: test_alloc_free)
+    associate (p_plus => self%q_guess)
       p_plus = self%p_arrive + mu * self%sys%grad
       stat = VCI_OK
       if (self%m > 0) call self%sys%project_momentum(self%q_wall, p_plus, stat)
@@ -1524,7 +1525,7 @@ contains
         self%p_leave = p_plus - d * self%sys%grad
         call self%sys%hamiltonian(self%q_wall, self%p_leave, hm, stat)
       end if
-    end block
+    end associate
     if (stat /= VCI_OK) then
       call set_cause(self, 'stage 2: H along the impulse line (does the reflection leave the wall?)'); return
     end if
