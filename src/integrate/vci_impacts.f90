@@ -1511,18 +1511,23 @@ contains
     real(dp) :: d, hp, hm
     rate = 0.0_dp; noise = 0.0_dp
     d = rel * max(abs(mu), maxval(abs(self%p_arrive)) / max(maxval(abs(self%sys%grad)), tiny(1.0_dp)))
-    ! p+ (with m > 0 its admissible part) in q_guess, as scratch: every use of q_guess sets it first
-    ! (an automatic array here would be a heap allocation in every impact: test_alloc_free)
-    associate (p_plus => self%q_guess)
-      p_plus = self%p_arrive + mu * self%sys%grad
+    ! H at base + (mu +- d) grad g: base = p- for m = 0 (as before, bit for bit), and with m > 0
+    ! p+'s admissible part less mu grad g, in q_guess as scratch (every use of q_guess sets it
+    ! first; an automatic array here would be a heap allocation in every impact: test_alloc_free)
+    associate (base => self%q_guess)
       stat = VCI_OK
-      if (self%m > 0) call self%sys%project_momentum(self%q_wall, p_plus, stat)
+      base = self%p_arrive
+      if (self%m > 0) then
+        base = self%p_arrive + mu * self%sys%grad
+        call self%sys%project_momentum(self%q_wall, base, stat)
+        base = base - mu * self%sys%grad
+      end if
       if (stat == VCI_OK) then
-        self%p_leave = p_plus + d * self%sys%grad
+        self%p_leave = base + (mu + d) * self%sys%grad
         call self%sys%hamiltonian(self%q_wall, self%p_leave, hp, stat)
       end if
       if (stat == VCI_OK) then
-        self%p_leave = p_plus - d * self%sys%grad
+        self%p_leave = base + (mu - d) * self%sys%grad
         call self%sys%hamiltonian(self%q_wall, self%p_leave, hm, stat)
       end if
     end associate
