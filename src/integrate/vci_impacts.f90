@@ -1515,8 +1515,9 @@ contains
     stat = VCI_OK
     reflected = .false.
     ! the branch first: a root whose momentum still moves into the wall is not the reflection,
-    ! wherever its sub-step ends (issue 27: through the centre of Kepler's force, below the wall)
-    if (self%has_energy .and. self%m == 0) then
+    ! wherever its sub-step ends (issue 27: through the centre of Kepler's force, below the wall;
+    ! with constraints, the knife between walls at h = 3, whose pass-through sub-step turned back)
+    if (self%has_energy) then
       call normal_rate(self, mu, rate, noise, stat)
       if (stat /= VCI_OK) return
       if (rate < -noise) return
@@ -1537,11 +1538,20 @@ contains
   end function reflected
 
   !> The rate at which the continuous motion from (qt, p- + mu grad g) leaves the wall in the run's
-  !> direction, dir grad g . dH/dp = dir d/dmu H(qt, p- + mu grad g) (central difference; rate > 0:
-  !> it leaves), and the
-  !> difference's round-off (noise). Elastic reflection reverses this rate; the pass-through root keeps
-  !> it negative. For H convex in p, H along the impulse line is a parabola-like curve with the
+  !> direction, dir grad g . dH/dp (central difference in p along grad g; rate > 0: it leaves), and
+  !> the difference's round-off (noise). Elastic reflection reverses this rate; the pass-through root
+  !> keeps it negative. For H convex in p, H along the impulse line is a parabola-like curve with the
   !> pass-through root (mu = 0) on its falling side and the reflection on its rising side.
+  !> With constraints (m > 0) the motion after the impulse is the constrained one: its momentum is
+  !> p+ = p- + mu grad g + Omega(qt) nu with Omega^T dH/dp(qt, p+) = 0 (project_momentum; the
+  !> scheme's node multipliers at qt or midpoint's discrete constraint make the leaving sub-step's
+  !> velocity admissible the same way), and the rate is grad g . dH/dp(qt, p+). It is also
+  !> d/dmu H(qt, p+(mu)), since dH/dp . Omega dnu/dmu = 0: the same fold picture on the constrained
+  !> impulse line. (The unconstrained rate is not it: for the knife, blade direction t, c = grad g . t,
+  !> speed v along the blade, c v < 0 arriving, the constrained rate is c v + mu c^2 / m, the
+  !> unconstrained one c v + mu / m: it also counts the impulse's part across the blade, which the
+  !> constraint absorbs, and turns positive at mu = -m c v while the motion enters the wall up to
+  !> mu = -m v / c.)
   subroutine normal_rate(self, mu, rate, noise, stat)
     type(vci_stepper_t), intent(inout) :: self
     real(dp), intent(in) :: mu
@@ -1551,12 +1561,26 @@ contains
     real(dp) :: d, hp, hm
     rate = 0.0_dp; noise = 0.0_dp
     d = rel * max(abs(mu), maxval(abs(self%p_arrive)) / max(maxval(abs(self%sys%grad)), tiny(1.0_dp)))
-    self%p_leave = self%p_arrive + (mu + d) * self%sys%grad
-    call self%sys%hamiltonian(self%q_wall, self%p_leave, hp, stat)
-    if (stat == VCI_OK) then
-      self%p_leave = self%p_arrive + (mu - d) * self%sys%grad
-      call self%sys%hamiltonian(self%q_wall, self%p_leave, hm, stat)
-    end if
+    ! H at base + (mu +- d) grad g: base = p- for m = 0 (as before, bit for bit), and with m > 0
+    ! p+'s admissible part less mu grad g, in q_guess as scratch (every use of q_guess sets it
+    ! first; an automatic array here would be a heap allocation in every impact: test_alloc_free)
+    associate (base => self%q_guess)
+      stat = VCI_OK
+      base = self%p_arrive
+      if (self%m > 0) then
+        base = self%p_arrive + mu * self%sys%grad
+        call self%sys%project_momentum(self%q_wall, base, stat)
+        base = base - mu * self%sys%grad
+      end if
+      if (stat == VCI_OK) then
+        self%p_leave = base + (mu + d) * self%sys%grad
+        call self%sys%hamiltonian(self%q_wall, self%p_leave, hp, stat)
+      end if
+      if (stat == VCI_OK) then
+        self%p_leave = base + (mu - d) * self%sys%grad
+        call self%sys%hamiltonian(self%q_wall, self%p_leave, hm, stat)
+      end if
+    end associate
     if (stat /= VCI_OK) then
       call set_cause(self, 'stage 2: H along the impulse line (does the reflection leave the wall?)'); return
     end if

@@ -18,6 +18,14 @@
 !> - LONG_FPU: the FPU-beta chain between walls (n = 32, beta = 1, |x_i| <= 0.6, the start of
 !>   tools/results) to t = 2; reference: the quad-precision event-driven Taylor method
 !>   (test/support/vci_ref_fpu_walls.f90, step 0.01).
+!> - LONG_KNIFE: the turning knife edge between the walls x = +-0.8 (examples/knife_edge; one
+!>   nonholonomic constraint, 6 impacts in 20 s, 2.7 and 3.6 rad of turn between them) to t = 20;
+!>   closed-form reference knife_exact (vci_scene_knife_edge; without walls the blade runs on a
+!>   circle of radius 1).
+!> - LONG_NH_PENDULUM: the paper's nonholonomic pendulum in a cylinder (examples/pendulum, docs/DESIGN.md
+!>   §8; constraint phi' = f(theta) theta', 3 impacts in 5 s) to t = 5 from the exact (q(0), p(0));
+!>   reference vci_ref_pendulum (order-8 Gauss-Legendre on the reduced 1-DOF equation; without
+!>   walls the same equation with the cylinder out of reach).
 module vci_long_cases
   use vci
   use vci_test_kepler, only: kepler_t, kepler_exact
@@ -26,14 +34,19 @@ module vci_long_cases
   use vci_ref_pendulum_walls, only: pendulum_walls_params, pendulum_walls_exact
   use vci_kepler_wall, only: kepler_wall_t, kepler_wall_exact
   use vci_ref_fpu_walls, only: fpu_walls_params, fpu_walls_run
+  use vci_scene_knife_edge, only: knife_walls_t, knife_scene_t, knife_model, knife_start, knife_exact, turning_knife
+  use vci_scene_pendulum, only: pendulum_lagrangian_model, pendulum_f
+  use vci_ref_pendulum, only: pendulum_params, pendulum_exact
   implicit none
   private
 
-  integer, parameter, public :: LONG_PENDULUM = 1, LONG_KEPLER_CIRCLE = 2, LONG_FPU = 3, LONG_KEPLER_WALL = 4
-  integer, parameter, public :: LONG_SCENES = 4
+  integer, parameter, public :: LONG_PENDULUM = 1, LONG_KEPLER_CIRCLE = 2, LONG_FPU = 3, LONG_KEPLER_WALL = 4, &
+                                LONG_KNIFE = 5, LONG_NH_PENDULUM = 6
+  integer, parameter, public :: LONG_SCENES = 6
   character(len=24), parameter, public :: long_scene_name(LONG_SCENES) = &
-    [character(len=24) :: 'walled pendulum', 'Kepler in a circle', 'FPU chain n = 32', 'Kepler below a wall']
-  real(dp), parameter, public :: long_t_final(LONG_SCENES) = [10.0_dp, 20.0_dp, 2.0_dp, 20.0_dp]
+    [character(len=24) :: 'walled pendulum', 'Kepler in a circle', 'FPU chain n = 32', 'Kepler below a wall', &
+     'knife between walls', 'paper''s pendulum']
+  real(dp), parameter, public :: long_t_final(LONG_SCENES) = [10.0_dp, 20.0_dp, 2.0_dp, 20.0_dp, 20.0_dp, 5.0_dp]
   !> The straight wall's height in LONG_KEPLER_WALL.
   real(dp), parameter, public :: kepler_wall_w = 0.1_dp
 
@@ -58,6 +71,9 @@ module vci_long_cases
     !> Kepler scenes: |H(q, p) - H(q0, p0)| at the end (the walls keep H; huge: did not finish or
     !> another scene)
     real(dp) :: energy_error = huge(1.0_dp)
+    !> the reference's impacts up to t_end (-1: not counted, as in the circle's closed form, or the
+    !> run did not finish)
+    integer :: exact_impacts = -1
   end type long_run_t
 
   public :: long_run, kepler_circle_exact, long_start
@@ -123,21 +139,25 @@ contains
   !> `splits` (1: off); the other settings are the library's defaults. walls = .false.: the same
   !> scene and start without walls (the free flight, whose own stability limits the step).
   !> max_iterations: Newton's cap (default 30; a low cap forces failures for the net to catch).
-  subroutine long_run(scene, scheme, stages, h, splits, r, walls, max_iterations)
+  !> impact_energy: the impact condition (default the library's, VCI_IMPACT_DISCRETE).
+  subroutine long_run(scene, scheme, stages, h, splits, r, walls, max_iterations, impact_energy)
     integer, intent(in) :: scene, scheme, stages, splits
     real(dp), intent(in) :: h
     type(long_run_t), intent(out) :: r
     logical, intent(in), optional :: walls
-    integer, intent(in), optional :: max_iterations
+    integer, intent(in), optional :: max_iterations, impact_energy
     class(vci_lagrangian_t), allocatable, target :: model
     type(vci_integrator_t) :: integ
     type(vci_stats_t) :: stats
     type(pendulum_walls_params) :: pw
-    real(dp) :: times(1)
+    real(dp) :: times(1), knife_times(64), speed
+    type(knife_scene_t) :: knife
+    type(pendulum_params) :: nh
+    real(dp), allocatable :: nh_times(:)
     real(dp), allocatable :: q0(:), p0(:), qr(:), pr(:), q(:), p(:)
     integer(i8) :: k, nsteps
     integer :: stat, nimp
-    real(dp) :: th, om, w, pmin
+    real(dp) :: th, om, w, pmin, thd
     logical :: with_walls
     with_walls = .true.
     if (present(walls)) with_walls = walls
@@ -166,6 +186,12 @@ contains
         allocate (kepler_t :: model)
       end if
       model%n = 2
+    case (LONG_KNIFE)
+      allocate (model, source=knife_model(turning_knife))
+      if (.not. with_walls) model%n_gaps = 0
+    case (LONG_NH_PENDULUM)
+      allocate (model, source=pendulum_lagrangian_model())
+      if (.not. with_walls) model%n_gaps = 0
     case default
       allocate (model, source=fpu_walls_lagrangian_model(fpu_n, fpu_beta, w))
     end select
@@ -174,6 +200,7 @@ contains
     if (stat == VCI_OK) call integ%set_scheme(scheme, stages, stat)
     if (stat == VCI_OK) call integ%set_step_splits(splits, stat)
     if (stat == VCI_OK .and. present(max_iterations)) call integ%set_tolerances(0.0_dp, 1.0e-12_dp, max_iterations, stat)
+    if (stat == VCI_OK .and. present(impact_energy)) call integ%set_impact_energy(impact_energy, stat)
     if (stat == VCI_OK) call integ%init_from_momentum(0.0_dp, q0, p0, stat)
     nsteps = nint(long_t_final(scene) / h, i8)
     if (stat == VCI_OK) then
@@ -197,6 +224,7 @@ contains
       if (with_walls) pw%theta_w = 1.0_dp
       call pendulum_walls_exact(pw, q0(1), p0(1), r%t_end, th, om, nimp)
       qr = [th]; pr = [om]
+      if (with_walls) r%exact_impacts = nimp
     case (LONG_KEPLER_CIRCLE)
       if (with_walls) then
         call kepler_circle_exact(kepler_e, kepler_radius, r%t_end, qr, pr)
@@ -206,23 +234,44 @@ contains
     case (LONG_KEPLER_WALL)
       if (with_walls) then
         call kepler_wall_exact(kepler_wall_w, q0, p0, r%t_end, qr, pr, nimp, times, pmin)
+        r%exact_impacts = nimp
       else
         call kepler_exact(kepler_e, r%t_end, qr, pr)
       end if
+    case (LONG_KNIFE)
+      ! without walls: the same blade with the walls out of reach (a circle of radius v / w = 1)
+      knife = turning_knife
+      if (.not. with_walls) knife%wall = 1.0e30_dp
+      call knife_exact(knife, r%t_end, 0.0_dp, qr, knife_times, nimp, speed=speed)
+      select type (model)
+      type is (knife_walls_t)
+        pr = [model%mass * speed * cos(qr(3)), model%mass * speed * sin(qr(3)), model%inertia * knife%w]
+      end select
+      if (with_walls) r%exact_impacts = nimp
+    case (LONG_NH_PENDULUM)
+      ! without walls: the cylinder out of reach (R = 1e30); p = m l^2 (theta', sin^2 theta phi')
+      if (.not. with_walls) nh%radius = 1.0e30_dp
+      call pendulum_exact(nh, q0(1), p0(1) / (nh%m * nh%ell**2), q0(2), r%t_end, th, om, thd, nh_times, nimp)
+      qr = [th, om]
+      pr = nh%m * nh%ell**2 * [thd, sin(th)**2 * pendulum_f(th) * thd]
+      if (with_walls) r%exact_impacts = nimp
     case default
       call fpu_walls_run(fpu_walls_params(beta=fpu_beta, w=w, step=0.01_dp), q0, p0, r%t_end, qr, pr, nimp)
+      if (with_walls) r%exact_impacts = nimp
     end select
     r%error = max(maxval(abs(q - qr)), maxval(abs(p - pr)))
     if (scene == LONG_KEPLER_CIRCLE .or. scene == LONG_KEPLER_WALL) &
       r%energy_error = abs(0.5_dp * sum(p**2) - 1.0_dp / norm2(q) - (0.5_dp * sum(p0**2) - 1.0_dp / norm2(q0)))
   end subroutine long_run
 
-  !> The start of a scene (both Kepler scenes: the pericentre of a = 1, e = 0.5).
+  !> The start of a scene (both Kepler scenes: the pericentre of a = 1, e = 0.5; the knife: the exact
+  !> (q(0), p(0)) of knife_start).
   subroutine long_start(scene, q0, p0)
     integer, intent(in) :: scene
     real(dp), allocatable, intent(out) :: q0(:), p0(:)
     real(dp) :: pi
     integer :: i
+    type(knife_walls_t) :: knife
     pi = acos(-1.0_dp)
     select case (scene)
     case (LONG_PENDULUM)
@@ -230,6 +279,14 @@ contains
     case (LONG_KEPLER_CIRCLE, LONG_KEPLER_WALL)
       allocate (q0(2), p0(2))
       call kepler_exact(kepler_e, 0.0_dp, q0, p0)
+    case (LONG_NH_PENDULUM)
+      ! q(0) = (0.75 pi, 0), qdot(0) = (pi/4, (pi + 1/2) pi/4), p = m l^2 (theta', sin^2 theta phi')
+      q0 = [0.75_dp * pi, 0.0_dp]
+      p0 = 4.0_dp * [pi / 4.0_dp, sin(q0(1))**2 * (pi + 0.5_dp) * pi / 4.0_dp]
+    case (LONG_KNIFE)
+      allocate (q0(3), p0(3))
+      knife = knife_model(turning_knife)
+      call knife_start(knife, turning_knife, q0, p0)
     case default
       allocate (q0(fpu_n), p0(fpu_n))
       do i = 1, fpu_n
