@@ -14,7 +14,10 @@
  * compositions of order 2, 4, 6 for a separable model) and solver tolerance rtol; N steps forward
  * and N back must return (q0, p0) to REVERSAL_C * 2N * rtol (relative to 1 + |q0|, 1 + |p0|), at
  * index 0, with as many impacts back as forward; runs where the safety net split a step or an energy
- * fallback was taken (vci_get_split_steps, vci_get_energy_fallbacks) are counted but not judged.
+ * fallback was taken (vci_get_split_steps, vci_get_energy_fallbacks) are counted but not judged;
+ * those where the directions differ in them ("one-sided") are printed with where the two impact
+ * lists first part (walked from the run's end), and counted apart for the left rule, which is not
+ * symmetric (docs/BACKWARD.md). VCI_FUZZ_IMPACTS=1 prints both lists.
  * The seeds are fixed, so a failure replays:
  *
  *   vci_fuzz [--reversal] SEED_FIRST SEED_COUNT [SECONDS]   run the seeds, stop after SECONDS (default 60)
@@ -44,7 +47,8 @@
 #define REVERSAL_C 100.0
 /* exit statuses of a reversal child beside 0 (held): judged broken, not judged (a step failed, or
  * the net split steps or energy fallbacks were taken alike both ways), not judged and one-sided (the
- * two directions differ in splits or fallbacks: issue 24 item 1 wants that never; counted, not failed) */
+ * two directions differ in splits or fallbacks: issue 24 item 1 wants that never for a symmetric
+ * scheme; counted, not failed yet), the same with the left rule (not symmetric: counted apart) */
 enum { EXIT_REVERSAL_BROKEN = 73, EXIT_REVERSAL_UNJUDGED = 74, EXIT_REVERSAL_ONE_SIDED = 75,
        EXIT_REVERSAL_ONE_SIDED_LEFT = 76 };
 
