@@ -406,6 +406,7 @@ contains
       ! gaps down to -9.4e-3, another path in each direction). The return is bracketed on the true
       ! map by halving from the end: the largest c = 2^-k with g > 0, and 2c beyond the wall.
       hi = 1.0_dp; ghi = self%g_end(j)
+      glo = -1.0_dp                              ! (the start's gap may be a rounding above 0)
       do k = 1, DEPARTURE_HALVINGS
         c = 0.5_dp * hi
         call gap_on_map(self, j, dir, c * tau, g, stat)
