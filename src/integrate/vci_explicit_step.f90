@@ -33,6 +33,9 @@ module vci_explicit_step
   private
 
   integer, parameter :: ILLINOIS_MAX = 200
+  !> A sub-step departing from a wall and ending beyond it: halvings from its end that look for an
+  !> admissible point of the true map before the return (first_crossing); 2^-40 of it is round-off
+  integer, parameter :: DEPARTURE_HALVINGS = 40
 
   type, public :: vci_explicit_t
     type(vci_composition_t) :: map
@@ -365,7 +368,7 @@ contains
     integer, intent(out) :: stat
     real(dp) :: lo, hi, glo, ghi, c, g, gs, slope, delta, delta_prev, floor
     integer :: i, k, nk, side
-    logical :: have_lo, any_inside, on_wall
+    logical :: have_lo, any_inside, on_wall, bracketed
     alpha = 2.0_dp; stat = VCI_OK
     nk = self%samples
     call ensure_samples(self, stat)
@@ -394,37 +397,64 @@ contains
     have_lo = .not. on_wall
     lo = 0.0_dp; glo = self%g_start(j)
     hi = -1.0_dp
-    do k = 1, nk
-      c = self%sorted(k)
-      if (c >= limit) then
-        ! A wall already found comes first, unless this one is crossed between its last admissible
-        ! sample and that wall's point: the gap there on the true map decides (samples are sparse,
-        ! Verlet has none inside a step; without this the earlier crossing was reflected late).
-        if (.not. have_lo .or. on_wall) return
-        if (.not. (self%root_known .and. self%root_alpha == limit)) then   ! that point's map, once
-          call gap_on_map(self, j, dir, limit * tau, g, stat)
-          if (stat /= VCI_OK) return
-          call keep_root(self, limit)
-        end if
-        g = self%g_root(j)
-        if (.not. g < 0.0_dp) return
-        hi = limit; ghi = g; exit
-      end if
-      if (k < nk .and. have_lo) then
-        if (on_wall .or. self%g_samples(j, k) >= 0.0_dp) cycle   ! admissible sample: no need of the true map
-      end if
-      if (k == nk) then
-        g = self%g_end(j)                      ! c = 1: the step's own end, already on the true map
-      else
+    bracketed = .false.
+    if (on_wall) then
+      ! Departing from the wall and ending beyond it: the forces bring the motion back within the
+      ! sub-step (a soft reflection). The samples near the start scatter around g = 0 and Verlet
+      ! has none, so none may serve as the bracket's admissible end: without one the sub-step
+      ! ended beyond the wall, and the next steps reflected from inside it (C reversal seed 4986:
+      ! gaps down to -9.4e-3, another path in each direction). The return is bracketed on the true
+      ! map by halving from the end: the largest c = 2^-k with g > 0, and 2c beyond the wall.
+      hi = 1.0_dp; ghi = self%g_end(j)
+      glo = -1.0_dp                              ! (the start's gap may be a rounding above 0)
+      do k = 1, DEPARTURE_HALVINGS
+        c = 0.5_dp * hi
         call gap_on_map(self, j, dir, c * tau, g, stat)
         if (stat /= VCI_OK) return
-      end if
-      if (g > 0.0_dp) then
-        have_lo = .true.; lo = c; glo = g
-      else if (have_lo) then
-        hi = c; ghi = g; exit
-      end if
-    end do
+        if (g > 0.0_dp) then
+          lo = c; glo = g; exit
+        else if (g == 0.0_dp) then
+          call keep_root(self, c); alpha = c; return
+        end if
+        hi = c; ghi = g
+      end do
+      if (.not. glo > 0.0_dp) return             ! back within 2^-40 of the sub-step: round-off
+      if (lo >= limit) return                    ! a wall already found comes first
+      bracketed = .true.
+    end if
+    if (.not. bracketed) then
+      do k = 1, nk
+        c = self%sorted(k)
+        if (c >= limit) then
+          ! A wall already found comes first, unless this one is crossed between its last admissible
+          ! sample and that wall's point: the gap there on the true map decides (samples are sparse,
+          ! Verlet has none inside a step; without this the earlier crossing was reflected late).
+          if (.not. have_lo .or. on_wall) return
+          if (.not. (self%root_known .and. self%root_alpha == limit)) then   ! that point's map, once
+            call gap_on_map(self, j, dir, limit * tau, g, stat)
+            if (stat /= VCI_OK) return
+            call keep_root(self, limit)
+          end if
+          g = self%g_root(j)
+          if (.not. g < 0.0_dp) return
+          hi = limit; ghi = g; exit
+        end if
+        if (k < nk .and. have_lo) then
+          if (on_wall .or. self%g_samples(j, k) >= 0.0_dp) cycle   ! admissible sample: no need of the true map
+        end if
+        if (k == nk) then
+          g = self%g_end(j)                      ! c = 1: the step's own end, already on the true map
+        else
+          call gap_on_map(self, j, dir, c * tau, g, stat)
+          if (stat /= VCI_OK) return
+        end if
+        if (g > 0.0_dp) then
+          have_lo = .true.; lo = c; glo = g
+        else if (have_lo) then
+          hi = c; ghi = g; exit
+        end if
+      end do
+    end if
     if (hi < 0.0_dp) return                    ! never departed or never came back
     if (ghi == 0.0_dp) then
       alpha = hi; return

@@ -14,7 +14,10 @@
  * compositions of order 2, 4, 6 for a separable model) and solver tolerance rtol; N steps forward
  * and N back must return (q0, p0) to REVERSAL_C * 2N * rtol (relative to 1 + |q0|, 1 + |p0|), at
  * index 0, with as many impacts back as forward; runs where the safety net split a step or an energy
- * fallback was taken (vci_get_split_steps, vci_get_energy_fallbacks) are counted but not judged.
+ * fallback was taken (vci_get_split_steps, vci_get_energy_fallbacks) are counted but not judged;
+ * those where the directions differ in them ("one-sided") are printed with where the two impact
+ * lists first part (walked from the run's end), and counted apart for the left rule, which is not
+ * symmetric (docs/BACKWARD.md). VCI_FUZZ_IMPACTS=1 prints both lists.
  * The seeds are fixed, so a failure replays:
  *
  *   vci_fuzz [--reversal] SEED_FIRST SEED_COUNT [SECONDS]   run the seeds, stop after SECONDS (default 60)
@@ -44,8 +47,50 @@
 #define REVERSAL_C 100.0
 /* exit statuses of a reversal child beside 0 (held): judged broken, not judged (a step failed, or
  * the net split steps or energy fallbacks were taken alike both ways), not judged and one-sided (the
- * two directions differ in splits or fallbacks: issue 24 item 1 wants that never; counted, not failed) */
-enum { EXIT_REVERSAL_BROKEN = 73, EXIT_REVERSAL_UNJUDGED = 74, EXIT_REVERSAL_ONE_SIDED = 75 };
+ * two directions differ in splits or fallbacks: issue 24 item 1 wants that never for a symmetric
+ * scheme; counted, not failed yet), the same with the left rule (not symmetric: counted apart) */
+enum { EXIT_REVERSAL_BROKEN = 73, EXIT_REVERSAL_UNJUDGED = 74, EXIT_REVERSAL_ONE_SIDED = 75,
+       EXIT_REVERSAL_ONE_SIDED_LEFT = 76 };
+
+/* The impacts of a reversal run, in the order met (forward: time increasing; backward: decreasing),
+ * to find where the two directions first part (one-sided runs, sorted by cause: docs/BACKWARD.md) */
+enum { MAX_LISTED_IMPACTS = 4096 };
+typedef struct {
+  int count;
+  double t[MAX_LISTED_IMPACTS], impulse[MAX_LISTED_IMPACTS];
+  int gap[MAX_LISTED_IMPACTS];
+} impact_list;
+static int list_impact(double t, double alpha, int gap, const double *q, double impulse, void *user) {
+  impact_list *l = (impact_list *)user;
+  (void)alpha; (void)q;
+  if (l->count < MAX_LISTED_IMPACTS) {
+    l->t[l->count] = t; l->gap[l->count] = gap; l->impulse[l->count] = impulse;
+  }
+  ++l->count;
+  return 0;
+}
+/* Walk the forward impacts from the run's end and the backward ones from their start (the same
+ * end): the first pair that is not the same impact (time and |impulse| within 1e-6 relative, same
+ * wall). Writes what differs; "none" when the lists agree. */
+static void first_difference(const impact_list *f, const impact_list *b, char *out, size_t size) {
+  int k, nf = f->count < MAX_LISTED_IMPACTS ? f->count : MAX_LISTED_IMPACTS;
+  int nb = b->count < MAX_LISTED_IMPACTS ? b->count : MAX_LISTED_IMPACTS;
+  for (k = 0; k < nf && k < nb; ++k) {
+    int i = nf - 1 - k;
+    double tf = f->t[i], tb = b->t[k], mf = fabs(f->impulse[i]), mb = fabs(b->impulse[k]);
+    if (f->gap[i] != b->gap[k] || fabs(tf - tb) > 1e-6 * (1.0 + fabs(tf))) {
+      snprintf(out, size, "other-impact: forward #%d t %.6f wall %d, backward t %.6f wall %d", i, tf, f->gap[i], tb,
+               b->gap[k]);
+      return;
+    }
+    if (fabs(mf - mb) > 1e-6 * (1.0 + mf)) {
+      snprintf(out, size, "other-impulse: t %.6f wall %d, |impulse| forward %.6g backward %.6g", tf, f->gap[i], mf, mb);
+      return;
+    }
+  }
+  if (nf != nb) snprintf(out, size, "extra-impact: %d forward, %d backward, alike up to the shorter", nf, nb);
+  else snprintf(out, size, "none");
+}
 
 static int impact_calls = 0, impact_fail_at = -1;
 static int cb_impact(double t, double alpha, int gap, const double *q, double impulse, void *user) {
@@ -420,7 +465,10 @@ static int reversal(uint64_t seed) {
   double h, rtol, q0[MAXC], p0[MAXC], t0, q[MAXC], p[MAXC], t, err_q = 0.0, err_p = 0.0, tol;
   int64_t imp_f = 0, imp_b = 0, split_f = 0, split_b = 0, fb_f = 0, fb_b = 0, k = -1;
   const char *verbose = getenv("VCI_FUZZ_VERBOSE");
+  static impact_list list_f, list_b;
+  char parted[160] = "";
   fuzz_seed(seed);
+  list_f.count = 0; list_b.count = 0;
   for (i = 0; i < MAXC; ++i) ref[i] = uniform(-1.0, 1.0);
   separable = chance(35);
   random_cmodel(&md, ref, 1, separable);
@@ -458,12 +506,14 @@ static int reversal(uint64_t seed) {
   }
   nsteps = 10 + below(91);
   s = vci_init_from_momentum(it, t0, q0, p0);
+  if (s == VCI_OK) s = vci_set_impact_callback(it, list_impact, &list_f);
   if (s == VCI_OK) s = vci_integrate(it, nsteps, 1);
   if (s == VCI_OK) {
     vci_get_stats(it, NULL, &imp_f, NULL);
     vci_get_split_steps(it, &split_f, NULL);
     vci_get_energy_fallbacks(it, &fb_f);
-    s = vci_integrate(it, nsteps, -1);
+    s = vci_set_impact_callback(it, list_impact, &list_b);
+    if (s == VCI_OK) s = vci_integrate(it, nsteps, -1);
   }
   if (s == VCI_OK) {
     vci_get_stats(it, NULL, &imp_b, NULL);
@@ -480,19 +530,40 @@ static int reversal(uint64_t seed) {
   /* an energy fallback is an impact's condition: never more of them than impacts in a direction
    * (seed 950 counted 17 forward with 4 impacts: those of the attempts the safety net discarded) */
   if (s == VCI_OK && (fb_f > imp_f || fb_b > imp_b)) verdict = EXIT_REVERSAL_BROKEN;
-  else if (s == VCI_OK && (split_f != split_b || fb_f != fb_b)) verdict = EXIT_REVERSAL_ONE_SIDED;
+  else if (s == VCI_OK && (split_f != split_b || fb_f != fb_b))
+    /* the left rule is not symmetric: its backward step solves the right rule's equations (another
+     * nonlinear system, another Newton basin; E_d - H offsets O(h), not O(h^2)), so where a solve
+     * fails or a condition blends may differ between the directions (docs/BACKWARD.md) */
+    verdict = scheme == VCI_SCHEME_LEFT ? EXIT_REVERSAL_ONE_SIDED_LEFT : EXIT_REVERSAL_ONE_SIDED;
   else if (s != VCI_OK || split_f + split_b + fb_f + fb_b > 0) verdict = EXIT_REVERSAL_UNJUDGED;
   else if (!(err_q <= tol && err_p <= tol) || k != 0 || imp_f != imp_b) verdict = EXIT_REVERSAL_BROKEN;
-  if (verbose || verdict == EXIT_REVERSAL_BROKEN || verdict == EXIT_REVERSAL_ONE_SIDED) { /* (one-sided: to sort them) */
+  if (verbose || verdict == EXIT_REVERSAL_BROKEN || verdict == EXIT_REVERSAL_ONE_SIDED ||
+      verdict == EXIT_REVERSAL_ONE_SIDED_LEFT) { /* (one-sided: to sort them) */
     char msg[300] = "";
     if (s != VCI_OK) vci_last_error(it, msg, sizeof msg);
+    if (s == VCI_OK) {
+      first_difference(&list_f, &list_b, parted, sizeof parted);
+      snprintf(msg, sizeof msg, "[%s] first difference from the end: %s",
+               split_f != split_b ? "split-one-way" : fb_f != fb_b ? "fallbacks-differ" : "alike", parted);
+    }
     printf("reversal seed %llu: kind %d n %d ng %d %s s %d h %.4f N %d rtol %.1e: status %d, impacts %lld/%lld, "
            "splits %lld/%lld, fallbacks %lld/%lld, index %lld, err q %.2e p %.2e (%.2g of 2N rtol)%s %s\n",
            (unsigned long long)seed, md.kind, n, md.ng, scheme_name(scheme), stages, h, nsteps, rtol, s,
            (long long)imp_f, (long long)imp_b, (long long)split_f, (long long)split_b, (long long)fb_f, (long long)fb_b,
            (long long)k, err_q, err_p, fmax(err_q, err_p) / (2.0 * nsteps * rtol),
            verdict == EXIT_REVERSAL_BROKEN ? " BROKEN" : verdict == EXIT_REVERSAL_ONE_SIDED ? " one-sided" :
-           verdict ? " unjudged" : "", msg);
+           verdict == EXIT_REVERSAL_ONE_SIDED_LEFT ? " one-sided-left" : verdict ? " unjudged" : "", msg);
+  }
+  if (getenv("VCI_FUZZ_IMPACTS")) { /* both lists, the backward one reversed beside the forward one */
+    int a = list_f.count < MAX_LISTED_IMPACTS ? list_f.count : MAX_LISTED_IMPACTS;
+    int b = list_b.count < MAX_LISTED_IMPACTS ? list_b.count : MAX_LISTED_IMPACTS;
+    for (i = 0; i < a || i < b; ++i) {
+      if (i < a) printf("  forward  t %.9f wall %d impulse %+.9g", list_f.t[i], list_f.gap[i], list_f.impulse[i]);
+      else printf("  forward  -");
+      if (i < b)
+        printf("   backward t %.9f wall %d impulse %+.9g\n", list_b.t[b - 1 - i], list_b.gap[b - 1 - i], list_b.impulse[b - 1 - i]);
+      else printf("   backward -\n");
+    }
   }
   vci_integrator_destroy(&it);
   vci_model_destroy(&model);
@@ -532,7 +603,7 @@ static void run_child(uint64_t seed) {
 }
 
 int main(int argc, char **argv) {
-  long first, count, i, ran = 0, bad = 0, unjudged = 0, one_sided = 0, stopped = 0;
+  long first, count, i, ran = 0, bad = 0, unjudged = 0, one_sided = 0, one_sided_left = 0, stopped = 0;
   double budget;
   time_t start = time(NULL);
   fuzz_trace = getenv("VCI_FUZZ_TRACE") != NULL;
@@ -575,6 +646,8 @@ int main(int argc, char **argv) {
       ++unjudged;
     } else if (reversal_mode && WEXITSTATUS(status) == EXIT_REVERSAL_ONE_SIDED) {
       ++one_sided;
+    } else if (reversal_mode && WEXITSTATUS(status) == EXIT_REVERSAL_ONE_SIDED_LEFT) {
+      ++one_sided_left;
     } else if (WEXITSTATUS(status) != 0) {
       static const char *why[] = {"exit from library code", "NaN/Inf given to LAPACK", "broken promise",
                                   "reversal broken"};
@@ -593,7 +666,8 @@ int main(int argc, char **argv) {
          first, first + ran - 1, difftime(time(NULL), start), bad);
   if (reversal_mode)
     printf(", %ld not judged (a failed step, or splits or energy fallbacks alike both ways), %ld not judged as"
-           " one-sided (splits or energy fallbacks differ between the directions)", unjudged, one_sided);
+           " one-sided (splits or energy fallbacks differ between the directions) with a symmetric scheme, %ld with"
+           " the left rule (not symmetric)", unjudged, one_sided, one_sided_left);
   printf("%s\n", ran < count && !stopped ? " (time budget reached)" : "");
   return bad ? 1 : 0;
 }

@@ -4,7 +4,9 @@
 !> start to solver tolerance, with the same impacts and the same energy fallbacks in both
 !> directions (test/support/vci_test_reversal.f90). Prints one line per failing seed and a summary.
 !>
-!>   vci_reversal_fuzz SEED_FIRST SEED_COUNT [SECONDS [TOL [firm|wide]]]   (defaults: 60 s, 1e-9, firm)
+!>   vci_reversal_fuzz SEED_FIRST SEED_COUNT [SECONDS [TOL [firm|wide [impacts]]]]   (defaults: 60 s, 1e-9, firm)
+!>
+!> impacts: also print each seed's forward impacts (condition, impulse, normal velocities)
 !>
 !> firm: impacts away from grazes (the property the default suite asserts); wide: soft impacts too
 !> A seed whose only fault is its distance to the start (status OK, the same impacts and fallbacks
@@ -26,7 +28,7 @@ program vci_reversal_fuzz
   character(len=64) :: arg
   type(reversal_scene_t) :: s
   type(reversal_result_t) :: r
-  logical :: bad, firm
+  logical :: bad, firm, list_impacts
   first = 1; count = 100; seconds = 60.0_dp; tol = 1.0e-9_dp; firm = .true.
   if (command_argument_count() >= 1) then
     call get_command_argument(1, arg); read (arg, *) first
@@ -43,6 +45,10 @@ program vci_reversal_fuzz
   if (command_argument_count() >= 5) then
     call get_command_argument(5, arg); firm = trim(arg) /= 'wide'
   end if
+  list_impacts = .false.
+  if (command_argument_count() >= 6) then
+    call get_command_argument(6, arg); list_impacts = trim(arg) == 'impacts'
+  end if
   call system_clock(c0, rate)
   chaotic = 0
   failed = 0; soft = 0; run = 0; multi = 0; fallbacks = 0; worst_q = 0.0_dp; worst_p = 0.0_dp
@@ -50,6 +56,10 @@ program vci_reversal_fuzz
     s = random_scene(seed, firm)
     r = round_trip(s)
     run = run + 1
+    if (list_impacts) then
+      print '(a,i0,a,a)', 'seed ', seed, ': ', trim(scene_label(s))
+      call print_forward_impacts(s)
+    end if
     bad = r%stat /= VCI_OK
     if (.not. bad) bad = .not. (r%err_q <= tol .and. r%err_p <= tol) .or. r%impacts_fwd /= r%impacts_bwd &
                          .or. r%fallbacks_fwd /= r%fallbacks_bwd

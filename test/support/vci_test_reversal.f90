@@ -44,7 +44,7 @@ module vci_test_reversal
     integer :: touches = 0               !< impacts with no impulse (tangential touches), both directions
   end type reversal_result_t
 
-  public :: random_scene, round_trip, scene_label, forward_growth
+  public :: random_scene, round_trip, scene_label, forward_growth, print_forward_impacts
 
 contains
 
@@ -252,6 +252,54 @@ contains
       if (imp%impulse == 0.0_dp) touches = touches + 1
     end do
   end function touches
+
+  !> The forward run of round_trip, printing each impact: step, time, wall, condition (0 discrete,
+  !> 1 H, 2 blended), impulse, the normal velocity before and after (from the momenta at the wall,
+  !> L's momentum inverted) and their squares' ratio, which the blended condition sets to
+  !> C/(C + 1) (delta > 0) or 1 + 1/C (delta < 0) (docs/BACKWARD.md). Stops at a failed step.
+  subroutine print_forward_impacts(s)
+    type(reversal_scene_t), intent(in) :: s
+    type(reversal_lag_t), target :: lag
+    type(vci_integrator_t) :: integ
+    type(vci_impact_t) :: imp
+    integer :: stat, i, k
+    real(dp) :: gn, vb, va
+    lag%n = 2; lag%n_gaps = 4; lag%s = s
+    call integ%create(lag, s%h, stat)
+    if (stat == VCI_OK) call integ%set_scheme(s%scheme, s%stages, stat)
+    if (stat == VCI_OK) call integ%set_poke_samples(.true., stat)
+    if (stat == VCI_OK) call integ%init_from_pair(0.0_dp, s%q0, s%q0 + s%h * s%v0, stat)
+    if (stat /= VCI_OK .or. s%scheme == VCI_SCHEME_DISCRETE) return   ! (the L_d scene: the same L, not printed)
+    do i = 1, s%nsteps
+      call integ%step(1, stat)
+      if (stat /= VCI_OK) then
+        print '(a,i0,a,a)', '  step ', i, ' failed: ', trim(integ%message()); return
+      end if
+      do k = 1, integ%impact_count()
+        imp = integ%impact(k)
+        gn = norm2(imp%grad_g)
+        vb = dot_product(velocity(s, imp%q, imp%p_before), imp%grad_g) / gn
+        va = dot_product(velocity(s, imp%q, imp%p_after), imp%grad_g) / gn
+        print '(a,i4,a,f9.5,a,i2,a,i2,a,es10.3,a,es10.3,a,es10.3,a,f7.3)', '  step ', i, ' t ', imp%t, ' wall ', imp%gap, &
+          ' condition ', imp%condition, ' impulse ', imp%impulse, ' v_n before ', vb, ' after ', va, &
+          ' ratio of squares ', (va / vb)**2
+      end do
+    end do
+  end subroutine print_forward_impacts
+
+  !> The velocity whose momentum L_v = v (1 + c |v|^2) + b/2 (-y, x) is p at q (Newton on |v|).
+  function velocity(s, q, p) result(v)
+    type(reversal_scene_t), intent(in) :: s
+    real(dp), intent(in) :: q(2), p(2)
+    real(dp) :: v(2), u(2), speed
+    integer :: it
+    u = p - 0.5_dp * s%b * [-q(2), q(1)]
+    speed = norm2(u)
+    do it = 1, 60
+      speed = speed - (speed * (1.0_dp + s%c * speed**2) - norm2(u)) / (1.0_dp + 3.0_dp * s%c * speed**2)
+    end do
+    v = u / (1.0_dp + s%c * speed**2)
+  end function velocity
 
   ! ---- L and its partials ----
 
