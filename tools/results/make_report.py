@@ -381,8 +381,10 @@ def main(outdir, root):
           "CVODE of that scene, timed the same way in one run): " + "; ".join(parts) + ". The interpreted "
           "peers' rows and the long runs are from the full run above; the profile is rerun with pendulum_walls.\n")
     w("vci's poke screen (a wall crossed and left within one sub-step, docs/BACKWARD.md) is on by default "
-      "since merge e6aced0 (2026-11-27) and costs 11–32 % more instructions a step (docs/bench/poke.md): "
-      "a scene whose rows come from an earlier commit ran with it off.\n")
+      "since merge e6aced0 (2026-11-27) and costs 11–29 % more instructions a step of the midpoint "
+      "schemes; Lobatto's screen reads its own stage polynomial since merge b8e5b3f and costs +2–7 % a "
+      "regular step, +1–2 % an impact step (docs/bench/poke.md): a scene whose rows come from an "
+      "earlier commit ran with the screen off or with the older screen.\n")
     w("> **vci rows.** `vci-ld-*`: the scene's own hand-written discrete Lagrangian (the midpoint rule, "
       "second order; the nonholonomic pendulum's is the paper's first-order left-point rule). "
       "`vci-left-*`, `vci-midpoint-*`, `vci-lobattoS-*`: the library's schemes built from the scene's "
