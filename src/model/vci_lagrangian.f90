@@ -84,7 +84,7 @@ module vci_lagrangian
 
   public :: lagrangian_work_setup, lagrangian_hessians, lagrangian_energy, lagrangian_hamiltonian
   public :: lagrangian_band_hessians, lagrangian_check_band
-  public :: lagrangian_sparse_hessians, lagrangian_sparse_setup
+  public :: lagrangian_sparse_hessians, lagrangian_sparse_setup, check_point
 
   real(dp), parameter :: fd_rel = 6.0e-6_dp   ! ~ eps**(1/3): central differences
 
@@ -369,10 +369,7 @@ contains
     call lag%clear_not_provided()
     exact = dense%has_hessians
     do k = 0, 2
-      do i = 1, n                  ! (q, v), then two points near it
-        qk(i) = q(i) + 0.05_dp * k * max(abs(q(i)), 1.0_dp) * sin(1.7_dp * i + k)
-        vk(i) = v(i) + 0.05_dp * k * max(abs(v(i)), 1.0_dp) * cos(0.9_dp * i - k)
-      end do
+      call check_point(q, v, k, qk, vk)
       call lagrangian_band_hessians(lag, band, qk, vk, bw, band%lqq, band%lqv, band%bvv, stat)
       if (stat /= VCI_OK) then
         why = 'hessians_band failed or returned NaN/Inf in the check of the declared bandwidth'
@@ -604,4 +601,17 @@ contains
     end do
     call lagrangian_energy(lag, work, q, work%w(1:n), e, stat)
   end subroutine lagrangian_hamiltonian
+  !> The k-th point (k = 0: (q, v) itself; 1, 2: two points near it, every coordinate moved by up to
+  !> 5 k % of its size) where the start-up checks compare a model's Hessian callbacks.
+  pure subroutine check_point(q, v, k, qk, vk)
+    real(dp), intent(in) :: q(:), v(:)
+    integer, intent(in) :: k
+    real(dp), intent(out) :: qk(:), vk(:)
+    integer :: i
+    do i = 1, size(q)
+      qk(i) = q(i) + 0.05_dp * k * max(abs(q(i)), 1.0_dp) * sin(1.7_dp * i + k)
+      vk(i) = v(i) + 0.05_dp * k * max(abs(v(i)), 1.0_dp) * cos(0.9_dp * i - k)
+    end do
+  end subroutine check_point
+
 end module vci_lagrangian

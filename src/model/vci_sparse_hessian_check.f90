@@ -10,7 +10,7 @@ module vci_sparse_hessian_check
   use vci_status, only: VCI_OK, VCI_ERR_ARGUMENT, VCI_ERR_CALLBACK, VCI_ERR_MEMORY, VCI_ERR_NONFINITE
   use vci_sparse, only: vci_sparse_pattern_t
   use vci_lagrangian, only: vci_lagrangian_t, vci_lagrangian_work_t, lagrangian_sparse_setup, &
-                            lagrangian_sparse_hessians
+                            lagrangian_sparse_hessians, check_point
   implicit none
   private
 
@@ -55,10 +55,7 @@ contains
       end if
       call lag%clear_not_provided()
       do k = 0, 2
-        do i = 1, n                  ! (q, v), then two points near it (the band check's)
-          qk(i) = q(i) + 0.05_dp * k * max(abs(q(i)), 1.0_dp) * sin(1.7_dp * i + k)
-          vk(i) = v(i) + 0.05_dp * k * max(abs(v(i)), 1.0_dp) * cos(0.9_dp * i - k)
-        end do
+        call check_point(q, v, k, qk, vk)     ! (q, v), then two points near it (the band check's)
         call lagrangian_sparse_hessians(lag, work, pat, qk, vk, work%sqq, work%sqv, work%svv, stat)
         if (stat /= VCI_OK) then
           why = 'hessians_sparse failed or returned NaN/Inf in the check of the sparse Hessians'
