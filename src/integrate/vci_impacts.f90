@@ -391,7 +391,7 @@ contains
       call set_cause(self, 'gap evaluation at the start of the sub-step'); self%x(1:nm) = self%x_full(1:nm); return
     end if
     ! a scheme with interior stages screens on their polynomial: no solve unless it comes near a wall
-    stage_path = self%sys%path_degree() >= 2 .and. self%sys%path_degree() <= PATH_MAX_DEGREE
+    stage_path = screens_on_stages(self)
     if (stage_path) then
       screened = stage_screen(self, only, stat)
       if (stat /= VCI_OK .or. .not. screened) return
@@ -513,6 +513,15 @@ contains
     stage_screen = .false.
   end function stage_screen
 
+  !> Does the poke screen read the scheme's stage polynomial (stage_screen) rather than the parabola
+  !> through a half sub-step? Schemes with interior stages, up to the degree stage_screen takes.
+  logical function screens_on_stages(self)
+    type(vci_stepper_t), intent(inout) :: self
+    integer :: d
+    d = self%sys%path_degree()
+    screens_on_stages = d >= 2 .and. d <= PATH_MAX_DEGREE
+  end function screens_on_stages
+
   !> Might the polynomial with Bernstein coefficients b(0:d) on [0, 1] be negative there? False when
   !> every coefficient of it, or of each piece after up to BERNSTEIN_SPLITS halvings (de Casteljau),
   !> is >= 0 (the convex hull property); true at a negative value (a piece's end) or when pieces are
@@ -614,7 +623,7 @@ contains
     may_poke = .true.
     if (state%predictor_depth * dir <= 0) return
     ! a stage polynomial screens at least as tightly, without the previous step (find_poke)
-    if (self%sys%path_degree() >= 2 .and. self%sys%path_degree() <= PATH_MAX_DEGREE) return
+    if (screens_on_stages(self)) return
     ! (gaps_start and gaps_trial as scratch: an impact that follows evaluates them again)
     call self%sys%eval_gaps(self%q_start, self%gaps_start(1:self%ng), stat)
     self%q_trial = 0.5_dp * (self%q_start + self%q_end)
