@@ -215,7 +215,7 @@ contains
   !> sub-step from p- + mu grad g and stage 1 to wall j. On return stage 1 (x_stage1, q_wall,
   !> p_arrive, alpha, e_minus, s1res) belongs to the final mu, and imp and p_start say so. Where no
   !> impulse meets the condition (near a graze, where E_d hardly depends on mu, or the motion no
-  !> longer reaches wall j), the state of the impulse stage 2 found is put back: that impact keeps
+  !> longer reaches wall j first), the state of the impulse stage 2 found is put back: that impact keeps
   !> its condition on the whole rest of the step, as before (docs/BACKWARD.md: not reversible).
   subroutine tie_to_wall(self, imp, dir, tau, j, alpha, e_minus, s1res, stat)
     type(vci_stepper_t), intent(inout) :: self
@@ -309,7 +309,8 @@ contains
     end subroutine tie_row
 
     !> Regular sub-step and stage 1 to wall j from (q_start, p- + mu grad g); f = E_d - E-. False when
-    !> the motion misses wall j or a solve fails (stat then says whether that is fatal).
+    !> the motion misses wall j, crosses another wall before it (then its sub-step does not end at
+    !> wall j) or a solve fails (stat then says whether that is fatal).
     logical function evaluate(mu, f)
       real(dp), intent(in) :: mu
       real(dp), intent(out) :: f
@@ -346,6 +347,14 @@ contains
       self%x_stage1(1:nx + 1) = self%x(1:nx + 1)
       s1res = self%last_residual
       call self%sys%get_endpoint(self%x_stage1, self%q_wall)
+      ! the motion at this impulse must reach wall j first: a wall admissible at the start and
+      ! violated at wall j's point was crossed on the way, unseen (the next sub-step would start
+      ! beyond it and reflect there as if on it: seed 14739, 1.4e-2 beyond)
+      call self%sys%eval_gaps(self%q_wall, self%gaps_trial(1:self%ng), stat)
+      if (stat /= VCI_OK) then
+        call set_cause(self, 'gap evaluation at the wall'); return
+      end if
+      if (crossed_before(j)) return
       call self%sys%momentum_out(self%x_stage1, self%q_start, alpha * tau, self%p_arrive, stat, self%p_start)
       if (stat == VCI_OK) call self%sys%energy_out(self%x_stage1, self%q_start, alpha * tau, e_minus, stat)
       if (stat /= VCI_OK) then
@@ -359,6 +368,17 @@ contains
         mu_best = mu; f_best = f
       end if
     end function evaluate
+
+    !> Does the sub-step from q_start to the point on wall `reached` (its gaps in gaps_trial) end
+    !> beyond another wall that it started on the admissible side of?
+    logical function crossed_before(reached)
+      integer, intent(in) :: reached
+      integer :: k
+      crossed_before = .false.
+      do k = 1, self%ng
+        if (k /= reached .and. self%gaps_start(k) >= 0.0_dp .and. self%gaps_trial(k) < 0.0_dp) crossed_before = .true.
+      end do
+    end function crossed_before
   end subroutine tie_to_wall
 
   !> Does the sub-step from (q_start, p_start) of length tau (its solution in x) pass a wall and come
