@@ -1009,12 +1009,12 @@ contains
     integer, intent(in) :: j
     real(dp), intent(in) :: tau2, e_minus
     integer, intent(out) :: stat
-    integer :: n, m, nx0, info, stat_b
+    integer :: m, nx0, info, stat_b
     real(dp) :: num, den, mu0, mirror
     logical :: done, passed_through
     character(len=40) :: what
     character(len=48) :: what_impulse
-    n = self%n; m = self%m; nx0 = self%nsub
+    m = self%m; nx0 = self%nsub
     self%impact_condition = self%settings%impact_energy
     what = wall_label('stage 2 (reflecting at wall ', j)
     call self%sys%eval_gap_gradient(self%q_wall, j, self%wall_grad, stat)
@@ -1022,8 +1022,7 @@ contains
       call set_cause(self, 'gap gradients at the wall'); return
     end if
     call self%sys%set_wall_normal(self%wall_grad)
-    if (self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN .and. m == 0 .and. self%rates_first .and. &
-        n >= vci_large_system) then
+    if (self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN .and. m == 0 .and. self%rates_first) then
       call reflect_by_rates(done)
       if (done .or. stat /= VCI_OK) return
     end if
@@ -1168,33 +1167,28 @@ contains
     !> sensitivity were ~29 % of an impact on the banded chain): H(qt, p- + mu grad g) = E- fixes
     !> mu from the momenta, and the free motion served only to say whether an impulse is needed and
     !> to start Newton. Here the rate s(mu) at which the motion leaves the wall (normal_rate) says
-    !> it where it is clear: the motion at the wall moves into it (s(0) < -1e6 noise: the rate, a
-    !> difference of H values, resolved to 1e-6, so that the impulse's Newton from the start below
-    !> takes a step and ends at round-off, not at its start) and the sub-step
+    !> it where it is clear: the motion at the wall moves into it (s(0) < -noise) and the sub-step
     !> ends beyond wall j by at least half the normal distance s(0) tau2 (so a normal force turns
     !> the normal velocity by less than |s(0)| over tau2: the free motion, g about s(0) t + a t^2/2,
-    !> still moves into the wall at its end and ends beyond it, num < 0). The impulse starts at
-    !> twice the fold of s along the impulse line (a secant from mu = 0: exact where H is quadratic in
-    !> p, as the mirror is to first order) and the leaving sub-step from the chord velocity with its
-    !> normal part reflected; reflect_hamiltonian does the rest. done = .false. (nothing changed):
-    !> a graze or a sub-step ending near the wall, rates that do not decide, or a reflection that
-    !> failed from this start — the free motion as before. Systems of vci_large_system unknowns or
-    !> more only: on the 2-dof grazing line (test_grazing_line, normal speed 1e-3) the reflected
-    !> normal speed came out 1e-9 relative off where the free motion's mirror gives it exactly (1e-12
-    !> asserted); the cause was not found, and small systems gain little (their solves are cheap).
+    !> still moves into the wall at its end and ends beyond it, num < 0). The impulse starts at the
+    !> other root of the parabola through H at mu = -mu_t, 0, mu_t (fold_by_values: exact where H
+    !> is quadratic in p, as the mirror is where the free motion is linear) when its round-off is
+    !> within rtol, and the leaving sub-step from the chord velocity with its normal part
+    !> reflected; reflect_hamiltonian does the rest. done = .false. (nothing changed): a graze or a
+    !> sub-step ending near the wall, a fold that round-off does not resolve to rtol, or a
+    !> reflection that failed from this start — the free motion as before.
     subroutine reflect_by_rates(done)
       logical, intent(out) :: done
-      real(dp) :: s0, s1, noise0, noise1, mu_t, gg, gv
+      real(dp) :: s0, noise0, mu_t, gg, gv
+      logical :: resolved
       done = .false.
       call normal_rate(self, 0.0_dp, s0, noise0, stat)
       if (stat /= VCI_OK) return
-      if (.not. (s0 < -1.0e6_dp * noise0 .and. self%gaps_end(j) <= 0.5_dp * s0 * tau2)) return
+      if (.not. (s0 < -noise0 .and. self%gaps_end(j) <= 0.5_dp * s0 * tau2)) return
       mu_t = maxval(abs(self%p_arrive)) / max(maxval(abs(self%sys%grad)), tiny(1.0_dp))
       if (.not. (mu_t > 0.0_dp .and. mu_t <= huge(1.0_dp))) return
-      call normal_rate(self, mu_t, s1, noise1, stat)
-      if (stat /= VCI_OK) return
-      if (.not. (abs(s1 - s0) > noise0 + noise1)) return
-      mu0 = 2.0_dp * mu_t * s0 / (s0 - s1)
+      call fold_by_values(self, mu_t, mu0, resolved, stat)
+      if (stat /= VCI_OK .or. .not. resolved) return
       if (.not. (abs(mu0) > 0.0_dp .and. abs(mu0) <= huge(1.0_dp))) return
       gg = dot_product(self%sys%grad, self%sys%grad)
       gv = dot_product(self%sys%grad, self%chord_velocity)
@@ -1616,6 +1610,42 @@ contains
     rate = real(self%sys%dir, dp) * (hp - hm) / (2.0_dp * d)   ! backward, q moves along -dH/dp
     noise = 8.0_dp * epsilon(1.0_dp) * (abs(hp) + abs(hm)) / (2.0_dp * d)
   end subroutine normal_rate
+
+  !> The reflection's impulse where H (m = 0) is quadratic along the impulse line: the other root
+  !> of H(qt, p- + mu grad g) = H(qt, p-), from the parabola through mu = -mu_t, 0, mu_t,
+  !> mu0 = -mu_t (H+ - H-) / (H+ - 2 H0 + H-). At a graze H is mostly the tangential motion's and
+  !> the normal part only a small difference of H values: the rate's central difference over
+  !> d = 6e-6 mu_t (normal_rate) has round-off eps |H| / (2 d |s(0)|), 9e-9 relative on the
+  !> grazing line at normal speed 1e-3 (H = 0.5, mu_t = 1), and a fold from it left the reflected
+  !> speed 1.05e-9 off (test_grazing_line), a start the energy row's tolerance, rtol |H|, accepts
+  !> (it fixes v_n only to rtol |H| / v_n). Over +-mu_t the round-off of mu0 is about
+  !> eps (|H+| + |H-|) / |H+ - H-| relative; resolved = that is within rtol and the curvature is
+  !> resolved: then the start is the reflection to solver tolerance wherever H is quadratic in p.
+  !> Else the caller takes the free motion's mirror.
+  subroutine fold_by_values(self, mu_t, mu0, resolved, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    real(dp), intent(in) :: mu_t
+    real(dp), intent(out) :: mu0
+    logical, intent(out) :: resolved
+    integer, intent(out) :: stat
+    real(dp) :: hp, h0, hm, slope, curvature
+    mu0 = 0.0_dp; resolved = .false.
+    self%p_leave = self%p_arrive + mu_t * self%sys%grad
+    call self%sys%hamiltonian(self%q_wall, self%p_leave, hp, stat)
+    if (stat == VCI_OK) call self%sys%hamiltonian(self%q_wall, self%p_arrive, h0, stat)
+    if (stat == VCI_OK) then
+      self%p_leave = self%p_arrive - mu_t * self%sys%grad
+      call self%sys%hamiltonian(self%q_wall, self%p_leave, hm, stat)
+    end if
+    if (stat /= VCI_OK) then
+      call set_cause(self, 'stage 2: H along the impulse line (the reflection''s impulse)'); return
+    end if
+    slope = hp - hm
+    curvature = hp - 2.0_dp * h0 + hm
+    resolved = epsilon(1.0_dp) * (abs(hp) + abs(hm)) <= self%settings%rtol * abs(slope) .and. &
+               curvature > 8.0_dp * epsilon(1.0_dp) * (abs(hp) + 2.0_dp * abs(h0) + abs(hm))
+    if (resolved) mu0 = -mu_t * slope / curvature
+  end subroutine fold_by_values
 
   !> The impact just resolved (stage 1 in x_stage1 / q_wall, stage 2 in x), into imp.
   subroutine record_impact(self, imp, dir, h, t, elapsed, j, e_minus, s1res, tau2)

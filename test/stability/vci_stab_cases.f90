@@ -75,12 +75,14 @@ contains
 
   !> No gravity; a straight approach to the floor with tangential speed 1 and normal speed vn,
   !> crossing at t* = 0.105 (in the middle of step 11 of h = 1e-2). 20 steps. Returns the impact
-  !> time, the normal speed after the impact and the tangential speed after.
-  subroutine graze_line_case(vn, mode, s, t_star, vn_after, vt_after)
+  !> time, the normal speed after the impact and the tangential speed after. rates_first: the
+  !> hamiltonian stage 2's path (set_solver_paths; absent: the default, on).
+  subroutine graze_line_case(vn, mode, s, t_star, vn_after, vt_after, rates_first)
     real(dp), intent(in) :: vn
     integer, intent(in) :: mode
     type(run_summary_t), intent(out) :: s
     real(dp), intent(out) :: t_star, vn_after, vt_after
+    logical, intent(in), optional :: rates_first
     type(particle_t), target :: model
     type(vci_integrator_t) :: integ
     integer :: stat
@@ -88,6 +90,8 @@ contains
     model = particle_on_floor(1.0_dp, 0.0_dp)
     call integ%create(model, 1.0e-2_dp, stat)
     call integ%set_impact_energy(mode, stat)
+    ! (the linear-algebra paths as by default: in-line LU up to 15 unknowns, reuse from 16)
+    if (present(rates_first)) call integ%set_solver_paths(15, 16, rates_first=rates_first)
     call integ%init_from_momentum(0.0_dp, [0.0_dp, vn * t_star], [1.0_dp, -vn], stat)
     call run_steps(integ, model, 20_i8, s)
     associate (p_ => integ%momentum())
