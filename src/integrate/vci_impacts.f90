@@ -141,6 +141,8 @@ contains
           j = first_by_chord(self, self%gaps_trial)
         end do
         if (jstar == 0) exit      ! a poke stage 1 did not confirm and the end is admissible: no impact
+        call reach_crossed_first(self, tau, last_gap, jstar, alpha, s1res, stat)
+        if (stat /= VCI_OK) return
         call self%sys%get_endpoint(self%x_stage1, self%q_wall)
         if (self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN) then
           call self%sys%impact_momentum(self%x_stage1, self%q_start, alpha * tau, self%p_arrive, stat, self%p_start)
@@ -204,6 +206,65 @@ contains
       state%arriving_energy = e_minus
     end do
   end subroutine resolve_impacts
+
+  !> Stage 1 reached wall jstar (x_stage1, its point's gaps in gaps_trial) after crossing a wall whose
+  !> gap is positive at the start and at the sub-step's end: a poke that find_poke leaves to stage 1
+  !> (its first sample beyond that wall was beyond a wall the end is beyond too), and that stage 1's
+  !> walls, those the end is beyond, do not include. The impact is at that wall: its crossing is
+  !> bracketed on the trajectory between the start and jstar's point (g > 0 at s = 0, < 0 at alpha)
+  !> and solved as a poke; repeated while the new point is beyond another such wall. (A particle
+  !> between a floor and a ceiling 0.017 apart, h = 0.087: the side wall reached 1.1e-4 beyond the
+  !> ceiling, the state then reflected from there; test_side_wall_beyond_ceiling.)
+  subroutine reach_crossed_first(self, tau, last_gap, jstar, alpha, s1res, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    real(dp), intent(in) :: tau
+    integer, intent(in) :: last_gap
+    integer, intent(inout) :: jstar
+    real(dp), intent(inout) :: alpha, s1res
+    integer, intent(out) :: stat
+    integer :: k, nm
+    real(dp) :: alpha_k
+    logical :: found
+    stat = VCI_OK
+    nm = self%nsub
+    do
+      k = crossed_on_the_way()
+      if (k == 0) return
+      self%wall_tried(k) = .true.
+      call self%sys%get_multipliers(self%x_stage1, self%lambda_start)
+      call self%sys%put_endpoint(self%x_low, self%q_start, self%q_start)
+      call self%sys%put_multipliers(self%x_low, self%lambda_start)
+      self%x_high(1:nm) = self%x_stage1(1:nm)
+      call stage_poke(self, k, tau, 0.0_dp, alpha, self%gaps_start(k), self%gaps_trial(k), alpha_k, found, stat)
+      if (stat /= VCI_OK) return
+      if (.not. (found .and. alpha_k < alpha)) cycle
+      alpha = alpha_k; jstar = k
+      self%x_stage1(1:nm + 1) = self%x(1:nm + 1)
+      s1res = self%last_residual
+      call self%sys%get_endpoint(self%x_stage1, self%q_trial)
+      call self%sys%eval_gaps(self%q_trial, self%gaps_trial(1:self%ng), stat)
+      if (stat /= VCI_OK) then
+        call set_cause(self, 'gap evaluation at the wall'); return
+      end if
+    end do
+  contains
+    !> Of the walls not yet tried, positive at the start and negative at the point reached, the one
+    !> the chord to that point crosses first (0: none). The wall just reflected from is not one.
+    integer function crossed_on_the_way()
+      integer :: i
+      real(dp) :: f, best
+      crossed_on_the_way = 0
+      best = huge(1.0_dp)
+      do i = 1, self%ng
+        if (i == last_gap .or. self%wall_tried(i)) cycle
+        if (.not. (self%gaps_start(i) > 0.0_dp .and. self%gaps_trial(i) < 0.0_dp)) cycle
+        f = self%gaps_start(i) / (self%gaps_start(i) - self%gaps_trial(i))
+        if (f < best) then
+          best = f; crossed_on_the_way = i
+        end if
+      end do
+    end function crossed_on_the_way
+  end subroutine reach_crossed_first
 
   !> Several impacts in one step (docs/DESIGN.md §2, "Several impacts in one step"). Stage 2 of the
   !> previous impact (imp, at q_start) matched E_d over the whole rest tau of the sub-step, but the
