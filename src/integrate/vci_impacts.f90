@@ -141,6 +141,8 @@ contains
           j = first_by_chord(self, self%gaps_trial)
         end do
         if (jstar == 0) exit      ! a poke stage 1 did not confirm and the end is admissible: no impact
+        call reach_crossed_first(self, tau, last_gap, jstar, alpha, s1res, stat)
+        if (stat /= VCI_OK) return
         call self%sys%get_endpoint(self%x_stage1, self%q_wall)
         if (self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN) then
           call self%sys%impact_momentum(self%x_stage1, self%q_start, alpha * tau, self%p_arrive, stat, self%p_start)
@@ -205,6 +207,65 @@ contains
     end do
   end subroutine resolve_impacts
 
+  !> Stage 1 reached wall jstar (x_stage1, its point's gaps in gaps_trial) after crossing a wall whose
+  !> gap is positive at the start and at the sub-step's end: a poke that find_poke leaves to stage 1
+  !> (its first sample beyond that wall was beyond a wall the end is beyond too), and that stage 1's
+  !> walls, those the end is beyond, do not include. The impact is at that wall: its crossing is
+  !> bracketed on the trajectory between the start and jstar's point (g > 0 at s = 0, < 0 at alpha)
+  !> and solved as a poke; repeated while the new point is beyond another such wall. (A particle
+  !> between a floor and a ceiling 0.017 apart, h = 0.087: the side wall reached 1.1e-4 beyond the
+  !> ceiling, the state then reflected from there; test_side_wall_beyond_ceiling.)
+  subroutine reach_crossed_first(self, tau, last_gap, jstar, alpha, s1res, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    real(dp), intent(in) :: tau
+    integer, intent(in) :: last_gap
+    integer, intent(inout) :: jstar
+    real(dp), intent(inout) :: alpha, s1res
+    integer, intent(out) :: stat
+    integer :: k, nm
+    real(dp) :: alpha_k
+    logical :: found
+    stat = VCI_OK
+    nm = self%nsub
+    do
+      k = crossed_on_the_way()
+      if (k == 0) return
+      self%wall_tried(k) = .true.
+      call self%sys%get_multipliers(self%x_stage1, self%lambda_start)
+      call self%sys%put_endpoint(self%x_low, self%q_start, self%q_start)
+      call self%sys%put_multipliers(self%x_low, self%lambda_start)
+      self%x_high(1:nm) = self%x_stage1(1:nm)
+      call stage_poke(self, k, tau, 0.0_dp, alpha, self%gaps_start(k), self%gaps_trial(k), alpha_k, found, stat)
+      if (stat /= VCI_OK) return
+      if (.not. (found .and. alpha_k < alpha)) cycle
+      alpha = alpha_k; jstar = k
+      self%x_stage1(1:nm + 1) = self%x(1:nm + 1)
+      s1res = self%last_residual
+      call self%sys%get_endpoint(self%x_stage1, self%q_trial)
+      call self%sys%eval_gaps(self%q_trial, self%gaps_trial(1:self%ng), stat)
+      if (stat /= VCI_OK) then
+        call set_cause(self, 'gap evaluation at the wall'); return
+      end if
+    end do
+  contains
+    !> Of the walls not yet tried, positive at the start and negative at the point reached, the one
+    !> the chord to that point crosses first (0: none). The wall just reflected from is not one.
+    integer function crossed_on_the_way()
+      integer :: i
+      real(dp) :: f, best
+      crossed_on_the_way = 0
+      best = huge(1.0_dp)
+      do i = 1, self%ng
+        if (i == last_gap .or. self%wall_tried(i)) cycle
+        if (.not. (self%gaps_start(i) > 0.0_dp .and. self%gaps_trial(i) < 0.0_dp)) cycle
+        f = self%gaps_start(i) / (self%gaps_start(i) - self%gaps_trial(i))
+        if (f < best) then
+          best = f; crossed_on_the_way = i
+        end if
+      end do
+    end function crossed_on_the_way
+  end subroutine reach_crossed_first
+
   !> Several impacts in one step (docs/DESIGN.md §2, "Several impacts in one step"). Stage 2 of the
   !> previous impact (imp, at q_start) matched E_d over the whole rest tau of the sub-step, but the
   !> motion leaving it reaches wall j after alpha tau: the sub-step that really leaves imp ends there.
@@ -215,7 +276,7 @@ contains
   !> sub-step from p- + mu grad g and stage 1 to wall j. On return stage 1 (x_stage1, q_wall,
   !> p_arrive, alpha, e_minus, s1res) belongs to the final mu, and imp and p_start say so. Where no
   !> impulse meets the condition (near a graze, where E_d hardly depends on mu, or the motion no
-  !> longer reaches wall j), the state of the impulse stage 2 found is put back: that impact keeps
+  !> longer reaches wall j first), the state of the impulse stage 2 found is put back: that impact keeps
   !> its condition on the whole rest of the step, as before (docs/BACKWARD.md: not reversible).
   subroutine tie_to_wall(self, imp, dir, tau, j, alpha, e_minus, s1res, stat)
     type(vci_stepper_t), intent(inout) :: self
@@ -309,7 +370,8 @@ contains
     end subroutine tie_row
 
     !> Regular sub-step and stage 1 to wall j from (q_start, p- + mu grad g); f = E_d - E-. False when
-    !> the motion misses wall j or a solve fails (stat then says whether that is fatal).
+    !> the motion misses wall j, crosses another wall before it (then its sub-step does not end at
+    !> wall j) or a solve fails (stat then says whether that is fatal).
     logical function evaluate(mu, f)
       real(dp), intent(in) :: mu
       real(dp), intent(out) :: f
@@ -346,6 +408,14 @@ contains
       self%x_stage1(1:nx + 1) = self%x(1:nx + 1)
       s1res = self%last_residual
       call self%sys%get_endpoint(self%x_stage1, self%q_wall)
+      ! the motion at this impulse must reach wall j first: a wall admissible at the start and
+      ! violated at wall j's point was crossed on the way, unseen (the next sub-step would start
+      ! beyond it and reflect there as if on it: seed 14739, 1.4e-2 beyond)
+      call self%sys%eval_gaps(self%q_wall, self%gaps_trial(1:self%ng), stat)
+      if (stat /= VCI_OK) then
+        call set_cause(self, 'gap evaluation at the wall'); return
+      end if
+      if (crossed_before(j)) return
       call self%sys%momentum_out(self%x_stage1, self%q_start, alpha * tau, self%p_arrive, stat, self%p_start)
       if (stat == VCI_OK) call self%sys%energy_out(self%x_stage1, self%q_start, alpha * tau, e_minus, stat)
       if (stat /= VCI_OK) then
@@ -359,6 +429,17 @@ contains
         mu_best = mu; f_best = f
       end if
     end function evaluate
+
+    !> Does the sub-step from q_start to the point on wall `reached` (its gaps in gaps_trial) end
+    !> beyond another wall that it started on the admissible side of?
+    logical function crossed_before(reached)
+      integer, intent(in) :: reached
+      integer :: k
+      crossed_before = .false.
+      do k = 1, self%ng
+        if (k /= reached .and. self%gaps_start(k) >= 0.0_dp .and. self%gaps_trial(k) < 0.0_dp) crossed_before = .true.
+      end do
+    end function crossed_before
   end subroutine tie_to_wall
 
   !> Does the sub-step from (q_start, p_start) of length tau (its solution in x) pass a wall and come
@@ -989,12 +1070,12 @@ contains
     integer, intent(in) :: j
     real(dp), intent(in) :: tau2, e_minus
     integer, intent(out) :: stat
-    integer :: n, m, nx0, info, stat_b
+    integer :: m, nx0, info, stat_b
     real(dp) :: num, den, mu0, mirror
     logical :: done, passed_through
     character(len=40) :: what
     character(len=48) :: what_impulse
-    n = self%n; m = self%m; nx0 = self%nsub
+    m = self%m; nx0 = self%nsub
     self%impact_condition = self%settings%impact_energy
     what = wall_label('stage 2 (reflecting at wall ', j)
     call self%sys%eval_gap_gradient(self%q_wall, j, self%wall_grad, stat)
@@ -1002,8 +1083,7 @@ contains
       call set_cause(self, 'gap gradients at the wall'); return
     end if
     call self%sys%set_wall_normal(self%wall_grad)
-    if (self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN .and. m == 0 .and. self%rates_first .and. &
-        n >= vci_large_system) then
+    if (self%settings%impact_energy == VCI_IMPACT_HAMILTONIAN .and. m == 0 .and. self%rates_first) then
       call reflect_by_rates(done)
       if (done .or. stat /= VCI_OK) return
     end if
@@ -1148,33 +1228,28 @@ contains
     !> sensitivity were ~29 % of an impact on the banded chain): H(qt, p- + mu grad g) = E- fixes
     !> mu from the momenta, and the free motion served only to say whether an impulse is needed and
     !> to start Newton. Here the rate s(mu) at which the motion leaves the wall (normal_rate) says
-    !> it where it is clear: the motion at the wall moves into it (s(0) < -1e6 noise: the rate, a
-    !> difference of H values, resolved to 1e-6, so that the impulse's Newton from the start below
-    !> takes a step and ends at round-off, not at its start) and the sub-step
+    !> it where it is clear: the motion at the wall moves into it (s(0) < -noise) and the sub-step
     !> ends beyond wall j by at least half the normal distance s(0) tau2 (so a normal force turns
     !> the normal velocity by less than |s(0)| over tau2: the free motion, g about s(0) t + a t^2/2,
-    !> still moves into the wall at its end and ends beyond it, num < 0). The impulse starts at
-    !> twice the fold of s along the impulse line (a secant from mu = 0: exact where H is quadratic in
-    !> p, as the mirror is to first order) and the leaving sub-step from the chord velocity with its
-    !> normal part reflected; reflect_hamiltonian does the rest. done = .false. (nothing changed):
-    !> a graze or a sub-step ending near the wall, rates that do not decide, or a reflection that
-    !> failed from this start — the free motion as before. Systems of vci_large_system unknowns or
-    !> more only: on the 2-dof grazing line (test_grazing_line, normal speed 1e-3) the reflected
-    !> normal speed came out 1e-9 relative off where the free motion's mirror gives it exactly (1e-12
-    !> asserted); the cause was not found, and small systems gain little (their solves are cheap).
+    !> still moves into the wall at its end and ends beyond it, num < 0). The impulse starts at the
+    !> other root of the parabola through H at mu = -mu_t, 0, mu_t (fold_by_values: exact where H
+    !> is quadratic in p, as the mirror is where the free motion is linear) when its round-off is
+    !> within rtol, and the leaving sub-step from the chord velocity with its normal part
+    !> reflected; reflect_hamiltonian does the rest. done = .false. (nothing changed): a graze or a
+    !> sub-step ending near the wall, a fold that round-off does not resolve to rtol, or a
+    !> reflection that failed from this start — the free motion as before.
     subroutine reflect_by_rates(done)
       logical, intent(out) :: done
-      real(dp) :: s0, s1, noise0, noise1, mu_t, gg, gv
+      real(dp) :: s0, noise0, mu_t, gg, gv
+      logical :: resolved
       done = .false.
       call normal_rate(self, 0.0_dp, s0, noise0, stat)
       if (stat /= VCI_OK) return
-      if (.not. (s0 < -1.0e6_dp * noise0 .and. self%gaps_end(j) <= 0.5_dp * s0 * tau2)) return
+      if (.not. (s0 < -noise0 .and. self%gaps_end(j) <= 0.5_dp * s0 * tau2)) return
       mu_t = maxval(abs(self%p_arrive)) / max(maxval(abs(self%sys%grad)), tiny(1.0_dp))
       if (.not. (mu_t > 0.0_dp .and. mu_t <= huge(1.0_dp))) return
-      call normal_rate(self, mu_t, s1, noise1, stat)
-      if (stat /= VCI_OK) return
-      if (.not. (abs(s1 - s0) > noise0 + noise1)) return
-      mu0 = 2.0_dp * mu_t * s0 / (s0 - s1)
+      call fold_by_values(self, mu_t, mu0, resolved, stat)
+      if (stat /= VCI_OK .or. .not. resolved) return
       if (.not. (abs(mu0) > 0.0_dp .and. abs(mu0) <= huge(1.0_dp))) return
       gg = dot_product(self%sys%grad, self%sys%grad)
       gv = dot_product(self%sys%grad, self%chord_velocity)
@@ -1596,6 +1671,42 @@ contains
     rate = real(self%sys%dir, dp) * (hp - hm) / (2.0_dp * d)   ! backward, q moves along -dH/dp
     noise = 8.0_dp * epsilon(1.0_dp) * (abs(hp) + abs(hm)) / (2.0_dp * d)
   end subroutine normal_rate
+
+  !> The reflection's impulse where H (m = 0) is quadratic along the impulse line: the other root
+  !> of H(qt, p- + mu grad g) = H(qt, p-), from the parabola through mu = -mu_t, 0, mu_t,
+  !> mu0 = -mu_t (H+ - H-) / (H+ - 2 H0 + H-). At a graze H is mostly the tangential motion's and
+  !> the normal part only a small difference of H values: the rate's central difference over
+  !> d = 6e-6 mu_t (normal_rate) has round-off eps |H| / (2 d |s(0)|), 9e-9 relative on the
+  !> grazing line at normal speed 1e-3 (H = 0.5, mu_t = 1), and a fold from it left the reflected
+  !> speed 1.05e-9 off (test_grazing_line), a start the energy row's tolerance, rtol |H|, accepts
+  !> (it fixes v_n only to rtol |H| / v_n). Over +-mu_t the round-off of mu0 is about
+  !> eps (|H+| + |H-|) / |H+ - H-| relative; resolved = that is within rtol and the curvature is
+  !> resolved: then the start is the reflection to solver tolerance wherever H is quadratic in p.
+  !> Else the caller takes the free motion's mirror.
+  subroutine fold_by_values(self, mu_t, mu0, resolved, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    real(dp), intent(in) :: mu_t
+    real(dp), intent(out) :: mu0
+    logical, intent(out) :: resolved
+    integer, intent(out) :: stat
+    real(dp) :: hp, h0, hm, slope, curvature
+    mu0 = 0.0_dp; resolved = .false.
+    self%p_leave = self%p_arrive + mu_t * self%sys%grad
+    call self%sys%hamiltonian(self%q_wall, self%p_leave, hp, stat)
+    if (stat == VCI_OK) call self%sys%hamiltonian(self%q_wall, self%p_arrive, h0, stat)
+    if (stat == VCI_OK) then
+      self%p_leave = self%p_arrive - mu_t * self%sys%grad
+      call self%sys%hamiltonian(self%q_wall, self%p_leave, hm, stat)
+    end if
+    if (stat /= VCI_OK) then
+      call set_cause(self, 'stage 2: H along the impulse line (the reflection''s impulse)'); return
+    end if
+    slope = hp - hm
+    curvature = hp - 2.0_dp * h0 + hm
+    resolved = epsilon(1.0_dp) * (abs(hp) + abs(hm)) <= self%settings%rtol * abs(slope) .and. &
+               curvature > 8.0_dp * epsilon(1.0_dp) * (abs(hp) + 2.0_dp * abs(h0) + abs(hm))
+    if (resolved) mu0 = -mu_t * slope / curvature
+  end subroutine fold_by_values
 
   !> The impact just resolved (stage 1 in x_stage1 / q_wall, stage 2 in x), into imp.
   subroutine record_impact(self, imp, dir, h, t, elapsed, j, e_minus, s1res, tau2)

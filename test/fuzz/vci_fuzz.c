@@ -59,10 +59,23 @@ typedef struct {
   int count;
   double t[MAX_LISTED_IMPACTS], impulse[MAX_LISTED_IMPACTS];
   int gap[MAX_LISTED_IMPACTS];
+  /* every impact point must be admissible: the most negative gap there, relative to its terms
+   * (seed 14739 reflected at a point 1.4e-2 beyond another wall, crossed unseen) */
+  const cmodel_t *md;
+  double worst_gap;
 } impact_list;
 static int list_impact(double t, double alpha, int gap, const double *q, double impulse, void *user) {
   impact_list *l = (impact_list *)user;
-  (void)alpha; (void)q;
+  int i, j;
+  (void)alpha;
+  for (j = 0; j < l->md->ng; ++j) {
+    double g = -l->md->offset[j], terms = fabs(l->md->offset[j]);
+    for (i = 0; i < l->md->n; ++i) {
+      g += l->md->normal[j][i] * q[i];
+      terms += fabs(l->md->normal[j][i] * q[i]);
+    }
+    if (g / (1.0 + terms) < l->worst_gap) l->worst_gap = g / (1.0 + terms);
+  }
   if (l->count < MAX_LISTED_IMPACTS) {
     l->t[l->count] = t; l->gap[l->count] = gap; l->impulse[l->count] = impulse;
   }
@@ -469,6 +482,8 @@ static int reversal(uint64_t seed) {
   char parted[160] = "";
   fuzz_seed(seed);
   list_f.count = 0; list_b.count = 0;
+  list_f.md = &md; list_b.md = &md;
+  list_f.worst_gap = 0.0; list_b.worst_gap = 0.0;
   for (i = 0; i < MAXC; ++i) ref[i] = uniform(-1.0, 1.0);
   separable = chance(35);
   random_cmodel(&md, ref, 1, separable);
@@ -530,6 +545,14 @@ static int reversal(uint64_t seed) {
   /* an energy fallback is an impact's condition: never more of them than impacts in a direction
    * (seed 950 counted 17 forward with 4 impacts: those of the attempts the safety net discarded) */
   if (s == VCI_OK && (fb_f > imp_f || fb_b > imp_b)) verdict = EXIT_REVERSAL_BROKEN;
+  /* an impact point beyond a wall (stage 1 solves a wall's gap row to rtol of its terms; a corner
+   * leaves the other wall's gap at that level too, so 100 rtol is a wide margin) */
+  else if (fmin(list_f.worst_gap, list_b.worst_gap) < -100.0 * rtol) {
+    verdict = EXIT_REVERSAL_BROKEN;
+    printf("reversal seed %llu: an impact point beyond a wall: gap %.2e relative to its terms (forward %.2e, "
+           "backward %.2e)\n", (unsigned long long)seed, fmin(list_f.worst_gap, list_b.worst_gap), list_f.worst_gap,
+           list_b.worst_gap);
+  }
   else if (s == VCI_OK && (split_f != split_b || fb_f != fb_b))
     /* the left rule is not symmetric: its backward step solves the right rule's equations (another
      * nonlinear system, another Newton basin; E_d - H offsets O(h), not O(h^2)), so where a solve

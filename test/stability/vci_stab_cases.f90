@@ -15,7 +15,7 @@ module vci_stab_cases
   real(dp), parameter, public :: pi = acos(-1.0_dp)
 
   public :: stiff_case, magnitude_case, graze_line_case, graze_ceiling_case, alpha_case
-  public :: corner_case, close_walls_case, rest_case, short_bounce_case
+  public :: corner_case, close_walls_case, rest_case, short_bounce_case, channel_case
   public :: pendulum_case, massless_case, step_size_case, ellipse_long_case, growth_exponent
 
 contains
@@ -75,12 +75,14 @@ contains
 
   !> No gravity; a straight approach to the floor with tangential speed 1 and normal speed vn,
   !> crossing at t* = 0.105 (in the middle of step 11 of h = 1e-2). 20 steps. Returns the impact
-  !> time, the normal speed after the impact and the tangential speed after.
-  subroutine graze_line_case(vn, mode, s, t_star, vn_after, vt_after)
+  !> time, the normal speed after the impact and the tangential speed after. rates_first: the
+  !> hamiltonian stage 2's path (set_solver_paths; absent: the default, on).
+  subroutine graze_line_case(vn, mode, s, t_star, vn_after, vt_after, rates_first)
     real(dp), intent(in) :: vn
     integer, intent(in) :: mode
     type(run_summary_t), intent(out) :: s
     real(dp), intent(out) :: t_star, vn_after, vt_after
+    logical, intent(in), optional :: rates_first
     type(particle_t), target :: model
     type(vci_integrator_t) :: integ
     integer :: stat
@@ -88,12 +90,53 @@ contains
     model = particle_on_floor(1.0_dp, 0.0_dp)
     call integ%create(model, 1.0e-2_dp, stat)
     call integ%set_impact_energy(mode, stat)
+    ! (the linear-algebra paths as by default: in-line LU up to 15 unknowns, reuse from 16)
+    if (present(rates_first)) call integ%set_solver_paths(15, 16, rates_first=rates_first)
     call integ%init_from_momentum(0.0_dp, [0.0_dp, vn * t_star], [1.0_dp, -vn], stat)
     call run_steps(integ, model, 20_i8, s)
     associate (p_ => integ%momentum())
       vn_after = p_(2); vt_after = p_(1)
     end associate
   end subroutine graze_line_case
+
+  !> A particle (mass 1, gravity 9.8) in a channel 0 <= y <= yc closed by the side wall x <= xw,
+  !> from (0, y0) with velocity (vx, vy), steps of h (the discrete model's own L_d and condition):
+  !> several impacts in a step, walls 0.002-0.1 apart. 20 steps. Returns the run (status, impacts)
+  !> and, over every impact point, the most negative gap of any wall (0 when none is negative).
+  subroutine channel_case(yc, xw, y0, vx, vy, h, s, worst_gap)
+    real(dp), intent(in) :: yc, xw, y0, vx, vy, h
+    type(run_summary_t), intent(out) :: s
+    real(dp), intent(out) :: worst_gap
+    type(particle_t), target :: model
+    type(vci_integrator_t) :: integ
+    type(vci_impact_t) :: imp
+    real(dp) :: g(3)
+    integer :: stat, k, i
+    call init_summary(s)
+    model = particle_on_floor(1.0_dp, 9.8_dp)
+    deallocate (model%normal, model%offset)
+    model%n_gaps = 3
+    allocate (model%normal(2, 3), model%offset(3))
+    model%normal = reshape([0.0_dp, 1.0_dp, 0.0_dp, -1.0_dp, -1.0_dp, 0.0_dp], [2, 3])
+    model%offset = [0.0_dp, -yc, -xw]
+    call integ%create(model, h, stat)
+    if (stat == VCI_OK) call integ%init_from_momentum(0.0_dp, [0.0_dp, y0], [vx, vy], stat)
+    worst_gap = 0.0_dp
+    s%status = stat
+    do k = 1, 20
+      if (s%status /= VCI_OK) exit
+      call integ%step(1, s%status)
+      if (s%status /= VCI_OK) then
+        s%message = integ%message(); exit
+      end if
+      do i = 1, integ%impact_count()
+        imp = integ%impact(i)
+        s%impacts = s%impacts + 1
+        call model%gaps(imp%q, g, stat)
+        worst_gap = min(worst_gap, minval(g))
+      end do
+    end do
+  end subroutine channel_case
 
   !> Gravity 9.8, ceiling y <= 1 (normal (0, -1)); a parabola whose apex is at height 1 + depth at
   !> time t_apex. h = 1e-2, 60 steps. depth > 0 pokes through the ceiling. t_apex on a grid point or
