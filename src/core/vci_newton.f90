@@ -571,6 +571,9 @@ contains
         call fail_eval(res, stat); return
       end if
       ! (a NaN/Inf in the Jacobian reaches the equilibrated matrix, which newton_direction checks)
+      ! the kept factors are overwritten from here on: none are kept until a factorisation succeeds
+      ! (a failed one left the next solve's chord steps NaN factors: fuzz seed 10217)
+      self%have_lu = .false.
       call newton_direction(self, n, factored, res)
       if (res%reason == NEWTON_STRUCTURE) then
         res%status = VCI_ERR_ARGUMENT; return
