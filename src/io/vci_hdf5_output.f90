@@ -856,7 +856,7 @@ contains
     integer, intent(in) :: status
     character(len=*), intent(in) :: message
     integer, intent(inout) :: stat
-    integer :: s, err
+    integer :: s
     if (.not. self%started) then
       call w_close(self); return
     end if
@@ -871,25 +871,36 @@ contains
       self%last_stored = .true.
     end if
     call flush_file(self, s)
-    ! the run's status after everything it vouches for is on disk, in a flush of its own: a full
-    ! disk part-way leaves the status `running` (as a killed run), never a status beside missing steps
-    call h5io_put_attr(self%file, 'status', status, s, self%message, self%path)
+    ! The run's end after everything it vouches for is on disk, in two flushes of its own: the
+    ! message first (status still `running`), then the status alone, rewritten in place (the last
+    ! write to the file). A flush is several writes (the superblock last), and a full disk at a
+    ! later write of one that also held status 0 left `ok` beside a run that returned VCI_ERR_IO;
+    ! now any failed write leaves `running` (as a killed run), never a status the run did not have.
     if (status == VCI_OK .and. len_trim(message) == 0) then
       call h5io_put_attr(self%file, 'status_message', 'ok', s, self%message, self%path)
     else
       call h5io_put_attr(self%file, 'status_message', trim(message), s, self%message, self%path)
     end if
-    if (s == VCI_OK) then
-      call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
-      if (err /= 0) then
-        call fail(self, 'H5Fflush failed: '//trim(h5io_os_cause()), s)
-        call h5io_discard_writes(self%file)
-        self%discarded = .true.
-      end if
-    end if
+    call flush_or_discard(self, s)
+    call h5io_put_attr(self%file, 'status', status, s, self%message, self%path)
+    call flush_or_discard(self, s)
     call w_close(self)
     if (s /= VCI_OK) stat = VCI_ERR_IO
   end subroutine w_finish
+
+  !> H5Fflush when nothing failed yet; a failed flush sends every later write to the sink.
+  subroutine flush_or_discard(self, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer, intent(inout) :: stat
+    integer :: err
+    if (stat /= VCI_OK) return
+    call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
+    if (err /= 0) then
+      call fail(self, 'H5Fflush failed: '//trim(h5io_os_cause()), stat)
+      call h5io_discard_writes(self%file)
+      self%discarded = .true.
+    end if
+  end subroutine flush_or_discard
 
   !> Append the buffered rows, store the checkpoint and steps_completed, H5Fflush.
   subroutine flush_file(self, stat)
