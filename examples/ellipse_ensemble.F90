@@ -260,7 +260,7 @@ contains
 #endif
 
   subroutine parse_arguments()
-    integer :: k, n
+    integer :: k, n, l
     character(len=512) :: arg
     n = command_argument_count()
     k = 1
@@ -295,9 +295,15 @@ contains
       case ('--threads'); threads = int_arg(k); k = k + 1
       case ('--chunk'); chunk = int_arg(k); k = k + 1
       case ('--output')   ! strict: `--output --quiet` is no file name
-        if (k + 1 <= n) call get_command_argument(k + 1, arg)
+        l = 0
+        if (k + 1 <= n) call get_command_argument(k + 1, arg, length=l)
         if (k + 1 > n .or. len_trim(arg) == 0 .or. arg(1:2) == '--' .or. trim(arg) == '-h') then
           if (rank == 0) write (error_unit, '(a)') 'ellipse_ensemble: --output needs a value (a file name)'
+          call finish(2)
+        end if
+        if (l > len(arg)) then   ! (was cut to its first 512 characters: another file written)
+          if (rank == 0) write (error_unit, '(a,i0,a)') 'ellipse_ensemble: --output: a file name of at most ', &
+            len(arg), ' characters'
           call finish(2)
         end if
         output = trim(arg); k = k + 1
