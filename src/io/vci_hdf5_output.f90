@@ -118,7 +118,7 @@ module vci_hdf5_output
     procedure :: failure_cause => w_failure_cause
   end type vci_hdf5_writer_t
 
-  public :: vci_hdf5_read_checkpoint
+  public :: vci_hdf5_read_checkpoint, vci_hdf5_close_file
 
 contains
 
@@ -1118,6 +1118,28 @@ contains
   end subroutine vci_hdf5_read_checkpoint
 
   ! The HDF5 helpers (attributes, row datasets, vectors) are vci_h5_io's, shared with the ensemble file.
+
+  !> Close an HDF5 file a caller opened itself (h5fopen_f or h5fcreate_f, the default sec2 driver;
+  !> its other objects closed first) so that a full disk is a status, never a crash, as this
+  !> module's writer closes its own: what HDF5 holds is flushed (err = the flush's failure, else 0;
+  !> `failed`: a write before already failed, nothing more is flushed), then the descriptor goes to
+  !> a sink, so that the close writes nothing (it rewrites the superblock) and HDF5 1.10, which
+  !> cannot close a file whose metadata flush failed, does not crash at exit (docs/OUTPUT.md). The
+  !> file on disk keeps what reached it.
+  subroutine vci_hdf5_close_file(file, err, failed)
+    integer(hid_t), intent(in) :: file
+    integer, intent(out) :: err
+    logical, intent(in), optional :: failed
+    integer :: e2
+    err = 0
+    if (present(failed)) then
+      if (failed) err = -1
+    end if
+    if (err == 0) call h5fflush_f(file, H5F_SCOPE_GLOBAL_F, err)
+    call h5io_discard_writes(file)
+    call h5fflush_f(file, H5F_SCOPE_GLOBAL_F, e2)   ! (a flush that failed half-way, completed into the sink)
+    call h5fclose_f(file, e2)
+  end subroutine vci_hdf5_close_file
 
   subroutine fail(self, cause, stat)
     type(vci_hdf5_writer_t), intent(inout) :: self
