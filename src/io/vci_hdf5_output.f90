@@ -823,7 +823,10 @@ contains
                 'stepping the other way or re-initialising mid-file needs a new file', stat)
       return
     end if
-    if (self%ni == size(self%it)) call grow_impacts(self)
+    if (self%ni == size(self%it)) then
+      call grow_impacts(self, stat)
+      if (stat /= VCI_OK) return
+    end if
     self%ni = self%ni + 1
     self%it(self%ni) = impact%t
     ! the row of /t the step started from: t(step) and t(step + 1) bracket the impact
@@ -835,19 +838,28 @@ contains
     if (self%flush_on_impact) self%flush_pending = .true.
   end subroutine w_impact
 
-  subroutine grow_impacts(self)
+  !> Twice the room for the impacts buffered until the next flush; all or nothing (VCI_ERR_IO with
+  !> a message when memory is short: an allocate without stat= ended the program).
+  subroutine grow_impacts(self, stat)
     type(vci_hdf5_writer_t), intent(inout) :: self
-    real(dp), allocatable :: r1(:), r2(:, :)
+    integer, intent(inout) :: stat
+    real(dp), allocatable :: t1(:), a1(:), j1(:), q2(:, :)
     integer(i8), allocatable :: l1(:)
     integer, allocatable :: i1(:)
-    integer :: k
+    integer :: k, err
     k = size(self%it)
-    allocate (r1(2 * k)); r1(1:k) = self%it; call move_alloc(r1, self%it)
-    allocate (r1(2 * k)); r1(1:k) = self%ia; call move_alloc(r1, self%ia)
-    allocate (r1(2 * k)); r1(1:k) = self%ii; call move_alloc(r1, self%ii)
-    allocate (l1(2 * k)); l1(1:k) = self%is; call move_alloc(l1, self%is)
-    allocate (i1(2 * k)); i1(1:k) = self%ig; call move_alloc(i1, self%ig)
-    allocate (r2(self%n, 2 * k)); r2(:, 1:k) = self%iq; call move_alloc(r2, self%iq)
+    allocate (t1(2 * k), a1(2 * k), j1(2 * k), l1(2 * k), i1(2 * k), q2(self%n, 2 * k), stat=err)
+    if (err /= 0) then
+      call fail(self, 'no memory for more than '//trim(vci_int_text(k))//' impacts between two flushes '// &
+                '(lower flush_every, or keep flush_on_impact)', stat)
+      return
+    end if
+    t1(1:k) = self%it; call move_alloc(t1, self%it)
+    a1(1:k) = self%ia; call move_alloc(a1, self%ia)
+    j1(1:k) = self%ii; call move_alloc(j1, self%ii)
+    l1(1:k) = self%is; call move_alloc(l1, self%is)
+    i1(1:k) = self%ig; call move_alloc(i1, self%ig)
+    q2(:, 1:k) = self%iq; call move_alloc(q2, self%iq)
   end subroutine grow_impacts
 
   !> The run ended: write what is buffered, the status and its message, and close the file.
