@@ -545,8 +545,9 @@ contains
     call h5io_fail(trim(why), stat, message, who)
   end subroutine check_extent_fits
 
-  !> Check that a dataset has exactly the Fortran shape `dims` (rank and every extent) before it is
-  !> read whole into a buffer of that shape.
+  !> Check that a dataset has exactly the Fortran shape `dims` (rank and every extent), and that
+  !> so many values fit in the file's bytes (check_extent_fits), before it is read whole into a
+  !> buffer of that shape.
   subroutine h5io_check_dims(dset, name, dims, stat, message, who)
     integer(hid_t), intent(in) :: dset
     character(len=*), intent(in) :: name, who
@@ -570,6 +571,7 @@ contains
     call h5sclose_f(space, e2)
     if (err < 0) call h5io_fail('dataset '//name//' does not have the shape the file''s attributes give', &
                                 stat, message, who)
+    call check_extent_fits(dset, name, product(real(dims, dp)), stat, message, who)
   end subroutine h5io_check_dims
 
   !> Spaces selecting rows first .. first + count - 1 (file) and count rows (memory); with `extend`
