@@ -21,6 +21,7 @@ program ellipse_ensemble
   use hdf5
   use vci_ensemble_h5, only: vci_ensemble_read
   use vci_ensemble_mpi, only: vci_ensemble_run_file
+  use vci_hdf5_output, only: vci_hdf5_close_file
 #endif
   use vci_scene_ellipse, only: ellipse_model
   use vci_example_cli, only: is_decimal
@@ -215,52 +216,105 @@ contains
 
 #ifdef VCI_HAVE_HDF5
   !> /analysis: perturbation size, divergence time and impact index per member; lambda and the
-  !> tolerance as attributes (written by one process after the ensemble file is closed).
+  !> tolerance as attributes (written by one process after the ensemble file is closed). Every
+  !> call is checked; after the first failure (a full disk) nothing more is written, and the file
+  !> is closed by vci_hdf5_close_file (nothing written at the close: HDF5 crashed at exit with
+  !> SIGSEGV) and the program ends with status 1; the file keeps the ensemble.
   subroutine write_analysis(path)
     character(len=*), intent(in) :: path
-    integer(hid_t) :: file, g, space, dset, attr
-    integer :: err
+    integer(hid_t) :: file, g
+    integer :: err, e2
     call h5open_f(err)
-    call h5fopen_f(path, H5F_ACC_RDWR_F, file, err)
+    file = -1; g = -1
+    if (err == 0) call h5fopen_f(path, H5F_ACC_RDWR_F, file, err)
     if (err /= 0) then
       write (error_unit, '(a)') 'ellipse_ensemble: cannot reopen '//path//' for /analysis'; call finish(1)
     end if
     call h5gcreate_f(file, 'analysis', g, err)
-    call h5screate_simple_f(1, [int(n_members, hsize_t)], space, err)
-    call h5dcreate_f(g, 'size', H5T_IEEE_F64LE, space, dset, err)
-    call h5dwrite_f(dset, H5T_NATIVE_DOUBLE, sizes, [int(n_members, hsize_t)], err)
-    call h5dclose_f(dset, err)
-    call h5dcreate_f(g, 'divergence_time', H5T_IEEE_F64LE, space, dset, err)
-    call h5dwrite_f(dset, H5T_NATIVE_DOUBLE, t_div, [int(n_members, hsize_t)], err)
-    call h5dclose_f(dset, err)
-    call h5dcreate_f(g, 'divergence_impact', H5T_STD_I32LE, space, dset, err)
-    call h5dwrite_f(dset, H5T_NATIVE_INTEGER, k_div, [int(n_members, hsize_t)], err)
-    call h5dclose_f(dset, err)
-    call h5sclose_f(space, err)
-    call h5screate_f(H5S_SCALAR_F, space, err)
-    call h5acreate_f(g, 'lyapunov', H5T_IEEE_F64LE, space, attr, err)
-    call h5awrite_f(attr, H5T_NATIVE_DOUBLE, lambda, [1_hsize_t], err)
-    call h5aclose_f(attr, err)
-    call h5acreate_f(g, 'lyapunov_stderr', H5T_IEEE_F64LE, space, attr, err)
-    call h5awrite_f(attr, H5T_NATIVE_DOUBLE, lambda_err, [1_hsize_t], err)
-    call h5aclose_f(attr, err)
-    call h5acreate_f(g, 'tolerance', H5T_IEEE_F64LE, space, attr, err)
-    call h5awrite_f(attr, H5T_NATIVE_DOUBLE, tol, [1_hsize_t], err)
-    call h5aclose_f(attr, err)
-    call h5acreate_f(g, 'fit_members', H5T_STD_I32LE, space, attr, err)
-    call h5awrite_f(attr, H5T_NATIVE_INTEGER, n_fit, [1_hsize_t], err)
-    call h5aclose_f(attr, err)
-    call h5sclose_f(space, err)
-    call h5gclose_f(g, err)
-    call h5fclose_f(file, err)
+    if (err == 0) call put_reals(g, 'size', sizes, err)
+    if (err == 0) call put_reals(g, 'divergence_time', t_div, err)
+    if (err == 0) call put_ints(g, 'divergence_impact', k_div, err)
+    if (err == 0) call put_scalar_real(g, 'lyapunov', lambda, err)
+    if (err == 0) call put_scalar_real(g, 'lyapunov_stderr', lambda_err, err)
+    if (err == 0) call put_scalar_real(g, 'tolerance', tol, err)
+    if (err == 0) call put_scalar_int(g, 'fit_members', n_fit, err)
+    if (g >= 0) call h5gclose_f(g, e2)
+    call vci_hdf5_close_file(file, e2, failed=err /= 0)
+    if (err == 0) err = e2
     if (err /= 0) then
-      write (error_unit, '(a)') 'ellipse_ensemble: writing /analysis failed'; call finish(1)
+      write (error_unit, '(a)') 'ellipse_ensemble: writing /analysis to '//path//' failed (a full disk?); '// &
+        'the file keeps the ensemble'
+      call finish(1)
     end if
   end subroutine write_analysis
+
+  subroutine put_reals(g, name, x, err)
+    integer(hid_t), intent(in) :: g
+    character(len=*), intent(in) :: name
+    real(dp), intent(in) :: x(:)
+    integer, intent(out) :: err
+    integer(hid_t) :: space, dset
+    integer :: e2
+    dset = -1
+    call h5screate_simple_f(1, [int(size(x), hsize_t)], space, err)
+    if (err /= 0) return
+    call h5dcreate_f(g, name, H5T_IEEE_F64LE, space, dset, err)
+    if (err == 0) call h5dwrite_f(dset, H5T_NATIVE_DOUBLE, x, [int(size(x), hsize_t)], err)
+    if (dset >= 0) call h5dclose_f(dset, e2)
+    call h5sclose_f(space, e2)
+  end subroutine put_reals
+
+  subroutine put_ints(g, name, x, err)
+    integer(hid_t), intent(in) :: g
+    character(len=*), intent(in) :: name
+    integer, intent(in) :: x(:)
+    integer, intent(out) :: err
+    integer(hid_t) :: space, dset
+    integer :: e2
+    dset = -1
+    call h5screate_simple_f(1, [int(size(x), hsize_t)], space, err)
+    if (err /= 0) return
+    call h5dcreate_f(g, name, H5T_STD_I32LE, space, dset, err)
+    if (err == 0) call h5dwrite_f(dset, H5T_NATIVE_INTEGER, x, [int(size(x), hsize_t)], err)
+    if (dset >= 0) call h5dclose_f(dset, e2)
+    call h5sclose_f(space, e2)
+  end subroutine put_ints
+
+  subroutine put_scalar_real(g, name, x, err)
+    integer(hid_t), intent(in) :: g
+    character(len=*), intent(in) :: name
+    real(dp), intent(in) :: x
+    integer, intent(out) :: err
+    integer(hid_t) :: space, attr
+    integer :: e2
+    attr = -1
+    call h5screate_f(H5S_SCALAR_F, space, err)
+    if (err /= 0) return
+    call h5acreate_f(g, name, H5T_IEEE_F64LE, space, attr, err)
+    if (err == 0) call h5awrite_f(attr, H5T_NATIVE_DOUBLE, x, [1_hsize_t], err)
+    if (attr >= 0) call h5aclose_f(attr, e2)
+    call h5sclose_f(space, e2)
+  end subroutine put_scalar_real
+
+  subroutine put_scalar_int(g, name, x, err)
+    integer(hid_t), intent(in) :: g
+    character(len=*), intent(in) :: name
+    integer, intent(in) :: x
+    integer, intent(out) :: err
+    integer(hid_t) :: space, attr
+    integer :: e2
+    attr = -1
+    call h5screate_f(H5S_SCALAR_F, space, err)
+    if (err /= 0) return
+    call h5acreate_f(g, name, H5T_STD_I32LE, space, attr, err)
+    if (err == 0) call h5awrite_f(attr, H5T_NATIVE_INTEGER, x, [1_hsize_t], err)
+    if (attr >= 0) call h5aclose_f(attr, e2)
+    call h5sclose_f(space, e2)
+  end subroutine put_scalar_int
 #endif
 
   subroutine parse_arguments()
-    integer :: k, n
+    integer :: k, n, l
     character(len=512) :: arg
     n = command_argument_count()
     k = 1
@@ -295,9 +349,15 @@ contains
       case ('--threads'); threads = int_arg(k); k = k + 1
       case ('--chunk'); chunk = int_arg(k); k = k + 1
       case ('--output')   ! strict: `--output --quiet` is no file name
-        if (k + 1 <= n) call get_command_argument(k + 1, arg)
+        l = 0
+        if (k + 1 <= n) call get_command_argument(k + 1, arg, length=l)
         if (k + 1 > n .or. len_trim(arg) == 0 .or. arg(1:2) == '--' .or. trim(arg) == '-h') then
           if (rank == 0) write (error_unit, '(a)') 'ellipse_ensemble: --output needs a value (a file name)'
+          call finish(2)
+        end if
+        if (l > len(arg)) then   ! (was cut to its first 512 characters: another file written)
+          if (rank == 0) write (error_unit, '(a,i0,a)') 'ellipse_ensemble: --output: a file name of at most ', &
+            len(arg), ' characters'
           call finish(2)
         end if
         output = trim(arg); k = k + 1

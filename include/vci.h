@@ -475,8 +475,10 @@ int  vci_open_output(vci_integrator integ, const char *path);      /* HDF5; VCI_
  *  or compress not in [0, 9]. */
 int  vci_open_output_every(vci_integrator integ, const char *path, int every, int compress);
 
-/** Finish and close the output file, if any. Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle;
- *  VCI_ERR_IO: the file could not be finished (the message says why); VCI_ERR_STATE: busy. */
+/** Finish and close the output file, if any (vci_integrator_destroy does the same). The file's
+ *  status and status_message are those of the last vci_step or vci_integrate on it, not of this
+ *  call. Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle; VCI_ERR_IO: the file could not be finished
+ *  (the message says why); VCI_ERR_STATE: busy. */
 int  vci_close_output(vci_integrator integ);
 
 /* ---- Restart (docs/C_API.md, "Restart"): continue a run from its HDF5 file, bit for bit ---- */

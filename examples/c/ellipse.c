@@ -1,10 +1,12 @@
 /* The paper's bouncing ellipse through the C API: the same run as build/bin/ellipse (h = 1e-2,
- * 2 s, Newton rtol 1e-12), printing one line per impact. Usage: vci_c_ellipse [h [t_final]]. */
+ * 2 s, Newton rtol 1e-12), printing one line per impact. Usage: vci_c_ellipse [h [t_final]]
+ * (0 < h <= 1e6, |t_final| <= 1e12, at most 2^53 steps; exit status 2 for anything else). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include "vci.h"
 #include "scenes.h"
+#include "args.h"
 
 static int print_impact(double t, double alpha, int gap, const double *q, double impulse, void *user) {
   int *count = (int *)user;
@@ -14,7 +16,7 @@ static int print_impact(double t, double alpha, int gap, const double *q, double
 }
 
 int main(int argc, char **argv) {
-  double h = argc > 1 ? atof(argv[1]) : 1e-2, t_final = argc > 2 ? atof(argv[2]) : 2.0;
+  double h, t_final;
   double t0, q0[3], q1[3], t, q[3], p[3];
   ellipse_params par = ellipse_default;
   vci_callbacks cb = ellipse_callbacks();
@@ -24,6 +26,9 @@ int main(int argc, char **argv) {
   int count = 0, status;
   char msg[512];
 
+  if (!example_number(argc, argv, 1, "h", 0.0, 1e6, 1, 1e-2, &h) ||
+      !example_number(argc, argv, 2, "t_final", -1e12, 1e12, 0, 2.0, &t_final))
+    return 2;
   cb.ld_fused = ellipse_fused; /* D1, D2, D3 and the Hessian in one call */
   status = vci_model_create(&model, 3, 0, 1, &cb, &par);
   if (status == VCI_OK) status = vci_integrator_create(&integ, model, h);
@@ -33,7 +38,11 @@ int main(int argc, char **argv) {
   if (status == VCI_OK) status = vci_init_from_pair(integ, t0, q0, q1);
   if (status == VCI_OK) {
     vci_get_state(integ, &t, NULL, NULL);
-    nsteps = (int64_t)ceil((t_final - t) / h - 1e-9);
+    if (!example_steps(argv[0], t, t_final, h, &nsteps)) {
+      vci_integrator_destroy(&integ);
+      vci_model_destroy(&model);
+      return 2;
+    }
     status = vci_integrate(integ, nsteps, +1);
   }
   if (status != VCI_OK) {

@@ -736,6 +736,7 @@ contains
       else
         call ip%integ%step(int(direction), stat, ip%obs)
         stat = after_call(ip, stat)
+        call note_run_end(ip, stat)
       end if
     end if
     call leave(ip)
@@ -760,6 +761,7 @@ contains
         call ip%integ%integrate(int(nsteps, i8), int(direction), stat, ip%obs)
       end if
       stat = after_call(ip, stat)
+      call note_run_end(ip, stat)
     end if
     call leave(ip)
     vci_integrate = stat
@@ -1116,6 +1118,7 @@ contains
             call move_alloc(w, ip%obs%output)
             ip%obs%started = .false.
             ip%obs%direction = 0
+            ip%obs%run_status = VCI_OK; ip%obs%run_message = ''
           end if
         end if
       end block

@@ -66,6 +66,10 @@ module vci_capi_registry
     integer :: direction = 0               !< of the output's run, once started
     type(c_integrator_t), pointer :: owner => null()
     logical :: stopped_by_destroy = .false.
+    !> the run's end the output records: the last vci_step/vci_integrate on it (note_run_end), not
+    !> the call that closes it (whose own status is 0 by then, or a refused getter's)
+    integer :: run_status = 0
+    character(len=VCI_MSG_LEN) :: run_message = ''
   contains
 
     procedure :: on_start => obs_start
@@ -450,13 +454,25 @@ contains
     if (ip%obs%started .and. ip%obs%output%keeps_checkpoints()) &
       call ip%obs%output%on_checkpoint(ip%integ%checkpoint(), stat)
     stat = 0
-    call ip%obs%output%on_finish(ip%integ%status(), trim(ip%integ%message_text()), stat)
+    call ip%obs%output%on_finish(ip%obs%run_status, trim(ip%obs%run_message), stat)
     deallocate (ip%obs%output)
     call unlock_io()
     ip%obs%started = .false.
     ip%obs%direction = 0
+    ip%obs%run_status = 0; ip%obs%run_message = ''
     if (stat /= 0) stat = VCI_ERR_IO
   end function close_output
+
+  !> After a vci_step/vci_integrate call (its status `stat`, the integrator's message): the end of
+  !> the run the open output records so far.
+  subroutine note_run_end(ip, stat)
+    type(c_integrator_t), intent(inout) :: ip
+    integer, intent(in) :: stat
+    if (.not. (allocated(ip%obs%output) .and. ip%obs%started)) return
+    ip%obs%run_status = stat
+    ip%obs%run_message = ''
+    if (stat /= VCI_OK) ip%obs%run_message = ip%integ%message_text()
+  end subroutine note_run_end
 
   !> Close the output and release an integrator no handle names any more.
   subroutine free_integrator(ip)

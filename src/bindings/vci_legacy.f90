@@ -209,6 +209,10 @@ module vci_legacy
     class(vci_observer_t), allocatable :: writer
     logical :: started = .false.
     integer :: direction = 0        !< of the file's run, once started
+    !> the run's end the file records: the last VCIADV's status and message (not those of the
+    !> VCICLS or VCIDEL that writes them, nor of a call between)
+    integer :: run_status = 0
+    character(len=VCI_MSG_LEN) :: run_message = ''
   end type legacy_output_t
 
   !> Records the impact times of one VCIADV call; clears the callback record after every step;
@@ -1160,6 +1164,13 @@ contains
     end if
     associate (integ => slots(i)%integ)
       call integ%integrate(int(nsteps, i8), idir, stat, log)
+      if (associated(log%out)) then
+        if (log%out%started) then
+          log%out%run_status = stat
+          log%out%run_message = ''
+          if (stat /= VCI_OK) log%out%run_message = integ%message_text()
+        end if
+      end if
       nimp = log%count
       k = min(nimp, size(timp))
       timp(1:k) = log%times(1:k)
@@ -1194,7 +1205,7 @@ contains
       associate (w => slots(i)%out%writer)
         if (slots(i)%out%started .and. w%keeps_checkpoints()) call w%on_checkpoint(slots(i)%integ%checkpoint(), stat)
         stat = VCI_OK
-        call w%on_finish(slots(i)%integ%status(), trim(slots(i)%integ%message_text()), stat)
+        call w%on_finish(slots(i)%out%run_status, trim(slots(i)%out%run_message), stat)
         if (stat /= VCI_OK) call w%failure_cause(global_message)
       end associate
     end if

@@ -741,10 +741,8 @@ contains
     if (present(config)) config = cfg
     f%impact_cap = cfg%impact_cap
     f%samples = vci_ensemble_samples(cfg)
-    if (stat == VCI_OK) call vci_ensemble_results_alloc(results, cfg, f%n, 1, nm, stat, msg)
-    if (stat /= VCI_OK) then
-      if (f%message == '') call fail(f, msg, stat)
-    end if
+    ! every dataset has the shape the attributes give, within the file's bytes, before anything is
+    ! allocated from them (a damaged impact_cap of 2^31 - 1 asked for 51 GB of results first)
     do j = 1, N_DSETS
       if (stat /= VCI_OK) exit
       if (j == D_PARAMS .and. f%n_params == 0) cycle
@@ -755,6 +753,10 @@ contains
       ! read whole into buffers sized from the attributes: the shape must be theirs
       if (err == 0) call h5io_check_dims(f%d(j), '/'//trim(names(j)), dims_of(f, j), stat, f%message, who(f))
     end do
+    if (stat == VCI_OK) then
+      call vci_ensemble_results_alloc(results, cfg, f%n, 1, nm, stat, msg)
+      if (stat /= VCI_OK .and. f%message == '') call fail(f, msg, stat)
+    end if
     if (stat == VCI_OK) then
       call get_i32(f, D_STATUS, results%status, stat)
       call get_messages(f, results%message, stat)

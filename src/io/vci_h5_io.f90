@@ -500,17 +500,21 @@ contains
 
   !> A dataset of `elements` values must fit in its file's bytes: an extent a damaged file claims
   !> (2^40 rows in 100 kB) is refused before anything is read, cut or allocated by it (cutting it
-  !> with H5Dset_extent visits every chunk of the extent: hours).
+  !> with H5Dset_extent visits every chunk of the extent: hours). A filtered (compressed) dataset
+  !> may hold up to deflate's largest ratio, 1032:1, more: a run's constant columns compress that
+  !> far, and a legitimate file was refused as damaged.
   subroutine check_extent_fits(dset, name, elements, stat, message, who)
     integer(hid_t), intent(in) :: dset
     character(len=*), intent(in) :: name, who
     real(dp), intent(in) :: elements     ! (real: a damaged extent times the width may pass 2^63)
     integer, intent(inout) :: stat
     character(len=*), intent(inout) :: message
-    integer(hid_t) :: file, dtype
+    real(dp), parameter :: deflate_max_ratio = 1032.0_dp
+    integer(hid_t) :: file, dtype, dcpl
     integer(hsize_t) :: file_bytes
     integer(size_t) :: type_bytes
-    integer :: err, e2
+    integer :: err, e2, nfilters
+    real(dp) :: room
     character(len=200) :: why
     if (stat /= VCI_OK) return
     call h5iget_file_id_f(dset, file, err)
@@ -525,14 +529,25 @@ contains
     if (err /= 0) then
       call h5io_fail('cannot tell the size of the file holding dataset '//name, stat, message, who); return
     end if
-    if (elements * real(max(type_bytes, 1_size_t), dp) <= real(file_bytes, dp)) return
+    nfilters = 0
+    call h5dget_create_plist_f(dset, dcpl, e2)
+    if (e2 == 0) then
+      call h5pget_nfilters_f(dcpl, nfilters, e2)
+      if (e2 /= 0) nfilters = 0
+      call h5pclose_f(dcpl, e2)
+    end if
+    room = real(file_bytes, dp)
+    if (nfilters > 0) room = deflate_max_ratio * room
+    if (elements * real(max(type_bytes, 1_size_t), dp) <= room) return
     write (why, '(a,es10.3,a,i0,a)') 'dataset '//name//' claims ', elements, &
-      ' values, more than the file''s ', file_bytes, ' bytes can hold (a damaged extent)'
+      ' values, more than the file''s ', file_bytes, ' bytes can hold'//trim(merge(' compressed', '           ', &
+      nfilters > 0))//' (a damaged extent)'
     call h5io_fail(trim(why), stat, message, who)
   end subroutine check_extent_fits
 
-  !> Check that a dataset has exactly the Fortran shape `dims` (rank and every extent) before it is
-  !> read whole into a buffer of that shape.
+  !> Check that a dataset has exactly the Fortran shape `dims` (rank and every extent), and that
+  !> so many values fit in the file's bytes (check_extent_fits), before it is read whole into a
+  !> buffer of that shape.
   subroutine h5io_check_dims(dset, name, dims, stat, message, who)
     integer(hid_t), intent(in) :: dset
     character(len=*), intent(in) :: name, who
@@ -556,6 +571,7 @@ contains
     call h5sclose_f(space, e2)
     if (err < 0) call h5io_fail('dataset '//name//' does not have the shape the file''s attributes give', &
                                 stat, message, who)
+    call check_extent_fits(dset, name, product(real(dims, dp)), stat, message, who)
   end subroutine h5io_check_dims
 
   !> Spaces selecting rows first .. first + count - 1 (file) and count rows (memory); with `extend`

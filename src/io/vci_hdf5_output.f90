@@ -118,7 +118,7 @@ module vci_hdf5_output
     procedure :: failure_cause => w_failure_cause
   end type vci_hdf5_writer_t
 
-  public :: vci_hdf5_read_checkpoint
+  public :: vci_hdf5_read_checkpoint, vci_hdf5_close_file
 
 contains
 
@@ -823,7 +823,10 @@ contains
                 'stepping the other way or re-initialising mid-file needs a new file', stat)
       return
     end if
-    if (self%ni == size(self%it)) call grow_impacts(self)
+    if (self%ni == size(self%it)) then
+      call grow_impacts(self, stat)
+      if (stat /= VCI_OK) return
+    end if
     self%ni = self%ni + 1
     self%it(self%ni) = impact%t
     ! the row of /t the step started from: t(step) and t(step + 1) bracket the impact
@@ -835,19 +838,28 @@ contains
     if (self%flush_on_impact) self%flush_pending = .true.
   end subroutine w_impact
 
-  subroutine grow_impacts(self)
+  !> Twice the room for the impacts buffered until the next flush; all or nothing (VCI_ERR_IO with
+  !> a message when memory is short: an allocate without stat= ended the program).
+  subroutine grow_impacts(self, stat)
     type(vci_hdf5_writer_t), intent(inout) :: self
-    real(dp), allocatable :: r1(:), r2(:, :)
+    integer, intent(inout) :: stat
+    real(dp), allocatable :: t1(:), a1(:), j1(:), q2(:, :)
     integer(i8), allocatable :: l1(:)
     integer, allocatable :: i1(:)
-    integer :: k
+    integer :: k, err
     k = size(self%it)
-    allocate (r1(2 * k)); r1(1:k) = self%it; call move_alloc(r1, self%it)
-    allocate (r1(2 * k)); r1(1:k) = self%ia; call move_alloc(r1, self%ia)
-    allocate (r1(2 * k)); r1(1:k) = self%ii; call move_alloc(r1, self%ii)
-    allocate (l1(2 * k)); l1(1:k) = self%is; call move_alloc(l1, self%is)
-    allocate (i1(2 * k)); i1(1:k) = self%ig; call move_alloc(i1, self%ig)
-    allocate (r2(self%n, 2 * k)); r2(:, 1:k) = self%iq; call move_alloc(r2, self%iq)
+    allocate (t1(2 * k), a1(2 * k), j1(2 * k), l1(2 * k), i1(2 * k), q2(self%n, 2 * k), stat=err)
+    if (err /= 0) then
+      call fail(self, 'no memory for more than '//trim(vci_int_text(k))//' impacts between two flushes '// &
+                '(lower flush_every, or keep flush_on_impact)', stat)
+      return
+    end if
+    t1(1:k) = self%it; call move_alloc(t1, self%it)
+    a1(1:k) = self%ia; call move_alloc(a1, self%ia)
+    j1(1:k) = self%ii; call move_alloc(j1, self%ii)
+    l1(1:k) = self%is; call move_alloc(l1, self%is)
+    i1(1:k) = self%ig; call move_alloc(i1, self%ig)
+    q2(:, 1:k) = self%iq; call move_alloc(q2, self%iq)
   end subroutine grow_impacts
 
   !> The run ended: write what is buffered, the status and its message, and close the file.
@@ -856,7 +868,7 @@ contains
     integer, intent(in) :: status
     character(len=*), intent(in) :: message
     integer, intent(inout) :: stat
-    integer :: s, err
+    integer :: s
     if (.not. self%started) then
       call w_close(self); return
     end if
@@ -871,25 +883,36 @@ contains
       self%last_stored = .true.
     end if
     call flush_file(self, s)
-    ! the run's status after everything it vouches for is on disk, in a flush of its own: a full
-    ! disk part-way leaves the status `running` (as a killed run), never a status beside missing steps
-    call h5io_put_attr(self%file, 'status', status, s, self%message, self%path)
+    ! The run's end after everything it vouches for is on disk, in two flushes of its own: the
+    ! message first (status still `running`), then the status alone, rewritten in place (the last
+    ! write to the file). A flush is several writes (the superblock last), and a full disk at a
+    ! later write of one that also held status 0 left `ok` beside a run that returned VCI_ERR_IO;
+    ! now any failed write leaves `running` (as a killed run), never a status the run did not have.
     if (status == VCI_OK .and. len_trim(message) == 0) then
       call h5io_put_attr(self%file, 'status_message', 'ok', s, self%message, self%path)
     else
       call h5io_put_attr(self%file, 'status_message', trim(message), s, self%message, self%path)
     end if
-    if (s == VCI_OK) then
-      call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
-      if (err /= 0) then
-        call fail(self, 'H5Fflush failed: '//trim(h5io_os_cause()), s)
-        call h5io_discard_writes(self%file)
-        self%discarded = .true.
-      end if
-    end if
+    call flush_or_discard(self, s)
+    call h5io_put_attr(self%file, 'status', status, s, self%message, self%path)
+    call flush_or_discard(self, s)
     call w_close(self)
     if (s /= VCI_OK) stat = VCI_ERR_IO
   end subroutine w_finish
+
+  !> H5Fflush when nothing failed yet; a failed flush sends every later write to the sink.
+  subroutine flush_or_discard(self, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer, intent(inout) :: stat
+    integer :: err
+    if (stat /= VCI_OK) return
+    call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
+    if (err /= 0) then
+      call fail(self, 'H5Fflush failed: '//trim(h5io_os_cause()), stat)
+      call h5io_discard_writes(self%file)
+      self%discarded = .true.
+    end if
+  end subroutine flush_or_discard
 
   !> Append the buffered rows, store the checkpoint and steps_completed, H5Fflush.
   subroutine flush_file(self, stat)
@@ -1107,6 +1130,28 @@ contains
   end subroutine vci_hdf5_read_checkpoint
 
   ! The HDF5 helpers (attributes, row datasets, vectors) are vci_h5_io's, shared with the ensemble file.
+
+  !> Close an HDF5 file a caller opened itself (h5fopen_f or h5fcreate_f, the default sec2 driver;
+  !> its other objects closed first) so that a full disk is a status, never a crash, as this
+  !> module's writer closes its own: what HDF5 holds is flushed (err = the flush's failure, else 0;
+  !> `failed`: a write before already failed, nothing more is flushed), then the descriptor goes to
+  !> a sink, so that the close writes nothing (it rewrites the superblock) and HDF5 1.10, which
+  !> cannot close a file whose metadata flush failed, does not crash at exit (docs/OUTPUT.md). The
+  !> file on disk keeps what reached it.
+  subroutine vci_hdf5_close_file(file, err, failed)
+    integer(hid_t), intent(in) :: file
+    integer, intent(out) :: err
+    logical, intent(in), optional :: failed
+    integer :: e2
+    err = 0
+    if (present(failed)) then
+      if (failed) err = -1
+    end if
+    if (err == 0) call h5fflush_f(file, H5F_SCOPE_GLOBAL_F, err)
+    call h5io_discard_writes(file)
+    call h5fflush_f(file, H5F_SCOPE_GLOBAL_F, e2)   ! (a flush that failed half-way, completed into the sink)
+    call h5fclose_f(file, e2)
+  end subroutine vci_hdf5_close_file
 
   subroutine fail(self, cause, stat)
     type(vci_hdf5_writer_t), intent(inout) :: self

@@ -907,6 +907,49 @@ static void suite_output(void) {
 }
 
 /* ================================================================================================ */
+/* The run a file records ends with the last vci_step / vci_integrate that wrote to it: its status
+ * and message are the file's (`status`, `status_message`), whatever calls came between it and
+ * vci_close_output or vci_integrator_destroy. Writes three files that test/api/output_status.sh
+ * reads back: (1) an impact callback stops the run (VCI_ERR_CALLBACK), then vci_close_output;
+ * (2) the same, then a getter that succeeds, then destroy; (3) a run that succeeds, then a getter
+ * refused (energy NULL: VCI_ERR_ARGUMENT), then destroy. The files must say 2, 2 and 0. */
+static int refuse_impact(double t, double alpha, int gap, const double *q, double impulse, void *user) {
+  (void)t; (void)alpha; (void)gap; (void)q; (void)impulse; (void)user;
+  return 1;
+}
+
+static void suite_output_status(void) {
+#ifdef VCI_TEST_HDF5
+  vci_callbacks cb = ellipse_callbacks();
+  vci_model model = NULL;
+  vci_integrator integ;
+  double t;
+  integ = make_ellipse(&model, &cb, 1e-2);   /* (1) the ellipse's first impact is at t = 0.75 */
+  CHECK_STATUS(vci_open_output(integ, "capi_status_callback.h5"), VCI_OK);
+  CHECK_STATUS(vci_set_impact_callback(integ, refuse_impact, NULL), VCI_OK);
+  CHECK_STATUS(vci_integrate(integ, 200, 1), VCI_ERR_CALLBACK);
+  CHECK_STATUS(vci_close_output(integ), VCI_OK);
+  vci_integrator_destroy(&integ);
+  vci_model_destroy(&model);
+  integ = make_ellipse(&model, &cb, 1e-2);   /* (2) */
+  CHECK_STATUS(vci_open_output(integ, "capi_status_destroyed.h5"), VCI_OK);
+  CHECK_STATUS(vci_set_impact_callback(integ, refuse_impact, NULL), VCI_OK);
+  CHECK_STATUS(vci_integrate(integ, 200, 1), VCI_ERR_CALLBACK);
+  CHECK_STATUS(vci_get_state(integ, &t, NULL, NULL), VCI_OK);
+  vci_integrator_destroy(&integ);
+  vci_model_destroy(&model);
+  integ = make_ellipse(&model, &cb, 1e-2);   /* (3) */
+  CHECK_STATUS(vci_open_output(integ, "capi_status_ok.h5"), VCI_OK);
+  CHECK_STATUS(vci_integrate(integ, 200, 1), VCI_OK);
+  CHECK_STATUS(vci_get_energy(integ, NULL), VCI_ERR_ARGUMENT);
+  vci_integrator_destroy(&integ);
+  vci_model_destroy(&model);
+#else
+  printf("  built without HDF5: nothing to check\n");
+#endif
+}
+
+/* ================================================================================================ */
 /* Restart from the C ABI: a run split in two (the first half written to a file, the second started
  * from that file by vci_restore_from_file and appended to it by vci_append_output) ends in exactly
  * the state of the uninterrupted run: bit for bit (memcmp), index and energy too. The ellipse hits
@@ -1540,7 +1583,8 @@ int main(int argc, char **argv) {
       {"callbacks", suite_callbacks}, {"ellipse", suite_ellipse},   {"hamiltonian", suite_hamiltonian},
       {"pendulum", suite_pendulum},   {"output", suite_output},     {"erratic", suite_erratic},
       {"limits", suite_limits},       {"contract", suite_contract}, {"status", suite_status},
-      {"abi", suite_abi},             {"restart", suite_restart},   {"fused", suite_fused}};
+      {"abi", suite_abi},             {"restart", suite_restart},   {"fused", suite_fused},
+      {"output_status", suite_output_status}};
   size_t i, n = sizeof suites / sizeof suites[0];
   int ran = 0;
   atexit(exit_guard);

@@ -137,6 +137,17 @@ if [ -x "$bin/ellipse_ensemble" ]; then
       echo "FAIL: ellipse_ensemble $flags wrote ens.h5 ($(stat -c %s ens.h5) bytes)"; fail=1
     fi
   done
+  # a path longer than the parser's 512 characters (two directories of 200, a name of 200): refused,
+  # not cut to another file (before: the ensemble written to d/d/ plus 110 characters of the name)
+  x200=$(printf 'x%.0s' $(seq 1 200))
+  mkdir -p "$x200/$x200"
+  "$bin/ellipse_ensemble" --members 2 --t-final 0.05 --quiet --output "$x200/$x200/$x200.h5" > out.txt 2> err.txt
+  rc=$?
+  if [ $rc -eq 0 ] || ! grep -qF -- "--output" err.txt || [ -n "$(ls "$x200/$x200")" ]; then
+    echo "FAIL: ellipse_ensemble --output (a path of 605 characters) (exit $rc): $(head -c 300 err.txt)" \
+         "files: $(ls "$x200/$x200" | cut -c1-40)"; fail=1
+  fi
+  rm -rf "$x200"
   if [ "$hdf5" = ON ]; then
     # the 4.4e7 case: the size the message states is that of 4.4e9 steps, not of a wrapped count
     eval "\"$bin/ellipse_ensemble\" --members 10000000 --t-final 4.4e7 --quiet --output ens.h5" > out.txt 2> err.txt

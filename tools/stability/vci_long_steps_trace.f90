@@ -69,6 +69,11 @@ program vci_long_steps_trace
     stop 1
   end if
   h0 = 0.5_dp * sum(p0**2) - 1 / norm2(q0)
+  ! counted in real before it becomes an integer: nint of a larger quotient wraps (h = 1e-12: 0 steps, exit 0)
+  if (.not. (long_t_final(scene) / h <= 1.0e7_dp)) then
+    write (*, '(a,es10.3,a)') 'vci_long_steps_trace: h = ', h, ' takes more than 1e7 steps (one line each); raise H'
+    stop 2
+  end if
   nsteps = nint(long_t_final(scene) / h)
   do k = 1, nsteps
     call integ%step(1, stat)

@@ -271,6 +271,24 @@ C     the appended file restarts at its new end; refusals
       WRITE (*, '(2A)') ' another H: ', MSG(1:160)
       CALL CHECKS('another H message', MSG, 'step length', NBAD)
       CALL VCIDEL(IH)
+C
+C     4. The file of a run that failed says so (legacy_output_status
+C        reads it): TASK 11 fails in mid-run (IPAR(1) = 2), then a call
+C        that succeeds (VCIMSG), then VCICLS: status 2 and the message
+C        in pendw77_failed.h5
+      IPAR(1) = 2
+      CALL VCINEW(PWMOD, N, M, NG, 8, H, RPAR, IPAR, IH, ISTAT)
+      CALL VCISCH(IH, 3, NSTG, ISTAT)
+      CALL VCIINM(IH, 0.0D0, Q0, P0, ISTAT)
+      CALL VCIOUT(IH, 'pendw77_failed.h5', 0, ISTAT)
+      CALL CHECKI('VCIOUT (failing run)', ISTAT, 0, NBAD)
+      CALL VCIADV(IH, 200, 1, T, Q, P, NIMP, TIMP, LTIMP, ISTAT)
+      CALL CHECKI('failing run into a file', ISTAT, 2, NBAD)
+      CALL VCIMSG(IH, MSG)
+      CALL VCICLS(IH, ISTAT)
+      CALL CHECKI('VCICLS (failing run)', ISTAT, 0, NBAD)
+      CALL VCIDEL(IH)
+      IPAR(1) = 0
    40 CONTINUE
 C
       IF (NBAD .NE. 0) THEN
