@@ -373,21 +373,27 @@ contains
     end subroutine tie_row
 
     !> evaluate at mu, or, where the motion there misses wall j (a secant step past the impulse at
-    !> which it grazes wall j), at mu moved back halfway towards mu_ok (the last impulse that
+    !> which it grazes wall j) or mu is not of mu_ok's sign (the reflection's side of mu = 0, as
+    !> energy_along keeps it), at mu moved back halfway towards mu_ok (the last impulse that
     !> reached it) until it does: the row's root may lie between (left-rule seed 2892 of the C
     !> harness: the backward tie stopped at such a step and the run ended 2e-2 off its start; with
-    !> the halving it finds the root, 8e-15 off)
+    !> the halving it finds the root, 8e-15 off). Without the sign, halving from a secant step
+    !> through 0 tied left-rule seed 15608's impulse at -0.36: the motion went into the wall it
+    !> had left and the next impacts were 1.0e-2 beyond it.
     logical function evaluate_towards(mu_ok, mu, f)
       real(dp), intent(in) :: mu_ok
       real(dp), intent(inout) :: mu
       real(dp), intent(out) :: f
       integer, parameter :: max_halvings = 24
       integer :: k
-      evaluate_towards = evaluate(mu, f)
-      do k = 1, max_halvings
-        if (evaluate_towards .or. stat /= VCI_OK .or. .not. missed) exit
+      evaluate_towards = .false.
+      f = huge(1.0_dp)
+      do k = 0, max_halvings
+        if (mu / mu_ok > 0.0_dp) then
+          evaluate_towards = evaluate(mu, f)
+          if (evaluate_towards .or. stat /= VCI_OK .or. .not. missed) return
+        end if
         mu = 0.5_dp * (mu + mu_ok)
-        evaluate_towards = evaluate(mu, f)
       end do
     end function evaluate_towards
 
