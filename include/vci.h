@@ -450,6 +450,16 @@ int  vci_get_stats(vci_integrator integ, int64_t *steps, int64_t *impacts, int64
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle; VCI_ERR_STATE: busy. */
 int  vci_get_energy_fallbacks(vci_integrator integ, int64_t *count);
 
+/** Impacts the library could not make reversible (docs/BACKWARD.md, "Impacts that cannot be tied"):
+ *  in a step with several impacts, an impact's energy condition is held on the sub-step that leaves
+ *  it up to the next wall, which is what a reversed run poses; where the search finds no impulse
+ *  that does (as measured: the impulse that would hold it lets the motion miss that wall), the
+ *  impact keeps its condition on the rest of the step, and a run back through it need not return
+ *  to its start. Only impacts of the steps taken count (as vci_get_energy_fallbacks). count may
+ *  be NULL.
+ *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle; VCI_ERR_STATE: busy. */
+int  vci_get_irreversible_impacts(vci_integrator integ, int64_t *count);
+
 /** Steps the safety net (vci_set_step_splits) took as equal sub-steps, and the most sub-steps one
  *  of them needed (0 when none); either pointer may be NULL.
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle; VCI_ERR_STATE: busy. */

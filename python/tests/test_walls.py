@@ -3,6 +3,8 @@
 numba cfuncs, and C functions compiled by the C compiler, through ctypes), L as a sympy formula --
 against the exact solution (Jacobi elliptic functions in quad precision,
 test/support/vci_ref_pendulum_walls.f90, through test/python/vci_python_ref)."""
+import math
+
 import numpy as np
 import pytest
 
@@ -140,3 +142,26 @@ def test_cffi_function_pointers(exact):
     assert errors(state, impacts, exact)[0] <= 1e-9
     with pytest.raises(vci.ArgumentError, match="double \\* is not a function pointer"):
         vci.LagrangianModel(1, 0, 2, **dict(cbs, dl_dq=ffi.new("double *")))
+
+
+def test_untied_impact_counted():
+    # a ball under gravity g = 10 leaving the floor early in a step of 0.2 and only just reaching a
+    # ceiling at 0.04 within it (midpoint: E_d = H - g^2 tau^2 / 8 on a sub-step of length tau): no
+    # impulse holds the floor impact's energy condition on the sub-step up to the ceiling, so it
+    # keeps it on the rest of the step and the integrator counts it (core_reversal's
+    # test_untied_impact_is_counted, the same scene in the box; docs/BACKWARD.md)
+    g, c, tau1, e_minus = 10.0, 0.04, 0.02, 0.1975
+    model = vci.LagrangianModel(
+        1, 0, 2,
+        lagrangian=lambda q, v: 0.5 * v[0] ** 2 - g * q[0],
+        dl_dq=lambda q, v: [-g],
+        dl_dv=lambda q, v: [v[0]],
+        gaps=lambda q: [q[0], c - q[0]],
+        gap_gradients=lambda q: [[1.0], [-1.0]])
+    va = math.sqrt(2.0 * (e_minus + g ** 2 * tau1 ** 2 / 8.0))
+    it = vci.Integrator(model, 0.2, scheme="midpoint")
+    it.init_from_momentum(0.0, [va * tau1 - 0.5 * g * tau1 ** 2], [-(va - g * tau1)])
+    assert it.irreversible_impacts == 0
+    it.step()
+    assert list(it.impacts["gap"][:2]) == [0, 1]
+    assert it.irreversible_impacts == 1

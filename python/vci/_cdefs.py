@@ -85,6 +85,7 @@ int  vci_get_energy(vci_integrator integ, double *energy);
 int  vci_get_index(vci_integrator integ, int64_t *k);
 int  vci_get_stats(vci_integrator integ, int64_t *steps, int64_t *impacts, int64_t *newton_iterations);
 int  vci_get_energy_fallbacks(vci_integrator integ, int64_t *count);
+int  vci_get_irreversible_impacts(vci_integrator integ, int64_t *count);
 int  vci_get_split_steps(vci_integrator integ, int64_t *steps, int64_t *largest);
 int  vci_set_impact_callback(vci_integrator integ, vci_impact_fn fn, void *user);
 int  vci_open_output(vci_integrator integ, const char *path);

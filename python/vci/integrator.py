@@ -419,6 +419,14 @@ class Integrator:
         return int(c[0])
 
     @property
+    def irreversible_impacts(self):
+        """Impacts whose energy condition could not be tied to the sub-step leaving them up to the next
+        wall (a run back through them need not return; docs/BACKWARD.md)."""
+        c = ffi.new("int64_t *")
+        self._check(lib.vci_get_irreversible_impacts(self._h[0], c))
+        return int(c[0])
+
+    @property
     def split_steps(self):
         """(steps the safety net took as equal sub-steps, the most sub-steps one needed)."""
         c, m = ffi.new("int64_t *"), ffi.new("int64_t *")

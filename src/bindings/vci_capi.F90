@@ -28,6 +28,7 @@ module vci_capi
   public :: vci_init_from_pair, vci_init_from_momentum, vci_step, vci_integrate
   public :: vci_get_state, vci_get_multipliers, vci_get_energy, vci_get_index, vci_get_stats
   public :: vci_get_energy_fallbacks
+  public :: vci_get_irreversible_impacts
   public :: vci_set_step_splits, vci_get_split_steps
   public :: vci_set_poke_samples
   public :: vci_set_bordered_impacts, vci_get_bordered_directions
@@ -937,6 +938,27 @@ contains
     end if
     vci_get_energy_fallbacks = stat
   end function vci_get_energy_fallbacks
+
+  !> int vci_get_irreversible_impacts(vci_integrator integ, int64_t *count): impacts whose energy
+  !> condition could not be tied to the sub-step that leaves them up to the next wall of the step
+  !> (docs/BACKWARD.md, "Impacts that cannot be tied").
+  integer(c_int) function vci_get_irreversible_impacts(integ, count) bind(C, name='vci_get_irreversible_impacts')
+    type(c_ptr), value :: integ, count
+    type(c_integrator_t), pointer :: ip
+    type(vci_stats_t) :: stats
+    integer :: stat
+    integer(c_int64_t), pointer :: l
+    call enter(integ, 'vci_get_irreversible_impacts', ip, stat)
+    if (stat == VCI_OK) then
+      if (c_associated(count)) then
+        stats = ip%integ%statistics()
+        call c_f_pointer(count, l)
+        l = int(stats%irreversible_impacts, c_int64_t)
+      end if
+      call leave(ip)
+    end if
+    vci_get_irreversible_impacts = stat
+  end function vci_get_irreversible_impacts
 
   !> int vci_get_split_steps(vci_integrator integ, int64_t *steps, int64_t *largest): steps the
   !> safety net took as equal sub-steps, and the most sub-steps one of them needed.

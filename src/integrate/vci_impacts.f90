@@ -288,7 +288,7 @@ contains
     integer, parameter :: max_secants = 12
     integer :: k, nx
     real(dp) :: mu_a, mu_b, mu_c, f_a, f_b, f_c, mu_best, f_best, tol, mu_state, alpha0, e0, s10
-    logical :: consistent, blend
+    logical :: consistent, blend, missed
     stat = VCI_OK
     nx = self%nsub
     mu_a = real(dir, dp) * imp%impulse
@@ -308,13 +308,16 @@ contains
       do k = 1, max_secants
         if (abs(f_b) <= 0.01_dp * tol .or. f_b == f_a) exit
         mu_c = mu_b - f_b * (mu_b - mu_a) / (f_b - f_a)
-        if (.not. evaluate(mu_c, f_c)) exit
+        if (.not. evaluate_towards(mu_b, mu_c, f_c)) exit
         mu_a = mu_b; f_a = f_b; mu_b = mu_c; f_b = f_c
       end do
     end if
     if (stat /= VCI_OK) return
     if (.not. (abs(f_best) <= tol)) then
-      ! no root: back to stage 2's impulse and the stage 1 that followed it
+      ! no root: back to stage 2's impulse and the stage 1 that followed it. A reversed run poses
+      ! this impact's condition on the sub-step from wall j, not on the rest of the step: counted
+      ! (irreversible_impacts; docs/BACKWARD.md, "Impacts that cannot be tied")
+      self%stats%irreversible_impacts = self%stats%irreversible_impacts + 1
       self%x(1:nx + 1) = self%tie_x(1:nx + 1, 1); self%x_stage1(1:nx + 1) = self%tie_x(1:nx + 1, 2)
       self%q_end = self%tie_q(:, 1); self%q_wall = self%tie_q(:, 2); self%p_arrive = self%tie_q(:, 3)
       alpha = alpha0; e_minus = e0; s1res = s10
@@ -369,6 +372,31 @@ contains
       tol = self%settings%atol + self%settings%rtol * sc
     end subroutine tie_row
 
+    !> evaluate at mu, or, where the motion there misses wall j (a secant step past the impulse at
+    !> which it grazes wall j) or mu is not of mu_ok's sign (the reflection's side of mu = 0, as
+    !> energy_along keeps it), at mu moved back halfway towards mu_ok (the last impulse that
+    !> reached it) until it does: the row's root may lie between (left-rule seed 2892 of the C
+    !> harness: the backward tie stopped at such a step and the run ended 2e-2 off its start; with
+    !> the halving it finds the root, 8e-15 off). Without the sign, halving from a secant step
+    !> through 0 tied left-rule seed 15608's impulse at -0.36: the motion went into the wall it
+    !> had left and the next impacts were 1.0e-2 beyond it.
+    logical function evaluate_towards(mu_ok, mu, f)
+      real(dp), intent(in) :: mu_ok
+      real(dp), intent(inout) :: mu
+      real(dp), intent(out) :: f
+      integer, parameter :: max_halvings = 24
+      integer :: k
+      evaluate_towards = .false.
+      f = huge(1.0_dp)
+      do k = 0, max_halvings
+        if (mu / mu_ok > 0.0_dp) then
+          evaluate_towards = evaluate(mu, f)
+          if (evaluate_towards .or. stat /= VCI_OK .or. .not. missed) return
+        end if
+        mu = 0.5_dp * (mu + mu_ok)
+      end do
+    end function evaluate_towards
+
     !> Regular sub-step and stage 1 to wall j from (q_start, p- + mu grad g); f = E_d - E-. False when
     !> the motion misses wall j, crosses another wall before it (then its sub-step does not end at
     !> wall j) or a solve fails (stat then says whether that is fatal).
@@ -380,6 +408,7 @@ contains
       logical :: found
       evaluate = .false.
       consistent = .false.
+      missed = .false.
       f = huge(1.0_dp)
       self%p_start = imp%p_before + mu * imp%grad_g
       call self%sys%put_endpoint(self%x, self%q_start, self%q_end)
@@ -392,12 +421,14 @@ contains
         call set_cause(self, 'gap evaluation'); return
       end if
       if (self%gaps_end(j) >= 0.0_dp) then
+        missed = .true.
         if (.not. self%settings%poke_samples) return
         ! the motion may still pass wall j and come back within the sub-step (find_poke)
         call find_poke(self, tau, j, poked, lo, hi, glo, ghi, stat)
         if (stat /= VCI_OK .or. poked /= j) return
         call stage_poke(self, j, tau, lo, hi, glo, ghi, alpha, found, stat)
         if (stat /= VCI_OK .or. .not. found) return
+        missed = .false.
       else
         call stage_wall(self, j, tau, alpha, stat)
         if (stat /= VCI_OK) then

@@ -52,6 +52,10 @@ module vci_integrator
     integer(i8) :: fused_solves = 0     !< regular sub-steps solved by the scheme's fused routine
     !> impacts where no impulse matches the discrete energy (a graze): H(q, p) kept instead
     integer(i8) :: energy_fallbacks = 0
+    !> impacts of a step with several whose energy condition could not be held on the sub-step that
+    !> leaves them up to the next wall (the search found no such impulse); a reversed run poses
+    !> another condition there and need not return (docs/BACKWARD.md, "Impacts that cannot be tied")
+    integer(i8) :: irreversible_impacts = 0
     !> steps that failed and were then taken as 2, 4, ... equal sub-steps (the safety net,
     !> set_step_splits; docs/DESIGN.md §2), and the most sub-steps one of them needed
     integer(i8) :: split_steps = 0
@@ -1249,6 +1253,7 @@ contains
     stats%fallbacks = solver%fallbacks
     stats%fused_solves = solver%fused_solves
     stats%energy_fallbacks = solver%energy_fallbacks
+    stats%irreversible_impacts = solver%irreversible_impacts
     stats%split_steps = solver%split_steps
     stats%largest_split = solver%largest_split
   end function statistics

@@ -406,16 +406,17 @@ contains
     type(vci_impact_buffer_t), intent(inout) :: impacts
     integer, intent(out) :: stat
     integer :: i
-    integer(i8) :: fallbacks
+    integer(i8) :: fallbacks, irreversible
     real(dp) :: arriving
     if (state%arriving_direction /= dir) state%arriving_energy = ieee_value(1.0_dp, ieee_quiet_nan)
     arriving = state%arriving_energy     ! a failed attempt may have changed it
     self%last_parts = 1
-    fallbacks = self%stats%energy_fallbacks
+    fallbacks = self%stats%energy_fallbacks; irreversible = self%stats%irreversible_impacts
     call take_step(self, state, dir, impacts, stat)
     ! energy_fallbacks counts the impacts of the steps taken: a failed attempt's impacts are
     ! discarded (a count of them made the two directions of a reversal differ where only one split)
     if (stat /= VCI_OK) self%stats%energy_fallbacks = fallbacks
+    if (stat /= VCI_OK) self%stats%irreversible_impacts = irreversible
     if (stat /= VCI_OK .and. self%settings%max_step_splits >= 2) then
       if (stat == VCI_ERR_NEWTON .or. stat == VCI_ERR_IMPACT .or. stat == VCI_ERR_TOO_MANY_IMPACTS) &
         call split_step(self, state, dir, arriving, impacts, stat)
@@ -456,12 +457,13 @@ contains
     type(vci_impact_buffer_t), intent(inout) :: impacts
     integer, intent(inout) :: stat
     integer :: first_stat, parts, i, k, st, tried
-    integer(i8) :: fallbacks
+    integer(i8) :: fallbacks, irreversible
     character(len=VCI_MSG_LEN) :: first_cause
     character(len=2 * VCI_MSG_LEN) :: combined
     character(len=16) :: last_parts
     first_stat = stat; first_cause = self%cause
     fallbacks = self%stats%energy_fallbacks      ! (a failed split's impacts are discarded too)
+    irreversible = self%stats%irreversible_impacts
     st = VCI_OK
     if (.not. allocated(self%part_impacts%records)) then
       call self%part_impacts%reserve(min(self%settings%max_impacts_per_step, 16), self%n, st)
@@ -512,6 +514,7 @@ contains
         return
       end if
       self%stats%energy_fallbacks = fallbacks
+      self%stats%irreversible_impacts = irreversible
       if (st == VCI_ERR_MEMORY .or. st == VCI_ERR_CALLBACK .or. st == VCI_ERR_NONFINITE) exit
       parts = 2 * parts
     end do

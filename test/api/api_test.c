@@ -713,6 +713,14 @@ static void suite_hamiltonian(void) {
     CHECK_STATUS(vci_get_energy_fallbacks(integ, &fallbacks), VCI_OK);
     CHECK_STATUS(vci_get_energy_fallbacks(integ, NULL), VCI_OK);
     CHECK_STATUS(vci_get_energy_fallbacks(NULL, &fallbacks), VCI_ERR_ARGUMENT);
+    {
+      /* the accessor (the count itself: fuzz_capi_reversal_seed_13, _17338, _17959) */
+      int64_t irreversible = -1;
+      CHECK_STATUS(vci_get_irreversible_impacts(integ, &irreversible), VCI_OK);
+      CHECK_STATUS(vci_get_irreversible_impacts(integ, NULL), VCI_OK);
+      CHECK_STATUS(vci_get_irreversible_impacts(NULL, &irreversible), VCI_ERR_ARGUMENT);
+      CHECK(irreversible >= 0 && irreversible <= impacts);
+    }
     printf("  soft impacts, discrete condition: %lld impacts, %lld kept H\n", (long long)impacts, (long long)fallbacks);
     CHECK(fallbacks > 0 && fallbacks < impacts);
     vci_integrator_destroy(&integ);

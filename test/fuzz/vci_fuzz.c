@@ -13,11 +13,13 @@
  * (fuzz_continuous.c's four kinds, walls at random), a random scheme (left, midpoint, Lobatto s = 1..4,
  * compositions of order 2, 4, 6 for a separable model) and solver tolerance rtol; N steps forward
  * and N back must return (q0, p0) to REVERSAL_C * 2N * rtol (relative to 1 + |q0|, 1 + |p0|), at
- * index 0, with as many impacts back as forward; runs where the safety net split a step or an energy
- * fallback was taken (vci_get_split_steps, vci_get_energy_fallbacks) are counted but not judged;
- * those where the directions differ in them ("one-sided") are printed with where the two impact
+ * index 0, with as many impacts back as forward; runs where the safety net split a step, an energy
+ * fallback was taken or the library reported an irreversible impact (vci_get_split_steps,
+ * vci_get_energy_fallbacks, vci_get_irreversible_impacts) are counted but not judged; those where
+ * the directions differ in splits or fallbacks ("one-sided") are printed with where the two impact
  * lists first part (walked from the run's end), and counted apart for the left rule, which is not
- * symmetric (docs/BACKWARD.md). VCI_FUZZ_IMPACTS=1 prints both lists.
+ * symmetric; a one-sided run of a symmetric scheme fails unless the library reported an
+ * irreversible impact in it (docs/BACKWARD.md). VCI_FUZZ_IMPACTS=1 prints both lists.
  * The seeds are fixed, so a failure replays:
  *
  *   vci_fuzz [--reversal] SEED_FIRST SEED_COUNT [SECONDS]   run the seeds, stop after SECONDS (default 60)
@@ -45,12 +47,15 @@
  * these h) and the impact solves' own tolerance. Measured over seeds 1-3000: at most 7.1 (a chain
  * with 43 impacts each way), above 1 in 3 of 2911 judged runs (docs/TESTING.md). */
 #define REVERSAL_C 100.0
-/* exit statuses of a reversal child beside 0 (held): judged broken, not judged (a step failed, or
- * the net split steps or energy fallbacks were taken alike both ways), not judged and one-sided (the
- * two directions differ in splits or fallbacks: issue 24 item 1 wants that never for a symmetric
- * scheme; counted, not failed yet), the same with the left rule (not symmetric: counted apart) */
+/* exit statuses of a reversal child beside 0 (held): judged broken, not judged (a step failed, the
+ * net split steps or energy fallbacks were taken alike both ways, or the library reported an impact
+ * it could not make reversible), not judged and one-sided with a symmetric scheme (the two
+ * directions differ in splits or fallbacks) where the library reported the cause (an irreversible
+ * impact: vci_get_irreversible_impacts), the same with the left rule (not symmetric: counted apart),
+ * and one-sided with a symmetric scheme and no cause reported: a failure (issue 24 item 1 wants a
+ * fallback never taken in one direction only; docs/BACKWARD.md) */
 enum { EXIT_REVERSAL_BROKEN = 73, EXIT_REVERSAL_UNJUDGED = 74, EXIT_REVERSAL_ONE_SIDED = 75,
-       EXIT_REVERSAL_ONE_SIDED_LEFT = 76 };
+       EXIT_REVERSAL_ONE_SIDED_LEFT = 76, EXIT_REVERSAL_ONE_SIDED_UNEXPLAINED = 77 };
 
 /* The impacts of a reversal run, in the order met (forward: time increasing; backward: decreasing),
  * to find where the two directions first part (one-sided runs, sorted by cause: docs/BACKWARD.md) */
@@ -476,7 +481,7 @@ static int reversal(uint64_t seed) {
   vci_integrator it = NULL;
   int separable, scheme, stages, s, i, n, nsteps, verdict = 0;
   double h, rtol, q0[MAXC], p0[MAXC], t0, q[MAXC], p[MAXC], t, err_q = 0.0, err_p = 0.0, tol;
-  int64_t imp_f = 0, imp_b = 0, split_f = 0, split_b = 0, fb_f = 0, fb_b = 0, k = -1;
+  int64_t imp_f = 0, imp_b = 0, split_f = 0, split_b = 0, fb_f = 0, fb_b = 0, irr_f = 0, irr_b = 0, k = -1;
   const char *verbose = getenv("VCI_FUZZ_VERBOSE");
   static impact_list list_f, list_b;
   char parted[160] = "";
@@ -527,6 +532,7 @@ static int reversal(uint64_t seed) {
     vci_get_stats(it, NULL, &imp_f, NULL);
     vci_get_split_steps(it, &split_f, NULL);
     vci_get_energy_fallbacks(it, &fb_f);
+    vci_get_irreversible_impacts(it, &irr_f);
     s = vci_set_impact_callback(it, list_impact, &list_b);
     if (s == VCI_OK) s = vci_integrate(it, nsteps, -1);
   }
@@ -534,7 +540,8 @@ static int reversal(uint64_t seed) {
     vci_get_stats(it, NULL, &imp_b, NULL);
     vci_get_split_steps(it, &split_b, NULL);
     vci_get_energy_fallbacks(it, &fb_b);
-    imp_b -= imp_f; split_b -= split_f; fb_b -= fb_f;
+    vci_get_irreversible_impacts(it, &irr_b);
+    imp_b -= imp_f; split_b -= split_f; fb_b -= fb_f; irr_b -= irr_f;
     promise(vci_get_state(it, &t, q, p) == VCI_OK && vci_get_index(it, &k) == VCI_OK, "state after the run");
     for (i = 0; i < n; ++i) {
       err_q = fmax(err_q, fabs(q[i] - q0[i]) / (1.0 + fabs(q0[i])));
@@ -557,11 +564,13 @@ static int reversal(uint64_t seed) {
     /* the left rule is not symmetric: its backward step solves the right rule's equations (another
      * nonlinear system, another Newton basin; E_d - H offsets O(h), not O(h^2)), so where a solve
      * fails or a condition blends may differ between the directions (docs/BACKWARD.md) */
-    verdict = scheme == VCI_SCHEME_LEFT ? EXIT_REVERSAL_ONE_SIDED_LEFT : EXIT_REVERSAL_ONE_SIDED;
-  else if (s != VCI_OK || split_f + split_b + fb_f + fb_b > 0) verdict = EXIT_REVERSAL_UNJUDGED;
+    verdict = scheme == VCI_SCHEME_LEFT      ? EXIT_REVERSAL_ONE_SIDED_LEFT
+              : irr_f + irr_b > 0            ? EXIT_REVERSAL_ONE_SIDED
+                                             : EXIT_REVERSAL_ONE_SIDED_UNEXPLAINED;
+  else if (s != VCI_OK || split_f + split_b + fb_f + fb_b + irr_f + irr_b > 0) verdict = EXIT_REVERSAL_UNJUDGED;
   else if (!(err_q <= tol && err_p <= tol) || k != 0 || imp_f != imp_b) verdict = EXIT_REVERSAL_BROKEN;
   if (verbose || verdict == EXIT_REVERSAL_BROKEN || verdict == EXIT_REVERSAL_ONE_SIDED ||
-      verdict == EXIT_REVERSAL_ONE_SIDED_LEFT) { /* (one-sided: to sort them) */
+      verdict == EXIT_REVERSAL_ONE_SIDED_LEFT || verdict == EXIT_REVERSAL_ONE_SIDED_UNEXPLAINED) { /* (to sort them) */
     char msg[300] = "";
     if (s != VCI_OK) vci_last_error(it, msg, sizeof msg);
     if (s == VCI_OK) {
@@ -570,12 +579,14 @@ static int reversal(uint64_t seed) {
                split_f != split_b ? "split-one-way" : fb_f != fb_b ? "fallbacks-differ" : "alike", parted);
     }
     printf("reversal seed %llu: kind %d n %d ng %d %s s %d h %.4f N %d rtol %.1e: status %d, impacts %lld/%lld, "
-           "splits %lld/%lld, fallbacks %lld/%lld, index %lld, err q %.2e p %.2e (%.2g of 2N rtol)%s %s\n",
+           "splits %lld/%lld, fallbacks %lld/%lld, irreversible %lld/%lld, index %lld, err q %.2e p %.2e (%.2g of 2N "
+           "rtol)%s %s\n",
            (unsigned long long)seed, md.kind, n, md.ng, scheme_name(scheme), stages, h, nsteps, rtol, s,
            (long long)imp_f, (long long)imp_b, (long long)split_f, (long long)split_b, (long long)fb_f, (long long)fb_b,
-           (long long)k, err_q, err_p, fmax(err_q, err_p) / (2.0 * nsteps * rtol),
+           (long long)irr_f, (long long)irr_b, (long long)k, err_q, err_p, fmax(err_q, err_p) / (2.0 * nsteps * rtol),
            verdict == EXIT_REVERSAL_BROKEN ? " BROKEN" : verdict == EXIT_REVERSAL_ONE_SIDED ? " one-sided" :
-           verdict == EXIT_REVERSAL_ONE_SIDED_LEFT ? " one-sided-left" : verdict ? " unjudged" : "", msg);
+           verdict == EXIT_REVERSAL_ONE_SIDED_LEFT ? " one-sided-left" :
+           verdict == EXIT_REVERSAL_ONE_SIDED_UNEXPLAINED ? " one-sided-unexplained" : verdict ? " unjudged" : "", msg);
   }
   if (getenv("VCI_FUZZ_IMPACTS")) { /* both lists, the backward one reversed beside the forward one */
     int a = list_f.count < MAX_LISTED_IMPACTS ? list_f.count : MAX_LISTED_IMPACTS;
@@ -673,11 +684,13 @@ int main(int argc, char **argv) {
       ++one_sided_left;
     } else if (WEXITSTATUS(status) != 0) {
       static const char *why[] = {"exit from library code", "NaN/Inf given to LAPACK", "broken promise",
-                                  "reversal broken"};
+                                  "reversal broken", "", "", "",
+                                  "one-sided with a symmetric scheme, no cause reported by the library"};
       int code = WEXITSTATUS(status);
       ++bad;
       printf("FAIL seed %ld: exit status %d (%s)\n", first + i, code,
-             code >= 70 && code <= 73 ? why[code - 70] : "sanitizer report or runtime error");
+             (code >= 70 && code <= 73) || code == EXIT_REVERSAL_ONE_SIDED_UNEXPLAINED ? why[code - 70]
+                                                                                  : "sanitizer report or runtime error");
     }
     if (bad >= 5) { /* enough to act on; the rest would repeat the reports */
       printf("stopping after 5 failures\n");
@@ -689,8 +702,8 @@ int main(int argc, char **argv) {
          first, first + ran - 1, difftime(time(NULL), start), bad);
   if (reversal_mode)
     printf(", %ld not judged (a failed step, or splits or energy fallbacks alike both ways), %ld not judged as"
-           " one-sided (splits or energy fallbacks differ between the directions) with a symmetric scheme, %ld with"
-           " the left rule (not symmetric)", unjudged, one_sided, one_sided_left);
+           " one-sided (splits or energy fallbacks differ between the directions) with a symmetric scheme and an"
+           " irreversible impact reported, %ld with the left rule (not symmetric)", unjudged, one_sided, one_sided_left);
   printf("%s\n", ran < count && !stopped ? " (time budget reached)" : "");
   return bad ? 1 : 0;
 }

@@ -20,7 +20,7 @@ program vci_reversal_fuzz
   use vci
   use vci_test_reversal
   implicit none
-  integer :: first, count, seed, failed, run, multi, fallbacks, soft
+  integer :: first, count, seed, failed, run, multi, fallbacks, soft, untied
   real(dp) :: seconds, tol, worst_q, worst_p, chaos_bound, g9, g10
   real(dp), parameter :: rtol = 1.0e-12_dp    ! the integrator's default Newton tolerance
   integer :: chaotic
@@ -51,7 +51,7 @@ program vci_reversal_fuzz
   end if
   call system_clock(c0, rate)
   chaotic = 0
-  failed = 0; soft = 0; run = 0; multi = 0; fallbacks = 0; worst_q = 0.0_dp; worst_p = 0.0_dp
+  failed = 0; soft = 0; untied = 0; run = 0; multi = 0; fallbacks = 0; worst_q = 0.0_dp; worst_p = 0.0_dp
   do seed = first, first + count - 1
     s = random_scene(seed, firm)
     r = round_trip(s)
@@ -80,10 +80,11 @@ program vci_reversal_fuzz
     if (bad .and. .not. max(r%err_q, r%err_p) <= chaos_bound) then
       failed = failed + 1
       if (r%fallbacks_fwd + r%fallbacks_bwd + r%touches > 0) soft = soft + 1
+      if (r%irreversible > 0) untied = untied + 1
       print '(a,i0,a,a)', 'seed ', seed, ': ', trim(scene_label(s))
-      print '(a,i0,a,es10.3,a,es10.3,a,i0,a,i0,a,i0,a,i0,a,i0,a,a)', '  stat ', r%stat, ' err q ', r%err_q, ' p ', r%err_p, &
-        ' impacts ', r%impacts_fwd, '/', r%impacts_bwd, ' fallbacks ', r%fallbacks_fwd, '/', r%fallbacks_bwd, &
-        ' touches ', r%touches, ' ', trim(r%message)
+      print '(a,i0,a,es10.3,a,es10.3,a,i0,a,i0,a,i0,a,i0,a,i0,a,i0,a,a)', '  stat ', r%stat, ' err q ', r%err_q, ' p ', &
+        r%err_p, ' impacts ', r%impacts_fwd, '/', r%impacts_bwd, ' fallbacks ', r%fallbacks_fwd, '/', r%fallbacks_bwd, &
+        ' touches ', r%touches, ' irreversible ', r%irreversible, ' ', trim(r%message)
       if (chaos_bound > 0.0_dp) print '(a,es9.2,a)', '  forward growth x rtol ', chaos_bound, &
         ' (a start moved by 1e-9 and 1e-10, relative; at most 1e-6): beyond it'
       if (g9 > 0.0_dp .and. chaos_bound < 0.0_dp) print '(a,2es9.2,a)', '  forward growth ', g9, g10, &
@@ -95,8 +96,9 @@ program vci_reversal_fuzz
     call system_clock(c1)
     if (real(c1 - c0, dp) / real(rate, dp) > seconds) exit
   end do
-  print '(a,i0,a,i0,a,i0,a,i0,a,i0,a,es9.2,a,es9.2,a,i0,a)', 'seeds run ', run, ', failed ', failed, ' (', soft, &
-    ' with a fallback or a touch), steps with several impacts ', multi, ', fallbacks ', fallbacks, &
+  print '(a,i0,a,i0,a,i0,a,i0,a,i0,a,i0,a,es9.2,a,es9.2,a,i0,a)', 'seeds run ', run, ', failed ', failed, ' (', soft, &
+    ' with a fallback or a touch, ', untied, ' with an irreversible impact), steps with several impacts ', multi, &
+    ', fallbacks ', fallbacks, &
     ', worst err q ', worst_q, ' p ', worst_p, ', ', chaotic, ' chaotic (beyond TOL, within forward growth x rtol)'
   if (failed > 0) error stop 1
 end program vci_reversal_fuzz

@@ -42,6 +42,7 @@ module vci_test_reversal
     integer :: multi_steps = 0           !< forward steps with two or more impacts
     integer :: fallbacks_fwd = 0, fallbacks_bwd = 0
     integer :: touches = 0               !< impacts with no impulse (tangential touches), both directions
+    integer :: irreversible = 0          !< impacts that could not be tied (irreversible_impacts), both directions
   end type reversal_result_t
 
   public :: random_scene, round_trip, scene_label, forward_growth, print_forward_impacts
@@ -237,6 +238,7 @@ contains
       r%touches = r%touches + touches(integ)
     end do
     st = integ%statistics(); fb = int(st%energy_fallbacks - fb0); r%fallbacks_bwd = fb
+    r%irreversible = int(st%irreversible_impacts)
     r%err_q = norm2(integ%configuration() - q0) / norm2(q0)
     r%err_p = norm2(integ%momentum() - p0) / norm2(p0)
   end subroutine run
