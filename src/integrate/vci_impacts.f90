@@ -528,7 +528,8 @@ contains
     if (.not. stage_path) screened = parabola_dips(self, only)
     if (screened) then
       if (.not. samples_are_path(self, self%q_start, self%p_start, self%q_end, self%x_full, tau, lam, stat)) then
-        if (stat == VCI_OK .and. stage_path) call unresolved_crossing(self, only, stat)
+        ! (only > 0: tie_to_wall's trial impulses, where a sub-step that cannot tell is no failure)
+        if (stat == VCI_OK .and. stage_path .and. only == 0) call unresolved_crossing(self, stat)
         screened = .false.
       end if
     end if
@@ -646,8 +647,8 @@ contains
   end function parabola_dips
 
   !> The path's point at s if it is beyond a wall the end is not beyond (only that wall when
-  !> only > 0): its index; -1 when a wall the end is beyond is crossed there (then that wall is
-  !> stage 1's, as without samples: no poke); 0 otherwise.
+  !> only > 0): its index; -1 when it is beyond a wall the end is beyond (then that wall is stage
+  !> 1's, as without samples), or beyond another wall than only: no poke; 0 when beyond none.
   integer function poked_point(self, s, only)
     type(vci_stepper_t), intent(in) :: self
     real(dp), intent(in) :: s
@@ -657,12 +658,11 @@ contains
     i = findloc(self%poke_path_s(1:self%poke_npath), s, 1)
     if (i == 0) return
     associate (g => self%poke_path_g(1:self%ng, i))
-      if (any(g < 0.0_dp .and. self%gaps_end(1:self%ng) < 0.0_dp)) then
-        poked_point = -1
-      else if (only > 0) then
-        if (g(only) < 0.0_dp) poked_point = i
-      else if (any(g < 0.0_dp)) then
-        poked_point = i
+      if (.not. any(g < 0.0_dp)) return
+      poked_point = i
+      if (any(g < 0.0_dp .and. self%gaps_end(1:self%ng) < 0.0_dp)) poked_point = -1
+      if (only > 0) then
+        if (.not. g(only) < 0.0_dp) poked_point = -1
       end if
     end associate
   end function poked_point
@@ -748,23 +748,22 @@ contains
 
   !> The stage screen dipped but the sub-step does not resolve the motion (samples_are_path), so no
   !> sample can place a crossing: if one of its own stage points is beyond a wall its end is not
-  !> beyond (only that wall when only > 0), the sub-step passes that wall and comes back, and ending
-  !> the step there without an impact is wrong without a sign (the walled pendulum, Lobatto s = 3,
-  !> h = 1: the step from t = 8 has stage points 0.16 beyond wall 1, misses the impacts at 8.24 and
-  !> 8.81 and ended the run 6.4 off with status 0). Then VCI_ERR_IMPACT with the cause (the safety
-  !> net splits the step); else stat as it came (only the bound's margin dipped: no poke, as
-  !> before). A scheme without interior stages has no solved point inside to tell (its half
-  !> sub-step is another solve, and at h omega >= 10 the safety net's splits then took a stiff
-  !> spring's energy to 3e6 H): it keeps the old behaviour there.
-  subroutine unresolved_crossing(self, only, stat)
+  !> beyond, the sub-step passes that wall and comes back, and ending the step there without an
+  !> impact is wrong without a sign (the walled pendulum, Lobatto s = 3, h = 1: the step from t = 8
+  !> has stage points 0.16 beyond wall 1, misses the impacts at 8.24 and 8.81 and ended the run 6.4
+  !> off with status 0). Then VCI_ERR_IMPACT with the cause (the safety net splits the step); else
+  !> stat as it came (only the bound's margin dipped: no poke, as before). A scheme without interior
+  !> stages has no solved point inside to tell (its half sub-step is another solve, and failing on
+  !> it sent a stiff spring at h omega >= 10 through the net's splits to |dH|/H = 3e6): it keeps
+  !> the old behaviour. Called for resolve_impacts' own sub-steps only (not tie_to_wall's trials).
+  subroutine unresolved_crossing(self, stat)
     type(vci_stepper_t), intent(inout) :: self
-    integer, intent(in) :: only
     integer, intent(inout) :: stat
     integer :: j, d
     real(dp) :: g_least
     d = self%sys%path_degree()
     do j = 1, self%ng
-      if (self%gaps_end(j) < 0.0_dp .or. (only > 0 .and. j /= only)) cycle
+      if (self%gaps_end(j) < 0.0_dp) cycle
       g_least = minval(self%poke_gaps(j, 4:2 + d))          ! (stage_screen's gaps at the stage points)
       if (g_least < 0.0_dp) then
         stat = VCI_ERR_IMPACT
