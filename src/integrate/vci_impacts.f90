@@ -556,7 +556,7 @@ contains
   !> Without it (before issue 24's third round) the parabola screen returned with the half sub-step
   !> posed; Lobatto's end momentum then missed its "sub-step just solved" path (its length differed)
   !> and was summed from differenced stages, with no polynomial start kept for the next step (the
-  !> walled pendulum with s = 1 moved by round-off, 4e-14, and its Newton iterations by 1-3 %). stat
+  !> walled pendulum with s = 1 moved by round-off, 4e-14, and its Newton iterations by up to 3 %). stat
   !> keeps an earlier failure.
   subroutine restore_substep(self, tau, stat)
     type(vci_stepper_t), intent(inout) :: self
