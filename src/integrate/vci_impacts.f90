@@ -479,11 +479,14 @@ contains
   !> two directions cut the motion into different sub-steps, so one saw the crossing at a sub-step's
   !> end and the other did not (docs/BACKWARD.md). Samples the discrete trajectory (regular
   !> sub-steps of length s tau, s = 1/8 .. 7/8, each solve started between the last sample and the
-  !> whole sub-step) up to the first with a negative gap: poked is the wall crossed first there
-  !> (only that wall counts when only > 0), bracketed on [lo, hi] with g(lo) = glo >= 0 > g(hi) = ghi
-  !> and the two samples' solutions in x_low, x_high. poked = 0: no poke (no negative sample, or a
-  !> wall the end is beyond is crossed by then: stage 1 as before; or a sample's solve failed). x is
-  !> left as it came (kept in x_full).
+  !> whole sub-step) up to the first with a negative gap, and where none is negative, at the least
+  !> of a parabola through the least sample and its neighbours (refine_samples): poked is the wall
+  !> crossed first there (only that wall counts when only > 0), bracketed on [lo, hi] with g(lo) =
+  !> glo >= 0 > g(hi) = ghi and the two points' solutions in x_low, x_high. poked = 0: no poke (no
+  !> negative sample, or a wall the end is beyond is crossed by then: stage 1 as before; or a
+  !> sample's solve failed). A stage point beyond a wall where the samples cannot be used fails
+  !> with VCI_ERR_IMPACT (unresolved_crossing). x and the caller's posed sub-step are left as they
+  !> came.
   subroutine find_poke(self, tau, only, poked, lo, hi, glo, ghi, stat)
     type(vci_stepper_t), intent(inout) :: self
     real(dp), intent(in) :: tau
@@ -491,8 +494,8 @@ contains
     integer, intent(out) :: poked
     real(dp), intent(out) :: lo, hi, glo, ghi
     integer, intent(out) :: stat
-    real(dp) :: s, f, best
-    integer :: nm, k, jj, st
+    real(dp) :: s
+    integer :: nm, k, ihi
     logical :: screened, stage_path
     nm = self%nsub
     associate (g_prev => self%poke_gaps(1:self%ng, 1), lam => self%poke_lambda)
@@ -500,7 +503,7 @@ contains
     self%x_full(1:nm) = self%x(1:nm)
     call self%sys%eval_gaps(self%q_start, g_prev, stat)
     if (stat /= VCI_OK) then
-      call set_cause(self, 'gap evaluation at the start of the sub-step'); self%x(1:nm) = self%x_full(1:nm); return
+      call set_cause(self, 'gap evaluation at the start of the sub-step'); return
     end if
     ! a scheme with interior stages screens on their polynomial: no solve unless it comes near a wall
     stage_path = screens_on_stages(self)
@@ -509,78 +512,269 @@ contains
       if (stat /= VCI_OK .or. .not. screened) return
     end if
     call self%sys%get_multipliers(self%x_full, lam)
-    call self%sys%put_endpoint(self%x_low, self%q_start, self%q_start)
+    call self%sys%put_endpoint(self%x_low, self%q_start, self%q_start)      ! (the start: a sub-step of length 0)
     call self%sys%put_multipliers(self%x_low, lam)
+    self%poke_npath = 0
+    call add_path_point(self, 0.0_dp, self%q_start, g_prev, self%x_low)
+    call add_path_point(self, 1.0_dp, self%q_end, self%gaps_end(1:self%ng), self%x_full)
     ! The screen (schemes without a stage polynomial): one solve at s = 1/2 and the parabola through
     ! the start, that point and the end, its bend doubled for a margin, at s = 1/8 .. 7/8 (gap
     ! evaluations). Only where it comes below a wall that the end is not beyond is the trajectory
     ! sampled (most impacts: one solve here). With a stage polynomial the half sub-step is solved
     ! only once that screen has passed: samples_are_path starts from it.
-    self%x(1:nm) = 0.5_dp * (self%x_low(1:nm) + self%x_full(1:nm))
-    call substep(self, self%q_start, self%p_start, 0.5_dp * tau, st)
-    if (st /= VCI_OK) then
-      if (self%sys%unrecoverable) stat = st
-      self%x(1:nm) = self%x_full(1:nm)
-      return
+    if (.not. path_sample(self, 0.5_dp, tau, stat)) then
+      call restore_substep(self, tau, stat); return
     end if
-    call self%sys%get_endpoint(self%x, self%q_guess)
-    self%q_guess = self%q_guess - 0.5_dp * (self%q_start + self%q_end)   ! the bend at s = 1/2
-    do k = 1, merge(0, POKE_SAMPLES, stage_path)
-      s = real(k, dp) / real(POKE_SAMPLES + 1, dp)
-      self%q_trial = self%q_start + s * (self%q_end - self%q_start) + 8.0_dp * s * (1.0_dp - s) * self%q_guess
-      call self%sys%eval_gaps(self%q_trial, self%gaps_trial(1:self%ng), stat)
-      if (stat /= VCI_OK) then
-        call set_cause(self, 'gap evaluation inside the sub-step'); self%x(1:nm) = self%x_full(1:nm); return
+    if (.not. stage_path) screened = parabola_dips(self, only)
+    if (screened) then
+      if (.not. samples_are_path(self, self%q_start, self%p_start, self%q_end, self%x_full, tau, lam, stat)) then
+        ! (only > 0: tie_to_wall's trial impulses, where a sub-step that cannot tell is no failure)
+        if (stat == VCI_OK .and. stage_path .and. only == 0) call unresolved_crossing(self, stat)
+        screened = .false.
       end if
-      do jj = 1, self%ng
-        if (self%gaps_trial(jj) < 0.0_dp .and. self%gaps_end(jj) >= 0.0_dp .and. (only == 0 .or. jj == only)) &
-          screened = .true.
-      end do
-      if (screened) exit
-    end do
-    if (.not. screened) then
-      self%x(1:nm) = self%x_full(1:nm)
-      return
     end if
-    if (.not. samples_are_path(self, self%q_start, self%p_start, self%q_end, self%x_full, tau, lam, stat)) then
-      self%x(1:nm) = self%x_full(1:nm)
-      return
+    if (stat /= VCI_OK .or. .not. screened) then
+      call restore_substep(self, tau, stat); return
     end if
+    ihi = 0
     do k = 1, POKE_SAMPLES
       s = real(k, dp) / real(POKE_SAMPLES + 1, dp)
-      self%x(1:nm) = self%x_low(1:nm) + (s - lo) / (1.0_dp - lo) * (self%x_full(1:nm) - self%x_low(1:nm))
-      call substep(self, self%q_start, self%p_start, s * tau, st)
-      if (st /= VCI_OK) then
-        if (self%sys%unrecoverable) stat = st     ! a callback said so; else no sample, no poke
-        exit
+      if (s /= 0.5_dp) then
+        if (.not. path_sample(self, s, tau, stat)) exit
       end if
-      call self%sys%get_endpoint(self%x, self%q_trial)
-      call self%sys%eval_gaps(self%q_trial, self%gaps_trial(1:self%ng), stat)
-      if (stat /= VCI_OK) then
-        call set_cause(self, 'gap evaluation inside the sub-step'); exit
-      end if
-      if (any(self%gaps_trial(1:self%ng) < 0.0_dp)) then
-        if (any(self%gaps_trial(1:self%ng) < 0.0_dp .and. self%gaps_end(1:self%ng) < 0.0_dp)) exit
-        best = huge(1.0_dp)
-        do jj = 1, self%ng
-          if (.not. self%gaps_trial(jj) < 0.0_dp .or. (only > 0 .and. jj /= only)) cycle
-          f = max(g_prev(jj), 0.0_dp) / (max(g_prev(jj), 0.0_dp) - self%gaps_trial(jj))
-          if (f < best) then
-            best = f; poked = jj
-          end if
-        end do
-        if (poked > 0) then
-          hi = s; glo = max(g_prev(poked), 0.0_dp); ghi = self%gaps_trial(poked)
-          self%x_high(1:nm) = self%x(1:nm)
-        end if
-        exit
-      end if
-      self%x_low(1:nm) = self%x(1:nm); lo = s
-      g_prev = self%gaps_trial(1:self%ng)
+      ihi = poked_point(self, s, only)
+      if (ihi /= 0) exit
     end do
-    self%x(1:nm) = self%x_full(1:nm)
+    if (stat == VCI_OK .and. ihi == 0 .and. k > POKE_SAMPLES) call refine_samples(self, tau, only, ihi, stat)
+    if (stat == VCI_OK .and. ihi > 0) call poke_bracket(self, ihi, only, poked, lo, hi, glo, ghi)
+    call restore_substep(self, tau, stat)
     end associate
   end subroutine find_poke
+
+  !> x back to the caller's solution (x_full) and its sub-step from (q_start, p_start) over tau posed
+  !> again: the unknowns are increments from the posed start, and the samples posed shorter ones.
+  !> Without it (before issue 24's third round) the parabola screen returned with the half sub-step
+  !> posed; Lobatto's end momentum then missed its "sub-step just solved" path (its length differed)
+  !> and was summed from differenced stages, with no polynomial start kept for the next step (the
+  !> walled pendulum with s = 1 moved by round-off, 4e-14, and its Newton iterations by up to 3 %). stat
+  !> keeps an earlier failure.
+  subroutine restore_substep(self, tau, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    real(dp), intent(in) :: tau
+    integer, intent(inout) :: stat
+    integer :: st
+    self%x(1:self%nsub) = self%x_full(1:self%nsub)
+    call self%sys%pose_substep(self%q_start, self%p_start, tau, st)
+    if (st /= VCI_OK .and. stat == VCI_OK) then
+      stat = st; call set_cause(self, 'constraint forms')
+    end if
+  end subroutine restore_substep
+
+  !> The trajectory's point at fraction s of the sub-step of length tau: the end of a regular
+  !> sub-step of s tau from (q_start, p_start), its solve started between the nearest path points
+  !> on either side, and its gaps; it joins the path (add_path_point). False when the solve failed
+  !> (stat set when a callback said so) or a gap evaluation did. x holds the solution.
+  logical function path_sample(self, s, tau, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    real(dp), intent(in) :: s, tau
+    integer, intent(out) :: stat
+    integer :: st, i
+    real(dp) :: f
+    stat = VCI_OK
+    path_sample = .false.
+    i = 2
+    do while (i < self%poke_npath .and. self%poke_path_s(i) < s)
+      i = i + 1
+    end do
+    f = (s - self%poke_path_s(i - 1)) / (self%poke_path_s(i) - self%poke_path_s(i - 1))
+    self%x(1:self%nsub) = (1.0_dp - f) * self%poke_path_x(1:self%nsub, i - 1) + f * self%poke_path_x(1:self%nsub, i)
+    call substep(self, self%q_start, self%p_start, s * tau, st)
+    if (st /= VCI_OK) then
+      if (self%sys%unrecoverable) stat = st     ! a callback said so; else no sample, no poke
+      return
+    end if
+    call self%sys%get_endpoint(self%x, self%q_trial)
+    call self%sys%eval_gaps(self%q_trial, self%gaps_trial(1:self%ng), stat)
+    if (stat /= VCI_OK) then
+      call set_cause(self, 'gap evaluation inside the sub-step'); return
+    end if
+    call add_path_point(self, s, self%q_trial, self%gaps_trial(1:self%ng), self%x)
+    path_sample = .true.
+  end function path_sample
+
+  !> Insert the point at s (position q, gaps g, the solution x of the sub-step to it) into
+  !> find_poke's path, kept sorted by s.
+  subroutine add_path_point(self, s, q, g, x)
+    type(vci_stepper_t), intent(inout) :: self
+    real(dp), intent(in) :: s, q(:), g(:), x(:)
+    integer :: i, np, nm
+    nm = self%nsub
+    np = self%poke_npath + 1
+    i = np
+    do while (i > 1)
+      if (self%poke_path_s(i - 1) <= s) exit
+      i = i - 1
+    end do
+    self%poke_path_s(i + 1:np) = self%poke_path_s(i:np - 1)
+    self%poke_path_q(:, i + 1:np) = self%poke_path_q(:, i:np - 1)
+    self%poke_path_g(1:self%ng, i + 1:np) = self%poke_path_g(1:self%ng, i:np - 1)
+    self%poke_path_x(1:nm, i + 1:np) = self%poke_path_x(1:nm, i:np - 1)
+    self%poke_path_s(i) = s; self%poke_path_q(:, i) = q; self%poke_path_g(1:self%ng, i) = g
+    self%poke_path_x(1:nm, i) = x(1:nm)
+    self%poke_npath = np
+  end subroutine add_path_point
+
+  !> The parabola screen (find_poke): does the parabola through the start, the half-way point and
+  !> the end, its bend doubled, come below a wall the end is not beyond (only that wall when
+  !> only > 0) at s = 1/8 .. 7/8? (A gap evaluation that fails: true, the samples decide.)
+  logical function parabola_dips(self, only)
+    type(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: only
+    integer :: k, jj, st
+    real(dp) :: s
+    parabola_dips = .true.
+    self%q_guess = self%poke_path_q(:, 2) - 0.5_dp * (self%q_start + self%q_end)   ! the bend at s = 1/2
+    do k = 1, POKE_SAMPLES
+      s = real(k, dp) / real(POKE_SAMPLES + 1, dp)
+      self%q_trial = self%q_start + s * (self%q_end - self%q_start) + 8.0_dp * s * (1.0_dp - s) * self%q_guess
+      call self%sys%eval_gaps(self%q_trial, self%gaps_trial(1:self%ng), st)
+      if (st /= VCI_OK) return
+      do jj = 1, self%ng
+        if (self%gaps_trial(jj) < 0.0_dp .and. self%gaps_end(jj) >= 0.0_dp .and. (only == 0 .or. jj == only)) return
+      end do
+    end do
+    parabola_dips = .false.
+  end function parabola_dips
+
+  !> The path's point at s if it is beyond a wall the end is not beyond (only that wall when
+  !> only > 0): its index; -1 when it is beyond a wall the end is beyond (then that wall is stage
+  !> 1's, as without samples), or beyond another wall than only: no poke; 0 when beyond none.
+  integer function poked_point(self, s, only)
+    type(vci_stepper_t), intent(in) :: self
+    real(dp), intent(in) :: s
+    integer, intent(in) :: only
+    integer :: i
+    poked_point = 0
+    i = findloc(self%poke_path_s(1:self%poke_npath), s, 1)
+    if (i == 0) return
+    associate (g => self%poke_path_g(1:self%ng, i))
+      if (.not. any(g < 0.0_dp)) return
+      poked_point = i
+      if (any(g < 0.0_dp .and. self%gaps_end(1:self%ng) < 0.0_dp)) poked_point = -1
+      if (only > 0) then
+        if (.not. g(only) < 0.0_dp) poked_point = -1
+      end if
+    end associate
+  end function poked_point
+
+  !> No sample is beyond a wall, but a dip narrower than their spacing passes between them (issue 24:
+  !> reversal seed 9830, midpoint, met a graze 1e-5 deep forward, where a sample fell in it, and
+  !> not backward, where it lay between the samples at 1/4 and 3/8 of its sub-step). The gap
+  !> along the trajectory is smooth, so a parabola through a wall's least interior sample and its
+  !> neighbours tells where and how deep it is; while one comes below a wall the end is not beyond,
+  !> the trajectory is sampled at its least, up to POKE_REFINEMENTS times (each refit with the new
+  !> point). ihi: the new point's index when it is beyond such a wall, else 0.
+  subroutine refine_samples(self, tau, only, ihi, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    real(dp), intent(in) :: tau
+    integer, intent(in) :: only
+    integer, intent(out) :: ihi, stat
+    integer :: r, jj
+    real(dp) :: s_least, g_least, s_fit, g_fit
+    stat = VCI_OK
+    ihi = 0
+    do r = 1, POKE_REFINEMENTS
+      g_least = 0.0_dp; s_least = -1.0_dp
+      do jj = 1, self%ng
+        if (self%gaps_end(jj) < 0.0_dp .or. (only > 0 .and. jj /= only)) cycle
+        call fitted_least(self%poke_path_s(1:self%poke_npath), self%poke_path_g(jj, 1:self%poke_npath), s_fit, g_fit)
+        if (g_fit < g_least) then
+          g_least = g_fit; s_least = s_fit
+        end if
+      end do
+      if (s_least < 0.0_dp) return
+      if (.not. path_sample(self, s_least, tau, stat)) return
+      ihi = max(poked_point(self, s_least, only), 0)
+      if (ihi > 0) return
+    end do
+  end subroutine refine_samples
+
+  !> The least of the parabola through the least interior value of g at the points s (sorted,
+  !> distinct) and its neighbours: its place s_fit, kept inside the neighbours' interval by 5 % of
+  !> it, and its value g_fit there; g_fit = huge where that parabola is not convex (then the least
+  !> point is the least there).
+  pure subroutine fitted_least(s, g, s_fit, g_fit)
+    real(dp), intent(in) :: s(:), g(:)
+    real(dp), intent(out) :: s_fit, g_fit
+    integer :: i
+    real(dp) :: d1, d2, c2
+    s_fit = -1.0_dp; g_fit = huge(1.0_dp)
+    if (size(s) < 3) return
+    i = minloc(g(2:size(s) - 1), 1) + 1
+    d1 = (g(i) - g(i - 1)) / (s(i) - s(i - 1)); d2 = (g(i + 1) - g(i)) / (s(i + 1) - s(i))
+    c2 = (d2 - d1) / (s(i + 1) - s(i - 1))
+    if (.not. c2 > 0.0_dp) return
+    s_fit = 0.5_dp * (s(i - 1) + s(i)) - d1 / (2.0_dp * c2)       ! where d1 + c2 (2 s - s(i-1) - s(i)) = 0
+    s_fit = min(max(s_fit, s(i - 1) + 0.05_dp * (s(i + 1) - s(i - 1))), s(i + 1) - 0.05_dp * (s(i + 1) - s(i - 1)))
+    g_fit = g(i - 1) + (s_fit - s(i - 1)) * (d1 + c2 * (s_fit - s(i)))
+  end subroutine fitted_least
+
+  !> The bracket of find_poke's poke at the path's point ihi: the wall crossed first from the point
+  !> before it (the least fraction of the way by its gaps; only that wall when only > 0), lo, hi,
+  !> glo = its gap there (>= 0), ghi, and the two points' solutions in x_low, x_high.
+  subroutine poke_bracket(self, ihi, only, poked, lo, hi, glo, ghi)
+    type(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: ihi, only
+    integer, intent(inout) :: poked
+    real(dp), intent(inout) :: lo, hi, glo, ghi
+    integer :: jj, nm
+    real(dp) :: f, best, g0
+    nm = self%nsub
+    best = huge(1.0_dp)
+    do jj = 1, self%ng
+      if (.not. self%poke_path_g(jj, ihi) < 0.0_dp .or. (only > 0 .and. jj /= only)) cycle
+      g0 = max(self%poke_path_g(jj, ihi - 1), 0.0_dp)
+      f = g0 / (g0 - self%poke_path_g(jj, ihi))
+      if (f < best) then
+        best = f; poked = jj
+      end if
+    end do
+    if (poked == 0) return
+    lo = self%poke_path_s(ihi - 1); hi = self%poke_path_s(ihi)
+    glo = max(self%poke_path_g(poked, ihi - 1), 0.0_dp); ghi = self%poke_path_g(poked, ihi)
+    self%x_low(1:nm) = self%poke_path_x(1:nm, ihi - 1)
+    self%x_high(1:nm) = self%poke_path_x(1:nm, ihi)
+  end subroutine poke_bracket
+
+  !> The stage screen dipped but the sub-step does not resolve the motion (samples_are_path), so no
+  !> sample can place a crossing: if one of its own stage points is beyond a wall its end is not
+  !> beyond, the sub-step passes that wall and comes back, and ending the step there without an
+  !> impact is wrong without a sign (the walled pendulum, Lobatto s = 3, h = 1: the step from t = 8
+  !> has stage points 0.16 beyond wall 1, misses the impacts at 8.24 and 8.81 and ended the run 6.4
+  !> off with status 0). Then VCI_ERR_IMPACT with the cause (the safety net splits the step); else
+  !> stat as it came (only the bound's margin dipped: no poke, as before). A scheme without interior
+  !> stages has no solved point inside to tell (its half sub-step is another solve, and failing on
+  !> it sent a stiff spring at h omega >= 10 through the net's splits to |dH|/H = 3e6): it keeps
+  !> the old behaviour. Called for resolve_impacts' own sub-steps only (not tie_to_wall's trials).
+  subroutine unresolved_crossing(self, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    integer, intent(inout) :: stat
+    integer :: j, d
+    real(dp) :: g_least
+    d = self%sys%path_degree()
+    do j = 1, self%ng
+      if (self%gaps_end(j) < 0.0_dp) cycle
+      g_least = minval(self%poke_gaps(j, 4:2 + d))          ! (stage_screen's gaps at the stage points)
+      if (g_least < 0.0_dp) then
+        stat = VCI_ERR_IMPACT
+        call vci_set_message(self%cause, trim(wall_label('poke screen (wall ', j))//': a stage point is '// &
+          trim(vci_real_text(-g_least, '(es9.2)'))//' beyond the wall and the end is not, but the sub-step does not '// &
+          'resolve the motion (two half sub-steps do not end where it does), so no sample can place the crossing; '// &
+          'a shorter step can')
+        return
+      end if
+    end do
+  end subroutine unresolved_crossing
 
   !> The poke screen of a scheme with interior stages (issue 25; docs/DESIGN.md, "A wall poked within
   !> one sub-step"): the solved sub-step's positions are the polynomial of degree d = path_degree

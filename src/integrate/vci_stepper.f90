@@ -46,6 +46,12 @@ module vci_stepper
   !> fraction of the whole sub-step's change of q and of p (vci_impacts: samples_are_path; a
   !> stiff spring at h omega >= 10 misses by 1.0-3.6, the firm reversal scenes by at most 0.18)
   real(dp), parameter :: POKE_PATH_FRACTION = 0.25_dp
+  !> ... and where no sample is beyond a wall, up to this many more at the least of a parabola fitted
+  !> to the least sample and its neighbours, while that parabola comes below a wall (a dip narrower
+  !> than the samples' spacing: vci_impacts, refine_samples)
+  integer, parameter :: POKE_REFINEMENTS = 3
+  !> The points of find_poke's path: its ends, the samples and the refinements
+  integer, parameter :: POKE_PATH_POINTS = POKE_SAMPLES + 2 + POKE_REFINEMENTS
   real(dp), parameter :: CHORD_WIDTH = 1.0e-9_dp
   !> Wall gradients kept in a sub-step (grad_cache): every use follows its wall's start_gradient,
   !> so one would be correct; a few spare a second gradient for a wall examined on_wall and then
@@ -103,6 +109,10 @@ module vci_stepper
     !> momentum (:, 2) of the first half sub-step, then (:, 1) the end of the second; the end
     !> momentum of the whole sub-step (:, 3) and of the two halves (:, 4)
     real(dp), allocatable :: poke_half(:, :)
+    !> find_poke's path, sorted by s: the fractions (poke_path_s), positions, gaps and solutions
+    !> (sub-steps from the start) of its points, poke_npath of them
+    real(dp), allocatable :: poke_path_s(:), poke_path_q(:, :), poke_path_g(:, :), poke_path_x(:, :)
+    integer :: poke_npath = 0
     !> find_poke's gaps at the last sample (:, 1) and may_poke's at the step's middle (:, 2), and
     !> the multipliers the samples start from: workspace, so that a regular step allocates nothing;
     !> (:, 3 + i), i = 0 .. path_degree: the gaps at the stage polynomial's points (stage_screen)
@@ -230,7 +240,8 @@ contains
     self%x = 0.0_dp; self%zero_lambda = 0.0_dp
     self%grad_slot = 0; self%slot_wall = 0; self%last_slot = 0
     allocate (self%tie_x(nx, 2), self%tie_q(n, 3), self%poke_half(n, 4), self%poke_gaps(ngw, 3 + self%sys%path_degree()), &
-              self%poke_lambda(m), stat=stat)
+              self%poke_lambda(m), self%poke_path_s(POKE_PATH_POINTS), self%poke_path_q(n, POKE_PATH_POINTS), &
+              self%poke_path_g(ngw, POKE_PATH_POINTS), self%poke_path_x(nx, POKE_PATH_POINTS), stat=stat)
     if (stat /= 0) then
       call release_workspace(self)
       stat = VCI_ERR_MEMORY; return
@@ -254,6 +265,7 @@ contains
     call free1(self%q_new); call free1(self%p_new); call free1(self%lambda_new)
     call free2(self%tie_x); call free2(self%tie_q); call free2(self%poke_half)
     call free2(self%poke_gaps); call free1(self%poke_lambda)
+    call free1(self%poke_path_s); call free2(self%poke_path_q); call free2(self%poke_path_g); call free2(self%poke_path_x)
   end subroutine release_workspace
 
   subroutine free1(a)
