@@ -214,13 +214,14 @@ contains
   !> Rebuild from a record of `version` written by to_record for sizes n, m. Versions from
   !> VCI_CHECKPOINT_OLDEST on are read; a version-3 record has no split counts (0) and comes without
   !> the scheme's start memory, so a constrained Lobatto run continues from it to solver tolerance,
-  !> not bit for bit (docs/DESIGN.md, "Restart bit for bit"). A newer version is refused.
+  !> not bit for bit (docs/DESIGN.md, "Restart bit for bit"). A newer version is refused
+  !> (VCI_ERR_ARGUMENT); VCI_ERR_MEMORY, self empty, when its arrays cannot be allocated.
   subroutine from_record(self, rec, n, m, version, stat)
     class(vci_checkpoint_t), intent(inout) :: self
     real(dp), intent(in) :: rec(:)
     integer, intent(in) :: n, m, version
     integer, intent(out) :: stat
-    integer :: o
+    integer :: o, st
     stat = VCI_ERR_ARGUMENT
     if (version < VCI_CHECKPOINT_OLDEST .or. version > VCI_CHECKPOINT_VERSION) return
     if (size(rec) /= vci_checkpoint_record_size(n, m, version)) return
@@ -231,7 +232,13 @@ contains
                  rec(o + 2) <= 2.0_dp**31)) return
       self%split_steps = nint(rec(o + 1), i8); self%largest_split = nint(rec(o + 2), i8)
     end if
-    if (allocated(self%start)) deallocate (self%start)
+    ! allocated here with stat= (the assignments below would reallocate without one)
+    call self%release()
+    allocate (self%q(n), self%p(n), self%velocity(n), self%lambda(m), self%velocity_before(n), &
+              self%lambda_before(m), self%lambda_before2(m), self%position_lo(n), stat=st)
+    if (st /= 0) then
+      call self%release(); stat = VCI_ERR_MEMORY; return
+    end if
     self%version = version
     self%step = nint(rec(1), i8); self%t0 = rec(2); self%h = rec(3)
     self%step_energy = rec(4); self%arriving_energy = rec(5); self%arriving_direction = nint(rec(6))
@@ -262,7 +269,7 @@ contains
     class(vci_checkpoint_t), intent(in) :: self
     real(dp), allocatable, intent(out) :: rec(:)
     integer, intent(out) :: stat
-    integer :: o, nf
+    integer :: o, nf, j
     nf = max(0, self%factors_n)
     allocate (rec(3 + 2 * nf + nf * nf), stat=stat)
     if (stat /= 0) then
@@ -272,8 +279,15 @@ contains
     if (nf == 0) rec(3) = 0.0_dp
     o = 3
     if (nf > 0) then
-      call put(rec, o, self%factors_rw); call put(rec, o, real(self%factors_pivots, dp))
-      rec(o + 1:) = reshape(self%factors_lu, [nf * nf])
+      ! element and column wise: no temporary of nf or nf^2 values (they allocate without stat=)
+      call put(rec, o, self%factors_rw)
+      do j = 1, nf
+        rec(o + j) = real(self%factors_pivots(j), dp)
+      end do
+      o = o + nf
+      do j = 1, nf
+        call put(rec, o, self%factors_lu(:, j))
+      end do
     end if
     stat = VCI_OK
   end subroutine factors_record_into
@@ -358,20 +372,27 @@ contains
 
   !> A checkpoint that knows only a state (t, q, p, lambda) and the step length, as read from an
   !> output that stores no checkpoint: index 0 at t, no solver memory (like init_from_momentum).
-  function vci_checkpoint_from_state(t, h, q, p, lambda) result(cp)
+  !> stat (optional): VCI_ERR_MEMORY, and an empty checkpoint, when its arrays cannot be allocated.
+  function vci_checkpoint_from_state(t, h, q, p, lambda, stat) result(cp)
     real(dp), intent(in) :: t, h, q(:), p(:), lambda(:)
+    integer, intent(out), optional :: stat
     type(vci_checkpoint_t) :: cp
+    integer :: st
+    if (present(stat)) stat = VCI_ERR_MEMORY
     cp%t0 = t; cp%h = h; cp%step = 0_i8
     ! allocated before the copies: assigning to the unallocated components of a function result made
     ! gfortran 12 -O2 warn that their descriptors are read uninitialised (-Wuninitialized)
-    allocate (cp%q(size(q)), cp%p(size(p)), cp%lambda(size(lambda)))
+    allocate (cp%q(size(q)), cp%p(size(p)), cp%lambda(size(lambda)), cp%velocity(size(q)), &
+              cp%velocity_before(size(q)), cp%lambda_before(size(lambda)), cp%lambda_before2(size(lambda)), &
+              cp%position_lo(size(q)), stat=st)
+    if (st /= 0) then
+      call cp%release(); return
+    end if
     cp%q = q; cp%p = p; cp%lambda = lambda
-    allocate (cp%velocity(size(q)), cp%velocity_before(size(q)), cp%lambda_before(size(lambda)), &
-              cp%lambda_before2(size(lambda)))
     cp%velocity = 0.0_dp; cp%velocity_before = 0.0_dp; cp%lambda_before = 0.0_dp; cp%lambda_before2 = 0.0_dp
     cp%predictor_depth = 0
-    allocate (cp%position_lo(size(q)))
     cp%position_lo = 0.0_dp
+    if (present(stat)) stat = VCI_OK
     cp%arriving_direction = 0
     cp%arriving_energy = ieee_value(1.0_dp, ieee_quiet_nan)
     cp%step_energy = ieee_value(1.0_dp, ieee_quiet_nan)

@@ -261,6 +261,8 @@ contains
     type(vci_checkpoint_t), intent(in) :: cp
     integer, intent(inout) :: stat
     integer :: s
+    self%have_cp = .false.
+    if (.not. allocated(cp%q)) return   ! (an empty checkpoint, of a failed checkpoint(): none to store)
     ! a copy with stat= (intrinsic assignment ends the program when memory runs out, issue 24)
     call self%cp%copy_from(cp, s)
     self%have_cp = s == VCI_OK
@@ -1139,6 +1141,9 @@ contains
       n = r%n
       call move_alloc(r%cp_rec, rec)
       call cp%from_record(rec(2:), n, r%m, r%cp_version, s)
+      if (s == VCI_ERR_MEMORY) then
+        call fail(r, 'out of memory for its checkpoint', stat); stat = VCI_ERR_MEMORY
+      end if
       use_cp = s == VCI_OK
       if (use_cp) call get_factors(r, cp)
       if (use_cp) call get_start(r, cp)
@@ -1154,8 +1159,13 @@ contains
       row(1:r%m, 3) = 0.0_dp
       if (r%steps > 0 .and. r%m > 0) call h5io_read_row(r%d_l, r%m, r%steps - 1, row(1:r%m, 3:3), stat, &
           r%message, r%path)
-      cp = vci_checkpoint_from_state(buf(1), r%h, row(1:r%n, 1), row(1:r%n, 2), row(1:r%m, 3))
-      if (r%steps > 0) then
+      if (stat == VCI_OK) then
+        cp = vci_checkpoint_from_state(buf(1), r%h, row(1:r%n, 1), row(1:r%n, 2), row(1:r%m, 3), s)
+        if (s /= VCI_OK) then
+          call fail(r, 'out of memory for its last state', stat); stat = VCI_ERR_MEMORY
+        end if
+      end if
+      if (r%steps > 0 .and. stat == VCI_OK) then
         call h5io_read_row(r%d_e, 0, r%steps - 1, buf, stat, r%message, r%path); cp%step_energy = buf(1)
       end if
     end if
