@@ -987,7 +987,8 @@ contains
       if (observer%keeps_checkpoints()) call hand_checkpoint(self, observer, ostat, cause)
       if (ostat == VCI_ERR_MEMORY .and. stat == VCI_OK) then
         ! the end's flush then stores no checkpoint of the last row: a run that was fine says so
-        self%last_message = 'integrate: at the end of the run: '//trim(cause)
+        self%last_message = 'integrate: no checkpoint of the run''s last state'
+        call append_failure_cause(self, observer, cause)
         stat = VCI_ERR_MEMORY; self%last_status = stat
       end if
       ostat = 0
@@ -1118,8 +1119,8 @@ contains
     stat = VCI_OK
   end subroutine take_checkpoint
 
-  !> The observer's on_checkpoint with a checkpoint taken now; ostat = VCI_ERR_MEMORY and the
-  !> integrator's message naming the copy when it cannot be taken (the state stays as it is).
+  !> The observer's on_checkpoint with a checkpoint taken now; ostat = VCI_ERR_MEMORY and cause
+  !> naming the copy when it cannot be taken (the state stays as it is).
   subroutine hand_checkpoint(self, observer, ostat, cause)
     class(vci_integrator_t), intent(inout) :: self
     class(vci_observer_t), intent(inout) :: observer
