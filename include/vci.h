@@ -410,14 +410,17 @@ int  vci_init_from_momentum(vci_integrator integ, double t0, const double *q0, c
  *  state overflows;
  *  VCI_ERR_CALLBACK, VCI_ERR_NONFINITE, VCI_ERR_NEWTON, VCI_ERR_IMPACT, VCI_ERR_TOO_MANY_IMPACTS,
  *  VCI_ERR_MEMORY: the step failed and the state stays at the last accepted step; VCI_ERR_CALLBACK
- *  also when the impact callback returned nonzero, VCI_ERR_IO when the output file failed (for
- *  these two the step was accepted; VCI_ERR_IO before the step when the file could not start the
- *  run). */
+ *  also when the impact callback returned nonzero, VCI_ERR_IO when the output file failed, and
+ *  VCI_ERR_MEMORY when the checkpoint the output file stores at a flush could not be allocated
+ *  (for these three the step was accepted and the integrator goes on from it; VCI_ERR_IO or
+ *  VCI_ERR_MEMORY before the step when the file could not start the run). */
 int  vci_step(vci_integrator integ, int direction);                 /* +1 forward, -1 backward */
 
 /** nsteps (>= 0) steps in one direction; stops at the first failure (state = last accepted step).
  *  Returns as vci_step, VCI_ERR_ARGUMENT also for nsteps < 0, VCI_ERR_IO also when the output file
- *  fails at the start or the end of the run, and VCI_STOPPED when the progress callback
+ *  fails at the start or the end of the run, VCI_ERR_MEMORY also when the checkpoint of the run's
+ *  last state could not be allocated for the file's last flush (the file then has none of that
+ *  state; the state is kept), and VCI_STOPPED when the progress callback
  *  (vci_set_progress) asked to stop (the state is that of the last step it was told of). */
 int  vci_integrate(vci_integrator integ, int64_t nsteps, int direction);
 
@@ -488,7 +491,8 @@ int  vci_open_output_every(vci_integrator integ, const char *path, int every, in
 /** Finish and close the output file, if any (vci_integrator_destroy does the same). The file's
  *  status and status_message are those of the last vci_step or vci_integrate on it, not of this
  *  call. Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle; VCI_ERR_IO: the file could not be finished
- *  (the message says why); VCI_ERR_STATE: busy. */
+ *  (the message says why); VCI_ERR_MEMORY: the checkpoint of the last state could not be
+ *  allocated, the file is finished without it; VCI_ERR_STATE: busy. */
 int  vci_close_output(vci_integrator integ);
 
 /* ---- Restart (docs/C_API.md, "Restart"): continue a run from its HDF5 file, bit for bit ---- */

@@ -719,7 +719,10 @@ contains
     integer(c_int), value :: direction
     type(c_integrator_t), pointer :: ip
     integer :: stat, ostat
+    type(vci_checkpoint_t) :: cp
+    character(len=VCI_MSG_LEN) :: cause   !< why the checkpoint for the output's start could not be taken
     call enter(integ, 'vci_step', ip, stat)
+    cause = ''
     if (stat /= VCI_OK) then
       vci_step = stat; return
     end if
@@ -728,11 +731,17 @@ contains
       ostat = 0
       if (allocated(ip%obs%output) .and. .not. ip%obs%started .and. ip%integ%is_initialized() .and. &
           (direction == 1 .or. direction == -1)) then
-        if (ip%obs%wants_checkpoint()) call ip%obs%on_checkpoint(ip%integ%checkpoint(), ostat)
+        if (ip%obs%wants_checkpoint()) then
+          cp = ip%integ%checkpoint(ostat, cause)
+          if (ostat == VCI_OK) call ip%obs%on_checkpoint(cp, ostat)
+        end if
         if (ostat == 0) call ip%obs%on_start(ip%integ%run_info(int(direction)), ip%integ%configuration(), &
                                              ip%integ%momentum(), ostat)
       end if
-      if (ostat /= 0) then
+      if (ostat == VCI_ERR_MEMORY) then
+        if (len_trim(cause) == 0) cause = output_message(ip)
+        stat = fail(ip, VCI_ERR_MEMORY, 'vci_step: the output could not start the run: '//trim(cause))
+      else if (ostat /= 0) then
         stat = fail(ip, VCI_ERR_IO, 'vci_step: the output could not start the run: '//trim(output_message(ip)))
       else
         call ip%integ%step(int(direction), stat, ip%obs)
@@ -1074,7 +1083,8 @@ contains
     vci_append_output = open_output_entry(integ, path, 'vci_append_output', .true., 0, 0)
   end function vci_append_output
 
-  !> A C string as a Fortran one; false (and a failure recorded on ip) when NULL or empty.
+  !> A C string as a Fortran one; false (and a failure recorded on ip) when NULL, empty or there is
+  !> no memory for the copy.
   logical function c_path(ip, who, path, fpath) result(ok)
     type(c_integrator_t), intent(inout) :: ip
     character(len=*), intent(in) :: who
@@ -1091,7 +1101,10 @@ contains
       stat = fail(ip, VCI_ERR_ARGUMENT, who//': path is empty'); return
     end if
     call c_f_pointer(path, chars, [nc])
-    allocate (character(len=nc) :: fpath)
+    allocate (character(len=nc) :: fpath, stat=stat)   ! (a C string of any length: not tiny)
+    if (stat /= 0) then
+      stat = fail(ip, VCI_ERR_MEMORY, who//': no memory for a copy of the path'); return
+    end if
     do i = 1, nc
       fpath(i:i) = chars(i)
     end do
@@ -1216,7 +1229,12 @@ contains
     if (stat == VCI_OK) then
       why = output_message(ip)
       stat = close_output(ip)
-      if (stat /= VCI_OK) stat = fail(ip, stat, 'vci_close_output: the output file could not be finished: '//trim(why))
+      if (stat == VCI_ERR_MEMORY) then
+        stat = fail(ip, stat, 'vci_close_output: no memory for the last state''s checkpoint: the file was '// &
+                    'finished without it')
+      else if (stat /= VCI_OK) then
+        stat = fail(ip, stat, 'vci_close_output: the output file could not be finished: '//trim(why))
+      end if
       call leave(ip)
     end if
     vci_close_output = stat

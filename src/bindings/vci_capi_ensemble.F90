@@ -442,7 +442,7 @@ contains
     l = int(min(strlen(p), 4096_c_size_t))
     if (l == 0) return
     call c_f_pointer(p, c, [l])
-    allocate (character(len=l) :: s)
+    allocate (character(len=l) :: s)   ! (at most 4096 characters: tiny, no stat=)
     s = transfer(c, s(1:l))
     ok = .true.
   end function c_string

@@ -447,12 +447,18 @@ contains
   !> Finish and drop the output of an integrator; the status of closing it.
   integer function close_output(ip) result(stat)
     type(c_integrator_t), intent(inout) :: ip
+    type(vci_checkpoint_t) :: cp
+    integer :: cstat
     stat = 0
     if (.not. allocated(ip%obs%output)) return
     ! also when no step was written: the writer then just closes its file
     call lock_io()
-    if (ip%obs%started .and. ip%obs%output%keeps_checkpoints()) &
-      call ip%obs%output%on_checkpoint(ip%integ%checkpoint(), stat)
+    cstat = VCI_OK
+    if (ip%obs%started .and. ip%obs%output%keeps_checkpoints()) then
+      ! (no memory for it: the file is still finished, without the last state's checkpoint)
+      cp = ip%integ%checkpoint(cstat)
+      if (cstat == VCI_OK) call ip%obs%output%on_checkpoint(cp, cstat)
+    end if
     stat = 0
     call ip%obs%output%on_finish(ip%obs%run_status, trim(ip%obs%run_message), stat)
     deallocate (ip%obs%output)
@@ -461,6 +467,7 @@ contains
     ip%obs%direction = 0
     ip%obs%run_status = 0; ip%obs%run_message = ''
     if (stat /= 0) stat = VCI_ERR_IO
+    if (stat == VCI_OK .and. cstat == VCI_ERR_MEMORY) stat = VCI_ERR_MEMORY
   end function close_output
 
   !> After a vci_step/vci_integrate call (its status `stat`, the integrator's message): the end of

@@ -1199,11 +1199,18 @@ contains
   !> Finish and drop the output file of slot i (its last state's checkpoint first); its status.
   integer function close_output(i) result(stat)
     integer, intent(in) :: i
+    type(vci_checkpoint_t) :: cp
+    integer :: cstat
     stat = VCI_OK
     if (.not. associated(slots(i)%out)) return
+    cstat = VCI_OK
     if (allocated(slots(i)%out%writer)) then
       associate (w => slots(i)%out%writer)
-        if (slots(i)%out%started .and. w%keeps_checkpoints()) call w%on_checkpoint(slots(i)%integ%checkpoint(), stat)
+        ! (no memory for the checkpoint: the file is still finished, without it)
+        if (slots(i)%out%started .and. w%keeps_checkpoints()) then
+          cp = slots(i)%integ%checkpoint(cstat)
+          if (cstat == VCI_OK) call w%on_checkpoint(cp, cstat)
+        end if
         stat = VCI_OK
         call w%on_finish(slots(i)%out%run_status, trim(slots(i)%out%run_message), stat)
         if (stat /= VCI_OK) call w%failure_cause(global_message)
@@ -1211,6 +1218,10 @@ contains
     end if
     deallocate (slots(i)%out)
     if (stat /= VCI_OK) stat = VCI_ERR_IO
+    if (stat == VCI_OK .and. cstat == VCI_ERR_MEMORY) then
+      stat = VCI_ERR_MEMORY
+      global_message = 'the output file was finished without its last state''s checkpoint: no memory for it'
+    end if
   end function close_output
 
   !> VCIOUT: write the later steps of ih (live) to the HDF5 file path (replaced), or with append

@@ -347,7 +347,7 @@ contains
     if (allocated(table%params)) then
       params = table%params(:, member)
     else
-      allocate (params(0))
+      allocate (params(0))   ! (zero size, tiny and fixed: no stat=)
     end if
 
     stat = 0

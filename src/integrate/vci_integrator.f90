@@ -878,6 +878,7 @@ contains
     integer :: i, ostat
     real(dp) :: t
     character(len=16) :: dname
+    character(len=160) :: cause   !< why a checkpoint the observer wanted could not be taken
     if (.not. self%initialized) then
       self%last_message = 'step: initialise the integrator first (init_from_pair or init_from_momentum)'
       call finish(self, VCI_ERR_STATE, stat); return
@@ -911,14 +912,15 @@ contains
       do i = 1, self%impacts%count
         call observer%on_impact(self%impacts%records(i), ostat)
       end do
-      if (ostat == 0 .and. observer%wants_checkpoint()) call observer%on_checkpoint(self%checkpoint(), ostat)
+      cause = ''
+      if (ostat == 0 .and. observer%wants_checkpoint()) call hand_checkpoint(self, observer, ostat, cause)
       if (ostat == 0) call observer%on_step(self%state%k, t, self%state%q, self%state%p, self%state%lambda, &
                                             self%state%step_energy, ostat)
       if (ostat /= 0) then
         write (self%last_message, '(a,i0,a,es14.7,a)') 'observer failed after step to index ', self%state%k, &
           ' (t = ', t, ')'
-        call append_observer_cause(self, observer)
-        call finish(self, VCI_ERR_IO, stat); return
+        call append_failure_cause(self, observer, cause)
+        call finish(self, observer_failure_status(ostat), stat); return
       end if
     end if
     call finish(self, VCI_OK, stat)
@@ -937,6 +939,7 @@ contains
     class(vci_progress_t), intent(inout), optional :: progress
     integer(i8) :: i, first
     integer :: ostat
+    character(len=160) :: cause   !< why a checkpoint the observer wanted could not be taken
     if (nsteps < 0) then
       write (self%last_message, '(a,i0,a)') 'integrate: nsteps = ', nsteps, ' (need >= 0)'
       call finish(self, VCI_ERR_ARGUMENT, stat); return
@@ -957,12 +960,13 @@ contains
     end if
     if (present(observer)) then
       ostat = 0
-      if (observer%wants_checkpoint()) call observer%on_checkpoint(self%checkpoint(), ostat)
+      cause = ''
+      if (observer%wants_checkpoint()) call hand_checkpoint(self, observer, ostat, cause)
       if (ostat == 0) call observer%on_start(self%run_info(direction), self%state%q, self%state%p, ostat)
       if (ostat /= 0) then
         self%last_message = 'integrate: observer failed at the start of the run'
-        call append_observer_cause(self, observer)
-        call finish(self, VCI_ERR_IO, stat); return
+        call append_failure_cause(self, observer, cause)
+        call finish(self, observer_failure_status(ostat), stat); return
       end if
     end if
     stat = VCI_OK
@@ -979,7 +983,14 @@ contains
     if (present(observer)) then
       ostat = 0
       ! the state is the last accepted step's: an output that flushes at the end stores it
-      if (observer%keeps_checkpoints()) call observer%on_checkpoint(self%checkpoint(), ostat)
+      cause = ''
+      if (observer%keeps_checkpoints()) call hand_checkpoint(self, observer, ostat, cause)
+      if (ostat == VCI_ERR_MEMORY .and. stat == VCI_OK) then
+        ! the end's flush then stores no checkpoint of the last row: a run that was fine says so
+        self%last_message = 'integrate: no checkpoint of the run''s last state'
+        call append_failure_cause(self, observer, cause)
+        stat = VCI_ERR_MEMORY; self%last_status = stat
+      end if
       ostat = 0
       call observer%on_finish(stat, trim(self%last_message), ostat)
       if (ostat /= 0 .and. stat == VCI_OK) then
@@ -1061,21 +1072,89 @@ contains
     if (len_trim(cause) > 0) self%last_message = trim(self%last_message)//': '//trim(cause)
   end subroutine append_observer_cause
 
-  !> The current state and solver memory, for restarts that continue bit for bit.
-  function checkpoint(self) result(cp)
+  !> The current state and solver memory, for restarts that continue bit for bit. stat (optional):
+  !> VCI_OK, or VCI_ERR_MEMORY when the copies could not be allocated; the checkpoint is then empty
+  !> (restore refuses it), message names what was missing, and the integrator is unchanged.
+  function checkpoint(self, stat, message) result(cp)
     class(vci_integrator_t), intent(in) :: self
+    integer, intent(out), optional :: stat
+    character(len=*), intent(out), optional :: message
     type(vci_checkpoint_t) :: cp
+    integer :: s
+    character(len=160) :: cause
+    call take_checkpoint(self, cp, s, cause)
+    if (present(stat)) stat = s
+    if (present(message)) message = cause
+  end function checkpoint
+
+  !> checkpoint() with its status: on VCI_ERR_MEMORY cp is empty and cause says which copy failed.
+  subroutine take_checkpoint(self, cp, stat, cause)
+    class(vci_integrator_t), intent(in) :: self
+    type(vci_checkpoint_t), intent(inout) :: cp
+    integer, intent(out) :: stat
+    character(len=*), intent(out) :: cause
     type(vci_solver_stats_t) :: solver
-    cp = self%state%to_checkpoint()
-    allocate (cp%position_lo(size(self%state%q)))
+    cause = ''
+    call self%state%to_checkpoint(cp, stat)
+    if (stat /= VCI_OK) then
+      call vci_set_message(cause, 'checkpoint at index '//trim(vci_int_text(self%state%k))// &
+        ': no memory for a copy of the state ('//trim(vci_int_text(self%model%n))//' coordinates)')
+      return
+    end if
+    allocate (cp%position_lo(size(self%state%q)), stat=stat)
+    if (stat /= 0) then
+      call cp%release(); stat = VCI_ERR_MEMORY
+      call vci_set_message(cause, 'checkpoint at index '//trim(vci_int_text(self%state%k))// &
+        ': no memory for the position carry ('//trim(vci_int_text(self%model%n))//' values)')
+      return
+    end if
     call self%stepper%position_carry(self%state%q, cp%position_lo)
+    ! (factors that cannot be copied are left out there: the restart is then correct, not bitwise)
     call self%stepper%factors_to_checkpoint(cp)
     solver = self%stepper%solver_stats()
     cp%split_steps = self%run_splits_before + (solver%split_steps - self%splits_at_start)
     cp%largest_split = self%run_largest_before
     ! (the integrator's largest split is over its life: it is the run's when this run split at all)
     if (solver%split_steps > self%splits_at_start) cp%largest_split = max(cp%largest_split, solver%largest_split)
-  end function checkpoint
+    stat = VCI_OK
+  end subroutine take_checkpoint
+
+  !> The observer's on_checkpoint with a checkpoint taken now; ostat = VCI_ERR_MEMORY and cause
+  !> naming the copy when it cannot be taken (the state stays as it is).
+  subroutine hand_checkpoint(self, observer, ostat, cause)
+    class(vci_integrator_t), intent(inout) :: self
+    class(vci_observer_t), intent(inout) :: observer
+    integer, intent(inout) :: ostat
+    character(len=*), intent(out) :: cause     !< why no checkpoint could be taken ('' when one was)
+    type(vci_checkpoint_t) :: cp
+    integer :: s
+    call take_checkpoint(self, cp, s, cause)
+    if (s /= VCI_OK) then
+      ostat = s; return
+    end if
+    call observer%on_checkpoint(cp, ostat)
+  end subroutine hand_checkpoint
+
+  !> After the message of a run an observer stopped: why the checkpoint could not be taken
+  !> (cause, when not blank), else the observer's own reason.
+  subroutine append_failure_cause(self, observer, cause)
+    class(vci_integrator_t), intent(inout) :: self
+    class(vci_observer_t), intent(in) :: observer
+    character(len=*), intent(in) :: cause
+    if (len_trim(cause) > 0) then
+      self%last_message = trim(self%last_message)//': '//trim(cause)
+    else
+      call append_observer_cause(self, observer)
+    end if
+  end subroutine append_failure_cause
+
+  !> The status of a run an observer stopped: no memory (a checkpoint that could not be taken or
+  !> kept) stays VCI_ERR_MEMORY, anything else is the output's VCI_ERR_IO.
+  pure integer function observer_failure_status(ostat)
+    integer, intent(in) :: ostat
+    observer_failure_status = VCI_ERR_IO
+    if (ostat == VCI_ERR_MEMORY) observer_failure_status = VCI_ERR_MEMORY
+  end function observer_failure_status
 
   !> A run starts: its safety-net counts so far (a checkpoint's, or none) and this integrator's now.
   subroutine start_run_counts(self, splits, largest)

@@ -1,7 +1,8 @@
 !> The observer interface: the integrator reports every accepted step and every impact to it,
 !> so output formats (CSV, HDF5, in-memory recorders) are not the stepper's business.
 !> All procedures have empty defaults; extend the type and override what you need. Set `stat`
-!> nonzero to stop the run (reported as VCI_ERR_IO by the integrator, with `failure_cause`).
+!> nonzero to stop the run (reported as VCI_ERR_IO by the integrator, with `failure_cause`;
+!> VCI_ERR_MEMORY stays VCI_ERR_MEMORY: an output with no memory for a checkpoint).
 !>
 !> Checkpoints: an observer that stores them (keeps_checkpoints) does not know the driver; the driver
 !> hands it one (on_checkpoint) when the observer asks (wants_checkpoint is true before the report

@@ -80,21 +80,28 @@ contains
   end subroutine forget_history
 
   !> The state and its history as a checkpoint (position_lo is the scheme's and left to the caller).
-  function to_checkpoint(self) result(cp)
+  !> stat = VCI_ERR_MEMORY when a copy cannot be allocated (cp is then empty; the state unchanged).
+  subroutine to_checkpoint(self, cp, stat)
     class(vci_state_t), intent(in) :: self
-    type(vci_checkpoint_t) :: cp
+    type(vci_checkpoint_t), intent(out) :: cp
+    integer, intent(out) :: stat
+    ! array by array with stat=: a copy of n or m values is not tiny (issue 24, no runtime stop)
+    allocate (cp%q, source=self%q, stat=stat)
+    if (stat == 0) allocate (cp%p, source=self%p, stat=stat)
+    if (stat == 0) allocate (cp%lambda, source=self%lambda, stat=stat)
+    if (stat == 0) allocate (cp%velocity, source=self%velocity, stat=stat)
+    if (stat == 0) allocate (cp%velocity_before, source=self%velocity_before, stat=stat)
+    if (stat == 0) allocate (cp%lambda_before, source=self%lambda_before, stat=stat)
+    if (stat == 0) allocate (cp%lambda_before2, source=self%lambda_before2, stat=stat)
+    if (stat /= 0) then
+      call cp%release(); stat = VCI_ERR_MEMORY; return
+    end if
     cp%t0 = self%t0; cp%h = self%h; cp%step = self%k
-    allocate (cp%q, source=self%q)
-    allocate (cp%p, source=self%p)
-    allocate (cp%lambda, source=self%lambda)
-    allocate (cp%velocity, source=self%velocity)
-    allocate (cp%velocity_before, source=self%velocity_before)
-    allocate (cp%lambda_before, source=self%lambda_before)
-    allocate (cp%lambda_before2, source=self%lambda_before2)
     cp%predictor_depth = self%predictor_depth
     cp%step_energy = self%step_energy
     cp%arriving_energy = self%arriving_energy; cp%arriving_direction = self%arriving_direction
-  end function to_checkpoint
+    stat = VCI_OK
+  end subroutine to_checkpoint
 
   !> Take the state and history of a checkpoint whose sizes the caller has checked (q, p, lambda,
   !> velocity); a history of other sizes, or none, is forgotten.

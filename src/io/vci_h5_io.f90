@@ -378,7 +378,7 @@ contains
     if (err == 0 .and. (sz < 1 .or. sz > 4096)) err = -1
     if (err == 0) then
       deallocate (v)
-      allocate (character(len=sz) :: v)
+      allocate (character(len=sz) :: v)   ! (sz <= 4096 checked above: tiny, no stat=)
       call h5aread_f(attr, ftype, v, [1_hsize_t], err)
     end if
     if (ftype >= 0) call h5tclose_f(ftype, e2)

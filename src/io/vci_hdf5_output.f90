@@ -21,7 +21,7 @@ module vci_hdf5_output
   use hdf5
   use vci_kinds, only: dp, i8
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
-  use vci_status, only: VCI_OK, VCI_ERR_IO, VCI_MSG_LEN
+  use vci_status, only: VCI_OK, VCI_ERR_IO, VCI_ERR_MEMORY, VCI_MSG_LEN
   use vci_message, only: vci_set_message, vci_int_text
   use vci_limits, only: vci_size_problem
   use vci_observer, only: vci_observer_t, vci_run_info_t, vci_impact_t
@@ -260,8 +260,16 @@ contains
     class(vci_hdf5_writer_t), intent(inout) :: self
     type(vci_checkpoint_t), intent(in) :: cp
     integer, intent(inout) :: stat
-    self%cp = cp
-    self%have_cp = .true.
+    integer :: s
+    self%have_cp = .false.
+    if (.not. allocated(cp%q)) return   ! (an empty checkpoint, of a failed checkpoint(): none to store)
+    ! a copy with stat= (intrinsic assignment ends the program when memory runs out, issue 24)
+    call self%cp%copy_from(cp, s)
+    self%have_cp = s == VCI_OK
+    if (s /= VCI_OK) then
+      write (self%message, '(a,i0,a)') 'no memory to keep the checkpoint of step ', cp%step, ' for the next flush'
+      stat = VCI_ERR_MEMORY
+    end if
   end subroutine w_checkpoint
 
   !> The message of the last failure (naming the file and the cause).
@@ -764,7 +772,7 @@ contains
     call buffer_step(self, t, q, p, lambda, energy)
     if (self%ne >= self%flush_every .or. self%flush_pending) then
       call flush_file(self, stat)
-      if (stat /= VCI_OK) stat = VCI_ERR_IO
+      if (stat /= VCI_OK .and. stat /= VCI_ERR_MEMORY) stat = VCI_ERR_IO   ! (no memory for its checkpoint stays so)
     end if
   end subroutine w_step
 
@@ -984,6 +992,7 @@ contains
     integer, intent(inout) :: stat
     integer :: err
     logical :: ex
+    real(dp), allocatable :: rec(:)
     if (stat /= VCI_OK) return
     if (self%g_cp < 0) then
       call h5gcreate_f(self%file, 'checkpoint', self%g_cp, err)
@@ -991,7 +1000,12 @@ contains
         call fail(self, 'cannot create group /checkpoint', stat); return
       end if
     end if
-    call h5io_put_vector(self%g_cp, 'record', [real(self%rows - 1, dp), cp%to_record()], stat, self%message, self%path)
+    ! each vector allocated with stat= (an n-sized temporary ended the program when memory ran out)
+    call cp%record_into(rec, stat, lead=real(self%rows - 1, dp))
+    if (stat /= VCI_OK) then
+      call no_memory_for(self, 'record', cp, stat); return
+    end if
+    call h5io_put_vector(self%g_cp, 'record', rec, stat, self%message, self%path)
     ! the record's layout version: a reader takes the record only in the layout it knows. Made anew
     ! once a file (an appended file's attribute may be of another type, or absent)
     if (.not. self%cp_version_written) then
@@ -1002,10 +1016,32 @@ contains
     end if
     ! Newton's kept factors beside it (tied to it by the step: a kill between the two writes leaves
     ! factors of another step, which the reader ignores)
-    call h5io_put_vector(self%g_cp, 'factors', cp%factors_record(), stat, self%message, self%path)
+    if (stat /= VCI_OK) return
+    call cp%factors_record_into(rec, stat)
+    if (stat /= VCI_OK) then
+      call no_memory_for(self, 'factors', cp, stat); return
+    end if
+    call h5io_put_vector(self%g_cp, 'factors', rec, stat, self%message, self%path)
     ! (version 4) the scheme's start memory likewise
-    call h5io_put_vector(self%g_cp, 'start', cp%start_record(), stat, self%message, self%path)
+    if (stat /= VCI_OK) return
+    call cp%start_record_into(rec, stat)
+    if (stat /= VCI_OK) then
+      call no_memory_for(self, 'start', cp, stat); return
+    end if
+    call h5io_put_vector(self%g_cp, 'start', rec, stat, self%message, self%path)
   end subroutine put_checkpoint
+
+  !> The flush fails with VCI_ERR_MEMORY: no room for a checkpoint's vector /checkpoint/<what>.
+  subroutine no_memory_for(self, what, cp, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    character(len=*), intent(in) :: what
+    type(vci_checkpoint_t), intent(in) :: cp
+    integer, intent(inout) :: stat
+    character(len=40) :: step
+    write (step, '(i0)') cp%step
+    call fail(self, 'no memory for /checkpoint/'//what//' of step '//trim(step), stat)
+    stat = VCI_ERR_MEMORY
+  end subroutine no_memory_for
 
   !> /checkpoint/factors into cp (Newton's kept factors, vci_checkpoint: factors_record), when it is
   !> there, of cp's step and of a size the model's can have (a Lobatto system has at most
@@ -1105,6 +1141,9 @@ contains
       n = r%n
       call move_alloc(r%cp_rec, rec)
       call cp%from_record(rec(2:), n, r%m, r%cp_version, s)
+      if (s == VCI_ERR_MEMORY) then
+        call fail(r, 'out of memory for its checkpoint', stat); stat = VCI_ERR_MEMORY
+      end if
       use_cp = s == VCI_OK
       if (use_cp) call get_factors(r, cp)
       if (use_cp) call get_start(r, cp)
@@ -1120,8 +1159,13 @@ contains
       row(1:r%m, 3) = 0.0_dp
       if (r%steps > 0 .and. r%m > 0) call h5io_read_row(r%d_l, r%m, r%steps - 1, row(1:r%m, 3:3), stat, &
           r%message, r%path)
-      cp = vci_checkpoint_from_state(buf(1), r%h, row(1:r%n, 1), row(1:r%n, 2), row(1:r%m, 3))
-      if (r%steps > 0) then
+      if (stat == VCI_OK) then
+        cp = vci_checkpoint_from_state(buf(1), r%h, row(1:r%n, 1), row(1:r%n, 2), row(1:r%m, 3), s)
+        if (s /= VCI_OK) then
+          call fail(r, 'out of memory for its last state', stat); stat = VCI_ERR_MEMORY
+        end if
+      end if
+      if (r%steps > 0 .and. stat == VCI_OK) then
         call h5io_read_row(r%d_e, 0, r%steps - 1, buf, stat, r%message, r%path); cp%step_energy = buf(1)
       end if
     end if

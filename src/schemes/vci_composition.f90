@@ -90,7 +90,7 @@ contains
     case (10)
       gamma = [ss10, ss10(17:1:-1)]
     case default
-      allocate (gamma(0))
+      allocate (gamma(0))   ! (zero size; the constructors above: at most 35 values, tiny and fixed)
       stat = VCI_ERR_ARGUMENT
     end select
   end subroutine composition_coefficients

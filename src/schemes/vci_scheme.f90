@@ -494,7 +494,7 @@ contains
   subroutine start_memory(self, mem)
     class(vci_scheme_t), intent(in) :: self
     real(dp), allocatable, intent(out) :: mem(:)
-    allocate (mem(0))
+    allocate (mem(0))   ! (zero size, tiny and fixed: no stat=)
   end subroutine start_memory
 
   !> Start from memory mem (from start_memory of the same scheme and model); one this scheme cannot

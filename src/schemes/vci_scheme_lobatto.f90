@@ -839,10 +839,23 @@ contains
   subroutine lobatto_start_memory(self, mem)
     class(vci_scheme_lobatto_t), intent(in) :: self
     real(dp), allocatable, intent(out) :: mem(:)
-    if (self%m > 0 .and. self%have_poly) then
-      mem = [self%poly_dh, reshape(self%ypoly, [size(self%ypoly)]), reshape(self%lpoly, [size(self%lpoly)])]
+    integer :: st, o, j
+    st = 1
+    ! allocated with stat= and filled column by column (n (s+1) + m s values: the constructor's and
+    ! reshape's temporaries ended the program when memory ran out); none kept when it fails, and
+    ! the restart is then correct, not bitwise, as without Newton's factors
+    if (self%m > 0 .and. self%have_poly) allocate (mem(1 + size(self%ypoly) + size(self%lpoly)), stat=st)
+    if (st == 0) then
+      mem(1) = self%poly_dh
+      o = 1
+      do j = lbound(self%ypoly, 2), ubound(self%ypoly, 2)
+        mem(o + 1:o + size(self%ypoly, 1)) = self%ypoly(:, j); o = o + size(self%ypoly, 1)
+      end do
+      do j = lbound(self%lpoly, 2), ubound(self%lpoly, 2)
+        mem(o + 1:o + size(self%lpoly, 1)) = self%lpoly(:, j); o = o + size(self%lpoly, 1)
+      end do
     else
-      allocate (mem(0))
+      allocate (mem(0))   ! (zero size: the runtime's smallest block, tiny and fixed)
     end if
   end subroutine lobatto_start_memory
 
