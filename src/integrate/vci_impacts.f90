@@ -1130,7 +1130,7 @@ contains
       call start_gradient(self, j, stat)
       if (stat /= VCI_OK) return
       if (self%gaps_start(j) >= -start_gap_tolerance(self, j, self%gaps_start(j))) cycle
-      wall = wall_label('wall ', j)
+      wall = wall_name(j)
       if (last_gap == 0) then
         stat = VCI_ERR_INADMISSIBLE
         call vci_set_message(self%cause, 'the step starts beyond '//trim(wall)//' (g = '// &
@@ -1138,7 +1138,7 @@ contains
           'step before ended there): a gap that is not a function of q alone, or a model changed under the integrator')
       else
         stat = VCI_ERR_IMPACT
-        call vci_set_message(self%cause, 'stage 1 reached '//trim(wall_label('wall ', last_gap))//' at a point beyond '// &
+        call vci_set_message(self%cause, 'stage 1 reached '//trim(wall_name(last_gap))//' at a point beyond '// &
           trim(wall)//' (g = '//trim(vci_real_text(self%gaps_start(j), '(es10.3)'))//'): the motion crossed it first, unseen')
       end if
       return
@@ -1164,8 +1164,8 @@ contains
       if (stat /= VCI_OK) return
       if (self%gaps_trial(k) >= -start_gap_tolerance(self, k, self%gaps_trial(k))) cycle
       stat = VCI_ERR_IMPACT
-      call vci_set_message(self%cause, 'stage 1 reached '//trim(wall_label('wall ', jstar))//' at the step''s end '// &
-        'at a point beyond '//trim(wall_label('wall ', k))//' (g = '//trim(vci_real_text(self%gaps_trial(k), '(es10.3)'))// &
+      call vci_set_message(self%cause, 'stage 1 reached '//trim(wall_name(jstar))//' at the step''s end '// &
+        'at a point beyond '//trim(wall_name(k))//' (g = '//trim(vci_real_text(self%gaps_trial(k), '(es10.3)'))// &
         '): the motion crossed it first, unseen')
       return
     end do
@@ -2094,4 +2094,12 @@ contains
     label(len(prefix) + 1:) = digits(pos:)
     label(len(prefix) + len(digits) - pos + 2:) = ')'
   end function wall_label
+
+  !> 'wall j' (wall_label's text without its closing parenthesis)
+  pure function wall_name(j) result(name)
+    integer, intent(in) :: j
+    character(len=40) :: name
+    name = wall_label('wall ', j)
+    name(len_trim(name):) = ' '
+  end function wall_name
 end submodule vci_impacts

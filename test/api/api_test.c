@@ -1193,12 +1193,13 @@ static int lying_gap_grads(int n, int ng, const double *q, double *dg, void *u) 
   return 0;
 }
 
-/* one step that must fail with VCI_ERR_INADMISSIBLE and leave (t, q, p) exactly as they were */
-static void check_refused_start(vci_integrator integ, int line) {
+/* one step that must fail with VCI_ERR_INADMISSIBLE, say where (the step, its time, the wall and
+ * its gap: `said`), and leave (t, q, p) exactly as they were */
+static void check_refused_start(vci_integrator integ, const char *said, int line) {
   double t0, q0, p0, t1, q1, p1;
   vci_get_state(integ, &t0, &q0, &p0);
   check_status(vci_step(integ, 1), VCI_ERR_INADMISSIBLE, "vci_step from beyond the wall", line);
-  check_message(integ, "beyond wall 1", line);
+  check_message(integ, said, line);
   vci_get_state(integ, &t1, &q1, &p1);
   check(t1 == t0 && q1 == q0 && p1 == p0, "state kept after the refused step", __FILE__, line);
 }
@@ -1224,13 +1225,15 @@ static void erratic_lying_gap(void) {
     CHECK_STATUS(vci_get_state(integ, &t, &q, NULL), VCI_OK);
     CHECK_CLOSE(q, -0.005, 1e-12);
     p.lie = 0;
-    check_refused_start(integ, __LINE__);
+    check_refused_start(integ, "step from index 2 (t =  2.0000000E-02, forward): the step starts beyond wall 1 (g = "
+                               "-5.000E-03", __LINE__);
     /* the wall moved past the particle: a fresh start at q = 0.5, 10 steps to q = 0.4, the wall to 0.45 */
     q = 0.5; v = -1.0;
     CHECK_STATUS(vci_init_from_momentum(integ, 0.0, &q, &v), VCI_OK);
     CHECK_STATUS(vci_integrate(integ, 10, 1), VCI_OK);  /* q = 0.4 */
     p.offset = 0.45;
-    check_refused_start(integ, __LINE__);
+    check_refused_start(integ, "step from index 10 (t =  1.0000000E-01, forward): the step starts beyond wall 1 (g = "
+                               "-5.000E-02", __LINE__);
     p.offset = 0.0;                                     /* consistent again: the run goes on */
     CHECK_STATUS(vci_step(integ, 1), VCI_OK);
     CHECK_STATUS(vci_get_state(integ, &t, &q, NULL), VCI_OK);
