@@ -398,10 +398,11 @@ contains
     call gap_gradient_of(self, self%a, j, stat)
     if (stat /= VCI_OK) return
     on_wall = self%g_start(j) <= 64.0_dp * epsilon(1.0_dp) * sum(abs(self%grad) * max(abs(self%a), 1.0_dp))
-    ! Beyond the wall by more than g's rounding (sqrt(eps) of its terms, far above the 64 eps a wall
-    ! point has): the step's start was accepted with every gap >= 0 and a wall point is on its wall,
-    ! so the gap callback is not a function of q alone (or the model changed): no "on" the wall
-    ! (it reflected from inside, status OK), a status (move words it: start_beyond_cause)
+    ! Beyond the wall by more than g's rounding (sqrt(eps) of its terms, far above the 64 eps of a
+    ! wall point): not "on" it (that reflected from inside it with status OK) but a status, which
+    ! move words: the step's start was accepted with every gap >= 0, so at the step's start the
+    ! gap callback is not a function of q alone (or the model changed); at a later sub-step's
+    ! start, this step's last wall point, stage 1 missed wall j
     if (self%g_start(j) < -sqrt(epsilon(1.0_dp)) * sum(abs(self%grad) * max(abs(self%a), 1.0_dp))) then
       stat = VCI_ERR_INADMISSIBLE; return
     end if
