@@ -413,7 +413,10 @@ int  vci_init_from_momentum(vci_integrator integ, double t0, const double *q0, c
  *  also when the impact callback returned nonzero, VCI_ERR_IO when the output file failed, and
  *  VCI_ERR_MEMORY when the checkpoint the output file stores at a flush could not be allocated
  *  (for these three the step was accepted and the integrator goes on from it; VCI_ERR_IO or
- *  VCI_ERR_MEMORY before the step when the file could not start the run). */
+ *  VCI_ERR_MEMORY before the step when the file could not start the run); VCI_ERR_INADMISSIBLE:
+ *  the state lies beyond a wall by more than the solver's tolerance although the gaps callback
+ *  gave g >= 0 there when the step before ended (a gaps callback that is not a function of q
+ *  alone, or a model changed under the integrator; the state stays). */
 int  vci_step(vci_integrator integ, int direction);                 /* +1 forward, -1 backward */
 
 /** nsteps (>= 0) steps in one direction; stops at the first failure (state = last accepted step).

@@ -21,7 +21,7 @@
 module vci_explicit_step
   use vci_kinds, only: dp, i8
   use vci_status
-  use vci_message, only: vci_set_message, vci_int_text
+  use vci_message, only: vci_set_message, vci_int_text, vci_real_text
   use vci_composition, only: vci_composition_t
   use vci_composition_energy, only: vci_composition_energy_t
   use vci_separable, only: vci_separable_t
@@ -270,7 +270,18 @@ contains
         if (jj == 0) j = j0
         if (j == 0 .or. (jj > 0 .and. jj == j0)) cycle
         call first_crossing(self, j, dir, tau, best, alpha, stat)
-        if (stat /= VCI_OK) then
+        if (stat == VCI_ERR_INADMISSIBLE .and. impacts%count == 0) then
+          call vci_set_message(cause, 'the step starts beyond wall '//trim(vci_int_text(j))//' (g = '// &
+            trim(vci_real_text(self%g_start(j), '(es10.3)'))//', where the gap callback gave g >= 0 when the step '// &
+            'before ended there): a gap that is not a function of q alone, or a model changed under the integrator')
+          return
+        else if (stat == VCI_ERR_INADMISSIBLE) then   ! this step's last wall point: stage 1 missed wall j
+          stat = VCI_ERR_IMPACT
+          call vci_set_message(cause, 'stage 1 reached wall '//trim(vci_int_text(impacts%records(impacts%count)%gap))// &
+            ' at a point beyond wall '//trim(vci_int_text(j))//' (g = '//trim(vci_real_text(self%g_start(j), '(es10.3)'))// &
+            '): the motion crossed it first, unseen')
+          return
+        else if (stat /= VCI_OK) then
           call fail(self, 'stage 1 (impact time)', stat, cause); return
         end if
         if (alpha < best) then
@@ -387,6 +398,14 @@ contains
     call gap_gradient_of(self, self%a, j, stat)
     if (stat /= VCI_OK) return
     on_wall = self%g_start(j) <= 64.0_dp * epsilon(1.0_dp) * sum(abs(self%grad) * max(abs(self%a), 1.0_dp))
+    ! Beyond the wall by more than g's rounding (sqrt(eps) of its terms, far above the 64 eps of a
+    ! wall point): not "on" it (that reflected from inside it with status OK) but a status, which
+    ! move words: the step's start was accepted with every gap >= 0, so at the step's start the
+    ! gap callback is not a function of q alone (or the model changed); at a later sub-step's
+    ! start, this step's last wall point, stage 1 missed wall j
+    if (self%g_start(j) < -sqrt(epsilon(1.0_dp)) * sum(abs(self%grad) * max(abs(self%a), 1.0_dp))) then
+      stat = VCI_ERR_INADMISSIBLE; return
+    end if
     if (on_wall) then
       call self%map%model%inverse_mass_times(self%pa, self%qt)
       if (dir * dot_product(self%grad, self%qt) < 0.0_dp) then

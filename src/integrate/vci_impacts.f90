@@ -61,6 +61,8 @@ contains
         call set_cause(self, 'gap evaluation at the start of the sub-step'); return
       end if
       call forget_start_gradients(self)         ! (each wall's gradient when first needed)
+      call refuse_start_beyond(self, last_gap, stat)
+      if (stat /= VCI_OK) return
 
       ! Already on a wall and moving into it: the impact is at the start of this sub-step.
       jstar = 0
@@ -173,6 +175,8 @@ contains
         ! Reached the wall (to round-off) exactly at the end of the step: no reflection yet;
         ! the next step starts on the wall and reflects there.
         if (1.0_dp - alpha <= landing_fraction) then
+          call refuse_landing_beyond(self, jstar, stat)
+          if (stat /= VCI_OK) return
           self%q_start = self%q_wall; self%p_start = self%p_arrive
           call self%sys%get_multipliers(self%x_stage1, self%lambda_new)
           self%q_new = self%q_wall; self%p_new = self%p_arrive; self%e_new = e_minus
@@ -1085,16 +1089,87 @@ contains
     end do
   end subroutine forget_start_gradients
 
-  !> Is configuration a (the sub-step's start) on wall j, to solver tolerance?
+  !> Is configuration a (the sub-step's start) on wall j, to solver tolerance? (Not beyond it by
+  !> more: refuse_start_beyond has refused such a start.)
   logical function on_wall(self, j)
     type(vci_stepper_t), intent(in) :: self
     integer, intent(in) :: j
-    real(dp) :: scale
-    ! the size of g's terms and of its change over the sub-step (as in stage 1's gap row)
-    scale = abs(self%gaps_start(j)) + sum(abs(self%grad_cache(:, self%grad_slot(j))) * &
-                                          (abs(self%q_start) + abs(self%q_end - self%q_start)))
-    on_wall = self%gaps_start(j) <= 10.0_dp * (self%settings%atol + self%settings%rtol * scale)
+    on_wall = self%gaps_start(j) <= start_gap_tolerance(self, j, self%gaps_start(j))
   end function on_wall
+
+  !> The solver's tolerance on a value g of wall j's gap near the sub-step (wall j's gradient at
+  !> its start in grad_cache): 10 (atol + rtol scale), scale the size of g's terms and of its
+  !> change over the sub-step (as in stage 1's gap row).
+  real(dp) function start_gap_tolerance(self, j, g)
+    type(vci_stepper_t), intent(in) :: self
+    integer, intent(in) :: j
+    real(dp), intent(in) :: g
+    real(dp) :: scale
+    scale = abs(g) + sum(abs(self%grad_cache(:, self%grad_slot(j))) * (abs(self%q_start) + abs(self%q_end - self%q_start)))
+    start_gap_tolerance = 10.0_dp * (self%settings%atol + self%settings%rtol * scale)
+  end function start_gap_tolerance
+
+  !> A sub-step must not start beyond a wall by more than the solver's tolerance (gaps_start; the
+  !> wall just reflected from, last_gap, is on it by stage 1). The step's start is the end of an
+  !> accepted step, where every gap was >= 0 (or the landed wall point, checked when landing); a
+  !> later sub-step's start is the wall point of this step's last impact. So a step that starts
+  !> beyond a wall met a gap callback that is not a function of q alone (it said >= 0 there before)
+  !> or a model changed under the integrator: VCI_ERR_INADMISSIBLE, which a shorter step cannot
+  !> cure. A wall point beyond another wall is stage 1's miss (the motion crossed that wall first,
+  !> unseen): VCI_ERR_IMPACT, which the safety net retries with shorter steps. Taken as "on" the
+  !> wall, either start reflected from inside it with status OK (fuzz_capi seeds 60, 131, 180, 473).
+  subroutine refuse_start_beyond(self, last_gap, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: last_gap
+    integer, intent(out) :: stat
+    integer :: j
+    character(len=40) :: wall
+    stat = VCI_OK
+    do j = 1, self%ng
+      if (j == last_gap .or. .not. self%gaps_start(j) < 0.0_dp) cycle   ! (the rare case: a gradient)
+      call start_gradient(self, j, stat)
+      if (stat /= VCI_OK) return
+      if (self%gaps_start(j) >= -start_gap_tolerance(self, j, self%gaps_start(j))) cycle
+      wall = wall_name(j)
+      if (last_gap == 0) then
+        stat = VCI_ERR_INADMISSIBLE
+        call vci_set_message(self%cause, 'the step starts beyond '//trim(wall)//' (g = '// &
+          trim(vci_real_text(self%gaps_start(j), '(es10.3)'))//', where the gap callback gave g >= 0 when the '// &
+          'step before ended there): a gap that is not a function of q alone, or a model changed under the integrator')
+      else
+        stat = VCI_ERR_IMPACT
+        call vci_set_message(self%cause, 'stage 1 reached '//trim(wall_name(last_gap))//' at a point beyond '// &
+          trim(wall)//' (g = '//trim(vci_real_text(self%gaps_start(j), '(es10.3)'))//'): the motion crossed it first, unseen')
+      end if
+      return
+    end do
+  end subroutine refuse_start_beyond
+
+  !> A step that lands on wall jstar (stage 1 at its end) is accepted with that wall point as its
+  !> end, which the end-of-step test (every gap >= 0) never sees: it must not lie beyond another
+  !> wall by more than the solver's tolerance (else the next step would start there), or it is
+  !> stage 1's miss: VCI_ERR_IMPACT (the safety net retries). One gap evaluation per landing.
+  subroutine refuse_landing_beyond(self, jstar, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: jstar
+    integer, intent(out) :: stat
+    integer :: k
+    call self%sys%eval_gaps(self%q_wall, self%gaps_trial(1:self%ng), stat)
+    if (stat /= VCI_OK) then
+      call set_cause(self, 'gap evaluation at the wall'); return
+    end if
+    do k = 1, self%ng
+      if (k == jstar .or. .not. self%gaps_trial(k) < 0.0_dp) cycle
+      call start_gradient(self, k, stat)
+      if (stat /= VCI_OK) return
+      if (self%gaps_trial(k) >= -start_gap_tolerance(self, k, self%gaps_trial(k))) cycle
+      stat = VCI_ERR_IMPACT
+      call vci_set_message(self%cause, 'stage 1 reached '//trim(wall_name(jstar))//' at the step''s end '// &
+        'at a point beyond '//trim(wall_name(k))//' (g = '//trim(vci_real_text(self%gaps_trial(k), '(es10.3)'))// &
+        '): the motion crossed it first, unseen')
+      return
+    end do
+  end subroutine refuse_landing_beyond
 
 
   !> Stage 1 for wall j: find alpha in (0, 1], b on the wall, lambda. Initial guess from the chord a -> b.
@@ -2019,4 +2094,12 @@ contains
     label(len(prefix) + 1:) = digits(pos:)
     label(len(prefix) + len(digits) - pos + 2:) = ')'
   end function wall_label
+
+  !> 'wall j' (wall_label's text without its closing parenthesis)
+  pure function wall_name(j) result(name)
+    integer, intent(in) :: j
+    character(len=40) :: name
+    name = wall_label('wall ', j)
+    name(len_trim(name):) = ' '
+  end function wall_name
 end submodule vci_impacts

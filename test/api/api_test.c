@@ -1166,6 +1166,83 @@ static int erratic_gaps(int n, int ng, const double *q, double *g, void *u) {
   return rc;
 }
 
+/* A gap callback that is not a function of q alone (issue 24, "nothing silently wrong"): a free
+ * particle (separable, n = 1, m = 1, V = 0) moving at speed 1 towards the wall g = q - offset >= 0.
+ * While `lie` is set the callback returns |q - offset|, so the step across the wall is accepted
+ * beyond it (the library cannot see that); told the truth again, the next step starts 5e-3 beyond
+ * the wall, six orders above the solver's tolerance. Moving `offset` past the particle between
+ * calls (a model changed under the integrator, as fuzz_capi seeds 60 and 473 did through a reused
+ * user pointer) does the same. Such a step fails with VCI_ERR_INADMISSIBLE naming the wall, the
+ * state stays at the last accepted step, and the integrator goes on once the model is consistent.
+ * Before, the start was taken as "on" the wall and reflected from inside it with VCI_OK. */
+typedef struct { int lie; double offset; } lying_params;
+static int lying_zero(int n, const double *q, double *out, void *u) {
+  (void)q; (void)u;
+  memset(out, 0, (size_t)n * sizeof *out); /* V = 0 and grad V = 0 (n >= 1 outputs either way) */
+  return 0;
+}
+static int lying_gaps(int n, int ng, const double *q, double *g, void *u) {
+  const lying_params *p = (const lying_params *)u;
+  (void)n; (void)ng;
+  g[0] = p->lie ? fabs(q[0] - p->offset) : q[0] - p->offset;
+  return 0;
+}
+static int lying_gap_grads(int n, int ng, const double *q, double *dg, void *u) {
+  (void)n; (void)ng; (void)q; (void)u;
+  dg[0] = 1.0;
+  return 0;
+}
+
+/* one step that must fail with VCI_ERR_INADMISSIBLE, say where (the step, its time, the wall and
+ * its gap: `said`), and leave (t, q, p) exactly as they were */
+static void check_refused_start(vci_integrator integ, const char *said, int line) {
+  double t0, q0, p0, t1, q1, p1;
+  vci_get_state(integ, &t0, &q0, &p0);
+  check_status(vci_step(integ, 1), VCI_ERR_INADMISSIBLE, "vci_step from beyond the wall", line);
+  check_message(integ, said, line);
+  vci_get_state(integ, &t1, &q1, &p1);
+  check(t1 == t0 && q1 == q0 && p1 == p0, "state kept after the refused step", __FILE__, line);
+}
+
+static void erratic_lying_gap(void) {
+  static const int schemes[] = {VCI_SCHEME_MIDPOINT, VCI_SCHEME_LOBATTO, VCI_SCHEME_COMPOSITION};
+  int i;
+  for (i = 0; i < 3; ++i) {
+    lying_params p = {0, 0.0};
+    vci_separable_callbacks cb = VCI_SEPARABLE_CALLBACKS_INIT;
+    vci_model model = NULL;
+    vci_integrator integ = NULL;
+    double mass = 1.0, q = 0.015, v = -1.0, t;
+    cb.potential = lying_zero; cb.potential_gradient = lying_zero;
+    cb.gaps = lying_gaps; cb.gap_gradients = lying_gap_grads;
+    CHECK_STATUS(vci_model_create_separable(&model, 1, 0, 1, VCI_MASS_DIAGONAL, &mass, &cb, &p), VCI_OK);
+    CHECK_STATUS(vci_integrator_create(&integ, model, 1e-2), VCI_OK);
+    CHECK_STATUS(vci_set_scheme(integ, schemes[i], 2), VCI_OK);
+    CHECK_STATUS(vci_init_from_momentum(integ, 0.0, &q, &v), VCI_OK);
+    CHECK_STATUS(vci_step(integ, 1), VCI_OK);           /* q = 0.005 (free flight: exact to round-off) */
+    p.lie = 1;
+    CHECK_STATUS(vci_step(integ, 1), VCI_OK);           /* across the wall, hidden by the lie */
+    CHECK_STATUS(vci_get_state(integ, &t, &q, NULL), VCI_OK);
+    CHECK_CLOSE(q, -0.005, 1e-12);
+    p.lie = 0;
+    check_refused_start(integ, "step from index 2 (t =  2.0000000E-02, forward): the step starts beyond wall 1 (g = "
+                               "-5.000E-03", __LINE__);
+    /* the wall moved past the particle: a fresh start at q = 0.5, 10 steps to q = 0.4, the wall to 0.45 */
+    q = 0.5; v = -1.0;
+    CHECK_STATUS(vci_init_from_momentum(integ, 0.0, &q, &v), VCI_OK);
+    CHECK_STATUS(vci_integrate(integ, 10, 1), VCI_OK);  /* q = 0.4 */
+    p.offset = 0.45;
+    check_refused_start(integ, "step from index 10 (t =  1.0000000E-01, forward): the step starts beyond wall 1 (g = "
+                               "-5.000E-02", __LINE__);
+    p.offset = 0.0;                                     /* consistent again: the run goes on */
+    CHECK_STATUS(vci_step(integ, 1), VCI_OK);
+    CHECK_STATUS(vci_get_state(integ, &t, &q, NULL), VCI_OK);
+    CHECK_CLOSE(q, 0.39, 1e-12);
+    vci_integrator_destroy(&integ);
+    vci_model_destroy(&model);
+  }
+}
+
 static void suite_erratic(void) {
   int which, mode, from, seed, runs = 0, failed_runs = 0;
   int64_t before = vci_test_lapack_calls();
@@ -1203,6 +1280,7 @@ static void suite_erratic(void) {
          vci_test_lapack_calls() - before);
   CHECK(vci_test_lapack_calls() > before); /* the guard sees vci's LAPACK calls (else this suite proves nothing) */
   CHECK(vci_test_lapack_nonfinite_calls() == 0);
+  erratic_lying_gap();
 }
 
 /* ================================================================================================ */
