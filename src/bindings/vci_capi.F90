@@ -932,20 +932,7 @@ contains
   !> discrete energy condition was blended with H or H(q, p) was kept instead (docs/DESIGN.md §2).
   integer(c_int) function vci_get_energy_fallbacks(integ, count) bind(C, name='vci_get_energy_fallbacks')
     type(c_ptr), value :: integ, count
-    type(c_integrator_t), pointer :: ip
-    type(vci_stats_t) :: stats
-    integer :: stat
-    integer(c_int64_t), pointer :: l
-    call enter(integ, 'vci_get_energy_fallbacks', ip, stat)
-    if (stat == VCI_OK) then
-      if (c_associated(count)) then
-        stats = ip%integ%statistics()
-        call c_f_pointer(count, l)
-        l = int(stats%energy_fallbacks, c_int64_t)
-      end if
-      call leave(ip)
-    end if
-    vci_get_energy_fallbacks = stat
+    vci_get_energy_fallbacks = get_count(integ, count, 'vci_get_energy_fallbacks')
   end function vci_get_energy_fallbacks
 
   !> int vci_get_irreversible_impacts(vci_integrator integ, int64_t *count): impacts whose energy
@@ -953,21 +940,31 @@ contains
   !> (docs/BACKWARD.md, "Impacts that cannot be tied").
   integer(c_int) function vci_get_irreversible_impacts(integ, count) bind(C, name='vci_get_irreversible_impacts')
     type(c_ptr), value :: integ, count
+    vci_get_irreversible_impacts = get_count(integ, count, 'vci_get_irreversible_impacts')
+  end function vci_get_irreversible_impacts
+
+  !> The getters of one statistics counter each (fname names the getter, and so the counter):
+  !> *count (when count is not NULL) from the integrator's statistics.
+  integer(c_int) function get_count(integ, count, fname) result(stat)
+    type(c_ptr), value :: integ, count
+    character(len=*), intent(in) :: fname
     type(c_integrator_t), pointer :: ip
     type(vci_stats_t) :: stats
-    integer :: stat
     integer(c_int64_t), pointer :: l
-    call enter(integ, 'vci_get_irreversible_impacts', ip, stat)
-    if (stat == VCI_OK) then
-      if (c_associated(count)) then
-        stats = ip%integ%statistics()
-        call c_f_pointer(count, l)
+    call enter(integ, fname, ip, stat)
+    if (stat /= VCI_OK) return
+    if (c_associated(count)) then
+      stats = ip%integ%statistics()
+      call c_f_pointer(count, l)
+      select case (fname)
+      case ('vci_get_energy_fallbacks')
+        l = int(stats%energy_fallbacks, c_int64_t)
+      case ('vci_get_irreversible_impacts')
         l = int(stats%irreversible_impacts, c_int64_t)
-      end if
-      call leave(ip)
+      end select
     end if
-    vci_get_irreversible_impacts = stat
-  end function vci_get_irreversible_impacts
+    call leave(ip)
+  end function get_count
 
   !> int vci_get_split_steps(vci_integrator integ, int64_t *steps, int64_t *largest): steps the
   !> safety net took as equal sub-steps, and the most sub-steps one of them needed.

@@ -116,11 +116,8 @@ contains
             alpha = alpha_j; jstar = poked
             self%x_stage1(1:self%nsub + 1) = self%x(1:self%nsub + 1)
             s1res = self%last_residual
-            call self%sys%get_endpoint(self%x_stage1, self%q_trial)
-            call self%sys%eval_gaps(self%q_trial, self%gaps_trial(1:self%ng), stat)
-            if (stat /= VCI_OK) then
-              call set_cause(self, 'gap evaluation at the wall'); return
-            end if
+            call gaps_at_stage1(self, stat)
+            if (stat /= VCI_OK) return
             j = first_by_chord(self, self%gaps_trial)
           else
             self%x(1:self%nsub) = self%x_full(1:self%nsub)   ! no crossing found: the sub-step as it was
@@ -135,11 +132,8 @@ contains
             self%x_stage1(1:self%nsub + 1) = self%x(1:self%nsub + 1)
             s1res = self%last_residual
           end if
-          call self%sys%get_endpoint(self%x_stage1, self%q_trial)
-          call self%sys%eval_gaps(self%q_trial, self%gaps_trial(1:self%ng), stat)
-          if (stat /= VCI_OK) then
-            call set_cause(self, 'gap evaluation at the wall'); return
-          end if
+          call gaps_at_stage1(self, stat)
+          if (stat /= VCI_OK) return
           j = first_by_chord(self, self%gaps_trial)
         end do
         if (jstar == 0) exit      ! a poke stage 1 did not confirm and the end is admissible: no impact
@@ -211,6 +205,15 @@ contains
     end do
   end subroutine resolve_impacts
 
+  !> The gaps at stage 1's point (the end of x_stage1, put in q_trial) into gaps_trial.
+  subroutine gaps_at_stage1(self, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    integer, intent(out) :: stat
+    call self%sys%get_endpoint(self%x_stage1, self%q_trial)
+    call self%sys%eval_gaps(self%q_trial, self%gaps_trial(1:self%ng), stat)
+    if (stat /= VCI_OK) call set_cause(self, 'gap evaluation at the wall')
+  end subroutine gaps_at_stage1
+
   !> Stage 1 reached wall jstar (x_stage1, its point's gaps in gaps_trial) after crossing a wall whose
   !> gap is positive at the start and at the sub-step's end: a poke that find_poke leaves to stage 1
   !> (its first sample beyond that wall was beyond a wall the end is beyond too), and that stage 1's
@@ -245,11 +248,8 @@ contains
       alpha = alpha_k; jstar = k
       self%x_stage1(1:nm + 1) = self%x(1:nm + 1)
       s1res = self%last_residual
-      call self%sys%get_endpoint(self%x_stage1, self%q_trial)
-      call self%sys%eval_gaps(self%q_trial, self%gaps_trial(1:self%ng), stat)
-      if (stat /= VCI_OK) then
-        call set_cause(self, 'gap evaluation at the wall'); return
-      end if
+      call gaps_at_stage1(self, stat)
+      if (stat /= VCI_OK) return
     end do
   contains
     !> Of the walls not yet tried, positive at the start and negative at the point reached, the one

@@ -926,7 +926,6 @@ contains
   subroutine flush_file(self, stat)
     type(vci_hdf5_writer_t), intent(inout) :: self
     integer, intent(inout) :: stat
-    integer :: err
     if (stat /= VCI_OK) return
     if (self%ns > 0) then
       if (self%every > 1) call h5io_append_rows(self%d_k, 0, self%rows, self%bk(1:self%ns), self%ns, stat, &
@@ -957,13 +956,8 @@ contains
       self%discarded = .true.
       return
     end if
-    call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
-    if (err /= 0) then
-      call fail(self, 'H5Fflush failed: '//trim(h5io_os_cause()), stat)
-      call h5io_discard_writes(self%file)   ! the disk keeps the last complete flush
-      self%discarded = .true.
-      return
-    end if
+    call flush_or_discard(self, stat)       ! (failed: the disk keeps the last complete flush)
+    if (stat /= VCI_OK) return
     self%rows = self%rows + self%ns; self%steps = self%steps + self%ne; self%impacts = self%impacts + self%ni
     self%ns = 0; self%ne = 0; self%ni = 0
     self%flush_pending = .false.
@@ -975,13 +969,7 @@ contains
     call h5io_put_attr(self%file, 'split_steps', self%split_steps, stat, self%message, self%path)
     call h5io_put_attr(self%file, 'largest_split', self%largest_split, stat, self%message, self%path)
     call h5io_put_attr(self%file, 'steps_completed', self%steps, stat, self%message, self%path)
-    if (stat /= VCI_OK) return
-    call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
-    if (err /= 0) then
-      call fail(self, 'H5Fflush failed: '//trim(h5io_os_cause()), stat)
-      call h5io_discard_writes(self%file)
-      self%discarded = .true.
-    end if
+    call flush_or_discard(self, stat)
   end subroutine flush_file
 
   !> /checkpoint/record: the file's last row followed by the checkpoint's record (vci_checkpoint:
