@@ -21,14 +21,14 @@
 module vci_explicit_step
   use vci_kinds, only: dp, i8
   use vci_status
-  use vci_message, only: vci_set_message, vci_int_text, vci_real_text
+  use vci_message, only: vci_set_message, vci_int_text
   use vci_composition, only: vci_composition_t
   use vci_composition_energy, only: vci_composition_energy_t
   use vci_separable, only: vci_separable_t
   use vci_observer, only: vci_impact_t
   use vci_state, only: vci_impact_buffer_t, vci_state_t
   use vci_scheme, only: VCI_IMPACT_HAMILTONIAN, VCI_IMPACT_DISCRETE
-  use vci_settings, only: vci_too_many_impacts_cause
+  use vci_settings, only: vci_too_many_impacts_cause, vci_start_beyond_cause, vci_crossed_unseen_cause
   implicit none
   private
 
@@ -271,15 +271,11 @@ contains
         if (j == 0 .or. (jj > 0 .and. jj == j0)) cycle
         call first_crossing(self, j, dir, tau, best, alpha, stat)
         if (stat == VCI_ERR_INADMISSIBLE .and. impacts%count == 0) then
-          call vci_set_message(cause, 'the step starts beyond wall '//trim(vci_int_text(j))//' (g = '// &
-            trim(vci_real_text(self%g_start(j), '(es10.3)'))//', where the gap callback gave g >= 0 when the step '// &
-            'before ended there): a gap that is not a function of q alone, or a model changed under the integrator')
+          call vci_set_message(cause, vci_start_beyond_cause(j, self%g_start(j)))
           return
         else if (stat == VCI_ERR_INADMISSIBLE) then   ! this step's last wall point: stage 1 missed wall j
           stat = VCI_ERR_IMPACT
-          call vci_set_message(cause, 'stage 1 reached wall '//trim(vci_int_text(impacts%records(impacts%count)%gap))// &
-            ' at a point beyond wall '//trim(vci_int_text(j))//' (g = '//trim(vci_real_text(self%g_start(j), '(es10.3)'))// &
-            '): the motion crossed it first, unseen')
+          call vci_set_message(cause, vci_crossed_unseen_cause(impacts%records(impacts%count)%gap, '', j, self%g_start(j)))
           return
         else if (stat /= VCI_OK) then
           call fail(self, 'stage 1 (impact time)', stat, cause); return

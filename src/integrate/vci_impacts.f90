@@ -1123,23 +1123,18 @@ contains
     integer, intent(in) :: last_gap
     integer, intent(out) :: stat
     integer :: j
-    character(len=40) :: wall
     stat = VCI_OK
     do j = 1, self%ng
       if (j == last_gap .or. .not. self%gaps_start(j) < 0.0_dp) cycle   ! (the rare case: a gradient)
       call start_gradient(self, j, stat)
       if (stat /= VCI_OK) return
       if (self%gaps_start(j) >= -start_gap_tolerance(self, j, self%gaps_start(j))) cycle
-      wall = wall_name(j)
       if (last_gap == 0) then
         stat = VCI_ERR_INADMISSIBLE
-        call vci_set_message(self%cause, 'the step starts beyond '//trim(wall)//' (g = '// &
-          trim(vci_real_text(self%gaps_start(j), '(es10.3)'))//', where the gap callback gave g >= 0 when the '// &
-          'step before ended there): a gap that is not a function of q alone, or a model changed under the integrator')
+        call vci_set_message(self%cause, vci_start_beyond_cause(j, self%gaps_start(j)))
       else
         stat = VCI_ERR_IMPACT
-        call vci_set_message(self%cause, 'stage 1 reached '//trim(wall_name(last_gap))//' at a point beyond '// &
-          trim(wall)//' (g = '//trim(vci_real_text(self%gaps_start(j), '(es10.3)'))//'): the motion crossed it first, unseen')
+        call vci_set_message(self%cause, vci_crossed_unseen_cause(last_gap, '', j, self%gaps_start(j)))
       end if
       return
     end do
@@ -1164,9 +1159,7 @@ contains
       if (stat /= VCI_OK) return
       if (self%gaps_trial(k) >= -start_gap_tolerance(self, k, self%gaps_trial(k))) cycle
       stat = VCI_ERR_IMPACT
-      call vci_set_message(self%cause, 'stage 1 reached '//trim(wall_name(jstar))//' at the step''s end '// &
-        'at a point beyond '//trim(wall_name(k))//' (g = '//trim(vci_real_text(self%gaps_trial(k), '(es10.3)'))// &
-        '): the motion crossed it first, unseen')
+      call vci_set_message(self%cause, vci_crossed_unseen_cause(jstar, ' at the step''s end', k, self%gaps_trial(k)))
       return
     end do
   end subroutine refuse_landing_beyond

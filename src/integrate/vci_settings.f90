@@ -2,6 +2,7 @@
 !> stepper (which holds the one settings object) and the driver (which validates and reports them).
 module vci_settings
   use vci_kinds, only: dp, i8
+  use vci_message, only: vci_int_text, vci_real_text
   use vci_scheme, only: VCI_IMPACT_DISCRETE
   implicit none
   private
@@ -35,6 +36,7 @@ module vci_settings
   end type vci_settings_t
 
   public :: vci_default_max_impacts, vci_too_many_impacts_cause
+  public :: vci_start_beyond_cause, vci_crossed_unseen_cause
 
   !> Cumulative solver statistics.
   type, public :: vci_solver_stats_t
@@ -69,4 +71,26 @@ contains
     cause = 'more than '//trim(b)//' impacts in one step (the bound; contact, chatter or impacts '// &
             'accumulating at one time; set_max_impacts raises it)'
   end function vci_too_many_impacts_cause
+  !> The cause of a step that starts beyond wall j (gap g, beyond the solver's tolerance) although
+  !> the step before ended there with every gap >= 0 (VCI_ERR_INADMISSIBLE; the implicit and the
+  !> explicit steps say it alike).
+  function vci_start_beyond_cause(j, g) result(cause)
+    integer, intent(in) :: j
+    real(dp), intent(in) :: g
+    character(len=:), allocatable :: cause
+    cause = 'the step starts beyond wall '//trim(vci_int_text(j))//' (g = '//trim(vci_real_text(g, '(es10.3)'))// &
+            ', where the gap callback gave g >= 0 when the step before ended there): a gap that is not a '// &
+            'function of q alone, or a model changed under the integrator'
+  end function vci_start_beyond_cause
+
+  !> The cause of stage 1's miss: it reached wall `reached` (where: '' or ' at the step''s end') at a
+  !> point beyond wall j (gap g), which the motion crossed first (VCI_ERR_IMPACT).
+  function vci_crossed_unseen_cause(reached, where, j, g) result(cause)
+    integer, intent(in) :: reached, j
+    character(len=*), intent(in) :: where
+    real(dp), intent(in) :: g
+    character(len=:), allocatable :: cause
+    cause = 'stage 1 reached wall '//trim(vci_int_text(reached))//where//' at a point beyond wall '// &
+            trim(vci_int_text(j))//' (g = '//trim(vci_real_text(g, '(es10.3)'))//'): the motion crossed it first, unseen'
+  end function vci_crossed_unseen_cause
 end module vci_settings

@@ -21,7 +21,8 @@ module vci_stepper
                         VCI_IMPACT_DISCRETE, VCI_IMPACT_HAMILTONIAN, VCI_IMPACT_BLENDED
   use vci_observer, only: vci_impact_t
   use vci_scheme_lobatto, only: vci_scheme_lobatto_t
-  use vci_settings, only: vci_settings_t, vci_solver_stats_t, vci_too_many_impacts_cause
+  use vci_settings, only: vci_settings_t, vci_solver_stats_t, vci_too_many_impacts_cause, vci_start_beyond_cause, &
+    vci_crossed_unseen_cause
   use vci_state, only: vci_state_t, vci_impact_buffer_t
   use vci_predictor, only: vci_predict_start
   use vci_explicit_step, only: vci_explicit_t
