@@ -85,7 +85,7 @@ module vci_checkpoint
     procedure :: release
   end type vci_checkpoint_t
 
-  public :: vci_checkpoint_record_size, vci_checkpoint_from_state
+  public :: vci_checkpoint_record_size, vci_checkpoint_from_state, copy_vector
 
 contains
 

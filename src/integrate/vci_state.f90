@@ -6,7 +6,7 @@
 module vci_state
   use vci_kinds, only: dp, i8
   use vci_status, only: VCI_OK, VCI_ERR_MEMORY
-  use vci_checkpoint, only: vci_checkpoint_t
+  use vci_checkpoint, only: vci_checkpoint_t, copy_vector
   use vci_observer, only: vci_impact_t
   implicit none
   private
@@ -86,13 +86,12 @@ contains
     type(vci_checkpoint_t), intent(out) :: cp
     integer, intent(out) :: stat
     ! array by array with stat=: a copy of n or m values is not tiny (issue 24, no runtime stop)
-    allocate (cp%q, source=self%q, stat=stat)
-    if (stat == 0) allocate (cp%p, source=self%p, stat=stat)
-    if (stat == 0) allocate (cp%lambda, source=self%lambda, stat=stat)
-    if (stat == 0) allocate (cp%velocity, source=self%velocity, stat=stat)
-    if (stat == 0) allocate (cp%velocity_before, source=self%velocity_before, stat=stat)
-    if (stat == 0) allocate (cp%lambda_before, source=self%lambda_before, stat=stat)
-    if (stat == 0) allocate (cp%lambda_before2, source=self%lambda_before2, stat=stat)
+    stat = 0
+    call copy_vector(self%q, cp%q, stat); call copy_vector(self%p, cp%p, stat)
+    call copy_vector(self%lambda, cp%lambda, stat); call copy_vector(self%velocity, cp%velocity, stat)
+    call copy_vector(self%velocity_before, cp%velocity_before, stat)
+    call copy_vector(self%lambda_before, cp%lambda_before, stat)
+    call copy_vector(self%lambda_before2, cp%lambda_before2, stat)
     if (stat /= 0) then
       call cp%release(); stat = VCI_ERR_MEMORY; return
     end if
