@@ -288,10 +288,8 @@ contains
     class(vci_hdf5_writer_t), intent(inout) :: self
     integer :: err
     if (self%is_open) then
-      if (.not. self%discarded) call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)
-      call h5io_discard_writes(self%file)
+      call flush_into_sink(self%file, self%discarded, err)
       self%discarded = .true.
-      call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, err)   ! (a flush that failed half-way, completed into the sink)
     end if
     call h5io_close_dset(self%d_t); call h5io_close_dset(self%d_q); call h5io_close_dset(self%d_p)
     call h5io_close_dset(self%d_e); call h5io_close_dset(self%d_l); call h5io_close_dset(self%d_k)
@@ -1175,15 +1173,26 @@ contains
     integer, intent(out) :: err
     logical, intent(in), optional :: failed
     integer :: e2
-    err = 0
-    if (present(failed)) then
-      if (failed) err = -1
-    end if
-    if (err == 0) call h5fflush_f(file, H5F_SCOPE_GLOBAL_F, err)
-    call h5io_discard_writes(file)
-    call h5fflush_f(file, H5F_SCOPE_GLOBAL_F, e2)   ! (a flush that failed half-way, completed into the sink)
+    logical :: before
+    before = .false.
+    if (present(failed)) before = failed
+    call flush_into_sink(file, before, err)
     call h5fclose_f(file, e2)
   end subroutine vci_hdf5_close_file
+
+  !> Before a close: what HDF5 holds flushed (err = the flush's failure, else 0; failed: a write
+  !> already failed, err = -1 and nothing flushed), then the descriptor to a sink and a flush that
+  !> failed half-way completed into it, so that the close writes nothing.
+  subroutine flush_into_sink(file, failed, err)
+    integer(hid_t), intent(in) :: file
+    logical, intent(in) :: failed
+    integer, intent(out) :: err
+    integer :: e2
+    err = -1
+    if (.not. failed) call h5fflush_f(file, H5F_SCOPE_GLOBAL_F, err)
+    call h5io_discard_writes(file)
+    call h5fflush_f(file, H5F_SCOPE_GLOBAL_F, e2)
+  end subroutine flush_into_sink
 
   subroutine fail(self, cause, stat)
     type(vci_hdf5_writer_t), intent(inout) :: self
