@@ -719,7 +719,6 @@ contains
     integer(c_int), value :: direction
     type(c_integrator_t), pointer :: ip
     integer :: stat, ostat
-    type(vci_checkpoint_t) :: cp
     character(len=VCI_MSG_LEN) :: cause   !< why the checkpoint for the output's start could not be taken
     call enter(integ, 'vci_step', ip, stat)
     cause = ''
@@ -732,8 +731,7 @@ contains
       if (allocated(ip%obs%output) .and. .not. ip%obs%started .and. ip%integ%is_initialized() .and. &
           (direction == 1 .or. direction == -1)) then
         if (ip%obs%wants_checkpoint()) then
-          cp = ip%integ%checkpoint(ostat, cause)
-          if (ostat == VCI_OK) call ip%obs%on_checkpoint(cp, ostat)
+          call ip%integ%checkpoint_to(ip%obs, ostat, cause)
         end if
         if (ostat == 0) call ip%obs%on_start(ip%integ%run_info(int(direction)), ip%integ%configuration(), &
                                              ip%integ%momentum(), ostat)

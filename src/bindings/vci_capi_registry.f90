@@ -447,7 +447,6 @@ contains
   !> Finish and drop the output of an integrator; the status of closing it.
   integer function close_output(ip) result(stat)
     type(c_integrator_t), intent(inout) :: ip
-    type(vci_checkpoint_t) :: cp
     integer :: cstat
     stat = 0
     if (.not. allocated(ip%obs%output)) return
@@ -456,8 +455,7 @@ contains
     cstat = VCI_OK
     if (ip%obs%started .and. ip%obs%output%keeps_checkpoints()) then
       ! (no memory for it: the file is still finished, without the last state's checkpoint)
-      cp = ip%integ%checkpoint(cstat)
-      if (cstat == VCI_OK) call ip%obs%output%on_checkpoint(cp, cstat)
+      call ip%integ%checkpoint_to(ip%obs%output, cstat)
     end if
     stat = 0
     call ip%obs%output%on_finish(ip%obs%run_status, trim(ip%obs%run_message), stat)

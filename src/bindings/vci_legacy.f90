@@ -1199,7 +1199,6 @@ contains
   !> Finish and drop the output file of slot i (its last state's checkpoint first); its status.
   integer function close_output(i) result(stat)
     integer, intent(in) :: i
-    type(vci_checkpoint_t) :: cp
     integer :: cstat
     stat = VCI_OK
     if (.not. associated(slots(i)%out)) return
@@ -1208,8 +1207,7 @@ contains
       associate (w => slots(i)%out%writer)
         ! (no memory for the checkpoint: the file is still finished, without it)
         if (slots(i)%out%started .and. w%keeps_checkpoints()) then
-          cp = slots(i)%integ%checkpoint(cstat)
-          if (cstat == VCI_OK) call w%on_checkpoint(cp, cstat)
+          call slots(i)%integ%checkpoint_to(w, cstat)
         end if
         stat = VCI_OK
         call w%on_finish(slots(i)%out%run_status, trim(slots(i)%out%run_message), stat)

@@ -132,6 +132,9 @@ module vci_integrator
     procedure :: run_info
     !> The current state and solver memory, for restarts that continue bit for bit.
     procedure :: checkpoint
+    !> A checkpoint taken now handed to an observer's on_checkpoint (no copy of it made; its
+    !> status VCI_ERR_MEMORY, and why, when it cannot be taken).
+    procedure :: checkpoint_to => hand_checkpoint
     !> Continue from a checkpoint taken with the same model and step length.
     procedure :: restore
     ! reading the state and the outcome
@@ -1125,10 +1128,12 @@ contains
     class(vci_integrator_t), intent(inout) :: self
     class(vci_observer_t), intent(inout) :: observer
     integer, intent(inout) :: ostat
-    character(len=*), intent(out) :: cause     !< why no checkpoint could be taken ('' when one was)
+    character(len=*), intent(out), optional :: cause   !< why no checkpoint could be taken ('' when one was)
     type(vci_checkpoint_t) :: cp
     integer :: s
-    call take_checkpoint(self, cp, s, cause)
+    character(len=160) :: why
+    call take_checkpoint(self, cp, s, why)
+    if (present(cause)) cause = why
     if (s /= VCI_OK) then
       ostat = s; return
     end if
