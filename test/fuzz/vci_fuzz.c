@@ -19,7 +19,9 @@
  * the directions differ in splits or fallbacks ("one-sided") are printed with where the two impact
  * lists first part (walked from the run's end), and counted apart for the left rule, which is not
  * symmetric; a one-sided run of a symmetric scheme fails unless the library reported an
- * irreversible impact in it (docs/BACKWARD.md). VCI_FUZZ_IMPACTS=1 prints both lists.
+ * irreversible impact in the step where the two directions part (parting_step: the steps are taken
+ * one by one and each one's counters recorded; docs/BACKWARD.md). VCI_FUZZ_IMPACTS=1 prints both
+ * lists.
  * The seeds are fixed, so a failure replays:
  *
  *   vci_fuzz [--reversal] SEED_FIRST SEED_COUNT [SECONDS]   run the seeds, stop after SECONDS (default 60)
@@ -55,7 +57,11 @@
  * and one-sided with a symmetric scheme and no cause reported: a failure (issue 24 item 1 wants a
  * fallback never taken in one direction only; docs/BACKWARD.md) */
 enum { EXIT_REVERSAL_BROKEN = 73, EXIT_REVERSAL_UNJUDGED = 74, EXIT_REVERSAL_ONE_SIDED = 75,
-       EXIT_REVERSAL_ONE_SIDED_LEFT = 76, EXIT_REVERSAL_ONE_SIDED_UNEXPLAINED = 77 };
+       EXIT_REVERSAL_ONE_SIDED_LEFT = 76, EXIT_REVERSAL_ONE_SIDED_UNEXPLAINED = 77,
+       EXIT_REVERSAL_ONE_SIDED_ELSEWHERE = 78 };
+/* ... and 78: one-sided with a symmetric scheme where the library reported an irreversible impact,
+ * but not in the step where the two directions part (parting_step below): the reported impact is
+ * not what made the run one-sided, so it explains nothing (a failure) */
 
 /* The impacts of a reversal run, in the order met (forward: time increasing; backward: decreasing),
  * to find where the two directions first part (one-sided runs, sorted by cause: docs/BACKWARD.md) */
@@ -64,6 +70,8 @@ typedef struct {
   int count;
   double t[MAX_LISTED_IMPACTS], impulse[MAX_LISTED_IMPACTS];
   int gap[MAX_LISTED_IMPACTS];
+  /* the step each impact was met in, as the forward step of the same interval (step_counts) */
+  int step[MAX_LISTED_IMPACTS], current_step;
   /* every impact point must be admissible: the most negative gap there, relative to its terms
    * (seed 14739 reflected at a point 1.4e-2 beyond another wall, crossed unseen) */
   const cmodel_t *md;
@@ -83,31 +91,145 @@ static int list_impact(double t, double alpha, int gap, const double *q, double 
   }
   if (l->count < MAX_LISTED_IMPACTS) {
     l->t[l->count] = t; l->gap[l->count] = gap; l->impulse[l->count] = impulse;
+    l->step[l->count] = l->current_step;
   }
   ++l->count;
   return 0;
 }
+/* Forward impact i and backward impact k are not the same impact: another wall or time (1e-6
+ * relative), or another |impulse| (1e-6 relative). */
+static int other_wall_or_time(const impact_list *f, int i, const impact_list *b, int k) {
+  return f->gap[i] != b->gap[k] || fabs(f->t[i] - b->t[k]) > 1e-6 * (1.0 + fabs(f->t[i]));
+}
+static int other_impulse(const impact_list *f, int i, const impact_list *b, int k) {
+  double mf = fabs(f->impulse[i]), mb = fabs(b->impulse[k]);
+  return fabs(mf - mb) > 1e-6 * (1.0 + mf);
+}
 /* Walk the forward impacts from the run's end and the backward ones from their start (the same
- * end): the first pair that is not the same impact (time and |impulse| within 1e-6 relative, same
- * wall). Writes what differs; "none" when the lists agree. */
+ * end): the first pair that is not the same impact. Writes what differs; "none" when the lists
+ * agree. */
 static void first_difference(const impact_list *f, const impact_list *b, char *out, size_t size) {
   int k, nf = f->count < MAX_LISTED_IMPACTS ? f->count : MAX_LISTED_IMPACTS;
   int nb = b->count < MAX_LISTED_IMPACTS ? b->count : MAX_LISTED_IMPACTS;
   for (k = 0; k < nf && k < nb; ++k) {
     int i = nf - 1 - k;
     double tf = f->t[i], tb = b->t[k], mf = fabs(f->impulse[i]), mb = fabs(b->impulse[k]);
-    if (f->gap[i] != b->gap[k] || fabs(tf - tb) > 1e-6 * (1.0 + fabs(tf))) {
+    if (other_wall_or_time(f, i, b, k)) {
       snprintf(out, size, "other-impact: forward #%d t %.6f wall %d, backward t %.6f wall %d", i, tf, f->gap[i], tb,
                b->gap[k]);
       return;
     }
-    if (fabs(mf - mb) > 1e-6 * (1.0 + mf)) {
+    if (other_impulse(f, i, b, k)) {
       snprintf(out, size, "other-impulse: t %.6f wall %d, |impulse| forward %.6g backward %.6g", tf, f->gap[i], mf, mb);
       return;
     }
   }
   if (nf != nb) snprintf(out, size, "extra-impact: %d forward, %d backward, alike up to the shorter", nf, nb);
   else snprintf(out, size, "none");
+}
+
+/* What each step of a reversal run did, filed under the forward step that covers the same time
+ * interval: forward step i runs from index i - 1 to i, and the backward run's j-th step (from index
+ * N + 1 - j to N - j) is filed under interval N + 1 - j. Entries 1..N; the counters' increments
+ * over the step (vci_get_stats' impacts, vci_get_split_steps, vci_get_energy_fallbacks,
+ * vci_get_irreversible_impacts). */
+enum { MAX_REVERSAL_STEPS = 100 };
+typedef struct {
+  int64_t impacts[MAX_REVERSAL_STEPS + 2], splits[MAX_REVERSAL_STEPS + 2], fallbacks[MAX_REVERSAL_STEPS + 2],
+      irreversible[MAX_REVERSAL_STEPS + 2];
+} step_counts;
+enum { COUNTER_IMPACTS, COUNTER_SPLITS, COUNTER_FALLBACKS, COUNTER_IRREVERSIBLE, NCOUNTERS };
+static void read_counters(vci_integrator it, int64_t c[NCOUNTERS]) {
+  c[0] = c[1] = c[2] = c[3] = 0;
+  vci_get_stats(it, NULL, &c[COUNTER_IMPACTS], NULL);
+  vci_get_split_steps(it, &c[COUNTER_SPLITS], NULL);
+  vci_get_energy_fallbacks(it, &c[COUNTER_FALLBACKS]);
+  vci_get_irreversible_impacts(it, &c[COUNTER_IRREVERSIBLE]);
+}
+/* VCI_FUZZ_MOVE_IRREVERSIBLE=k files each step's irreversible impacts k intervals later (dropped
+ * beyond the run): only to see the check below fail where the reported impact is elsewhere
+ * (ctest fuzz_capi_reversal_irreversible_elsewhere_13, _8934) */
+static int irreversible_offset(void) {
+  const char *env = getenv("VCI_FUZZ_MOVE_IRREVERSIBLE");
+  return env != NULL ? atoi(env) : 0;
+}
+/* nsteps single steps (vci_step, as vci_integrate takes them) in direction dir, each step's
+ * counter increments filed in *r and its impacts in l (via l->current_step). Returns the first
+ * status that is not VCI_OK (the run stops there, as vci_integrate), else VCI_OK. */
+static int recorded_steps(vci_integrator it, int nsteps, int dir, impact_list *l, step_counts *r) {
+  int64_t before[NCOUNTERS], after[NCOUNTERS];
+  int j, s, moved = irreversible_offset();
+  memset(r, 0, sizeof *r);
+  read_counters(it, before);
+  for (j = 1; j <= nsteps; ++j) {
+    int interval = dir > 0 ? j : nsteps + 1 - j;
+    l->current_step = interval;
+    s = vci_step(it, dir);
+    if (s != VCI_OK) return s;
+    read_counters(it, after);
+    r->impacts[interval] = after[COUNTER_IMPACTS] - before[COUNTER_IMPACTS];
+    r->splits[interval] = after[COUNTER_SPLITS] - before[COUNTER_SPLITS];
+    r->fallbacks[interval] = after[COUNTER_FALLBACKS] - before[COUNTER_FALLBACKS];
+    if (interval + moved >= 1 && interval + moved <= nsteps)
+      r->irreversible[interval + moved] += after[COUNTER_IRREVERSIBLE] - before[COUNTER_IRREVERSIBLE];
+    memcpy(before, after, sizeof before);
+  }
+  return VCI_OK;
+}
+/* Interval i of the two runs differs: another number of impacts, splits or energy fallbacks, or
+ * (where both lists hold every impact) an impact that is not the same, paired from the interval's
+ * end (the forward impacts from the last, the backward ones from the first met). */
+static int interval_differs(int i, const impact_list *f, const step_counts *rf, const impact_list *b,
+                           const step_counts *rb) {
+  int kf[MAX_LISTED_IMPACTS], kb[MAX_LISTED_IMPACTS], nf = 0, nb = 0, k;
+  if (rf->impacts[i] != rb->impacts[i] || rf->splits[i] != rb->splits[i] || rf->fallbacks[i] != rb->fallbacks[i])
+    return 1;
+  if (f->count > MAX_LISTED_IMPACTS || b->count > MAX_LISTED_IMPACTS) return 0; /* counts only */
+  for (k = 0; k < f->count; ++k)
+    if (f->step[k] == i) kf[nf++] = k;
+  for (k = 0; k < b->count; ++k)
+    if (b->step[k] == i) kb[nb++] = k;
+  if (nf != nb) return 1; /* (the counters agreed; an impact callback that was not called) */
+  for (k = 0; k < nf; ++k)
+    if (other_wall_or_time(f, kf[nf - 1 - k], b, kb[k]) || other_impulse(f, kf[nf - 1 - k], b, kb[k])) return 1;
+  return 0;
+}
+/* The step where the two directions part: walking from the run's end (where the backward run
+ * starts from the forward run's last state), the first interval whose steps differ; 0 when none
+ * does. Before it the backward run retraced the forward one (the same impacts, splits and
+ * fallbacks), so it started this interval from the forward run's state at the interval's end; a
+ * symmetric scheme's backward step then inverts the forward step unless one of the two made a
+ * decision in this interval that the other direction cannot pose (an impact whose condition could
+ * not be tied: vci_get_irreversible_impacts). An irreversible impact earlier in time cannot have
+ * caused it (the backward run had not reached it), one later in time left the steps after it alike
+ * (so it changed nothing the comparison sees): only this interval explains the parting. */
+static int parting_step(int nsteps, const impact_list *f, const step_counts *rf, const impact_list *b,
+                        const step_counts *rb) {
+  int i;
+  for (i = nsteps; i >= 1; --i)
+    if (interval_differs(i, f, rf, b, rb)) return i;
+  return 0;
+}
+/* An irreversible impact was reported (either direction) in the step where the directions part */
+static int irreversible_where_parted(int parted, int nsteps, const step_counts *rf, const step_counts *rb) {
+  return parted >= 1 && parted <= nsteps && rf->irreversible[parted] + rb->irreversible[parted] > 0;
+}
+/* the intervals with an irreversible impact, forward then backward, e.g. "12/-" or "3,7/12" */
+static void irreversible_steps(int nsteps, const step_counts *rf, const step_counts *rb, char *out, size_t size) {
+  const step_counts *r[2] = {rf, rb};
+  size_t used = 0;
+  int d, i;
+  out[0] = '\0';
+  for (d = 0; d < 2; ++d) {
+    int any = 0;
+    for (i = 1; i <= nsteps; ++i)
+      if (r[d]->irreversible[i] > 0 && used + 16 < size) {
+        used += (size_t)snprintf(out + used, size - used, "%s%d", any ? "," : "", i);
+        any = 1;
+      }
+    if (!any && used + 2 < size) used += (size_t)snprintf(out + used, size - used, "-");
+    if (d == 0 && used + 2 < size) used += (size_t)snprintf(out + used, size - used, "/");
+  }
 }
 
 static int impact_calls = 0, impact_fail_at = -1;
@@ -484,7 +606,9 @@ static int reversal(uint64_t seed) {
   int64_t imp_f = 0, imp_b = 0, split_f = 0, split_b = 0, fb_f = 0, fb_b = 0, irr_f = 0, irr_b = 0, k = -1;
   const char *verbose = getenv("VCI_FUZZ_VERBOSE");
   static impact_list list_f, list_b;
-  char parted[160] = "";
+  static step_counts steps_f, steps_b;
+  char parted[160] = "", irreversible_at[160] = "";
+  int parted_step = 0;
   fuzz_seed(seed);
   list_f.count = 0; list_b.count = 0;
   list_f.md = &md; list_b.md = &md;
@@ -525,16 +649,17 @@ static int reversal(uint64_t seed) {
     p0[i] = uniform(-2.0, 2.0);
   }
   nsteps = 10 + below(91);
+  promise(nsteps <= MAX_REVERSAL_STEPS, "the steps fit the per-step records");
   s = vci_init_from_momentum(it, t0, q0, p0);
   if (s == VCI_OK) s = vci_set_impact_callback(it, list_impact, &list_f);
-  if (s == VCI_OK) s = vci_integrate(it, nsteps, 1);
+  if (s == VCI_OK) s = recorded_steps(it, nsteps, 1, &list_f, &steps_f);
   if (s == VCI_OK) {
     vci_get_stats(it, NULL, &imp_f, NULL);
     vci_get_split_steps(it, &split_f, NULL);
     vci_get_energy_fallbacks(it, &fb_f);
     vci_get_irreversible_impacts(it, &irr_f);
     s = vci_set_impact_callback(it, list_impact, &list_b);
-    if (s == VCI_OK) s = vci_integrate(it, nsteps, -1);
+    if (s == VCI_OK) s = recorded_steps(it, nsteps, -1, &list_b, &steps_b);
   }
   if (s == VCI_OK) {
     vci_get_stats(it, NULL, &imp_b, NULL);
@@ -560,23 +685,31 @@ static int reversal(uint64_t seed) {
            "backward %.2e)\n", (unsigned long long)seed, fmin(list_f.worst_gap, list_b.worst_gap), list_f.worst_gap,
            list_b.worst_gap);
   }
-  else if (s == VCI_OK && (split_f != split_b || fb_f != fb_b))
+  else if (s == VCI_OK && (split_f != split_b || fb_f != fb_b)) {
     /* the left rule is not symmetric: its backward step solves the right rule's equations (another
      * nonlinear system, another Newton basin; E_d - H offsets O(h), not O(h^2)), so where a solve
-     * fails or a condition blends may differ between the directions (docs/BACKWARD.md) */
-    verdict = scheme == VCI_SCHEME_LEFT      ? EXIT_REVERSAL_ONE_SIDED_LEFT
-              : irr_f + irr_b > 0            ? EXIT_REVERSAL_ONE_SIDED
-                                             : EXIT_REVERSAL_ONE_SIDED_UNEXPLAINED;
+     * fails or a condition blends may differ between the directions (docs/BACKWARD.md). A symmetric
+     * scheme's one-sided run is explained only by an irreversible impact where the directions part */
+    parted_step = parting_step(nsteps, &list_f, &steps_f, &list_b, &steps_b);
+    verdict = scheme == VCI_SCHEME_LEFT ? EXIT_REVERSAL_ONE_SIDED_LEFT
+              : irr_f + irr_b == 0      ? EXIT_REVERSAL_ONE_SIDED_UNEXPLAINED
+              : irreversible_where_parted(parted_step, nsteps, &steps_f, &steps_b) ? EXIT_REVERSAL_ONE_SIDED
+                                                                                  : EXIT_REVERSAL_ONE_SIDED_ELSEWHERE;
+  }
   else if (s != VCI_OK || split_f + split_b + fb_f + fb_b + irr_f + irr_b > 0) verdict = EXIT_REVERSAL_UNJUDGED;
   else if (!(err_q <= tol && err_p <= tol) || k != 0 || imp_f != imp_b) verdict = EXIT_REVERSAL_BROKEN;
   if (verbose || verdict == EXIT_REVERSAL_BROKEN || verdict == EXIT_REVERSAL_ONE_SIDED ||
-      verdict == EXIT_REVERSAL_ONE_SIDED_LEFT || verdict == EXIT_REVERSAL_ONE_SIDED_UNEXPLAINED) { /* (to sort them) */
-    char msg[300] = "";
+      verdict == EXIT_REVERSAL_ONE_SIDED_LEFT || verdict == EXIT_REVERSAL_ONE_SIDED_UNEXPLAINED ||
+      verdict == EXIT_REVERSAL_ONE_SIDED_ELSEWHERE) { /* (to sort them) */
+    char msg[600] = "";
     if (s != VCI_OK) vci_last_error(it, msg, sizeof msg);
     if (s == VCI_OK) {
       first_difference(&list_f, &list_b, parted, sizeof parted);
-      snprintf(msg, sizeof msg, "[%s] first difference from the end: %s",
-               split_f != split_b ? "split-one-way" : fb_f != fb_b ? "fallbacks-differ" : "alike", parted);
+      if (parted_step == 0) parted_step = parting_step(nsteps, &list_f, &steps_f, &list_b, &steps_b);
+      irreversible_steps(nsteps, &steps_f, &steps_b, irreversible_at, sizeof irreversible_at);
+      snprintf(msg, sizeof msg, "[%s] first difference from the end: %s; parting step %d of %d, irreversible in steps %s",
+               split_f != split_b ? "split-one-way" : fb_f != fb_b ? "fallbacks-differ" : "alike", parted, parted_step,
+               nsteps, irreversible_at);
     }
     printf("reversal seed %llu: kind %d n %d ng %d %s s %d h %.4f N %d rtol %.1e: status %d, impacts %lld/%lld, "
            "splits %lld/%lld, fallbacks %lld/%lld, irreversible %lld/%lld, index %lld, err q %.2e p %.2e (%.2g of 2N "
@@ -586,7 +719,9 @@ static int reversal(uint64_t seed) {
            (long long)irr_f, (long long)irr_b, (long long)k, err_q, err_p, fmax(err_q, err_p) / (2.0 * nsteps * rtol),
            verdict == EXIT_REVERSAL_BROKEN ? " BROKEN" : verdict == EXIT_REVERSAL_ONE_SIDED ? " one-sided" :
            verdict == EXIT_REVERSAL_ONE_SIDED_LEFT ? " one-sided-left" :
-           verdict == EXIT_REVERSAL_ONE_SIDED_UNEXPLAINED ? " one-sided-unexplained" : verdict ? " unjudged" : "", msg);
+           verdict == EXIT_REVERSAL_ONE_SIDED_UNEXPLAINED ? " one-sided-unexplained" :
+           verdict == EXIT_REVERSAL_ONE_SIDED_ELSEWHERE ? " one-sided-irreversible-elsewhere" :
+           verdict ? " unjudged" : "", msg);
   }
   if (getenv("VCI_FUZZ_IMPACTS")) { /* both lists, the backward one reversed beside the forward one */
     int a = list_f.count < MAX_LISTED_IMPACTS ? list_f.count : MAX_LISTED_IMPACTS;
@@ -685,11 +820,14 @@ int main(int argc, char **argv) {
     } else if (WEXITSTATUS(status) != 0) {
       static const char *why[] = {"exit from library code", "NaN/Inf given to LAPACK", "broken promise",
                                   "reversal broken", "", "", "",
-                                  "one-sided with a symmetric scheme, no cause reported by the library"};
+                                  "one-sided with a symmetric scheme, no cause reported by the library",
+                                  "one-sided with a symmetric scheme, an irreversible impact reported but not in the"
+                                  " step where the directions part"};
       int code = WEXITSTATUS(status);
       ++bad;
       printf("FAIL seed %ld: exit status %d (%s)\n", first + i, code,
-             (code >= 70 && code <= 73) || code == EXIT_REVERSAL_ONE_SIDED_UNEXPLAINED ? why[code - 70]
+             (code >= 70 && code <= 73) || code == EXIT_REVERSAL_ONE_SIDED_UNEXPLAINED ||
+                     code == EXIT_REVERSAL_ONE_SIDED_ELSEWHERE ? why[code - 70]
                                                                                   : "sanitizer report or runtime error");
     }
     if (bad >= 5) { /* enough to act on; the rest would repeat the reports */
