@@ -81,7 +81,7 @@ contains
     character(len=:), allocatable :: s
     integer :: n, st
     call get_command_argument(i, length=n, status=st)
-    if (st > 0 .or. i > command_argument_count()) call usage_error(what//' (argument '//digits(i)//') is missing')
+    if (st > 0 .or. i > command_argument_count()) call usage_error(what//' (argument '//int_text(i)//') is missing')
     allocate (character(len=n) :: s)
     call get_command_argument(i, s)
   end function argument
@@ -103,11 +103,11 @@ contains
     stop 2, quiet=.true.
   end subroutine usage_error
 
-  pure function digits(i) result(s)
+  pure function int_text(i) result(s)
     integer, intent(in) :: i
     character(len=:), allocatable :: s
     character(len=12) :: b
     write (b, '(i0)') i
     s = trim(b)
-  end function digits
+  end function int_text
 end module vci_tool_args
