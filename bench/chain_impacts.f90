@@ -15,6 +15,7 @@
 !> n to run (default 32 128 256). Not a test: tools/bench/run_chain.sh runs it with OpenBLAS on one thread.
 
 program bench_chain_impacts
+  use vci_tool_args, only: text_value
   use, intrinsic :: iso_fortran_env, only: output_unit
   use vci
   use vci_bench_stats, only: median
@@ -43,7 +44,7 @@ program bench_chain_impacts
     else if (trim(arg) == 'bandcb') then
       banded = .true.; bandcb = .true.
     else if (arg(1:6) == 'steps=') then
-      read (arg(7:), *) max_steps
+      call text_value(trim(arg(7:)), 'steps=', max_steps)
     else if (trim(arg) == 'whole') then
       whole = .true.
     else if (trim(arg) == 'lobatto') then
@@ -53,7 +54,7 @@ program bench_chain_impacts
     else if (trim(arg) == 'single') then
       single = .true.
     else
-      read (arg, *) k
+      call text_value(trim(arg), 'N', k)
       ns = [ns, k]
     end if
   end do

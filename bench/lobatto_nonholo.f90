@@ -16,6 +16,7 @@
 !> Newton iterations per solve (with the polish) and the final configuration (the same trajectory
 !> before and after a change of the step's arithmetic, to solver tolerance).
 program bench_lobatto_nonholo
+  use vci_tool_args, only: arg_value
   use, intrinsic :: iso_fortran_env, only: output_unit
   use vci
   use vci_bench_stats, only: median
@@ -34,17 +35,17 @@ program bench_lobatto_nonholo
   character(len=32) :: arg, part
   s = 3; h = 0.05_dp; neps = 50; part = 'all'; rtol = 1.0e-14_dp
   if (command_argument_count() >= 1) then
-    call get_command_argument(1, arg); read (arg, *) s
+    call arg_value(1, 'S', s)
   end if
   if (command_argument_count() >= 2) then
-    call get_command_argument(2, arg); read (arg, *) h
+    call arg_value(2, 'H', h)
   end if
   if (command_argument_count() >= 3) then
-    call get_command_argument(3, arg); read (arg, *) neps
+    call arg_value(3, 'EPISODES', neps)
   end if
   if (command_argument_count() >= 4) call get_command_argument(4, part)
   if (command_argument_count() >= 5) then
-    call get_command_argument(5, arg); read (arg, *) rtol
+    call arg_value(5, 'RTOL', rtol)
   end if
   nsteps = nint(t_end / h); h = t_end / nsteps
   q0 = [0.75_dp * pi, 0.0_dp]

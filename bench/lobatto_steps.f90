@@ -12,6 +12,7 @@
 !> hand_lobatto_steps (hand loop). tools/bench/run_bench.sh runs the parts under callgrind and
 !> prints instructions per step; this program prints ns per step (medians of 5 repeats).
 program bench_lobatto_steps
+  use vci_tool_args, only: arg_value
   use, intrinsic :: iso_fortran_env, only: output_unit
   use vci
   use vci_bench_stats, only: median
@@ -31,10 +32,10 @@ program bench_lobatto_steps
   character(len=32) :: arg, part
   s = 4; neps = 200; part = 'all'
   if (command_argument_count() >= 1) then
-    call get_command_argument(1, arg); read (arg, *) s
+    call arg_value(1, 'S', s)
   end if
   if (command_argument_count() >= 2) then
-    call get_command_argument(2, arg); read (arg, *) neps
+    call arg_value(2, 'EPISODES', neps)
   end if
   if (command_argument_count() >= 3) call get_command_argument(3, part)
   walled = pendulum_walls_model(.true.)

@@ -50,6 +50,7 @@ contains
 end module roundoff_runs
 
 program roundoff
+  use vci_tool_args, only: arg_value
   use, intrinsic :: iso_fortran_env, only: output_unit
   use vci
   use vci_ref_ellipse, only: ellipse_params, ellipse_exact
@@ -71,8 +72,8 @@ program roundoff
   if (command_argument_count() >= 3) then
     call get_command_argument(1, arg)
     if (trim(arg) == '--long') then
-      call get_command_argument(2, arg); read (arg, *) nsteps
-      call get_command_argument(3, arg); read (arg, *) h
+      call arg_value(2, 'NSTEPS', nsteps)
+      call arg_value(3, 'H', h)
       call get_command_argument(4, arg)
       call long_run(nsteps, h, trim(arg) == 'discrete')
       stop
@@ -87,7 +88,7 @@ program roundoff
   if (command_argument_count() >= 2) then     ! --t-end T
     call get_command_argument(1, arg)
     if (trim(arg) == '--t-end') then
-      call get_command_argument(2, arg); read (arg, *) t_end
+      call arg_value(2, '--t-end', t_end)
     end if
   end if
   call ellipse_exact(par, q0, qd0, t_end, qe, qde, times, nimp)

@@ -10,6 +10,7 @@
 !> The last column is the peak resident memory (kB).
 !> Not a test: docs/bench/sparse.md gives the command (OpenBLAS on one thread).
 program bench_sparse_chain
+  use vci_tool_args, only: arg_value, text_value
   use, intrinsic :: iso_fortran_env, only: output_unit
   use vci
   use vci_bench_stats, only: median
@@ -29,7 +30,7 @@ program bench_sparse_chain
   real(dp), parameter :: h = 0.01_dp
   pi = acos(-1.0_dp)
   call get_command_argument(1, mode)
-  call get_command_argument(2, arg); read (arg, *) nsteps
+  call arg_value(2, 'NSTEPS', nsteps)
   allocate (ns(0))
   digest = .false.
   do ia = 3, command_argument_count()
@@ -37,7 +38,7 @@ program bench_sparse_chain
     if (trim(arg) == 'digest') then
       digest = .true.; cycle
     end if
-    read (arg, *) k
+    call text_value(trim(arg), 'N', k)
     ns = [ns, k]
   end do
   do i = 1, size(ns)

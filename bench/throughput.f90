@@ -38,6 +38,7 @@ contains
 end module vci_bench_impact_log
 
 program throughput
+  use vci_tool_args, only: arg_value
   use, intrinsic :: iso_fortran_env, only: int64, error_unit, output_unit
   use vci
   use vci_bench_stats, only: median
@@ -98,9 +99,9 @@ program throughput
     case ('--quick')
       repeats = 3; min_time = 0.05_dp
     case ('--repeats')
-      i = i + 1; call get_command_argument(i, arg); read (arg, *) repeats
+      i = i + 1; call arg_value(i, '--repeats', repeats)
     case ('--min-time')
-      i = i + 1; call get_command_argument(i, arg); read (arg, *) min_time
+      i = i + 1; call arg_value(i, '--min-time', min_time)
     case ('--profile')
       call profile_mode(i); stop
     case ('--profile-steps')
@@ -563,7 +564,7 @@ contains
     real(dp) :: t
     call get_command_argument(i + 1, a1); call get_command_argument(i + 2, a2); call get_command_argument(i + 3, a3)
     is_ = findloc(scene_name, trim(a1), dim=1)
-    read (a2, *) iv_; read (a3, *) neps
+    call arg_value(i + 2, 'VARIANT', iv_); call arg_value(i + 3, 'EPISODES', neps)
     if (is_ < 1 .or. iv_ < 1 .or. iv_ > n_var) error stop 'usage: --profile SCENE VARIANT EPISODES'
     t = run_timed(is_, iv_, neps)
     write (output_unit, '(a,1x,a,1x,f9.1,a,f8.3)') trim(scene_name(is_)), trim(var_name(iv_)), &
@@ -582,7 +583,7 @@ contains
     logical, allocatable :: hit(:)
     call get_command_argument(i + 1, a1); call get_command_argument(i + 2, a2); call get_command_argument(i + 3, a3)
     is_ = findloc(scene_name, trim(a1), dim=1)
-    read (a2, *) iv_; read (a3, *) neps
+    call arg_value(i + 2, 'VARIANT', iv_); call arg_value(i + 3, 'EPISODES', neps)
     if (is_ < 1 .or. iv_ < V_LIB .or. iv_ > V_LIB_FD) error stop 'usage: --profile-steps SCENE VARIANT(1..2) EPISODES'
     allocate (hit(sc(is_)%nsteps))
     call integ(is_, iv_)%init_from_pair(sc(is_)%t0, sc(is_)%q0, sc(is_)%q1, stat)

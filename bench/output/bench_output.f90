@@ -5,6 +5,7 @@
 !> Usage: vci_bench_output [STEPS [REPEATS [DIR [VARIANT]]]]   (defaults 200000, 5, ., all)
 !> VARIANT (1..6) runs only that one, once per repeat: for instruction counts under callgrind.
 program bench_output
+  use vci_tool_args, only: arg_value
   use vci
   use vci_hdf5_output, only: vci_hdf5_writer_t, VCI_HDF5_FLUSH_EVERY
   use vci_scene_pendulum, only: pendulum_t, pendulum_model
@@ -12,7 +13,7 @@ program bench_output
   type(pendulum_t), target :: model
   integer(i8) :: nsteps, bytes(6)
   integer :: repeats, r, v, only
-  character(len=256) :: arg, dir
+  character(len=256) :: dir
   real(dp) :: best(6), secs
   ! variant: flush interval (0: no output), gzip level, every k-th state
   integer, parameter :: flush_of(6) = [0, VCI_HDF5_FLUSH_EVERY, 100, VCI_HDF5_FLUSH_EVERY, VCI_HDF5_FLUSH_EVERY, &
@@ -25,14 +26,14 @@ program bench_output
 
   nsteps = 200000_i8; repeats = 5; dir = '.'; only = 0
   if (command_argument_count() >= 1) then
-    call get_command_argument(1, arg); read (arg, *) nsteps
+    call arg_value(1, 'NSTEPS', nsteps)
   end if
   if (command_argument_count() >= 2) then
-    call get_command_argument(2, arg); read (arg, *) repeats
+    call arg_value(2, 'REPEATS', repeats)
   end if
   if (command_argument_count() >= 3) call get_command_argument(3, dir)
   if (command_argument_count() >= 4) then
-    call get_command_argument(4, arg); read (arg, *) only
+    call arg_value(4, 'ONLY', only)
   end if
   model = pendulum_model()
   best = huge(1.0_dp); bytes = 0

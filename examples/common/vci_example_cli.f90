@@ -455,6 +455,7 @@ contains
       if (info%steps_done == info%steps_total .or. stop_requested) write (error_unit, '(a)') ''
     else
       write (error_unit, '(a)') trim(line)
+      flush (error_unit)   ! gfortran buffers stderr into a file or pipe: a log's reader sees the line now
     end if
   end subroutine progress_report
 

@@ -494,11 +494,35 @@ contains
     err = 0
     if (n_step > 0) call h5dread_f(self%d_is, h5kind_to_type(i8, H5_INTEGER_KIND), steps, [int(n_step, hsize_t)], err)
     if (err /= 0) then
-      k = 0
-      call fail(self, 'cannot read /impacts/step', stat); return
+      ! a run killed inside a flush: the dataset's new extent reached the disk, the chunk of its new
+      ! rows not (beyond the file's end of allocation); the rows before it are readable
+      k = readable_impacts_before(self, k)
+      return
     end if
     k = count(steps(1:k) < self%last_index)
   end function trusted_impacts
+
+  !> Of the first n rows of /impacts/step, how many are readable with a step before the last trusted
+  !> row: a prefix, as the steps do not decrease and only rows after the last complete flush can be
+  !> unreadable. Bisection, one row read per halving.
+  integer(i8) function readable_impacts_before(self, n) result(k)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer(i8), intent(in) :: n
+    integer(i8) :: hi, mid, step
+    integer :: s
+    character(len=VCI_MSG_LEN) :: ignored
+    k = 0; hi = n                      ! rows [0, k) are in, rows [hi, n) are not
+    do while (k < hi)
+      mid = k + (hi - k) / 2
+      s = VCI_OK
+      call h5io_read_i8(self%d_is, mid, step, s, ignored, self%path)
+      if (s == VCI_OK .and. step < self%last_index) then
+        k = mid + 1
+      else
+        hi = mid
+      end if
+    end do
+  end function readable_impacts_before
 
   !> Appending: cut every dataset to the trusted lengths before new rows follow.
   subroutine truncate_to_trusted(self, stat)

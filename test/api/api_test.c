@@ -1243,6 +1243,106 @@ static void erratic_lying_gap(void) {
   }
 }
 
+/* The two refusals of a stage-1 miss inside a step (wall24j: refuse_start_beyond at a wall point of
+ * this step, refuse_landing_beyond), which only fuzz seed 473 reached: a free particle above a floor
+ * (wall 1, g = q) under a ceiling (wall 3, g = c - q), and wall 2 (g = q + 1, far below) whose gaps
+ * callback lies: once the step has evaluated V (the impact's energy, after stage 1 has checked
+ * every gap at its wall point), it says wall 2 is 1e-3 beyond at the floor's point (q = 0). So
+ * stage 1's own check of that point saw it admissible and the next look at it (the next sub-step's
+ * start, or the landed end's check) sees it beyond: what a miss of stage 1 looks like to the step.
+ * Net off: VCI_ERR_IMPACT naming the step, its time and both walls, the state kept. The lie ends
+ * when the callback is asked about the step's start q0 again (the safety net's retry; no sub-step
+ * of the first attempt ends there): net on, the retry as 2 sub-steps is exact free flight. */
+typedef struct { int armed, latched, told; double ceiling, q_reset; } miss_params;
+static int miss_potential(int n, const double *q, double *out, void *u) {
+  miss_params *p = (miss_params *)u;
+  (void)q;
+  if (p->armed) p->latched = 1;
+  memset(out, 0, (size_t)n * sizeof *out); /* V = 0 (out[0]) and grad V = 0 */
+  return 0;
+}
+static int miss_gradient(int n, const double *q, double *out, void *u) {
+  (void)q; (void)u;
+  memset(out, 0, (size_t)n * sizeof *out);
+  return 0;
+}
+static int miss_gaps(int n, int ng, const double *q, double *g, void *u) {
+  miss_params *p = (miss_params *)u;
+  (void)n; (void)ng;
+  if (p->latched && q[0] == p->q_reset) p->latched = p->armed = 0; /* the retry: honest from now on */
+  g[0] = q[0];
+  g[1] = q[0] + 1.0;
+  g[2] = p->ceiling - q[0];
+  if (p->latched && q[0] == 0.0) {
+    g[1] = -1e-3;
+    ++p->told;
+  }
+  return 0;
+}
+static int miss_gap_grads(int n, int ng, const double *q, double *dg, void *u) {
+  (void)n; (void)ng; (void)q; (void)u;
+  dg[0] = 1.0; dg[1] = 1.0; dg[2] = -1.0;
+  return 0;
+}
+
+/* From q0 at t = 0.25 (v = -1, h = 1e-2, ceiling c), the step in which wall 2 lies; with the net
+ * (splits > 1) the retry must end at (q_end, p_end), one step split in 2. */
+static void stage1_miss_step(int scheme, double q0, double c, int splits, int expected, const char *said,
+                             double q_end, double p_end, int line) {
+  miss_params par = {0, 0, 0, 0.0, 0.0};
+  vci_separable_callbacks cb = VCI_SEPARABLE_CALLBACKS_INIT;
+  vci_model model = NULL;
+  vci_integrator integ = NULL;
+  double mass = 1.0, q = q0, v = -1.0, t0, qa, pa, t, p;
+  int64_t split_steps = -1, largest = -1;
+  cb.potential = miss_potential; cb.potential_gradient = miss_gradient;
+  cb.gaps = miss_gaps; cb.gap_gradients = miss_gap_grads;
+  par.ceiling = c; par.q_reset = q0;
+  check_status(vci_model_create_separable(&model, 1, 0, 3, VCI_MASS_DIAGONAL, &mass, &cb, &par), VCI_OK, "create", line);
+  check_status(vci_integrator_create(&integ, model, 1e-2), VCI_OK, "integrator", line);
+  check_status(vci_set_scheme(integ, scheme, 2), VCI_OK, "scheme", line);
+  check_status(vci_set_step_splits(integ, splits), VCI_OK, "splits", line);
+  check_status(vci_init_from_momentum(integ, 0.25, &q, &v), VCI_OK, "init", line);
+  vci_get_state(integ, &t0, &qa, &pa);
+  par.armed = 1;
+  check_status(vci_step(integ, 1), expected, "the step with the lie", line);
+  if (expected != VCI_OK) check_message(integ, said, line);
+  check(par.told > 0, "the lie was told (the test reached its point)", __FILE__, line);
+  vci_get_state(integ, &t, &q, &p);
+  if (expected != VCI_OK) {
+    check(t == t0 && q == qa && p == pa, "state kept after the refused step", __FILE__, line);
+  } else {
+    check(fabs(t - 0.26) <= 1e-15, "the step was taken", __FILE__, line);
+    /* free flight between walls is exact for these schemes: round-off only */
+    check(fabs(q - q_end) <= 1e-12 && fabs(p - p_end) <= 1e-12, "free flight between the walls after the split",
+          __FILE__, line);
+    check_status(vci_get_split_steps(integ, &split_steps, &largest), VCI_OK, "split steps", line);
+    check(split_steps == 1 && largest == 2, "the net split that step in 2", __FILE__, line);
+  }
+  vci_integrator_destroy(&integ);
+  vci_model_destroy(&model);
+}
+
+static void erratic_stage1_miss(void) {
+  static const int schemes[] = {VCI_SCHEME_MIDPOINT, VCI_SCHEME_LOBATTO};
+  int i;
+  for (i = 0; i < 2; ++i) {
+    /* from 0.003 under a ceiling at 0.004: the floor at t = 0.253, then 0.007 up, beyond the
+     * ceiling: the next sub-step starts at the floor's point, which wall 2 now says is beyond it */
+    stage1_miss_step(schemes[i], 0.003, 0.004, 1, VCI_ERR_IMPACT,
+                     "step from index 0 (t =  2.5000000E-01, forward): stage 1 reached wall 1 at a point beyond wall 2 "
+                     "(g = -1.000E-03): the motion crossed it first, unseen", 0.0, 0.0, __LINE__);
+    /* net on: 2 sub-steps, the floor at t = 0.253, the ceiling at 0.257, down to 0.001 at 0.26 */
+    stage1_miss_step(schemes[i], 0.003, 0.004, 16, VCI_OK, NULL, 0.001, -1.0, __LINE__);
+    /* from 1e-2 - 1e-13: the step ends 1e-13 beyond the floor, stage 1 lands on it at the step's
+     * end (within 1e-10 of it), and the landed point is checked against wall 2 */
+    stage1_miss_step(schemes[i], 0.01 - 1e-13, 1.0, 1, VCI_ERR_IMPACT,
+                     "step from index 0 (t =  2.5000000E-01, forward): stage 1 reached wall 1 at the step's end at a "
+                     "point beyond wall 2 (g = -1.000E-03): the motion crossed it first, unseen", 0.0, 0.0, __LINE__);
+    stage1_miss_step(schemes[i], 0.01 - 1e-13, 1.0, 16, VCI_OK, NULL, 0.0, -1.0, __LINE__);
+  }
+}
+
 static void suite_erratic(void) {
   int which, mode, from, seed, runs = 0, failed_runs = 0;
   int64_t before = vci_test_lapack_calls();
@@ -1281,6 +1381,7 @@ static void suite_erratic(void) {
   CHECK(vci_test_lapack_calls() > before); /* the guard sees vci's LAPACK calls (else this suite proves nothing) */
   CHECK(vci_test_lapack_nonfinite_calls() == 0);
   erratic_lying_gap();
+  erratic_stage1_miss();
 }
 
 /* ================================================================================================ */

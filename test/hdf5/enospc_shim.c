@@ -5,12 +5,16 @@
  * To put the failure at one chosen write (test/ensemble/totals_flush.sh): VCI_ENOSPC_OPEN=K and
  * VCI_ENOSPC_WRITES=W let the process's K-th open() of such a file be followed by W writes to
  * them, and fail every later one. VCI_ENOSPC_LOG=PREFIX appends a line per open ("open") and per
- * write ("write BYTES") of such files to PREFIX.PID, so that a first run can count them. */
+ * write ("write BYTES") of such files to PREFIX.PID, so that a first run can count them.
+ *
+ * VCI_ENOSPC_KILL=1: the process is killed (SIGKILL) at the write that would fail, instead: a kill
+ * at a chosen byte of the file's writes, e.g. inside a flush (test/hdf5/kill_in_flush.sh). */
 #define _GNU_SOURCE
 #include <dlfcn.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <limits.h>
+#include <signal.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -68,6 +72,7 @@ static int room_for(int fd, size_t count) {
     else after++;
   }
   if (!full && limit && written + (long long)count > atoll(limit)) full = 1;
+  if (full && getenv("VCI_ENOSPC_KILL")) raise(SIGKILL);
   if (full) return 0;
   written += (long long)count;
   log_line("write", (long long)count);

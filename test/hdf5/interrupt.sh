@@ -3,8 +3,9 @@
 # status 128 + the signal (143, 130), its file is closed with status VCI_STOPPED (11) and a message
 # saying it was interrupted; `--from FILE --append` then continues it to a later time, and the
 # result equals an uninterrupted run to that time bit for bit (every dataset and attribute but
-# `created` and `resumes`, which records the continuation). The signal is sent once the file exists and has streamed for half a second, to a run
-# over a horizon it cannot reach (10^6 s), so the test does not depend on the machine's speed.
+# `created` and `resumes`, which records the continuation). The signal is sent once the run's
+# progress line (--progress, on stderr) reports 3000 steps done (as in sigkill.sh; a bounded wait),
+# to a run over a horizon it cannot reach (10^6 s), so the test does not depend on the machine's speed.
 # The second case (SIGINT) writes every 7th state, compressed: the continued file equals the
 # uninterrupted one plus the row of the state where the signal ended the first part.
 # Usage: interrupt.sh PENDULUM_EXE PYTHON WORKDIR
@@ -19,13 +20,17 @@ run_case() {
   local sig=$1 code=$2; shift 2
   local out="$dir/interrupted_$sig.h5" ref="$dir/uninterrupted_$sig.h5"
   rm -f "$out" "$ref"
-  "$exe" --h "$h" --t-final 1e6 --quiet --no-progress --flush-every 1000 "$@" --output "$out" > "$out.log" 2>&1 &
-  local pid=$!
-  for _ in $(seq 1 200); do
-    [ -s "$out" ] && break
+  "$exe" --h "$h" --t-final 1e6 --quiet --progress --flush-every 1000 "$@" --output "$out" > "$out.log" 2> "$out.progress" &
+  local pid=$! done_steps=0 last start=$SECONDS
+  while [ "$done_steps" -lt 3000 ]; do
+    last=$(sed -n 's/^progress .* step \([0-9][0-9]*\) of .*/\1/p' "$out.progress" | tail -n 1)
+    [ -n "$last" ] && done_steps=$last
+    kill -0 "$pid" 2> /dev/null || break
+    if [ $((SECONDS - start)) -ge 100 ]; then
+      kill -9 "$pid"; fail "$sig: no progress line with >= 3000 steps within 100 s (last: $done_steps)"
+    fi
     sleep 0.1
   done
-  sleep 0.5
   kill -0 "$pid" 2> /dev/null || { cat "$out.log"; fail "the pendulum ended before the signal"; }
   kill -s "$sig" "$pid"
   local rc=0

@@ -2,7 +2,8 @@
 !> not closed, holds at least the steps of the last flush (steps_completed, written last at each flush)
 !> in every dataset, every flushed row equals a fresh in-process run bit for bit, and its
 !> /checkpoint is the state of the row it names. Then it restarts from the file, appends, and checks
-!> the continuation against the reference run too. Usage: hdf5_sigkill_check FILE H
+!> the continuation against the reference run too. Usage: hdf5_sigkill_check FILE H MIN_FLUSHED
+!> (MIN_FLUSHED: the steps the writer must have flushed before the kill, sigkill.sh says why).
 program sigkill_check
   use hdf5, only: hid_t
   use vci
@@ -12,8 +13,8 @@ program sigkill_check
   implicit none
   character(len=512) :: path, arg
   integer(hid_t) :: f
-  integer(i8) :: flushed
-  integer :: rows, steps, stat, s, r, total
+  integer(i8) :: flushed, min_flushed
+  integer :: rows, steps, stat, s, r, total, ios
   type(vci_checkpoint_t) :: cp
   type(vci_integrator_t), target :: integ2
   type(vci_hdf5_writer_t), target :: w
@@ -23,10 +24,19 @@ program sigkill_check
   type(pendulum_t), target :: model
   type(vci_integrator_t) :: integ
   type(tape_t) :: tape
+  !> A kill inside HDF5's metadata flush leaves chunks that append cannot cut back (not fixed; about
+  !> 1 run in 30 of this test: docs/OUTPUT.md, "A kill inside a flush")
+  character(len=*), parameter :: append_hint = ' [a kill inside a flush: the known append failure of '// &
+    'docs/OUTPUT.md, "A kill inside a flush"]'
 
+  if (command_argument_count() /= 3) call die('usage: hdf5_sigkill_check FILE H MIN_FLUSHED')
   call get_command_argument(1, path)
   call get_command_argument(2, arg)
-  read (arg, *) h
+  read (arg, *, iostat=ios) h
+  if (ios /= 0) call die('H is not a number: '//trim(arg))
+  call get_command_argument(3, arg)
+  read (arg, *, iostat=ios) min_flushed
+  if (ios /= 0) call die('MIN_FLUSHED is not an integer: '//trim(arg))
   f = h5r_open(trim(path))
   if (f < 0) call die('the file does not open')
   if (h5r_attr_int(f, 'status') /= VCI_HDF5_RUNNING) call die('status should still say "running"')
@@ -35,7 +45,12 @@ program sigkill_check
   e = h5r_real1(f, 'energy'); l = h5r_real2(f, 'lambda')
   rows = size(t); steps = size(e)
   write (*, '(a,i0,a,i0,a,i0)') 'steps_completed ', flushed, '  rows of /t ', rows, '  rows of /energy ', steps
-  if (flushed < 1000) call die('fewer than one flush interval on disk: kill came too early?')
+  ! the run reported N steps done before the kill; the writer flushes whenever flush_every rows
+  ! are buffered, so at least N - flush_every + 1 of them are on disk
+  if (flushed < max(min_flushed, 1000_i8)) then
+    write (arg, '(i0,a,i0)') flushed, ' < ', max(min_flushed, 1000_i8)
+    call die('steps_completed '//trim(arg)//': steps the run had done before the kill were not flushed')
+  end if
   ! a kill inside a flush may leave some datasets longer than others beyond the flushed rows (each
   ! dataset's new extent reaches the disk on its own): only the flushed rows must be in all of them
   if (min(rows, size(q, 2), size(p, 2)) < flushed + 1 .or. min(steps, size(l, 2)) < flushed) &
@@ -76,9 +91,9 @@ program sigkill_check
   call integ2%restore(cp, stat)
   if (stat /= VCI_OK) call die('restore: '//trim(integ2%message()))
   call w%open(trim(path), stat, append=.true.)
-  if (stat /= VCI_OK) call die('append: '//trim(w%message))
+  if (stat /= VCI_OK) call die('append: '//trim(w%message)//append_hint)
   call integ2%integrate(int(total, i8) - (cp%step - 1), 1, stat, w)
-  if (stat /= VCI_OK) call die('restarted run: '//trim(integ2%message()))
+  if (stat /= VCI_OK) call die('restarted run: '//trim(integ2%message())//append_hint)
   f = h5r_open(trim(path))
   t = h5r_real1(f, 't'); q = h5r_real2(f, 'q'); e = h5r_real1(f, 'energy')
   if (size(t) /= total + 1) call die('the continued file does not have the expected rows')

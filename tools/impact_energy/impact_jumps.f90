@@ -12,6 +12,7 @@
 program impact_jumps
   use vci
   use vci_scene_ellipse, only: ellipse_t, ellipse_model
+  use vci_tool_args, only: arg_value, bad_argument
   implicit none
   real(dp), parameter :: h = 1.0e-2_dp, pi = acos(-1.0_dp)
   type(ellipse_t), target :: model
@@ -23,7 +24,9 @@ program impact_jumps
   character(len=256) :: arg, path
   nsteps = 10000000_i8; path = 'impact_jumps.txt'
   if (command_argument_count() >= 1) then
-    call get_command_argument(1, arg); read (arg, *) nsteps
+    call arg_value(1, 'NSTEPS', nsteps)
+    call get_command_argument(1, arg)
+    if (nsteps < 1) call bad_argument('NSTEPS', trim(arg), 'at least 1')
   end if
   if (command_argument_count() >= 2) call get_command_argument(2, path)
   model = ellipse_model()

@@ -10,6 +10,7 @@ program vci_long_steps_probe
   use vci
   use vci_long_cases, only: kepler_wall_w
   use vci_kepler_wall, only: kepler_wall_t, kepler_wall_exact
+  use vci_tool_args, only: arg_value, bad_argument
   implicit none
   type(kepler_wall_t), target :: model
   type(vci_integrator_t) :: integ
@@ -22,12 +23,12 @@ program vci_long_steps_probe
     write (*, '(a)') 'usage: vci_long_steps_probe STAGES H Q1 Q2 P1 P2'
     stop 2
   end if
-  call get_command_argument(1, arg); read (arg, *) stages
-  call get_command_argument(2, arg); read (arg, *) h
-  do i = 1, 2
-    call get_command_argument(2 + i, arg); read (arg, *) q0(i)
-    call get_command_argument(4 + i, arg); read (arg, *) p0(i)
-  end do
+  call arg_value(1, 'STAGES', stages)
+  call arg_value(2, 'H', h)
+  call arg_value(3, 'Q1', q0(1)); call arg_value(4, 'Q2', q0(2))
+  call arg_value(5, 'P1', p0(1)); call arg_value(6, 'P2', p0(2))
+  call get_command_argument(2, arg)
+  if (.not. (h > 0.0_dp)) call bad_argument('H', trim(arg), 'positive')
   model%n = 2; model%n_gaps = 1; model%w = kepler_wall_w
   h0 = 0.5_dp * sum(p0**2) - 1 / norm2(q0)
   call kepler_wall_exact(kepler_wall_w, q0, p0, h, qe, pe, nimp, times, pmin)

@@ -16,6 +16,7 @@ program vci_long_steps_trace
   use vci_test_kepler, only: kepler_t
   use vci_kepler_wall, only: kepler_wall_t
   use vci_checkpoint, only: vci_checkpoint_t
+  use vci_tool_args, only: arg_value, bad_argument
   implicit none
   class(vci_lagrangian_t), allocatable, target :: model
   type(vci_integrator_t) :: integ
@@ -30,11 +31,17 @@ program vci_long_steps_trace
     write (*, '(a)') 'usage: vci_long_steps_trace SCENE(2|4) STAGES H SPLITS WALLS(0|1)'
     stop 2
   end if
-  call get_command_argument(1, arg); read (arg, *) scene
-  call get_command_argument(2, arg); read (arg, *) stages
-  call get_command_argument(3, arg); read (arg, *) h
-  call get_command_argument(4, arg); read (arg, *) splits
-  call get_command_argument(5, arg); read (arg, *) walls
+  call arg_value(1, 'SCENE', scene)
+  call arg_value(2, 'STAGES', stages)
+  call arg_value(3, 'H', h)
+  call arg_value(4, 'SPLITS', splits)
+  call arg_value(5, 'WALLS', walls)
+  call get_command_argument(1, arg)
+  if (scene /= LONG_KEPLER_CIRCLE .and. scene /= LONG_KEPLER_WALL) call bad_argument('SCENE', trim(arg), '2 or 4')
+  call get_command_argument(5, arg)
+  if (walls /= 0 .and. walls /= 1) call bad_argument('WALLS', trim(arg), '0 or 1')
+  call get_command_argument(3, arg)
+  if (.not. (h > 0.0_dp)) call bad_argument('H', trim(arg), 'positive')
   if (scene == LONG_KEPLER_WALL .and. walls == 1) then
     allocate (kepler_wall_t :: model)
     select type (model)
