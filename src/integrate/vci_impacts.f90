@@ -24,7 +24,7 @@ contains
     integer, intent(out) :: stat
     integer :: n, j, jstar, last_gap, poked
     real(dp) :: h, t, alpha, alpha_j, consumed, e_minus, s1res, p_lo, p_hi, p_glo, p_ghi
-    logical :: ok
+    logical :: ok, cleared
     n = self%n; h = state%h; t = state%time()
     consumed = 0.0_dp
     stat = VCI_OK
@@ -47,10 +47,15 @@ contains
       else if (impacts%count > 0 .or. any(self%gaps_end(1:self%ng) < 0.0_dp)) then
         call find_poke(self, tau, 0, poked, p_lo, p_hi, p_glo, p_ghi, stat)
       else if (may_poke(self, state, dir, tau, stat)) then
-        ! a whole step with both ends admissible is the sub-step the other direction starts from its
-        ! end: its poke is taken only where the samples from both ends see it (poke_seen_from_end)
-        call find_poke(self, tau, 0, poked, p_lo, p_hi, p_glo, p_ghi, stat)
-        if (stat == VCI_OK .and. poked > 0) call poke_seen_from_end(self, dir, tau, poked, stat)
+        call find_poke(self, tau, 0, poked, p_lo, p_hi, p_glo, p_ghi, stat, cleared)
+        ! a whole step with both ends admissible is the sub-step the other direction starts at its
+        ! end: where the screens and samples from the start found no poke, those from the end may,
+        ! and the other direction then reflects where this one cannot (poke_seen_from_end). Not
+        ! where the stage polynomial cleared the step: it is the same curve both ways
+        if (stat == VCI_OK .and. poked == 0 .and. .not. cleared) then
+          if (poke_seen_from_end(self, dir, tau, stat)) &
+            self%stats%irreversible_impacts = self%stats%irreversible_impacts + 1
+        end if
       end if
       if (stat /= VCI_OK) return
       if (poked == 0 .and. all(self%gaps_end(1:self%ng) >= 0.0_dp)) exit
@@ -494,19 +499,22 @@ contains
   !> sample's solve failed). A stage point beyond a wall where the samples cannot be used fails
   !> with VCI_ERR_IMPACT (unresolved_crossing). x and the caller's posed sub-step are left as they
   !> came.
-  subroutine find_poke(self, tau, only, poked, lo, hi, glo, ghi, stat)
+  subroutine find_poke(self, tau, only, poked, lo, hi, glo, ghi, stat, cleared)
     type(vci_stepper_t), intent(inout) :: self
     real(dp), intent(in) :: tau
     integer, intent(in) :: only
     integer, intent(out) :: poked
     real(dp), intent(out) :: lo, hi, glo, ghi
     integer, intent(out) :: stat
+    !> the stage polynomial's screen (stage_screen) cleared the sub-step: no solve was made
+    logical, intent(out), optional :: cleared
     real(dp) :: s
     integer :: nm, k, ihi
     logical :: screened, stage_path
     nm = self%nsub
     associate (g_prev => self%poke_gaps(1:self%ng, 1), lam => self%poke_lambda)
     poked = 0; lo = 0.0_dp; hi = 1.0_dp; glo = 0.0_dp; ghi = 0.0_dp; screened = .false.
+    if (present(cleared)) cleared = .false.
     self%x_full(1:nm) = self%x(1:nm)
     call self%sys%eval_gaps(self%q_start, g_prev, stat)
     if (stat /= VCI_OK) then
@@ -516,6 +524,7 @@ contains
     stage_path = screens_on_stages(self)
     if (stage_path) then
       screened = stage_screen(self, only, stat)
+      if (present(cleared)) cleared = stat == VCI_OK .and. .not. screened
       if (stat /= VCI_OK .or. .not. screened) return
     end if
     call self%sys%get_multipliers(self%x_full, lam)
@@ -558,38 +567,38 @@ contains
     end associate
   end subroutine find_poke
 
-  !> find_poke found a poke of the whole step (no impact yet, both ends admissible) from its start:
-  !> is it seen from the end too? The samples are regular sub-steps from the start, the discrete
-  !> flow of one end, and the other direction, which starts this same sub-step at its end (the
-  !> step's end state), samples from there: its families of sub-steps differ from these by the
-  !> order-2 scheme's O(tau^3), so a graze shallower than that was poked one way only (C reversal
-  !> seed 4984, Lobatto s = 1: wall 1's gap +5.8e-4 at the half sub-step from the start, -4.4e-4 at
-  !> the half sub-step back from the end; the backward run reflected in a step the forward run took
-  !> without an impact). Here find_poke runs again on the sub-step from (q_end, p_end) the other way
-  !> over tau, exactly the other direction's computation, and the poke stands only when it finds one
-  !> too; so the decision is "seen from both ends" in both directions, and they agree. Not seen from
-  !> the end: poked = 0 and the graze is counted (one_sided_grazes). Where the solve from the end
-  !> fails (the other direction could not take the step whole either) the start's decision stands.
-  !> The caller's sub-step, x, the bracket (x_low, x_high) and gaps_end are as find_poke left them.
-  subroutine poke_seen_from_end(self, dir, tau, poked, stat)
+  !> find_poke screened a whole step (no impact yet, both ends admissible) from its start and found
+  !> no poke: would the other direction find one? It starts this same sub-step at its end (the
+  !> step's end state) and samples regular sub-steps from there, a family that differs from the
+  !> start's by the order-2 scheme's O(tau^3), so a graze shallower than that is poked one way only
+  !> (C reversal seed 4984, Lobatto s = 1: wall 1's gap +5.8e-4 at the half sub-step from the
+  !> start, -4.4e-4 at the half sub-step back from the end; the backward run reflected in a step
+  !> the forward run took free). This direction cannot take that impact (stage 1 from the start
+  !> finds no crossing: its discrete flow has none), and the other cannot be kept from it (a rule
+  !> that drops pokes seen from one end only loses the pokes that retrace a soft impact of this
+  !> direction: docs/DESIGN.md, "A poke seen from the end only"), so it is reported: true when
+  !> find_poke, run again on the sub-step from (q_end, p_end) the other way over tau (exactly the
+  !> other direction's computation), finds a poke; the caller counts an irreversible impact. False
+  !> where that solve fails. The caller's sub-step, x and gaps_end are as find_poke left them.
+  logical function poke_seen_from_end(self, dir, tau, stat) result(seen)
     type(vci_stepper_t), intent(inout) :: self
     integer, intent(in) :: dir
     real(dp), intent(in) :: tau
-    integer, intent(inout) :: poked
     integer, intent(out) :: stat
     integer :: nm, st, poked_end
     real(dp) :: lo, hi, glo, ghi
     logical :: solved
     nm = self%nsub
     stat = VCI_OK
-    associate (keep_x => self%poke_keep_x, keep_q => self%poke_keep_q, lam => self%poke_lambda)
+    seen = .false.
+    associate (keep_x => self%poke_keep_x(:, 1), keep_q => self%poke_keep_q, lam => self%poke_lambda)
     ! the end's momentum, as the step hands it to the next one (take_step's regular step)
     call self%sys%momentum_out(self%x, self%q_start, tau, keep_q(:, 4), st, self%p_start)
     if (st /= VCI_OK) then
       if (self%sys%unrecoverable) stat = st
       return
     end if
-    keep_x(1:nm, 1) = self%x(1:nm); keep_x(1:nm, 2) = self%x_low(1:nm); keep_x(1:nm, 3) = self%x_high(1:nm)
+    keep_x(1:nm) = self%x(1:nm)
     keep_q(:, 1) = self%q_start; keep_q(:, 2) = self%p_start; keep_q(:, 3) = self%q_end
     self%poke_keep_g(1:self%ng) = self%gaps_end(1:self%ng)
     call self%sys%get_multipliers(self%x, lam)
@@ -607,21 +616,18 @@ contains
       if (stat /= VCI_OK) call set_cause(self, 'gap evaluation at the start of the step (poke screen from its end)')
     end if
     ! (a start on a wall, to round-off, may be just beyond it from the end: find_poke then leaves
-    ! that wall to stage 1 as the other direction's would)
+    ! that wall to stage 1, as the other direction's would)
     poked_end = 0
     if (solved .and. stat == VCI_OK) call find_poke(self, tau, 0, poked_end, lo, hi, glo, ghi, stat)
     ! back to the step as the caller had it
     call self%sys%set_direction(dir)
     self%q_start = keep_q(:, 1); self%p_start = keep_q(:, 2); self%q_end = keep_q(:, 3)
     self%gaps_end(1:self%ng) = self%poke_keep_g(1:self%ng)
-    self%x_full(1:nm) = keep_x(1:nm, 1); self%x_low(1:nm) = keep_x(1:nm, 2); self%x_high(1:nm) = keep_x(1:nm, 3)
+    self%x_full(1:nm) = keep_x(1:nm)
     call restore_substep(self, tau, stat)
-    if (stat == VCI_OK .and. solved .and. poked_end == 0) then
-      poked = 0
-      self%stats%one_sided_grazes = self%stats%one_sided_grazes + 1
-    end if
+    seen = stat == VCI_OK .and. poked_end > 0
     end associate
-  end subroutine poke_seen_from_end
+  end function poke_seen_from_end
 
   !> x back to the caller's solution (x_full) and its sub-step from (q_start, p_start) over tau posed
   !> again: the unknowns are increments from the posed start, and the samples posed shorter ones.

@@ -56,10 +56,6 @@ module vci_integrator
     !> leaves them up to the next wall (the search found no such impulse); a reversed run poses
     !> another condition there and need not return (docs/BACKWARD.md, "Impacts that cannot be tied")
     integer(i8) :: irreversible_impacts = 0
-    !> pokes of a step without impacts that the samples from its start found and those from its end
-    !> did not (a graze shallower than the scheme's error there): not taken, in either direction
-    !> (docs/DESIGN.md, "A poke is taken where both ends see it"); counted where the start saw it
-    integer(i8) :: one_sided_grazes = 0
     !> steps that failed and were then taken as 2, 4, ... equal sub-steps (the safety net,
     !> set_step_splits; docs/DESIGN.md §2), and the most sub-steps one of them needed
     integer(i8) :: split_steps = 0
@@ -1342,7 +1338,6 @@ contains
     stats%fused_solves = solver%fused_solves
     stats%energy_fallbacks = solver%energy_fallbacks
     stats%irreversible_impacts = solver%irreversible_impacts
-    stats%one_sided_grazes = solver%one_sided_grazes
     stats%split_steps = solver%split_steps
     stats%largest_split = solver%largest_split
   end function statistics

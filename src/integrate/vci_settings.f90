@@ -46,7 +46,6 @@ module vci_settings
     integer(i8) :: fused_solves = 0   !< of newton_solves, those the scheme's fused routine did
     integer(i8) :: energy_fallbacks = 0  !< soft impacts off the discrete condition: E_d blended with H, or H kept
     integer(i8) :: irreversible_impacts = 0  !< impacts whose condition could not be tied to the next wall's sub-step
-    integer(i8) :: one_sided_grazes = 0  !< whole steps' pokes seen from their start only, not taken
     integer(i8) :: split_steps = 0       !< steps the safety net took as equal sub-steps
     integer(i8) :: largest_split = 0     !< the most sub-steps one of them needed
   end type vci_solver_stats_t

@@ -118,9 +118,9 @@ module vci_stepper
     !> the multipliers the samples start from: workspace, so that a regular step allocates nothing;
     !> (:, 3 + i), i = 0 .. path_degree: the gaps at the stage polynomial's points (stage_screen)
     real(dp), allocatable :: poke_gaps(:, :), poke_lambda(:)
-    !> A whole step's poke seen from its start, kept while the same sub-step is sampled from its end
-    !> (vci_impacts: poke_seen_from_end): x_full, x_low, x_high (poke_keep_x); q_start, p_start,
-    !> q_end and the end's momentum (poke_keep_q); gaps_end (poke_keep_g)
+    !> A whole step sampled from its start, kept while the same sub-step is sampled from its end
+    !> (vci_impacts: poke_seen_from_end): x (poke_keep_x); q_start, p_start, q_end and the end's
+    !> momentum (poke_keep_q); gaps_end (poke_keep_g)
     real(dp), allocatable :: poke_keep_x(:, :), poke_keep_q(:, :), poke_keep_g(:)
     !> The impact condition stage 2 used (the setting, or VCI_IMPACT_HAMILTONIAN where the discrete
     !> energy condition has no solution) and, then, H(qt, p-).
@@ -247,7 +247,7 @@ contains
     allocate (self%tie_x(nx, 2), self%tie_q(n, 3), self%poke_half(n, 4), self%poke_gaps(ngw, 3 + self%sys%path_degree()), &
               self%poke_lambda(m), self%poke_path_s(POKE_PATH_POINTS), self%poke_path_q(n, POKE_PATH_POINTS), &
               self%poke_path_g(ngw, POKE_PATH_POINTS), self%poke_path_x(nx, POKE_PATH_POINTS), &
-              self%poke_keep_x(nx, 3), self%poke_keep_q(n, 4), self%poke_keep_g(ngw), stat=stat)
+              self%poke_keep_x(nx, 1), self%poke_keep_q(n, 4), self%poke_keep_g(ngw), stat=stat)
     if (stat /= 0) then
       call release_workspace(self)
       stat = VCI_ERR_MEMORY; return
@@ -425,19 +425,17 @@ contains
     type(vci_impact_buffer_t), intent(inout) :: impacts
     integer, intent(out) :: stat
     integer :: i
-    integer(i8) :: fallbacks, irreversible, grazes
+    integer(i8) :: fallbacks, irreversible
     real(dp) :: arriving
     if (state%arriving_direction /= dir) state%arriving_energy = ieee_value(1.0_dp, ieee_quiet_nan)
     arriving = state%arriving_energy     ! a failed attempt may have changed it
     self%last_parts = 1
     fallbacks = self%stats%energy_fallbacks; irreversible = self%stats%irreversible_impacts
-    grazes = self%stats%one_sided_grazes
     call take_step(self, state, dir, impacts, stat)
     ! energy_fallbacks counts the impacts of the steps taken: a failed attempt's impacts are
     ! discarded (a count of them made the two directions of a reversal differ where only one split)
     if (stat /= VCI_OK) self%stats%energy_fallbacks = fallbacks
     if (stat /= VCI_OK) self%stats%irreversible_impacts = irreversible
-    if (stat /= VCI_OK) self%stats%one_sided_grazes = grazes
     if (stat /= VCI_OK .and. self%settings%max_step_splits >= 2) then
       if (stat == VCI_ERR_NEWTON .or. stat == VCI_ERR_IMPACT .or. stat == VCI_ERR_TOO_MANY_IMPACTS) &
         call split_step(self, state, dir, arriving, impacts, stat)
@@ -478,14 +476,13 @@ contains
     type(vci_impact_buffer_t), intent(inout) :: impacts
     integer, intent(inout) :: stat
     integer :: first_stat, parts, i, k, st, tried
-    integer(i8) :: fallbacks, irreversible, grazes
+    integer(i8) :: fallbacks, irreversible
     character(len=VCI_MSG_LEN) :: first_cause
     character(len=2 * VCI_MSG_LEN) :: combined
     character(len=16) :: last_parts
     first_stat = stat; first_cause = self%cause
     fallbacks = self%stats%energy_fallbacks      ! (a failed split's impacts are discarded too)
     irreversible = self%stats%irreversible_impacts
-    grazes = self%stats%one_sided_grazes
     st = VCI_OK
     if (.not. allocated(self%part_impacts%records)) then
       call self%part_impacts%reserve(min(self%settings%max_impacts_per_step, 16), self%n, st)
@@ -537,7 +534,6 @@ contains
       end if
       self%stats%energy_fallbacks = fallbacks
       self%stats%irreversible_impacts = irreversible
-      self%stats%one_sided_grazes = grazes
       if (st == VCI_ERR_MEMORY .or. st == VCI_ERR_CALLBACK .or. st == VCI_ERR_NONFINITE) exit
       parts = 2 * parts
     end do
