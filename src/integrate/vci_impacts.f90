@@ -598,6 +598,8 @@ contains
       if (self%sys%unrecoverable) stat = st
       return
     end if
+    ! the start's carried low part (compensated positions): the sub-steps from the end replace it
+    call self%sys%position_carry(self%q_start, keep_q(:, 5))
     keep_x(1:nm) = self%x(1:nm)
     keep_q(:, 1) = self%q_start; keep_q(:, 2) = self%p_start; keep_q(:, 3) = self%q_end
     self%poke_keep_g(1:self%ng) = self%gaps_end(1:self%ng)
@@ -624,6 +626,7 @@ contains
     self%q_start = keep_q(:, 1); self%p_start = keep_q(:, 2); self%q_end = keep_q(:, 3)
     self%gaps_end(1:self%ng) = self%poke_keep_g(1:self%ng)
     self%x_full(1:nm) = keep_x(1:nm)
+    call self%sys%restore_position_carry(self%q_start, keep_q(:, 5))
     call restore_substep(self, tau, stat)
     seen = stat == VCI_OK .and. poked_end > 0
     end associate
