@@ -578,8 +578,10 @@ contains
   !> that drops pokes seen from one end only loses the pokes that retrace a soft impact of this
   !> direction: docs/DESIGN.md, "A poke seen from the end only"), so it is reported: true when
   !> find_poke, run again on the sub-step from (q_end, p_end) the other way over tau (exactly the
-  !> other direction's computation), finds a poke; the caller counts an irreversible impact. False
-  !> where that solve fails. The caller's sub-step, x and gaps_end are as find_poke left them.
+  !> other direction's computation), finds a poke, or fails the step there (a stage point beyond a
+  !> wall in a sub-step that does not resolve the motion); the caller counts an irreversible
+  !> impact. False where the solve from the end fails. The caller's sub-step, x and gaps_end are as
+  !> find_poke left them; only a callback's failure is a failure.
   logical function poke_seen_from_end(self, dir, tau, stat) result(seen)
     type(vci_stepper_t), intent(inout) :: self
     integer, intent(in) :: dir
@@ -621,6 +623,11 @@ contains
     ! that wall to stage 1, as the other direction's would)
     poked_end = 0
     if (solved .and. stat == VCI_OK) call find_poke(self, tau, 0, poked_end, lo, hi, glo, ghi, stat)
+    if (stat == VCI_ERR_IMPACT) then
+      ! (unresolved_crossing: the other direction fails this step there and splits it, this one
+      ! need not; a report, not a failure)
+      stat = VCI_OK; self%cause = ''; poked_end = -1
+    end if
     ! back to the step as the caller had it
     call self%sys%set_direction(dir)
     self%q_start = keep_q(:, 1); self%p_start = keep_q(:, 2); self%q_end = keep_q(:, 3)
@@ -628,7 +635,7 @@ contains
     self%x_full(1:nm) = keep_x(1:nm)
     call self%sys%restore_position_carry(self%q_start, keep_q(:, 5))
     call restore_substep(self, tau, stat)
-    seen = stat == VCI_OK .and. poked_end > 0
+    seen = stat == VCI_OK .and. poked_end /= 0
     end associate
   end function poke_seen_from_end
 
