@@ -11,6 +11,10 @@ submodule (vci_stepper) vci_impacts
   !> The highest stage-polynomial degree stage_screen takes (Lobatto's VCI_LOBATTO_MAX_STAGES);
   !> beyond it, or below 2, the parabola screen
   integer, parameter :: PATH_MAX_DEGREE = 8
+  !> The parabola screen's bend, doubled for its margin; and widened to this for whole steps, below
+  !> which the other direction's screen cannot dip either (poke_seen_from_end: its half sub-step
+  !> lies O(tau^3) from this one's, the margin added is two more bends, O(tau^2))
+  real(dp), parameter :: POKE_BEND = 2.0_dp, POKE_FAR_BEND = 4.0_dp
 
 contains
 
@@ -51,7 +55,7 @@ contains
         ! a whole step with both ends admissible is the sub-step the other direction starts at its
         ! end: where the screens and samples from the start found no poke, those from the end may,
         ! and the other direction then reflects where this one cannot (poke_seen_from_end). Not
-        ! where the stage polynomial cleared the step: it is the same curve both ways
+        ! where the screen cleared the step with room to spare (find_poke's cleared)
         if (stat == VCI_OK .and. poked == 0 .and. .not. cleared) then
           if (poke_seen_from_end(self, dir, tau, stat)) &
             self%stats%irreversible_impacts = self%stats%irreversible_impacts + 1
@@ -506,7 +510,8 @@ contains
     integer, intent(out) :: poked
     real(dp), intent(out) :: lo, hi, glo, ghi
     integer, intent(out) :: stat
-    !> the stage polynomial's screen (stage_screen) cleared the sub-step: no solve was made
+    !> the screen cleared the sub-step with room to spare: the stage polynomial's (the same curve
+    !> both ways), or the parabola's with its bend widened to POKE_FAR_BEND
     logical, intent(out), optional :: cleared
     real(dp) :: s
     integer :: nm, k, ihi
@@ -541,7 +546,10 @@ contains
     if (.not. path_sample(self, 0.5_dp, tau, stat)) then
       call restore_substep(self, tau, stat); return
     end if
-    if (.not. stage_path) screened = parabola_dips(self, only)
+    if (.not. stage_path) then
+      screened = parabola_dips(self, only, POKE_BEND)
+      if (present(cleared) .and. .not. screened) cleared = .not. parabola_dips(self, only, POKE_FAR_BEND)
+    end if
     if (screened) then
       if (.not. samples_are_path(self, self%q_start, self%p_start, self%q_end, self%x_full, tau, lam, stat)) then
         ! (only > 0: tie_to_wall's trial impulses, where a sub-step that cannot tell is no failure)
@@ -713,18 +721,19 @@ contains
   end subroutine add_path_point
 
   !> The parabola screen (find_poke): does the parabola through the start, the half-way point and
-  !> the end, its bend doubled, come below a wall the end is not beyond (only that wall when
+  !> the end, its bend times `bend`, come below a wall the end is not beyond (only that wall when
   !> only > 0) at s = 1/8 .. 7/8? (A gap evaluation that fails: true, the samples decide.)
-  logical function parabola_dips(self, only)
+  logical function parabola_dips(self, only, bend)
     type(vci_stepper_t), intent(inout) :: self
     integer, intent(in) :: only
+    real(dp), intent(in) :: bend     !< the parabola's bend times this (POKE_BEND: doubled)
     integer :: k, jj, st
     real(dp) :: s
     parabola_dips = .true.
     self%q_guess = self%poke_path_q(:, 2) - 0.5_dp * (self%q_start + self%q_end)   ! the bend at s = 1/2
     do k = 1, POKE_SAMPLES
       s = real(k, dp) / real(POKE_SAMPLES + 1, dp)
-      self%q_trial = self%q_start + s * (self%q_end - self%q_start) + 8.0_dp * s * (1.0_dp - s) * self%q_guess
+      self%q_trial = self%q_start + s * (self%q_end - self%q_start) + 4.0_dp * bend * s * (1.0_dp - s) * self%q_guess
       call self%sys%eval_gaps(self%q_trial, self%gaps_trial(1:self%ng), st)
       if (st /= VCI_OK) return
       do jj = 1, self%ng
