@@ -11,6 +11,10 @@ submodule (vci_stepper) vci_impacts
   !> The highest stage-polynomial degree stage_screen takes (Lobatto's VCI_LOBATTO_MAX_STAGES);
   !> beyond it, or below 2, the parabola screen
   integer, parameter :: PATH_MAX_DEGREE = 8
+  !> The parabola screen's bend, doubled for its margin; and widened to this for whole steps, below
+  !> which the other direction's screen cannot dip either (poke_seen_from_end: its half sub-step
+  !> lies O(tau^3) from this one's, the margin added is two more bends, O(tau^2))
+  real(dp), parameter :: POKE_BEND = 2.0_dp, POKE_FAR_BEND = 4.0_dp
 
 contains
 
@@ -24,7 +28,7 @@ contains
     integer, intent(out) :: stat
     integer :: n, j, jstar, last_gap, poked
     real(dp) :: h, t, alpha, alpha_j, consumed, e_minus, s1res, p_lo, p_hi, p_glo, p_ghi
-    logical :: ok
+    logical :: ok, cleared
     n = self%n; h = state%h; t = state%time()
     consumed = 0.0_dp
     stat = VCI_OK
@@ -47,7 +51,15 @@ contains
       else if (impacts%count > 0 .or. any(self%gaps_end(1:self%ng) < 0.0_dp)) then
         call find_poke(self, tau, 0, poked, p_lo, p_hi, p_glo, p_ghi, stat)
       else if (may_poke(self, state, dir, tau, stat)) then
-        call find_poke(self, tau, 0, poked, p_lo, p_hi, p_glo, p_ghi, stat)
+        call find_poke(self, tau, 0, poked, p_lo, p_hi, p_glo, p_ghi, stat, cleared)
+        ! a whole step with both ends admissible is the sub-step the other direction starts at its
+        ! end: where the screens and samples from the start found no poke, those from the end may,
+        ! and the other direction then reflects where this one cannot (poke_seen_from_end). Not
+        ! where the screen cleared the step with room to spare (find_poke's cleared)
+        if (stat == VCI_OK .and. poked == 0 .and. .not. cleared) then
+          if (poke_seen_from_end(self, dir, tau, stat)) &
+            self%stats%irreversible_impacts = self%stats%irreversible_impacts + 1
+        end if
       end if
       if (stat /= VCI_OK) return
       if (poked == 0 .and. all(self%gaps_end(1:self%ng) >= 0.0_dp)) exit
@@ -491,19 +503,23 @@ contains
   !> sample's solve failed). A stage point beyond a wall where the samples cannot be used fails
   !> with VCI_ERR_IMPACT (unresolved_crossing). x and the caller's posed sub-step are left as they
   !> came.
-  subroutine find_poke(self, tau, only, poked, lo, hi, glo, ghi, stat)
+  subroutine find_poke(self, tau, only, poked, lo, hi, glo, ghi, stat, cleared)
     type(vci_stepper_t), intent(inout) :: self
     real(dp), intent(in) :: tau
     integer, intent(in) :: only
     integer, intent(out) :: poked
     real(dp), intent(out) :: lo, hi, glo, ghi
     integer, intent(out) :: stat
+    !> the screen cleared the sub-step with room to spare: the stage polynomial's (the same curve
+    !> both ways), or the parabola's with its bend widened to POKE_FAR_BEND
+    logical, intent(out), optional :: cleared
     real(dp) :: s
     integer :: nm, k, ihi
     logical :: screened, stage_path
     nm = self%nsub
     associate (g_prev => self%poke_gaps(1:self%ng, 1), lam => self%poke_lambda)
     poked = 0; lo = 0.0_dp; hi = 1.0_dp; glo = 0.0_dp; ghi = 0.0_dp; screened = .false.
+    if (present(cleared)) cleared = .false.
     self%x_full(1:nm) = self%x(1:nm)
     call self%sys%eval_gaps(self%q_start, g_prev, stat)
     if (stat /= VCI_OK) then
@@ -513,6 +529,7 @@ contains
     stage_path = screens_on_stages(self)
     if (stage_path) then
       screened = stage_screen(self, only, stat)
+      if (present(cleared)) cleared = stat == VCI_OK .and. .not. screened
       if (stat /= VCI_OK .or. .not. screened) return
     end if
     call self%sys%get_multipliers(self%x_full, lam)
@@ -529,7 +546,10 @@ contains
     if (.not. path_sample(self, 0.5_dp, tau, stat)) then
       call restore_substep(self, tau, stat); return
     end if
-    if (.not. stage_path) screened = parabola_dips(self, only)
+    if (.not. stage_path) then
+      screened = parabola_dips(self, only, POKE_BEND)
+      if (present(cleared) .and. .not. screened) cleared = .not. parabola_dips(self, only, POKE_FAR_BEND)
+    end if
     if (screened) then
       if (.not. samples_are_path(self, self%q_start, self%p_start, self%q_end, self%x_full, tau, lam, stat)) then
         ! (only > 0: tie_to_wall's trial impulses, where a sub-step that cannot tell is no failure)
@@ -554,6 +574,78 @@ contains
     call restore_substep(self, tau, stat)
     end associate
   end subroutine find_poke
+
+  !> find_poke screened a whole step (no impact yet, both ends admissible) from its start and found
+  !> no poke: would the other direction find one? It starts this same sub-step at its end (the
+  !> step's end state) and samples regular sub-steps from there, a family that differs from the
+  !> start's by the order-2 scheme's O(tau^3), so a graze shallower than that is poked one way only
+  !> (C reversal seed 4984, Lobatto s = 1: wall 1's gap +5.8e-4 at the half sub-step from the
+  !> start, -4.4e-4 at the half sub-step back from the end; the backward run reflected in a step
+  !> the forward run took free). This direction cannot take that impact (stage 1 from the start
+  !> finds no crossing: its discrete flow has none), and the other cannot be kept from it (a rule
+  !> that drops pokes seen from one end only loses the pokes that retrace a soft impact of this
+  !> direction: docs/DESIGN.md, "A poke seen from the end only"), so it is reported: true when
+  !> find_poke, run again on the sub-step from (q_end, p_end) the other way over tau (exactly the
+  !> other direction's computation), finds a poke, or fails the step there (a stage point beyond a
+  !> wall in a sub-step that does not resolve the motion); the caller counts an irreversible
+  !> impact. False where the solve from the end fails. The caller's sub-step, x and gaps_end are as
+  !> find_poke left them; only a callback's failure is a failure.
+  logical function poke_seen_from_end(self, dir, tau, stat) result(seen)
+    type(vci_stepper_t), intent(inout) :: self
+    integer, intent(in) :: dir
+    real(dp), intent(in) :: tau
+    integer, intent(out) :: stat
+    integer :: nm, st, poked_end
+    real(dp) :: lo, hi, glo, ghi
+    logical :: solved
+    nm = self%nsub
+    stat = VCI_OK
+    seen = .false.
+    associate (keep_x => self%poke_keep_x(:, 1), keep_q => self%poke_keep_q, lam => self%poke_lambda)
+    ! the end's momentum, as the step hands it to the next one (take_step's regular step)
+    call self%sys%momentum_out(self%x, self%q_start, tau, keep_q(:, 4), st, self%p_start)
+    if (st /= VCI_OK) then
+      if (self%sys%unrecoverable) stat = st
+      return
+    end if
+    ! the start's carried low part (compensated positions): the sub-steps from the end replace it
+    call self%sys%position_carry(self%q_start, keep_q(:, 5))
+    keep_x(1:nm) = self%x(1:nm)
+    keep_q(:, 1) = self%q_start; keep_q(:, 2) = self%p_start; keep_q(:, 3) = self%q_end
+    self%poke_keep_g(1:self%ng) = self%gaps_end(1:self%ng)
+    call self%sys%get_multipliers(self%x, lam)
+    ! the same sub-step from the end, the other way (Newton from its known end, the start)
+    call self%sys%set_direction(-dir)
+    self%q_start = keep_q(:, 3); self%p_start = keep_q(:, 4)
+    call self%sys%put_endpoint(self%x, self%q_start, keep_q(:, 1))
+    call self%sys%put_multipliers(self%x, lam)
+    call substep(self, self%q_start, self%p_start, tau, st)
+    solved = st == VCI_OK
+    if (.not. solved .and. self%sys%unrecoverable) stat = st
+    if (solved) then
+      call self%sys%get_endpoint(self%x, self%q_end)
+      call self%sys%eval_gaps(self%q_end, self%gaps_end(1:self%ng), stat)
+      if (stat /= VCI_OK) call set_cause(self, 'gap evaluation at the start of the step (poke screen from its end)')
+    end if
+    ! (a start on a wall, to round-off, may be just beyond it from the end: find_poke then leaves
+    ! that wall to stage 1, as the other direction's would)
+    poked_end = 0
+    if (solved .and. stat == VCI_OK) call find_poke(self, tau, 0, poked_end, lo, hi, glo, ghi, stat)
+    if (stat == VCI_ERR_IMPACT) then
+      ! (unresolved_crossing: the other direction fails this step there and splits it, this one
+      ! need not; a report, not a failure)
+      stat = VCI_OK; self%cause = ''; poked_end = -1
+    end if
+    ! back to the step as the caller had it
+    call self%sys%set_direction(dir)
+    self%q_start = keep_q(:, 1); self%p_start = keep_q(:, 2); self%q_end = keep_q(:, 3)
+    self%gaps_end(1:self%ng) = self%poke_keep_g(1:self%ng)
+    self%x_full(1:nm) = keep_x(1:nm)
+    call self%sys%restore_position_carry(self%q_start, keep_q(:, 5))
+    call restore_substep(self, tau, stat)
+    seen = stat == VCI_OK .and. poked_end /= 0
+    end associate
+  end function poke_seen_from_end
 
   !> x back to the caller's solution (x_full) and its sub-step from (q_start, p_start) over tau posed
   !> again: the unknowns are increments from the posed start, and the samples posed shorter ones.
@@ -629,18 +721,19 @@ contains
   end subroutine add_path_point
 
   !> The parabola screen (find_poke): does the parabola through the start, the half-way point and
-  !> the end, its bend doubled, come below a wall the end is not beyond (only that wall when
+  !> the end, its bend times `bend`, come below a wall the end is not beyond (only that wall when
   !> only > 0) at s = 1/8 .. 7/8? (A gap evaluation that fails: true, the samples decide.)
-  logical function parabola_dips(self, only)
+  logical function parabola_dips(self, only, bend)
     type(vci_stepper_t), intent(inout) :: self
     integer, intent(in) :: only
+    real(dp), intent(in) :: bend     !< the parabola's bend times this (POKE_BEND: doubled)
     integer :: k, jj, st
     real(dp) :: s
     parabola_dips = .true.
     self%q_guess = self%poke_path_q(:, 2) - 0.5_dp * (self%q_start + self%q_end)   ! the bend at s = 1/2
     do k = 1, POKE_SAMPLES
       s = real(k, dp) / real(POKE_SAMPLES + 1, dp)
-      self%q_trial = self%q_start + s * (self%q_end - self%q_start) + 8.0_dp * s * (1.0_dp - s) * self%q_guess
+      self%q_trial = self%q_start + s * (self%q_end - self%q_start) + 4.0_dp * bend * s * (1.0_dp - s) * self%q_guess
       call self%sys%eval_gaps(self%q_trial, self%gaps_trial(1:self%ng), st)
       if (st /= VCI_OK) return
       do jj = 1, self%ng

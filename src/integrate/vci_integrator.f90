@@ -54,7 +54,9 @@ module vci_integrator
     integer(i8) :: energy_fallbacks = 0
     !> impacts of a step with several whose energy condition could not be held on the sub-step that
     !> leaves them up to the next wall (the search found no such impulse); a reversed run poses
-    !> another condition there and need not return (docs/BACKWARD.md, "Impacts that cannot be tied")
+    !> another condition there and need not return (docs/BACKWARD.md, "Impacts that cannot be tied");
+    !> and steps taken free whose poke screen from the end (a reversed run's) finds a poke that the
+    !> one from the start did not (docs/DESIGN.md, "A poke seen from the end only")
     integer(i8) :: irreversible_impacts = 0
     !> steps that failed and were then taken as 2, 4, ... equal sub-steps (the safety net,
     !> set_step_splits; docs/DESIGN.md §2), and the most sub-steps one of them needed

@@ -118,6 +118,10 @@ module vci_stepper
     !> the multipliers the samples start from: workspace, so that a regular step allocates nothing;
     !> (:, 3 + i), i = 0 .. path_degree: the gaps at the stage polynomial's points (stage_screen)
     real(dp), allocatable :: poke_gaps(:, :), poke_lambda(:)
+    !> A whole step sampled from its start, kept while the same sub-step is sampled from its end
+    !> (vci_impacts: poke_seen_from_end): x (poke_keep_x); q_start, p_start, q_end, the end's
+    !> momentum and the start's carried low part (poke_keep_q); gaps_end (poke_keep_g)
+    real(dp), allocatable :: poke_keep_x(:, :), poke_keep_q(:, :), poke_keep_g(:)
     !> The impact condition stage 2 used (the setting, or VCI_IMPACT_HAMILTONIAN where the discrete
     !> energy condition has no solution) and, then, H(qt, p-).
     integer :: impact_condition = 0
@@ -242,7 +246,8 @@ contains
     self%grad_slot = 0; self%slot_wall = 0; self%last_slot = 0
     allocate (self%tie_x(nx, 2), self%tie_q(n, 3), self%poke_half(n, 4), self%poke_gaps(ngw, 3 + self%sys%path_degree()), &
               self%poke_lambda(m), self%poke_path_s(POKE_PATH_POINTS), self%poke_path_q(n, POKE_PATH_POINTS), &
-              self%poke_path_g(ngw, POKE_PATH_POINTS), self%poke_path_x(nx, POKE_PATH_POINTS), stat=stat)
+              self%poke_path_g(ngw, POKE_PATH_POINTS), self%poke_path_x(nx, POKE_PATH_POINTS), &
+              self%poke_keep_x(nx, 1), self%poke_keep_q(n, 5), self%poke_keep_g(ngw), stat=stat)
     if (stat /= 0) then
       call release_workspace(self)
       stat = VCI_ERR_MEMORY; return
@@ -267,6 +272,7 @@ contains
     call free2(self%tie_x); call free2(self%tie_q); call free2(self%poke_half)
     call free2(self%poke_gaps); call free1(self%poke_lambda)
     call free1(self%poke_path_s); call free2(self%poke_path_q); call free2(self%poke_path_g); call free2(self%poke_path_x)
+    call free2(self%poke_keep_x); call free2(self%poke_keep_q); call free1(self%poke_keep_g)
   end subroutine release_workspace
 
   subroutine free1(a)

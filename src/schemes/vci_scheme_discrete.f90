@@ -205,14 +205,20 @@ contains
     end do
   end subroutine keep_point
 
-  !> The low part of q kept by get_endpoint when q is the last endpoint it returned, else zero.
+  !> The low part of q kept by get_endpoint when q is the last endpoint it returned, or the start
+  !> of the sub-step it read last (a side computation from other starts, vci_impacts'
+  !> poke_seen_from_end, keeps it across them), else zero.
   subroutine discrete_position_carry(self, q, lo)
     class(vci_scheme_discrete_t), intent(in) :: self
     real(dp), intent(in) :: q(:)
     real(dp), intent(out) :: lo(:)
     lo = 0.0_dp
     if (.not. self%increments .or. .not. self%have_end) return
-    if (all(q == self%end_key)) lo = self%end_lo
+    if (all(q == self%end_key)) then
+      lo = self%end_lo
+    else if (all(q == self%start_key)) then
+      lo = self%start_lo
+    end if
   end subroutine discrete_position_carry
 
   !> Make q the last endpoint, with low part lo, so that the next sub-step from q adds lo back.
