@@ -976,7 +976,10 @@ contains
     stat = VCI_OK
     samples_are_path = .false.
     associate (q_mid => self%poke_half(:, 1), p_mid => self%poke_half(:, 2), p_b => self%poke_half(:, 3), &
-               p_two => self%poke_half(:, 4))
+               p_two => self%poke_half(:, 4), a_lo => self%poke_half(:, 5))
+      ! a's carried low part (compensated positions): the half sub-step from q_mid replaces it, and
+      ! the caller's endpoint from a would then drop it (an ulp where the screen ran, none elsewhere)
+      call self%sys%position_carry(a, a_lo)
       call self%sys%get_endpoint(self%x, q_mid)
       call self%sys%momentum_out(self%x, a, 0.5_dp * tau, p_mid, st, pa)
       if (st == VCI_OK) call self%sys%momentum_out(xw, a, tau, p_b, st, pa)
@@ -997,6 +1000,7 @@ contains
       else if (self%sys%unrecoverable) then
         stat = st
       end if
+      call self%sys%restore_position_carry(a, a_lo)
     end associate
     self%x(1:nm) = self%x_high(1:nm)
     ! x holds increments from the posed start: pose the sub-step from a again, or the caller's x

@@ -244,7 +244,7 @@ contains
     end if
     self%x = 0.0_dp; self%zero_lambda = 0.0_dp
     self%grad_slot = 0; self%slot_wall = 0; self%last_slot = 0
-    allocate (self%tie_x(nx, 2), self%tie_q(n, 3), self%poke_half(n, 4), self%poke_gaps(ngw, 3 + self%sys%path_degree()), &
+    allocate (self%tie_x(nx, 2), self%tie_q(n, 3), self%poke_half(n, 5), self%poke_gaps(ngw, 3 + self%sys%path_degree()), &
               self%poke_lambda(m), self%poke_path_s(POKE_PATH_POINTS), self%poke_path_q(n, POKE_PATH_POINTS), &
               self%poke_path_g(ngw, POKE_PATH_POINTS), self%poke_path_x(nx, POKE_PATH_POINTS), &
               self%poke_keep_x(nx, 1), self%poke_keep_q(n, 5), self%poke_keep_g(ngw), stat=stat)
