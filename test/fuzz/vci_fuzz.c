@@ -793,6 +793,10 @@ int main(int argc, char **argv) {
   first = atol(argv[1]);
   count = atol(argv[2]);
   budget = argc > 3 ? atof(argv[3]) : 60.0;
+  /* stop after this many failures (5: enough to act on in a check); VCI_FUZZ_MAX_FAILURES=0 runs
+   * every seed, for a survey of a seed range (docs/TESTING.md) */
+  const char *max_env = getenv("VCI_FUZZ_MAX_FAILURES");
+  long max_failures = max_env != NULL ? atol(max_env) : 5;
   for (i = 0; i < count; ++i) {
     pid_t pid;
     int status;
@@ -830,8 +834,8 @@ int main(int argc, char **argv) {
                      code == EXIT_REVERSAL_ONE_SIDED_ELSEWHERE ? why[code - 70]
                                                                                   : "sanitizer report or runtime error");
     }
-    if (bad >= 5) { /* enough to act on; the rest would repeat the reports */
-      printf("stopping after 5 failures\n");
+    if (max_failures > 0 && bad >= max_failures) { /* enough to act on; the rest would repeat the reports */
+      printf("stopping after %ld failures\n", max_failures);
       stopped = 1;
       break;
     }
