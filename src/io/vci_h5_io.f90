@@ -18,6 +18,7 @@ module vci_h5_io
   private
 
   public :: h5io_fail, h5io_os_cause, h5io_discard_writes, h5io_discard_path, h5io_free_bytes, h5io_path_kind
+  public :: h5io_allocate_to_file_end
   public :: h5io_put_attr, h5io_get_attr
   public :: h5io_make_rows, h5io_open_dset, h5io_rows, h5io_append_rows, h5io_read_row, h5io_read_i8, h5io_check_dims
   public :: h5io_put_vector, h5io_get_vector, h5io_close_dset, h5io_string_type
@@ -77,6 +78,12 @@ module vci_h5_io
       import :: c_int, c_char
       character(kind=c_char), intent(in) :: path(*)
     end function vci_path_kind
+    !> the file's end of allocation to max(EOA, end of the file on disk) + increment (HDF5 >= 1.10.2)
+    integer(c_int) function h5fincrement_filesize(file, increment) bind(C, name='H5Fincrement_filesize')
+      import :: c_int64_t, c_long_long, c_int
+      integer(c_int64_t), value :: file
+      integer(c_long_long), value :: increment   ! hsize_t
+    end function h5fincrement_filesize
     integer(c_size_t) function c_strlen(s) bind(C, name='strlen')
       import :: c_ptr, c_size_t
       type(c_ptr), value :: s
@@ -154,6 +161,23 @@ contains
       r = vci_discard_fd(fd)   ! (src/io/vci_fd_discard.c: a sink that also takes HDF5's ftruncate at close)
     end if
   end subroutine h5io_discard_writes
+
+  !> Extend the end of allocation (EOA) of a file opened for writing to the end of the file on disk,
+  !> when it is below it. H5Fflush writes new extents, chunk indexes and object headers, which may
+  !> point at blocks it allocated past the old EOA, before the superblock that records the new EOA:
+  !> a run killed between them leaves a file whose datasets point past its EOA, where HDF5 neither
+  !> reads nor writes (cutting such a dataset back and appending to it failed with an I/O error).
+  !> Every block the file points at was written before the pointer to it, so it lies below the end
+  !> on disk; taking that end as the EOA makes them addressable, and new blocks go after them.
+  subroutine h5io_allocate_to_file_end(file, stat, message, who)
+    integer(hid_t), intent(in) :: file
+    integer, intent(inout) :: stat
+    character(len=*), intent(inout) :: message
+    character(len=*), intent(in) :: who
+    if (stat /= VCI_OK) return
+    if (h5fincrement_filesize(int(file, c_int64_t), 0_c_long_long) < 0) &
+      call h5io_fail('cannot extend the end of allocation to the end of the file', stat, message, who)
+  end subroutine h5io_allocate_to_file_end
 
   !> Point this process's descriptors of the file at PATH at a sink (vci_fd_discard.c), for drivers
   !> whose descriptor HDF5 does not hand out (MPI-IO); local, not collective. How many were redirected,

@@ -208,7 +208,9 @@ contains
         call fail(self, 'cannot open for appending (not an HDF5 file, or not writable)', stat); return
       end if
       self%is_open = .true.
-      call open_existing(self, stat)
+      ! a run killed inside a flush may have left datasets pointing past the recorded end of the file
+      call h5io_allocate_to_file_end(self%file, stat, self%message, self%path)
+      if (stat == VCI_OK) call open_existing(self, stat)
       if (stat == VCI_OK .and. every_asked > 0 .and. every_asked /= self%every) then
         call vci_set_message(self%message, self%path//': cannot append: the file stores every '// &
           trim(vci_int_text(self%every))//'-th state, not every '//trim(vci_int_text(every_asked))//'-th')
@@ -528,25 +530,44 @@ contains
   subroutine truncate_to_trusted(self, stat)
     type(vci_hdf5_writer_t), intent(inout) :: self
     integer, intent(inout) :: stat
-    integer :: err, e(12)
-    e = 0
-    if (self%every > 1) call h5dset_extent_f(self%d_k, [int(self%rows, hsize_t)], e(12))
-    call h5dset_extent_f(self%d_t, [int(self%rows, hsize_t)], e(1))
-    call h5dset_extent_f(self%d_q, [int(self%n, hsize_t), int(self%rows, hsize_t)], e(2))
-    call h5dset_extent_f(self%d_p, [int(self%n, hsize_t), int(self%rows, hsize_t)], e(3))
-    call h5dset_extent_f(self%d_e, [int(self%steps, hsize_t)], e(4))
-    if (self%m > 0) call h5dset_extent_f(self%d_l, [int(self%m, hsize_t), int(self%steps, hsize_t)], e(5))
+    if (self%every > 1) call cut_rows(self, self%d_k, 'step', 0, self%rows, stat)
+    call cut_rows(self, self%d_t, 't', 0, self%rows, stat)
+    call cut_rows(self, self%d_q, 'q', self%n, self%rows, stat)
+    call cut_rows(self, self%d_p, 'p', self%n, self%rows, stat)
+    call cut_rows(self, self%d_e, 'energy', 0, self%steps, stat)
+    if (self%m > 0) call cut_rows(self, self%d_l, 'lambda', self%m, self%steps, stat)
     if (self%n_gaps > 0) then
-      call h5dset_extent_f(self%d_it, [int(self%impacts, hsize_t)], e(6))
-      call h5dset_extent_f(self%d_is, [int(self%impacts, hsize_t)], e(7))
-      call h5dset_extent_f(self%d_ia, [int(self%impacts, hsize_t)], e(8))
-      call h5dset_extent_f(self%d_ig, [int(self%impacts, hsize_t)], e(9))
-      call h5dset_extent_f(self%d_iq, [int(self%n, hsize_t), int(self%impacts, hsize_t)], e(10))
-      call h5dset_extent_f(self%d_ii, [int(self%impacts, hsize_t)], e(11))
+      call cut_rows(self, self%d_it, 'impacts/time', 0, self%impacts, stat)
+      call cut_rows(self, self%d_is, 'impacts/step', 0, self%impacts, stat)
+      call cut_rows(self, self%d_ia, 'impacts/alpha', 0, self%impacts, stat)
+      call cut_rows(self, self%d_ig, 'impacts/gap_index', 0, self%impacts, stat)
+      call cut_rows(self, self%d_iq, 'impacts/q', self%n, self%impacts, stat)
+      call cut_rows(self, self%d_ii, 'impacts/impulse', 0, self%impacts, stat)
     end if
-    err = minval(e)
-    if (err /= 0) call fail(self, 'cannot cut the datasets to the trusted steps', stat)
   end subroutine truncate_to_trusted
+
+  !> Cut dataset NAME (rows of WIDTH values, 0: of one) to its first ROWS rows. HDF5 cannot when a
+  !> run killed inside the flush that wrote the dataset's first chunk left its object header
+  !> pointing at a chunk index that never reached the disk (the dataset can then be neither cut,
+  !> written nor deleted): a status naming it, so the run is restarted into a new file.
+  subroutine cut_rows(self, dset, name, width, rows, stat)
+    type(vci_hdf5_writer_t), intent(inout) :: self
+    integer(hid_t), intent(in) :: dset
+    character(len=*), intent(in) :: name
+    integer, intent(in) :: width
+    integer(i8), intent(in) :: rows
+    integer, intent(inout) :: stat
+    integer :: err
+    if (stat /= VCI_OK) return
+    if (width > 0) then
+      call h5dset_extent_f(dset, [int(width, hsize_t), int(rows, hsize_t)], err)
+    else
+      call h5dset_extent_f(dset, [int(rows, hsize_t)], err)
+    end if
+    if (err /= 0) call fail(self, 'cannot append: cannot cut /'//name//' back to its '//trim(vci_int_text(rows))// &
+      ' trusted rows (its chunk index is unreadable, as a run killed inside a flush can leave it); '// &
+      'restart from the file into a new one', stat)
+  end subroutine cut_rows
 
   subroutine w_start(self, info, q, p, stat)
     class(vci_hdf5_writer_t), intent(inout) :: self
