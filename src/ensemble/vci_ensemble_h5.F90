@@ -10,7 +10,8 @@
 !>
 !> create, write_table (with each rank's share), close and abandon are collective under MPI;
 !> write_results is independent. Nothing here stops or prints (HDF5's own error printing is switched
-!> off); failures give VCI_ERR_IO and a message naming the file.
+!> off); failures give VCI_ERR_IO (VCI_ERR_MEMORY: a buffer of this module's) and a message naming
+!> the file.
 !>
 !> A write that fails (a full disk) ends the file's writing: its descriptor is pointed at a sink
 !> (vci_h5_io's h5io_discard_writes, as the run writer does), so that HDF5 closes it without touching
