@@ -672,7 +672,8 @@ int  vci_ensemble_run(vci_model model, const vci_ensemble_config *config, int64_
  *  unless overwrite != 0. *members_failed (may be NULL) = members whose status is not VCI_OK.
  *  Returns VCI_OK when every member was run and written; the statuses of vci_ensemble_run, path
  *  NULL or empty or ranks given different member counts (VCI_ERR_ARGUMENT), VCI_ERR_IO (the file,
- *  or no HDF5 in this library), VCI_ERR_STATE (MPI not initialised); under MPI the ranks all
+ *  or no HDF5 in this library), VCI_ERR_MEMORY (also the file writer's buffers: a block's ranks,
+ *  under MPI the fill values), VCI_ERR_STATE (MPI not initialised); under MPI the ranks all
  *  return the same status (and message). */
 int  vci_ensemble_run_file(vci_model model, const vci_ensemble_config *config, int64_t members,
                            const double *t0, const double *q0, const double *v0, const char *path,

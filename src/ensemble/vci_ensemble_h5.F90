@@ -10,7 +10,8 @@
 !>
 !> create, write_table (with each rank's share), close and abandon are collective under MPI;
 !> write_results is independent. Nothing here stops or prints (HDF5's own error printing is switched
-!> off); failures give VCI_ERR_IO and a message naming the file.
+!> off); failures give VCI_ERR_IO (VCI_ERR_MEMORY: a buffer of this module's) and a message naming
+!> the file.
 !>
 !> A write that fails (a full disk) ends the file's writing: its descriptor is pointed at a sink
 !> (vci_h5_io's h5io_discard_writes, as the run writer does), so that HDF5 closes it without touching
@@ -31,7 +32,8 @@ module vci_ensemble_h5
                      MPI_INTEGER, MPI_CHARACTER, MPI_MAX, MPI_MIN
 #endif
   use vci_kinds, only: dp, i8
-  use vci_status, only: VCI_OK, VCI_ERR_IO, VCI_ERR_ARGUMENT, VCI_MSG_LEN
+  use vci_status, only: VCI_OK, VCI_ERR_IO, VCI_ERR_ARGUMENT, VCI_ERR_MEMORY, VCI_MSG_LEN
+  use vci_message, only: vci_int_text
   use vci_h5_io, only: h5io_put_attr, h5io_get_attr, h5io_string_type, h5io_check_dims, h5io_discard_writes, &
                        h5io_discard_path, &
                        h5io_os_cause, h5io_free_bytes
@@ -353,51 +355,93 @@ contains
 
 #ifdef VCI_HAVE_MPI
   !> The fill values ("not run") of members first .. last in every dataset, written by this rank
-  !> alone (independent I/O), in blocks of at most 2^18 values.
+  !> alone (independent I/O), in blocks of at most 2 MiB (or one member's values, when larger).
   subroutine fill_share(self, first, last, stat)
     type(vci_ensemble_file_t), intent(inout) :: self
     integer, intent(in) :: first, last
     integer, intent(inout) :: stat
-    integer, parameter :: max_values = 2**18
+    integer, allocatable :: dims(:)
+    integer :: j, r
+    do j = 1, N_DSETS
+      if (self%d(j) < 0 .or. stat /= VCI_OK .or. last < first) cycle
+      dims = dims_of(self, j)   ! (at most 3 values: tiny)
+      r = size(dims)
+      call fill_members(self, j, dims(1:r - 1), first, last, stat)
+    end do
+  end subroutine fill_share
+
+  !> Dataset `which`'s fill value into members first .. last (leading dimensions `lead`), a block of
+  !> members a write, from one buffer of a block's values allocated with stat= (2 MiB: the 2^18
+  !> messages a block once took were 64 MB): running out of memory is a status, VCI_ERR_MEMORY,
+  !> that f_create's sync makes every rank's.
+  subroutine fill_members(self, which, lead, first, last, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    integer, intent(in) :: which, lead(:), first, last
+    integer, intent(inout) :: stat
+    integer, parameter :: max_bytes = 2**21
     real(dp), allocatable, target :: r(:)
     integer, allocatable, target :: k(:)
     integer(i8), allocatable, target :: l(:)
     character(len=VCI_ENSEMBLE_MESSAGE_LEN), allocatable, target :: c(:)
-    integer, allocatable :: dims(:)
-    integer(hid_t) :: stype
-    integer :: i, j, lead, block, at, cnt, err, e2
-    do j = 1, N_DSETS
-      if (self%d(j) < 0 .or. stat /= VCI_OK) cycle
-      dims = dims_of(self, j)
-      lead = max(1, product(dims(1:size(dims) - 1)))
-      block = max(1, max_values / lead)
-      do at = first, last, block
-        cnt = min(block, last - at + 1)
-        select case (j)
-        case (D_STATUS, D_RANK, D_THREAD, D_IMPGAP, D_EKIND, D_TRCOUNT)
-          k = [(merge(-1, 0, j == D_STATUS .or. j == D_RANK .or. j == D_THREAD), i=1, lead * cnt)]
-          call put_raw(self, j, H5T_NATIVE_INTEGER, c_loc(k), dims(1:size(dims) - 1), at, cnt, stat)
-        case (D_STEPS, D_IMPACTS, D_NEWTON)
-          l = [(0_i8, i=1, lead * cnt)]
-          call put_raw(self, j, h5kind_to_type(i8, H5_INTEGER_KIND), c_loc(l), dims(1:size(dims) - 1), at, cnt, stat)
-        case (D_MESSAGE)
-          allocate (c(cnt))
-          c = repeat(achar(0), VCI_ENSEMBLE_MESSAGE_LEN)
-          call h5io_string_type(VCI_ENSEMBLE_MESSAGE_LEN, stype, err)
-          if (err == 0) call put_raw(self, j, stype, c_loc(c), dims(1:size(dims) - 1), at, cnt, stat)
-          call h5tclose_f(stype, e2)
-          deallocate (c)
-        case (D_T0, D_Q0, D_V0, D_PARAMS)
-          r = [(0.0_dp, i=1, lead * cnt)]
-          call put_raw(self, j, H5T_NATIVE_DOUBLE, c_loc(r), dims(1:size(dims) - 1), at, cnt, stat)
-        case default
-          r = [(ieee_value(1.0_dp, ieee_quiet_nan), i=1, lead * cnt)]
-          call put_raw(self, j, H5T_NATIVE_DOUBLE, c_loc(r), dims(1:size(dims) - 1), at, cnt, stat)
-        end select
-        if (stat /= VCI_OK) exit
-      end do
+    integer(hid_t) :: mtype
+    type(c_ptr) :: buf
+    integer :: per_member, value_bytes, block, values, at, err, e2
+    select case (which)
+    case (D_STATUS, D_RANK, D_THREAD, D_IMPGAP, D_EKIND, D_TRCOUNT)
+      value_bytes = 4
+    case (D_MESSAGE)
+      value_bytes = VCI_ENSEMBLE_MESSAGE_LEN
+    case default
+      value_bytes = 8
+    end select
+    per_member = max(1, product(lead))
+    block = min(max(1, max_bytes / value_bytes / per_member), last - first + 1)
+    values = per_member * block
+    select case (which)
+    case (D_STATUS, D_RANK, D_THREAD, D_IMPGAP, D_EKIND, D_TRCOUNT)
+      allocate (k(values), stat=err)
+      if (err == 0) then
+        k = merge(-1, 0, which == D_STATUS .or. which == D_RANK .or. which == D_THREAD)
+        buf = c_loc(k); mtype = H5T_NATIVE_INTEGER
+      end if
+    case (D_STEPS, D_IMPACTS, D_NEWTON)
+      allocate (l(values), stat=err)
+      if (err == 0) then
+        l = 0_i8
+        buf = c_loc(l); mtype = h5kind_to_type(i8, H5_INTEGER_KIND)
+      end if
+    case (D_MESSAGE)
+      allocate (c(values), stat=err)
+      if (err == 0) then
+        c = repeat(achar(0), VCI_ENSEMBLE_MESSAGE_LEN)
+        buf = c_loc(c)
+      end if
+    case default
+      allocate (r(values), stat=err)
+      if (err == 0) then
+        r = ieee_value(1.0_dp, ieee_quiet_nan)
+        if (which == D_T0 .or. which == D_Q0 .or. which == D_V0 .or. which == D_PARAMS) r = 0.0_dp
+        buf = c_loc(r); mtype = H5T_NATIVE_DOUBLE
+      end if
+    end select
+    if (err /= 0) then
+      call fail(self, 'no memory to fill /'//trim(names(which))//' ('//trim(vci_int_text(values))// &
+                ' values a block) for members '//trim(vci_int_text(first))//' to '//trim(vci_int_text(last)), &
+                stat, VCI_ERR_MEMORY)
+      return
+    end if
+    if (which == D_MESSAGE) then
+      call h5io_string_type(VCI_ENSEMBLE_MESSAGE_LEN, mtype, err)
+      if (err /= 0) then
+        call fail(self, 'cannot make a string type to fill /'//trim(names(which)), stat); return
+      end if
+    end if
+    do at = first, last, block
+      call put_raw(self, which, mtype, buf, lead, at, min(block, last - at + 1), stat)
+      if (stat /= VCI_OK) exit
     end do
-  end subroutine fill_share
+    if (which == D_MESSAGE) call h5tclose_f(mtype, e2)
+  end subroutine fill_members
 #endif
 
   !> Write the starts and parameters of members first .. first + count - 1 (each rank its share).
@@ -423,7 +467,6 @@ contains
     integer, intent(in) :: rank
     integer, intent(out) :: stat
     integer :: f, c, j, n
-    integer, allocatable :: ranks(:)
     stat = VCI_OK
     f = results%first; c = results%count; n = self%n
     if (c < 1) return
@@ -455,13 +498,33 @@ contains
       call put_f64(self, D_TRQ, results%traj_q, [n, self%samples], f, c, stat)
       call put_f64(self, D_TRP, results%traj_p, [n, self%samples], f, c, stat)
     end if
-    allocate (ranks(c))
-    ranks = rank
-    call put_i32(self, D_RANK, ranks, per_member, f, c, stat)
+    call put_ranks(self, rank, f, c, stat)
     call put_i32(self, D_THREAD, results%thread, per_member, f, c, stat)
     call put_f64(self, D_SECONDS, results%seconds, per_member, f, c, stat)
     call put_i32(self, D_STATUS, results%status, per_member, f, c, stat)
   end subroutine f_write_results
+
+  !> `rank` as the rank of members first .. first + count - 1, from a buffer of count values
+  !> allocated with stat= (a block may hold many members): no memory is VCI_ERR_MEMORY, and the
+  !> members' statuses are then not written (write_results writes them last), so the file holds none
+  !> of them.
+  subroutine put_ranks(self, rank, first, count, stat)
+    type(vci_ensemble_file_t), intent(inout) :: self
+    integer, intent(in) :: rank, first, count
+    integer, intent(inout) :: stat
+    integer, allocatable :: ranks(:)
+    integer :: err
+    if (stat /= VCI_OK) return
+    allocate (ranks(count), stat=err)
+    if (err /= 0) then
+      call fail(self, 'no memory for the ranks of members '//trim(vci_int_text(first))//' to '// &
+                trim(vci_int_text(first + count - 1))//' ('//trim(vci_int_text(count))// &
+                ' values): they are not in the file', stat, VCI_ERR_MEMORY)
+      return
+    end if
+    ranks = rank
+    call put_i32(self, D_RANK, ranks, per_member, first, count, stat)
+  end subroutine put_ranks
 
   !> Record how many members ran and failed, mark the file complete when all ran, and close it.
   !> Collective under MPI (every rank passes the same totals).

@@ -37,7 +37,8 @@ contains
   !> MPI_COMM_WORLD, which must be initialised), every rank passing the same factory, configuration
   !> and table; `stat` and `message` are then the same on every rank.
   !> `stat` is VCI_OK when every member was run and written, whatever the members' own statuses
-  !> (`members_failed` counts those); VCI_ERR_ARGUMENT, VCI_ERR_STATE or VCI_ERR_IO otherwise.
+  !> (`members_failed` counts those); VCI_ERR_ARGUMENT, VCI_ERR_STATE, VCI_ERR_MEMORY (the results
+  !> of a block, the file writer's buffers) or VCI_ERR_IO otherwise.
 #ifdef VCI_HAVE_MPI
   subroutine vci_ensemble_run_file(factory, config, table, path, stat, message, overwrite, &
                                    members_failed, comm)

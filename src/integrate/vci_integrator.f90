@@ -1099,6 +1099,7 @@ contains
     integer, intent(out) :: stat
     character(len=*), intent(out) :: cause
     type(vci_solver_stats_t) :: solver
+    character(len=40) :: what
     cause = ''
     call self%state%to_checkpoint(cp, stat)
     if (stat /= VCI_OK) then
@@ -1114,8 +1115,14 @@ contains
       return
     end if
     call self%stepper%position_carry(self%state%q, cp%position_lo)
-    ! (factors that cannot be copied are left out there: the restart is then correct, not bitwise)
-    call self%stepper%factors_to_checkpoint(cp)
+    ! without them a restart would be correct but not bit for bit: then no checkpoint at all
+    call self%stepper%factors_to_checkpoint(cp, stat, what)
+    if (stat /= VCI_OK) then
+      call cp%release()
+      call vci_set_message(cause, 'checkpoint at index '//trim(vci_int_text(self%state%k))// &
+        ': no memory for a copy of '//trim(what)//' (a restart without it is not bit for bit)')
+      return
+    end if
     solver = self%stepper%solver_stats()
     cp%split_steps = self%run_splits_before + (solver%split_steps - self%splits_at_start)
     cp%largest_split = self%run_largest_before

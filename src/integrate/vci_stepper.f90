@@ -361,20 +361,29 @@ contains
     if (allocated(self%sys)) call self%sys%restore_position_carry(q, lo)
   end subroutine restore_position_carry
 
-  !> Newton's kept factors and the scheme's start memory into a checkpoint (no factors when they
-  !> cannot be copied: the restored run is then correct but not bitwise the same), so that the next steps of a restored run solve from the
-  !> same factors as the uninterrupted one (docs/DESIGN.md, "Restart bit for bit").
-  subroutine factors_to_checkpoint(self, cp)
+  !> Newton's kept factors and the scheme's start memory into a checkpoint, so that the next steps
+  !> of a restored run solve from the same factors and start as the uninterrupted one (docs/DESIGN.md,
+  !> "Restart bit for bit"). stat: VCI_ERR_MEMORY when either cannot be copied (a checkpoint without
+  !> them restarts correct but not bit for bit, so it is no checkpoint: the caller drops it), and
+  !> `what` names the copy; cp's factors and start may then be partly allocated.
+  subroutine factors_to_checkpoint(self, cp, stat, what)
     class(vci_stepper_t), intent(in) :: self
     type(vci_checkpoint_t), intent(inout) :: cp
-    integer :: st
-    call self%newton%kept_factors(cp%factors_n, cp%factors_key, cp%factors_rw, cp%factors_lu, cp%factors_pivots, st)
+    integer, intent(out) :: stat
+    character(len=*), intent(out) :: what
+    what = ''
+    call self%newton%kept_factors(cp%factors_n, cp%factors_key, cp%factors_rw, cp%factors_lu, cp%factors_pivots, stat)
+    if (stat /= VCI_OK) then
+      what = 'Newton''s kept factors'; stat = VCI_ERR_MEMORY; return
+    end if
     ! and the scheme's start memory (Lobatto with constraints: its last step's polynomials)
     if (allocated(cp%start)) deallocate (cp%start)
-    if (allocated(self%sys)) then
-      call self%sys%start_memory(cp%start)
-      if (size(cp%start) == 0) deallocate (cp%start)
+    if (.not. allocated(self%sys)) return
+    call self%sys%start_memory(cp%start, stat)
+    if (stat /= VCI_OK) then
+      what = 'the scheme''s start memory'; stat = VCI_ERR_MEMORY; return
     end if
+    if (size(cp%start) == 0) deallocate (cp%start)
   end subroutine factors_to_checkpoint
 
   !> The checkpoint's factors (or none) become Newton's kept ones, its start memory (or none) the scheme's.

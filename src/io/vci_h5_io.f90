@@ -284,6 +284,7 @@ contains
     integer(hid_t) :: stype
     integer :: err, e2
     character(len=max(1, len(v))), target :: buf
+    type(c_ptr) :: p
     if (stat /= VCI_OK) return
     buf = v
     if (len(v) == 0) buf = achar(0)
@@ -291,7 +292,11 @@ contains
     if (err /= 0) then
       call h5io_fail('cannot make a string type', stat, message, who); return
     end if
-    call write_attr(loc, name, stype, stype, c_loc(buf), stat, message, who, .true.)
+    ! c_loc(buf) of a character buffer given straight as an argument makes gfortran 12 pass len(buf)
+    ! as an extra hidden length, which shifted write_attr's: on a failure its message had len(v)
+    ! and `who` the message's length, read past the path (the garbled messages of issue 24)
+    p = c_loc(buf)
+    call write_attr(loc, name, stype, stype, p, stat, message, who, .true.)
     call h5tclose_f(stype, e2)
   end subroutine put_attr_str
 
@@ -448,6 +453,7 @@ contains
     integer(hid_t) :: space, plist, dapl
     integer(hsize_t) :: dims(2), maxdims(2), chunk(2)
     integer :: rank, err, e2
+    character(len=256) :: os
     dset = -1
     if (stat /= VCI_OK) return
     dapl = -1
@@ -466,9 +472,15 @@ contains
     end if
     if (err == 0) call uncached_access(dapl, err)
     if (err == 0) call h5dcreate_f(loc, name, ftype, space, dset, err, plist, dapl_id=dapl)
+    os = ''
+    if (err /= 0) os = h5io_os_cause()
     call h5pclose_f(plist, e2); call h5sclose_f(space, e2)
     if (dapl >= 0) call h5pclose_f(dapl, e2)
-    if (err /= 0) call h5io_fail('cannot create dataset '//name, stat, message, who)
+    ! HDF5 1.10 creates no chunked dataset again, without a reason, once an allocation of its own
+    ! failed inside a write (docs/OUTPUT.md, "HDF5 out of memory")
+    if (len_trim(os) == 0) os = 'HDF5 gives no reason (as after an allocation of its own failed earlier in '// &
+                               'this process: HDF5 1.10 then creates no chunked dataset until the process restarts)'
+    if (err /= 0) call h5io_fail('cannot create dataset '//name//': '//trim(os), stat, message, who)
   end subroutine h5io_make_rows
 
   subroutine h5io_open_dset(loc, name, dset, stat, message, who)

@@ -736,15 +736,19 @@ contains
     call h5io_put_attr(self%file, 'resumes', old, stat, self%message, self%path)
   end subroutine note_resume
 
-  !> The attributes `units` and `description` of a dataset.
+  !> The attributes `units` and `description` of a dataset (none when it was not created). Best
+  !> effort: a failure here neither fails the run nor replaces the writer's message (it replaced
+  !> the cause of a failed start, "cannot create dataset t", with "cannot write attribute units").
   subroutine describe(self, dset, units, description)
     type(vci_hdf5_writer_t), intent(inout) :: self
     integer(hid_t), intent(in) :: dset
     character(len=*), intent(in) :: units, description
     integer :: s
+    character(len=VCI_MSG_LEN) :: scratch
+    if (dset < 0) return
     s = VCI_OK
-    call h5io_put_attr(dset, 'units', units, s, self%message, self%path)
-    call h5io_put_attr(dset, 'description', description, s, self%message, self%path)
+    call h5io_put_attr(dset, 'units', units, s, scratch, self%path)
+    call h5io_put_attr(dset, 'description', description, s, scratch, self%path)
   end subroutine describe
 
   subroutine alloc_buffers(self, stat)

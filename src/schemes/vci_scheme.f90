@@ -491,10 +491,13 @@ contains
 
   !> Newton's start memory beyond the state (a checkpoint carries it: a restart continues bit for
   !> bit): none here (mem of size 0); Lobatto with constraints keeps its last step's polynomials.
-  subroutine start_memory(self, mem)
+  !> stat: VCI_ERR_MEMORY, mem unallocated, when a memory there is cannot be copied.
+  subroutine start_memory(self, mem, stat)
     class(vci_scheme_t), intent(in) :: self
     real(dp), allocatable, intent(out) :: mem(:)
+    integer, intent(out) :: stat
     allocate (mem(0))   ! (zero size, tiny and fixed: no stat=)
+    stat = VCI_OK
   end subroutine start_memory
 
   !> Start from memory mem (from start_memory of the same scheme and model); one this scheme cannot

@@ -835,28 +835,33 @@ contains
   end subroutine keep_polynomial
 
   !> The polynomial start's memory for a checkpoint: [poly_dh, ypoly(n, 0:s), lpoly(m, 0:s-1)]
-  !> when there is one (m > 0, after a regular step), else nothing.
-  subroutine lobatto_start_memory(self, mem)
+  !> when there is one (m > 0, after a regular step), else nothing (size 0). stat: VCI_ERR_MEMORY,
+  !> mem unallocated, when there is one and it cannot be copied (a checkpoint without it would
+  !> restart correct but not bit for bit: the checkpoint fails instead).
+  subroutine lobatto_start_memory(self, mem, stat)
     class(vci_scheme_lobatto_t), intent(in) :: self
     real(dp), allocatable, intent(out) :: mem(:)
-    integer :: st, o, j
-    st = 1
-    ! allocated with stat= and filled column by column (n (s+1) + m s values: the constructor's and
-    ! reshape's temporaries ended the program when memory ran out); none kept when it fails, and
-    ! the restart is then correct, not bitwise, as without Newton's factors
-    if (self%m > 0 .and. self%have_poly) allocate (mem(1 + size(self%ypoly) + size(self%lpoly)), stat=st)
-    if (st == 0) then
-      mem(1) = self%poly_dh
-      o = 1
-      do j = lbound(self%ypoly, 2), ubound(self%ypoly, 2)
-        mem(o + 1:o + size(self%ypoly, 1)) = self%ypoly(:, j); o = o + size(self%ypoly, 1)
-      end do
-      do j = lbound(self%lpoly, 2), ubound(self%lpoly, 2)
-        mem(o + 1:o + size(self%lpoly, 1)) = self%lpoly(:, j); o = o + size(self%lpoly, 1)
-      end do
-    else
+    integer, intent(out) :: stat
+    integer :: o, j
+    if (.not. (self%m > 0 .and. self%have_poly)) then
       allocate (mem(0))   ! (zero size: the runtime's smallest block, tiny and fixed)
+      stat = VCI_OK; return
     end if
+    ! allocated with stat= and filled column by column (n (s+1) + m s values: the constructor's and
+    ! reshape's temporaries ended the program when memory ran out)
+    allocate (mem(1 + size(self%ypoly) + size(self%lpoly)), stat=stat)
+    if (stat /= 0) then
+      stat = VCI_ERR_MEMORY; return
+    end if
+    mem(1) = self%poly_dh
+    o = 1
+    do j = lbound(self%ypoly, 2), ubound(self%ypoly, 2)
+      mem(o + 1:o + size(self%ypoly, 1)) = self%ypoly(:, j); o = o + size(self%ypoly, 1)
+    end do
+    do j = lbound(self%lpoly, 2), ubound(self%lpoly, 2)
+      mem(o + 1:o + size(self%lpoly, 1)) = self%lpoly(:, j); o = o + size(self%lpoly, 1)
+    end do
+    stat = VCI_OK
   end subroutine lobatto_start_memory
 
   !> Take the polynomial start from lobatto_start_memory's vector if it has this scheme's size and

@@ -2,6 +2,11 @@
 !>   ens_driver run FILE [--members N] [--nsteps K] [--threads T] [--chunk C] [--stride S] [--fail]
 !>     runs the test ensemble (perturbed ellipses; with --fail, members 3, 5, 7, 11 fail on purpose)
 !>     into FILE with vci_ensemble_run_file (all ranks under mpirun);
+!>     Built as ens_alloc_driver (VCI_ENS_MALLOC_FAIL, linked with test/alloc's malloc_counter.c):
+!>     --fail-alloc K MIN [--fail-rank R] [--fail-in OBJ] makes the K-th allocation of at least MIN
+!>     bytes inside vci_ensemble_run_file fail (on rank R only, default every rank; counting only
+!>     those made from the shared object whose path contains OBJ) and prints on each armed rank
+!>     whether it was met ("rank r: allocation K failed" / "rank r: allocation K not reached");
 !>   ens_driver verify FILE [--partial]
 !>     reads FILE, runs every member the file says was run again in memory (one thread) from the
 !>     file's own table, and exits 1 unless they are bitwise equal. With --fail members 3, 5, 7, 11
@@ -17,7 +22,29 @@ program ens_driver
   use vci_ensemble_h5, only: vci_ensemble_read
   use vci_ensemble_mpi, only: vci_ensemble_run_file
   use vci_ens_test_support
+#ifdef VCI_ENS_MALLOC_FAIL
+  use, intrinsic :: iso_c_binding, only: c_long_long, c_char, c_null_char
+#endif
   implicit none
+#ifdef VCI_ENS_MALLOC_FAIL
+  interface
+    subroutine vci_test_malloc_fail(k, min_bytes) bind(C, name='vci_test_malloc_fail')
+      import :: c_long_long
+      integer(c_long_long), value :: k, min_bytes
+    end subroutine vci_test_malloc_fail
+    subroutine vci_test_malloc_fail_in(k, min_bytes, object) bind(C, name='vci_test_malloc_fail_in')
+      import :: c_long_long, c_char
+      integer(c_long_long), value :: k, min_bytes
+      character(kind=c_char), intent(in) :: object(*)
+    end subroutine vci_test_malloc_fail_in
+    function vci_test_malloc_fail_pending() bind(C, name='vci_test_malloc_fail_pending') result(k)
+      import :: c_long_long
+      integer(c_long_long) :: k
+    end function vci_test_malloc_fail_pending
+  end interface
+  integer :: fail_k = 0, fail_min = 0, fail_rank = -1
+  character(len=64) :: fail_in = ''
+#endif
   character(len=512) :: mode, path, arg
   integer :: nm, nsteps, threads, chunk, stride, i, stat, rank, failed, fail_after
   logical :: with_failures, partial
@@ -50,6 +77,11 @@ program ens_driver
     case ('--stride'); stride = int_arg(i + 1); i = i + 1
     case ('--fail'); with_failures = .true.
     case ('--partial'); partial = .true.
+#ifdef VCI_ENS_MALLOC_FAIL
+    case ('--fail-alloc'); fail_k = int_arg(i + 1); fail_min = int_arg(i + 2); i = i + 2
+    case ('--fail-rank'); fail_rank = int_arg(i + 1); i = i + 1
+    case ('--fail-in'); call get_command_argument(i + 1, fail_in); i = i + 1
+#endif
     case default
       print '(a)', 'unknown argument '//trim(arg); call finish(2)
     end select
@@ -76,8 +108,22 @@ program ens_driver
     cfg%h = h; cfg%nsteps = nsteps; cfg%threads = threads; cfg%chunk = chunk; cfg%stride = stride
     cfg%impact_cap = 32
     cfg%name = 'ens_driver test ensemble'
+#ifdef VCI_ENS_MALLOC_FAIL
+    if (fail_rank < 0 .or. fail_rank == rank) &
+      call vci_test_malloc_fail_in(int(fail_k, c_long_long), int(fail_min, c_long_long), trim(fail_in)//c_null_char)
+#endif
     call vci_ensemble_run_file(factory, cfg, table, trim(path), stat, msg, overwrite=.true., &
                                members_failed=failed)
+#ifdef VCI_ENS_MALLOC_FAIL
+    if (fail_k > 0 .and. (fail_rank < 0 .or. fail_rank == rank)) then
+      if (vci_test_malloc_fail_pending() == 0) then
+        print '(a,i0,a,i0,a)', 'rank ', rank, ': allocation ', fail_k, ' failed'
+      else
+        print '(a,i0,a,i0,a)', 'rank ', rank, ': allocation ', fail_k, ' not reached'
+      end if
+      call vci_test_malloc_fail(0_c_long_long, 0_c_long_long)
+    end if
+#endif
     ! a run that stopped (a full disk, a rank's failure) says so: its member count is not a result
     if (rank == 0 .and. stat == VCI_OK) print '(a,i0,a,i0,a)', 'ran ', nm, ' members, ', failed, ' failed'
     if (rank == 0 .and. stat /= VCI_OK) print '(a,i0,a,i0,a)', 'run of ', nm, ' members stopped with status ', stat, &
