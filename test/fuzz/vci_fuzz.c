@@ -21,7 +21,9 @@
  * symmetric; a one-sided run of a symmetric scheme fails unless the library reported an
  * irreversible impact in the step where the two directions part (parting_step: the steps are taken
  * one by one and each one's counters recorded; docs/BACKWARD.md). VCI_FUZZ_IMPACTS=1 prints both
- * lists.
+ * lists. A run off only in its distance is judged against the scene's measured forward growth
+ * (chaos_bound: "chaotic", counted apart); VCI_FUZZ_RTOL_SCALE, VCI_FUZZ_MOVE_START and
+ * VCI_FUZZ_ASYMMETRY change a seed's rtol, start or backward walls to measure why (below).
  * The seeds are fixed, so a failure replays:
  *
  *   vci_fuzz [--reversal] SEED_FIRST SEED_COUNT [SECONDS]   run the seeds, stop after SECONDS (default 60)
@@ -58,7 +60,7 @@
  * fallback never taken in one direction only; docs/BACKWARD.md) */
 enum { EXIT_REVERSAL_BROKEN = 73, EXIT_REVERSAL_UNJUDGED = 74, EXIT_REVERSAL_ONE_SIDED = 75,
        EXIT_REVERSAL_ONE_SIDED_LEFT = 76, EXIT_REVERSAL_ONE_SIDED_UNEXPLAINED = 77,
-       EXIT_REVERSAL_ONE_SIDED_ELSEWHERE = 78 };
+       EXIT_REVERSAL_ONE_SIDED_ELSEWHERE = 78, EXIT_REVERSAL_CHAOTIC = 79 };
 /* ... and 78: one-sided with a symmetric scheme where the library reported an irreversible impact,
  * but not in the step where the two directions part (parting_step below): the reported impact is
  * not what made the run one-sided, so it explains nothing (a failure) */
@@ -595,6 +597,91 @@ static void program(uint64_t seed) {
   if (vci_test_lapack_nonfinite_calls() != 0) _exit(71); /* (the guard exits at once anyway) */
 }
 
+/* VCI_FUZZ_RTOL_SCALE=f multiplies each run's drawn rtol by f (the draw itself is unchanged, so a
+ * seed keeps its scene): an error the solves' tolerance makes falls with f, an asymmetry of the
+ * algorithm does not (docs/BACKWARD.md, "Distance alone") */
+static double rtol_scale(void) {
+  const char *env = getenv("VCI_FUZZ_RTOL_SCALE");
+  return env != NULL && atof(env) > 0.0 ? atof(env) : 1.0;
+}
+
+/* The end of N forward steps from (q0, p0 + eps (1 + |p0|) d), d a fixed direction of alternating
+ * signs, with the run's model, scheme and tolerance; returns the step's status */
+static int moved_forward_end(vci_model model, int scheme, int stages, double h, double rtol, double t0, int n,
+                             const double *q0, const double *p0, int nsteps, double eps, double *q, double *p) {
+  vci_integrator it = NULL;
+  double pm[MAXC], t;
+  int i, j, s;
+  for (i = 0; i < n; ++i) pm[i] = p0[i] + eps * (1.0 + fabs(p0[i])) * (i % 2 ? -0.6 : 0.8);
+  s = vci_integrator_create(&it, model, h);
+  if (s == VCI_OK) s = vci_set_scheme(it, scheme, stages);
+  if (s == VCI_OK) s = vci_set_tolerances(it, 0.0, rtol, 30);
+  if (s == VCI_OK) s = vci_init_from_momentum(it, t0, q0, pm);
+  for (j = 0; j < nsteps && s == VCI_OK; ++j) s = vci_step(it, 1);
+  if (s == VCI_OK) s = vci_get_state(it, &t, q, p);
+  vci_integrator_destroy(&it);
+  return s;
+}
+/* How much the forward run amplifies a start moved by eps: the largest relative change of an end
+ * coordinate (the reversal error's measure) over eps; negative when a moved run failed. The
+ * backward run is the inverse map, whose derivative has the same largest singular value (the
+ * map is symplectic), so a solve's error anywhere in the round trip is amplified at most about
+ * this much */
+static double forward_growth(vci_model model, int scheme, int stages, double h, double rtol, double t0, int n,
+                             const double *q0, const double *p0, int nsteps, const double *qe, const double *pe,
+                             double eps) {
+  double q[MAXC], p[MAXC], d = 0.0;
+  int i;
+  if (moved_forward_end(model, scheme, stages, h, rtol, t0, n, q0, p0, nsteps, eps, q, p) != VCI_OK) return -1.0;
+  for (i = 0; i < n; ++i)
+    d = fmax(d, fmax(fabs(q[i] - qe[i]) / (1.0 + fabs(qe[i])), fabs(p[i] - pe[i]) / (1.0 + fabs(pe[i]))));
+  return d / eps;
+}
+
+/* A run whose only fault is its distance (status OK, index 0, as many impacts both ways, no split,
+ * fallback or irreversible impact) on a chaotic scene: the 2N solves' errors (rtol each) are
+ * amplified by up to the forward growth G, which REVERSAL_C * 2N * rtol ignores (docs/BACKWARD.md,
+ * "Distance alone"). The bound 2N * rtol * G, where G is measured linear (the growths of starts
+ * moved by 1e-9 and 1e-10 within a factor 2), and the start perturbation 2N * rtol capped at 1e-9
+ * (the largest one measured linear); none (negative) when G is not linear, a moved run failed or the
+ * bound exceeds CHAOS_RESOLUTION (there the tolerance alone moves the end by O(1e-3): nothing to
+ * judge, the run stays BROKEN). growth[2] receives the two growths. */
+#define CHAOS_RESOLUTION 1e-3
+static double chaos_bound(vci_model model, int scheme, int stages, double h, double rtol, double t0, int n,
+                          const double *q0, const double *p0, int nsteps, const double *qe, const double *pe,
+                          double growth[2]) {
+  double bound;
+  growth[0] = forward_growth(model, scheme, stages, h, rtol, t0, n, q0, p0, nsteps, qe, pe, 1e-9);
+  growth[1] = forward_growth(model, scheme, stages, h, rtol, t0, n, q0, p0, nsteps, qe, pe, 1e-10);
+  if (!(growth[0] > 0.0 && growth[1] > 0.0) || fmax(growth[0], growth[1]) > 2.0 * fmin(growth[0], growth[1]))
+    return -1.0;
+  bound = fmin(2.0 * nsteps * rtol, 1e-9) * fmin(growth[0], growth[1]);
+  return bound <= CHAOS_RESOLUTION ? bound : -1.0;
+}
+
+/* VCI_FUZZ_ASYMMETRY=d moves every wall by d (1 + |offset|) outwards for the backward run only: a
+ * deliberate asymmetry between the directions, to see the chaos judgement above fail it (the
+ * reversal error is then d times the growth, not rtol times it) */
+static double asymmetry(void) {
+  const char *env = getenv("VCI_FUZZ_ASYMMETRY");
+  return env != NULL ? atof(env) : 0.0;
+}
+static void move_walls(cmodel_t *md, double d) {
+  int j;
+  for (j = 0; j < md->ng; ++j) md->offset[j] -= d * (1.0 + fabs(md->offset[j]));
+}
+
+/* VCI_FUZZ_MOVE_START=e moves the start's p0 by e (1 + |p0|) along moved_forward_end's direction
+ * (after the draws: the scene is the seed's): an error made by the round-off of the 2N solves and
+ * amplified changes at random with a move of 1e-15, an asymmetry of the algorithm (smooth in the
+ * start) does not (docs/BACKWARD.md, "Distance alone") */
+static void move_start(int n, double *p0) {
+  const char *env = getenv("VCI_FUZZ_MOVE_START");
+  double e = env != NULL ? atof(env) : 0.0;
+  int i;
+  for (i = 0; i < n; ++i) p0[i] += e * (1.0 + fabs(p0[i])) * (i % 2 ? -0.6 : 0.8);
+}
+
 /* The reversal property on one random continuous scene: returns 0 (held), EXIT_REVERSAL_BROKEN or
  * EXIT_REVERSAL_UNJUDGED (a step failed, the net split a step or an energy fallback was taken). */
 static int reversal(uint64_t seed) {
@@ -602,7 +689,8 @@ static int reversal(uint64_t seed) {
   vci_model model = NULL;
   vci_integrator it = NULL;
   int separable, scheme, stages, s, i, n, nsteps, verdict = 0;
-  double h, rtol, q0[MAXC], p0[MAXC], t0, q[MAXC], p[MAXC], t, err_q = 0.0, err_p = 0.0, tol;
+  double h, rtol, q0[MAXC], p0[MAXC], t0, q[MAXC], p[MAXC], t, err_q = 0.0, err_p = 0.0, tol, qe[MAXC], pe[MAXC];
+  double chaos = -1.0, growth[2] = {-1.0, -1.0}, offsets[MAXCG];
   int64_t imp_f = 0, imp_b = 0, split_f = 0, split_b = 0, fb_f = 0, fb_b = 0, irr_f = 0, irr_b = 0, k = -1;
   const char *verbose = getenv("VCI_FUZZ_VERBOSE");
   static impact_list list_f, list_b;
@@ -641,25 +729,30 @@ static int reversal(uint64_t seed) {
   scheme = separable && chance(30) ? VCI_SCHEME_COMPOSITION : 1 + below(3);
   stages = scheme == VCI_SCHEME_COMPOSITION ? 2 * (1 + below(3)) : 1 + below(4);
   promise(vci_set_scheme(it, scheme, stages) == VCI_OK, "scheme set");
-  rtol = pow(10.0, uniform(-13.0, -10.0));
+  rtol = pow(10.0, uniform(-13.0, -10.0)) * rtol_scale();
   promise(vci_set_tolerances(it, 0.0, rtol, 30) == VCI_OK, "tolerances set");
   t0 = uniform(-1.0, 1.0);
   for (i = 0; i < n; ++i) {
     q0[i] = ref[i];
     p0[i] = uniform(-2.0, 2.0);
   }
+  move_start(n, p0);
   nsteps = 10 + below(91);
   promise(nsteps <= MAX_REVERSAL_STEPS, "the steps fit the per-step records");
   s = vci_init_from_momentum(it, t0, q0, p0);
   if (s == VCI_OK) s = vci_set_impact_callback(it, list_impact, &list_f);
   if (s == VCI_OK) s = recorded_steps(it, nsteps, 1, &list_f, &steps_f);
+  if (s == VCI_OK) s = vci_get_state(it, &t, qe, pe);
   if (s == VCI_OK) {
     vci_get_stats(it, NULL, &imp_f, NULL);
     vci_get_split_steps(it, &split_f, NULL);
     vci_get_energy_fallbacks(it, &fb_f);
     vci_get_irreversible_impacts(it, &irr_f);
     s = vci_set_impact_callback(it, list_impact, &list_b);
+    memcpy(offsets, md.offset, sizeof offsets);
+    move_walls(&md, asymmetry());
     if (s == VCI_OK) s = recorded_steps(it, nsteps, -1, &list_b, &steps_b);
+    memcpy(md.offset, offsets, sizeof offsets);
   }
   if (s == VCI_OK) {
     vci_get_stats(it, NULL, &imp_b, NULL);
@@ -697,10 +790,17 @@ static int reversal(uint64_t seed) {
                                                                                   : EXIT_REVERSAL_ONE_SIDED_ELSEWHERE;
   }
   else if (s != VCI_OK || split_f + split_b + fb_f + fb_b + irr_f + irr_b > 0) verdict = EXIT_REVERSAL_UNJUDGED;
-  else if (!(err_q <= tol && err_p <= tol) || k != 0 || imp_f != imp_b) verdict = EXIT_REVERSAL_BROKEN;
+  else if (!(err_q <= tol && err_p <= tol) || k != 0 || imp_f != imp_b) {
+    verdict = EXIT_REVERSAL_BROKEN;
+    /* only the distance is at fault: judged against the scene's measured chaos */
+    if (k == 0 && imp_f == imp_b) {
+      chaos = chaos_bound(model, scheme, stages, h, rtol, t0, n, q0, p0, nsteps, qe, pe, growth);
+      if (fmax(err_q, err_p) <= chaos) verdict = EXIT_REVERSAL_CHAOTIC;
+    }
+  }
   if (verbose || verdict == EXIT_REVERSAL_BROKEN || verdict == EXIT_REVERSAL_ONE_SIDED ||
       verdict == EXIT_REVERSAL_ONE_SIDED_LEFT || verdict == EXIT_REVERSAL_ONE_SIDED_UNEXPLAINED ||
-      verdict == EXIT_REVERSAL_ONE_SIDED_ELSEWHERE) { /* (to sort them) */
+      verdict == EXIT_REVERSAL_ONE_SIDED_ELSEWHERE || verdict == EXIT_REVERSAL_CHAOTIC) { /* (to sort them) */
     char msg[600] = "";
     if (s != VCI_OK) vci_last_error(it, msg, sizeof msg);
     if (s == VCI_OK) {
@@ -721,8 +821,13 @@ static int reversal(uint64_t seed) {
            verdict == EXIT_REVERSAL_ONE_SIDED_LEFT ? " one-sided-left" :
            verdict == EXIT_REVERSAL_ONE_SIDED_UNEXPLAINED ? " one-sided-unexplained" :
            verdict == EXIT_REVERSAL_ONE_SIDED_ELSEWHERE ? " one-sided-irreversible-elsewhere" :
+           verdict == EXIT_REVERSAL_CHAOTIC ? " chaotic" :
            verdict ? " unjudged" : "", msg);
   }
+  if (growth[0] != -1.0 || growth[1] != -1.0)
+    printf("  forward growth %.3g (start moved by 1e-9), %.3g (1e-10); chaos bound %s %.2e (2N rtol x growth, "
+           "the start's move capped at 1e-9), err %.2e\n", growth[0], growth[1], chaos < 0.0 ? "none:" : "",
+           chaos < 0.0 ? fmin(2.0 * nsteps * rtol, 1e-9) * fmin(growth[0], growth[1]) : chaos, fmax(err_q, err_p));
   if (getenv("VCI_FUZZ_IMPACTS")) { /* both lists, the backward one reversed beside the forward one */
     int a = list_f.count < MAX_LISTED_IMPACTS ? list_f.count : MAX_LISTED_IMPACTS;
     int b = list_b.count < MAX_LISTED_IMPACTS ? list_b.count : MAX_LISTED_IMPACTS;
@@ -772,7 +877,7 @@ static void run_child(uint64_t seed) {
 }
 
 int main(int argc, char **argv) {
-  long first, count, i, ran = 0, bad = 0, unjudged = 0, one_sided = 0, one_sided_left = 0, stopped = 0;
+  long first, count, i, ran = 0, bad = 0, unjudged = 0, one_sided = 0, one_sided_left = 0, chaotic = 0, stopped = 0;
   double budget;
   time_t start = time(NULL);
   fuzz_trace = getenv("VCI_FUZZ_TRACE") != NULL;
@@ -821,6 +926,8 @@ int main(int argc, char **argv) {
       ++one_sided;
     } else if (reversal_mode && WEXITSTATUS(status) == EXIT_REVERSAL_ONE_SIDED_LEFT) {
       ++one_sided_left;
+    } else if (reversal_mode && WEXITSTATUS(status) == EXIT_REVERSAL_CHAOTIC) {
+      ++chaotic;
     } else if (WEXITSTATUS(status) != 0) {
       static const char *why[] = {"exit from library code", "NaN/Inf given to LAPACK", "broken promise",
                                   "reversal broken", "", "", "",
@@ -845,7 +952,8 @@ int main(int argc, char **argv) {
   if (reversal_mode)
     printf(", %ld not judged (a failed step, or splits or energy fallbacks alike both ways), %ld not judged as"
            " one-sided (splits or energy fallbacks differ between the directions) with a symmetric scheme and an"
-           " irreversible impact reported, %ld with the left rule (not symmetric)", unjudged, one_sided, one_sided_left);
+           " irreversible impact reported, %ld with the left rule (not symmetric), %ld chaotic (beyond 100 2N rtol,"
+           " within 2N rtol x the measured forward growth)", unjudged, one_sided, one_sided_left, chaotic);
   printf("%s\n", ran < count && !stopped ? " (time budget reached)" : "");
   return bad ? 1 : 0;
 }
