@@ -7,7 +7,11 @@
 !> γ_i) are sampled first: the first c_i in (0, 1) whose stage lies beyond the wall, checked on the
 !> true map Φ_{c_i h}, closes a bracket [lo, hi] with g > 0 at lo and g < 0 at hi, which Illinois
 !> (modified regula falsi) shrinks to round-off. So a path that dips into the wall and out within
-!> one step is found when an internal stage sees it (for Verlet, s = 1, only the end is seen).
+!> one step is found when an internal stage sees it (for Verlet, s = 1, only the end is seen),
+!> or when the dip screen does: the parabola through the gaps at the sub-step's start, its
+!> estimated middle and its end, bend doubled, comes below the wall (may_dip); the true map at its
+!> deepest point then decides (dip_bracket). Without it a crossing met at the end one way was a dip
+!> that came back out unseen the other way (reversal seeds 112428, 25640, 44182, 48535, 52408).
 !> Only the sub-step ends are states: the internal stages are never reflected.
 !>
 !> Stage 2 (reflect): the Hamiltonian condition H(q̃, p⁺) = H(q̃, p⁻) with p⁺ = p⁻ + μ ∇g_j(q̃). For
@@ -36,12 +40,16 @@ module vci_explicit_step
   !> A sub-step departing from a wall and ending beyond it: halvings from its end that look for an
   !> admissible point of the true map before the return (first_crossing); 2^-40 of it is round-off
   integer, parameter :: DEPARTURE_HALVINGS = 40
+  !> A dip suspected by the screen: maps of the true map at the parabola's deepest point, each
+  !> parabola through the true map's points so far (the first through the estimated middle)
+  integer, parameter :: DIP_PROBES = 4
 
   type, public :: vci_explicit_t
     type(vci_composition_t) :: map
     integer :: n = 0, ng = 0
     logical :: start_gaps_known = .false. !< g_start holds the gaps at a
     logical :: samples_known = .false.    !< g_samples holds the gaps at the internal stages
+    logical :: middle_known = .false.     !< g_middle holds the gaps at the estimated middle
     integer :: max_impacts = 16           !< the records grow on demand up to it
     integer :: samples = 1                !< sorted(1:samples): stage-end fractions in (0, 1), then 1
     real(dp), allocatable :: a(:), pa(:), qe(:), pe(:), qt(:), pt(:), stage_q(:, :)
@@ -49,6 +57,7 @@ module vci_explicit_step
     real(dp), allocatable :: q_root(:), p_root(:), v_scratch(:)  !< stage 1's last point (fraction root_alpha)
     real(dp), allocatable :: g_sample_min(:)      !< each wall's least gap over the internal stages
     real(dp), allocatable :: g_root(:)            !< every wall's gap at (q_root, p_root)
+    real(dp), allocatable :: g_middle(:)          !< every wall's gap at the sub-step's estimated middle
     real(dp) :: root_alpha = -1.0_dp
     logical :: root_known = .false.
     real(dp), allocatable :: g_start(:), g_end(:), g_trial(:), grad(:), sorted(:), g_samples(:, :)
@@ -88,10 +97,10 @@ contains
     if (allocated(self%a)) deallocate (self%a, self%pa, self%qe, self%pe, self%qt, self%pt, self%stage_q, &
                                        self%g_start, self%g_end, self%g_trial, self%grad, self%sorted, self%order, &
                                        self%g_samples, self%q_run, self%p_run, self%q_root, self%p_root, &
-                                       self%v_scratch, self%g_sample_min, self%g_root)
+                                       self%v_scratch, self%g_sample_min, self%g_root, self%g_middle)
     if (allocated(self%all_grads)) deallocate (self%all_grads)
     allocate (self%q_run(n), self%p_run(n), self%q_root(n), self%p_root(n), self%v_scratch(n), self%g_sample_min(ng), &
-              self%g_root(ng), &
+              self%g_root(ng), self%g_middle(ng), &
               self%a(n), self%pa(n), self%qe(n), self%pe(n), self%qt(n), &
               self%pt(n), self%stage_q(n, s), &
               self%g_start(ng), self%g_end(ng), self%g_trial(ng), self%grad(n), self%sorted(s), &
@@ -175,12 +184,14 @@ contains
       call copy(self%n, state%q, self%qe); call copy(self%n, state%p, self%pe)   ! (move sets a, pa)
       call self%map%flow(self%qe, self%pe, dir * state%h, stat, self%stage_q)
       if (stat == VCI_OK) call gaps(self, self%qe, self%g_end, stat)
-      self%samples_known = .false.
+      self%samples_known = .false.; self%middle_known = .false.; self%start_gaps_known = .false.
       if (stat == VCI_OK) call ensure_samples(self, stat)
+      if (stat == VCI_OK) call ensure_middle(self, state%q, state%p, dir, state%h, stat)
       if (stat /= VCI_OK) then
         impacts%count = 0; return             ! the general path retakes the step and reports it
       end if
-      if (all_admissible(self%ng, self%g_end, self%g_sample_min)) then
+      if (all_admissible(self%ng, self%g_end, self%g_sample_min) .and. &
+          .not. any_dip(self%ng, self%g_start, self%g_middle, self%g_end)) then
         call copy(self%n, self%qe, state%q); call copy(self%n, self%pe, state%p)
         impacts%count = 0
         state%k = state%k + dir
@@ -200,6 +211,40 @@ contains
       done = done + 1; found = found + impacts%count
     end do
   end subroutine explicit_run
+
+  !> Some wall may dip (may_dip) in the sub-step with gaps g0 at its start, gm at its estimated
+  !> middle and g1 at its end.
+  pure logical function any_dip(ng, g0, gm, g1)
+    integer, intent(in) :: ng
+    real(dp), intent(in) :: g0(ng), gm(ng), g1(ng)
+    integer :: j
+    any_dip = .true.
+    do j = 1, ng
+      if (may_dip(g0(j), gm(j), g1(j))) return
+    end do
+    any_dip = .false.
+  end function any_dip
+
+  !> The screen for a wall crossed and left again inside a sub-step whose start, end and samples
+  !> are admissible: the parabola in the fraction c through the gaps g0 (c = 0), gm (c = 1/2, the
+  !> estimated middle) and g1 (c = 1), with its bend doubled (the middle is an estimate, O(τ³) off
+  !> for a composition, and the gap need not be linear), comes below 0 inside (0, 1).
+  pure logical function may_dip(g0, gm, g1)
+    real(dp), intent(in) :: g0, gm, g1
+    real(dp) :: bend, c
+    may_dip = .false.
+    bend = 0.5_dp * (g0 + g1) - gm                     ! the middle's depth below the chord
+    if (.not. bend > 0.0_dp) return
+    c = deepest(g0, g1, 2.0_dp * bend)
+    if (c <= 0.0_dp .or. c >= 1.0_dp) return
+    may_dip = g0 + (g1 - g0) * c - 8.0_dp * bend * c * (1.0_dp - c) < 0.0_dp
+  end function may_dip
+
+  !> The fraction where g0 + (g1 − g0) c − 4 bend c (1 − c) is least (bend > 0).
+  pure real(dp) function deepest(g0, g1, bend)
+    real(dp), intent(in) :: g0, g1, bend
+    deepest = 0.5_dp * (1.0_dp - (g1 - g0) / (4.0_dp * bend))
+  end function deepest
 
   !> No gap negative at the step's end nor at an internal stage (every wall's least sample).
   pure logical function all_admissible(ng, g_end, g_min)
@@ -251,7 +296,7 @@ contains
         if (stat /= VCI_OK) then
           call fail(self, 'gaps of the step''s end', stat, cause); return
         end if
-        self%samples_known = .false.
+        self%samples_known = .false.; self%middle_known = .false.
       end if
       mapped = .false.
       self%start_gaps_known = .false.       ! (evaluated only when a wall may be crossed)
@@ -375,13 +420,20 @@ contains
     integer, intent(out) :: stat
     real(dp) :: lo, hi, glo, ghi, c, g, gs, slope, delta, delta_prev, floor
     integer :: i, k, nk, side
-    logical :: have_lo, any_inside, on_wall, bracketed
+    logical :: have_lo, any_inside, on_wall, bracketed, dip
     alpha = 2.0_dp; stat = VCI_OK
     nk = self%samples
     call ensure_samples(self, stat)
     if (stat /= VCI_OK) return
     any_inside = self%g_end(j) < 0.0_dp .or. self%g_sample_min(j) < 0.0_dp
-    if (.not. any_inside) return
+    dip = .false.
+    if (.not. any_inside) then
+      ! end and samples admissible: only a dip can cross the wall (the screen, then the true map)
+      call ensure_middle(self, self%a, self%pa, dir, tau, stat)
+      if (stat /= VCI_OK) return
+      if (.not. may_dip(self%g_start(j), self%g_middle(j), self%g_end(j))) return
+      dip = .true.
+    end if
     ! A start on the wall (after a reflection, or a step that ended on it), to within the rounding
     ! of g there: moving into it, reflect at once; departing from it, the bracket's low end is the
     ! first point of the true map that is admissible again, and only the end can show a return
@@ -402,6 +454,7 @@ contains
     if (self%g_start(j) < -sqrt(epsilon(1.0_dp)) * sum(abs(self%grad) * max(abs(self%a), 1.0_dp))) then
       stat = VCI_ERR_INADMISSIBLE; return
     end if
+    if (dip .and. on_wall) return                ! (a start on the wall: as before the screen)
     if (on_wall) then
       call self%map%model%inverse_mass_times(self%pa, self%qt)
       if (dir * dot_product(self%grad, self%qt) < 0.0_dp) then
@@ -413,6 +466,12 @@ contains
     lo = 0.0_dp; glo = self%g_start(j)
     hi = -1.0_dp
     bracketed = .false.
+    if (dip) then
+      call dip_bracket(self, j, dir, tau, lo, glo, hi, ghi, stat)
+      if (stat /= VCI_OK) return
+      if (hi < 0.0_dp .or. lo >= limit) return   ! no crossing on the true map, or after a wall found
+      bracketed = .true.
+    end if
     if (on_wall) then
       ! Departing from the wall and ending beyond it: the forces bring the motion back within the
       ! sub-step (a soft reflection). The samples near the start scatter around g = 0 and Verlet
@@ -540,6 +599,93 @@ contains
     end do
     alpha = lo                                 ! the admissible side of the crossing
   end subroutine first_crossing
+
+  !> Every wall's gap at the start (q0, p0) of the sub-step of length tau (g_start) and at its
+  !> estimated middle (g_middle), once per sub-step: q(1/2) of the quadratic in the fraction c
+  !> through q0 with slope dir τ M⁻¹p0 there and through the end qe at c = 1, (3 q0 + qe +
+  !> dir τ M⁻¹p0)/4. Verlet's map over c τ is exactly that quadratic (kick–drift–kick); a
+  !> composition's is to O(τ³). No force: one product with M⁻¹ and one gaps callback.
+  subroutine ensure_middle(self, q0, p0, dir, tau, stat)
+    type(vci_explicit_t), intent(inout) :: self
+    real(dp), intent(in) :: q0(:), p0(:), tau
+    integer, intent(in) :: dir
+    integer, intent(out) :: stat
+    integer :: i
+    stat = VCI_OK
+    if (self%middle_known) return
+    if (.not. self%start_gaps_known) then
+      call gaps(self, q0, self%g_start, stat)
+      if (stat /= VCI_OK) return
+      self%start_gaps_known = .true.
+    end if
+    call self%map%model%inverse_mass_times(p0, self%v_scratch)
+    do i = 1, self%n
+      self%v_scratch(i) = 0.25_dp * ((3.0_dp * q0(i) + self%qe(i)) + dir * tau * self%v_scratch(i))
+    end do
+    call gaps(self, self%v_scratch, self%g_middle, stat)
+    if (stat == VCI_OK) self%middle_known = .true.
+  end subroutine ensure_middle
+
+  !> A dip of wall j suspected by the screen (may_dip), on the true map: the map at the deepest
+  !> point of the screen's parabola (without the doubling), then at the vertex of the parabola
+  !> through the true map's three points around the least gap so far, while that vertex lies
+  !> below the wall, up to DIP_PROBES maps. hi < 0: no crossing found (the dip stays above the
+  !> wall, to the parabola's resolution); else g > 0 at lo (the start or a probe), g <= 0 at hi.
+  subroutine dip_bracket(self, j, dir, tau, lo, glo, hi, ghi, stat)
+    type(vci_explicit_t), intent(inout) :: self
+    integer, intent(in) :: j, dir
+    real(dp), intent(in) :: tau
+    real(dp), intent(out) :: lo, glo, hi, ghi
+    integer, intent(out) :: stat
+    real(dp) :: cs(3), gs(3), c, g, bend
+    integer :: k
+    lo = 0.0_dp; glo = self%g_start(j); hi = -1.0_dp; ghi = 0.0_dp
+    cs = [0.0_dp, 0.5_dp, 1.0_dp]; gs = [self%g_start(j), self%g_middle(j), self%g_end(j)]
+    bend = 0.5_dp * (gs(1) + gs(3)) - gs(2)
+    c = deepest(gs(1), gs(3), bend)
+    if (c <= 0.0_dp .or. c >= 1.0_dp) c = deepest(gs(1), gs(3), 2.0_dp * bend)
+    do k = 1, DIP_PROBES
+      call gap_on_map(self, j, dir, c * tau, g, stat)
+      if (stat /= VCI_OK) return
+      if (.not. g > 0.0_dp) then
+        hi = c; ghi = g
+        if (g == 0.0_dp) call keep_root(self, c)
+        return
+      end if
+      ! the three true-map points around the least gap (the estimated middle drops out first)
+      if (k == 1) then
+        cs(2) = c; gs(2) = g
+      else if (c < cs(2)) then
+        if (g < gs(2)) then
+          cs(3) = cs(2); gs(3) = gs(2); cs(2) = c; gs(2) = g
+        else
+          cs(1) = c; gs(1) = g
+        end if
+      else
+        if (g < gs(2)) then
+          cs(1) = cs(2); gs(1) = gs(2); cs(2) = c; gs(2) = g
+        else
+          cs(3) = c; gs(3) = g
+        end if
+      end if
+      if (.not. parabola_vertex(cs, gs, c)) return
+    end do
+  contains
+    !> The vertex of the parabola through (cs(i), gs(i)), when it opens upwards, lies strictly
+    !> between cs(1) and cs(3) and below the wall.
+    logical function parabola_vertex(cs, gs, c)
+      real(dp), intent(in) :: cs(3), gs(3)
+      real(dp), intent(out) :: c
+      real(dp) :: d1, d2, curv
+      parabola_vertex = .false.; c = -1.0_dp
+      d1 = (gs(2) - gs(1)) / (cs(2) - cs(1)); d2 = (gs(3) - gs(2)) / (cs(3) - cs(2))
+      curv = (d2 - d1) / (cs(3) - cs(1))
+      if (.not. curv > 0.0_dp) return
+      c = 0.5_dp * (cs(1) + cs(2)) - 0.5_dp * d1 / curv
+      if (.not. (c > cs(1) .and. c < cs(3))) return
+      parabola_vertex = gs(1) + d1 * (c - cs(1)) + curv * (c - cs(1)) * (c - cs(2)) < 0.0_dp
+    end function parabola_vertex
+  end subroutine dip_bracket
 
   !> Every wall's gap at every internal stage of the sub-step (once per sub-step).
   subroutine ensure_samples(self, stat)
