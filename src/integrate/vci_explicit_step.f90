@@ -168,7 +168,9 @@ contains
     integer(i8), intent(out) :: done, found
     character(len=VCI_MSG_LEN) :: cause
     integer :: stat, i
+    logical :: start_is_last_end, regular
     done = 0; found = 0
+    start_is_last_end = .false.
     if (self%ng == 0) then
       ! no walls: the composed map's steps in one kernel (vci_composition's run_steps: flow's
       ! arithmetic, the same bits; a failing step is not taken, its start is in the state)
@@ -184,15 +186,22 @@ contains
       call copy(self%n, state%q, self%qe); call copy(self%n, state%p, self%pe)   ! (move sets a, pa)
       call self%map%flow(self%qe, self%pe, dir * state%h, stat, self%stage_q)
       if (stat == VCI_OK) call gaps(self, self%qe, self%g_end, stat)
-      self%samples_known = .false.; self%middle_known = .false.; self%start_gaps_known = .false.
+      ! (the start's gaps: the last regular step's end's, when that step was committed here)
+      self%samples_known = .false.; self%middle_known = .false.; self%start_gaps_known = start_is_last_end
+      start_is_last_end = .false.
       if (stat == VCI_OK) call ensure_samples(self, stat)
-      if (stat == VCI_OK) call ensure_middle(self, state%q, state%p, dir, state%h, stat)
+      regular = .false.
+      if (stat == VCI_OK) regular = all_admissible(self%ng, self%g_end, self%g_sample_min)
+      if (regular) then                       ! ... unless a wall is crossed and left inside the step
+        call ensure_middle(self, state%q, state%p, dir, state%h, stat)
+        regular = .not. any_dip(self%ng, self%g_start, self%g_middle, self%g_end)
+      end if
       if (stat /= VCI_OK) then
         impacts%count = 0; return             ! the general path retakes the step and reports it
       end if
-      if (all_admissible(self%ng, self%g_end, self%g_sample_min) .and. &
-          .not. any_dip(self%ng, self%g_start, self%g_middle, self%g_end)) then
+      if (regular) then
         call copy(self%n, self%qe, state%q); call copy(self%n, self%pe, state%p)
+        call copy(self%ng, self%g_end, self%g_start); start_is_last_end = .true.
         impacts%count = 0
         state%k = state%k + dir
         done = done + 1
