@@ -723,6 +723,8 @@ contains
                                     self%settings%impact_energy_chosen)
     self%stats%energy_fallbacks = self%stats%energy_fallbacks + self%explicit%fallbacks
     self%explicit%fallbacks = 0
+    self%stats%irreversible_impacts = self%stats%irreversible_impacts + self%explicit%irreversible
+    self%explicit%irreversible = 0
   end subroutine explicit_condition
 
   !> Regular sub-step of length tau from (a, pa); x holds the initial guess and returns the solution.
