@@ -373,8 +373,9 @@ int  vci_set_step_splits(vci_integrator integ, int max_splits);
  *  inside each sub-step that may come near a wall for a wall crossed and left again within it (the
  *  grid-point test alone misses it: a graze, or a second bounce off the same wall in one long step),
  *  where the sub-step resolves the motion; 0 tests the gaps at the sub-steps' ends only (cheaper;
- *  docs/bench/poke.md). Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, on not 0 or 1;
- *  VCI_ERR_STATE: busy. */
+ *  docs/bench/poke.md). The explicit compositions' dip screen follows it too (docs/DESIGN.md §9: 0
+ *  checks their ends and stage points only). Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle, on not
+ *  0 or 1; VCI_ERR_STATE: busy. */
 int  vci_set_poke_samples(vci_integrator integ, int on);
 
 /** Start from the pair q0[n] at t0 and q1[n] at t0 + h. The current state becomes

@@ -75,6 +75,9 @@ module vci_explicit_step
     integer(i8) :: irreversible = 0
     logical :: checking = .false.     !< move is the check of a step (no check of the check)
     logical :: step_had_dip = .false. !< the dip screen suspected a wall in this step (may_dip)
+    !> screen sub-steps for dips (the integrator's poke-screen setting, set_poke_samples; set by the
+    !> stepper before each step): off, only the ends and the samples are checked, as before the screen
+    logical :: screen_dips = .true.
     type(vci_impact_buffer_t) :: check_impacts
     real(dp), allocatable :: q_check(:), p_check(:)
     !> The model's one-wall gradient (gap_gradient): 0 not probed yet, 1 provided (O(n) a wall),
@@ -202,7 +205,7 @@ contains
       if (stat == VCI_OK) call ensure_samples(self, stat)
       regular = .false.
       if (stat == VCI_OK) regular = all_admissible(self%ng, self%g_end, self%g_sample_min)
-      if (regular) then                       ! ... unless a wall is crossed and left inside the step
+      if (regular .and. self%screen_dips) then   ! ... unless a wall is crossed and left inside the step
         call ensure_middle(self, state%q, state%p, dir, state%h, stat)
         regular = .not. any_dip(self%ng, self%g_start, self%g_middle, self%g_end)
       end if
@@ -494,6 +497,7 @@ contains
     dip = .false.
     if (.not. any_inside) then
       ! end and samples admissible: only a dip can cross the wall (the screen, then the true map)
+      if (.not. self%screen_dips) return
       call ensure_middle(self, self%a, self%pa, dir, tau, stat)
       if (stat /= VCI_OK) return
       if (.not. may_dip(self%g_start(j), self%g_middle(j), self%g_end(j))) return

@@ -31,7 +31,8 @@ module vci_settings
     integer :: border_min = 16     !< ... for stage systems of at least this many unknowns
     !> Sample sub-steps inside for a wall poked within one (docs/BACKWARD.md, "A wall poked within
     !> one sub-step"): set_poke_samples; on by default (off: the gaps at the sub-steps' ends only);
-    !> used only where the sub-step resolves the motion (samples_are_path)
+    !> used only where the sub-step resolves the motion (samples_are_path); the explicit
+    !> compositions' dip screen follows it (vci_explicit_step)
     logical :: poke_samples = .true.
   end type vci_settings_t
 

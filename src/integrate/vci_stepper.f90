@@ -716,11 +716,12 @@ contains
   !> The explicit step follows the impact-energy setting once set_impact_energy chose it, else it
   !> keeps the hamiltonian condition (the default `discrete` is the implicit schemes'; for the
   !> compositions it costs more and its energy error is larger: docs/SCHEMES.md); its grazes
-  !> under the discrete condition (mirror kept) are counted with the energy fallbacks.
+  !> under the discrete condition (mirror kept) are counted with the energy fallbacks. Its dip screen follows set_poke_samples.
   subroutine explicit_condition(self)
     type(vci_stepper_t), intent(inout) :: self
     self%explicit%condition = merge(self%settings%impact_energy, VCI_IMPACT_HAMILTONIAN, &
                                     self%settings%impact_energy_chosen)
+    self%explicit%screen_dips = self%settings%poke_samples
     self%stats%energy_fallbacks = self%stats%energy_fallbacks + self%explicit%fallbacks
     self%explicit%fallbacks = 0
     self%stats%irreversible_impacts = self%stats%irreversible_impacts + self%explicit%irreversible
