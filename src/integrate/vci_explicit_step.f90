@@ -234,6 +234,25 @@ contains
     end do
   end subroutine explicit_run
 
+  !> One Illinois step of a bracket on a wall's gap: the point c, gap g, replaces the bracket's end
+  !> on its side (g > 0: the admissible end pos, else the end neg beyond the wall); when the same
+  !> side is replaced twice running, the other end's gap is halved, so the false position does not
+  !> stall at one end. side: the side replaced last (1 admissible, -1 beyond, 0 none yet).
+  pure subroutine illinois_narrow(c, g, pos, gpos, neg, gneg, side)
+    real(dp), intent(in) :: c, g
+    real(dp), intent(inout) :: pos, gpos, neg, gneg
+    integer, intent(inout) :: side
+    if (g > 0.0_dp) then
+      pos = c; gpos = g
+      if (side == 1) gneg = 0.5_dp * gneg
+      side = 1
+    else
+      neg = c; gneg = g
+      if (side == -1) gpos = 0.5_dp * gpos
+      side = -1
+    end if
+  end subroutine illinois_narrow
+
   !> Some wall may dip (may_dip) in the sub-step with gaps g0 at its start, gm at its estimated
   !> middle and g1 at its end.
   pure logical function any_dip(ng, g0, gm, g1)
@@ -627,14 +646,8 @@ contains
       if (stat /= VCI_OK) return
       if (gs == 0.0_dp) then
         call keep_root(self, c); alpha = c; return
-      else if (gs > 0.0_dp) then
-        lo = c; glo = gs
-        if (side == 1) ghi = 0.5_dp * ghi
-        side = 1
       else
-        hi = c; ghi = gs
-        if (side == -1) glo = 0.5_dp * glo
-        side = -1
+        call illinois_narrow(c, gs, lo, glo, hi, ghi, side)
       end if
       call slope_on_map(self, j, dir, tau, slope, stat)
       if (stat /= VCI_OK) return
@@ -795,15 +808,7 @@ contains
       if (c <= a .or. c >= b) exit
       call gap_on_map(self, j, dir, c * tau, g, stat)
       if (stat /= VCI_OK) return
-      if (g > 0.0_dp) then
-        b = c; gb = g
-        if (side == 1) ga = 0.5_dp * ga
-        side = 1
-      else
-        a = c; ga = g
-        if (side == -1) gb = 0.5_dp * gb
-        side = -1
-      end if
+      call illinois_narrow(c, g, b, gb, a, ga, side)
       if (b - a <= 4.0_dp * epsilon(1.0_dp) * b) exit
     end do
     call gap_on_map(self, j, dir, b * tau, g, stat)               ! the exit's admissible side
