@@ -82,7 +82,7 @@ contains
       call set_thread_message(who//': '//trim(msg))
       vci_ensemble_run_c = stat; return
     end if
-    call write_results(res, out, int(members), size(table%q0, 1), int(cfg%impact_cap))
+    call write_results(res, out, int(members), int(cfg%impact_cap))
     call set_thread_message('')
     vci_ensemble_run_c = VCI_OK
   end function vci_ensemble_run_c
@@ -167,7 +167,7 @@ contains
     type(vci_ensemble_table_t), intent(out) :: table
     type(c_model_t) :: mcopy
     type(vci_ensemble_config_c) :: c
-    real(c_double), pointer :: a(:)
+    real(c_double), pointer :: a(:), a2(:, :)
     character(len=VCI_MSG_LEN) :: msg
     integer :: i, n, s
     stat = VCI_ERR_ARGUMENT
@@ -245,8 +245,9 @@ contains
       stat = VCI_ERR_MEMORY; return
     end if
     call c_f_pointer(t0, a, [members]); table%t0 = a
-    call c_f_pointer(q0, a, [n * members]); table%q0 = reshape(a, [n, int(members)])
-    call c_f_pointer(v0, a, [n * members]); table%v0 = reshape(a, [n, int(members)])
+    ! (through rank-2 pointers: a reshape would be a temporary of n * members allocated without stat=)
+    call c_f_pointer(q0, a2, [n, int(members)]); table%q0 = a2
+    call c_f_pointer(v0, a2, [n, int(members)]); table%v0 = a2
     call vci_ensemble_check(cfg, table, s, msg)
     if (s /= VCI_OK) then
       call set_thread_message(who//': '//trim(msg))
@@ -365,24 +366,27 @@ contains
   end function whole
 
   !> The Fortran results into the caller's arrays (those not NULL); gap indices from 0, -1 for none.
-  subroutine write_results(res, out, members, n, cap)
+  !> The tables go through rank-2 pointers of the caller's arrays, element by element: a reshape
+  !> (or `values - 1`) would be a temporary of the table's size allocated without stat=, whose
+  !> failure is a runtime error that ends the caller's program.
+  subroutine write_results(res, out, members, cap)
     type(vci_ensemble_results_t), intent(in) :: res
     type(vci_ensemble_results_c), intent(in) :: out
-    integer, intent(in) :: members, n, cap
+    integer, intent(in) :: members, cap
     character(kind=c_char), pointer :: txt(:)
     integer :: j, l, len_msg
     call put_i32(out%status, res%status)
     call put_f64(out%t, res%t)
-    call put_f64(out%q, reshape(res%q, [n * members]))
-    call put_f64(out%p, reshape(res%p, [n * members]))
+    call put_f64_table(out%q, res%q)
+    call put_f64_table(out%p, res%p)
     call put_i64(out%steps, res%steps)
     call put_i64(out%impacts, res%impacts)
     call put_i64(out%newton_iterations, res%newton_iterations)
     call put_f64(out%energy_start, res%energy_start)
     call put_f64(out%energy_end, res%energy_end)
     if (cap > 0) then
-      call put_f64(out%impact_t, reshape(res%impact_t, [cap * members]))
-      call put_i32(out%impact_gap, reshape(res%impact_gap, [cap * members]) - 1)
+      call put_f64_table(out%impact_t, res%impact_t)
+      call put_gap_table(out%impact_gap, res%impact_gap)
     end if
     if (c_associated(out%messages)) then
       len_msg = int(min(out%message_size, int(huge(1) / members, c_int64_t)))
@@ -404,6 +408,34 @@ contains
     call c_f_pointer(p, d, [size(values)])
     d = values
   end subroutine put_f64
+
+  !> The table values into the caller's double array at p, column by column (nothing when p is NULL).
+  subroutine put_f64_table(p, values)
+    type(c_ptr), intent(in) :: p
+    real(dp), intent(in) :: values(:, :)
+    real(c_double), pointer :: d(:, :)
+    integer :: j
+    if (.not. c_associated(p)) return
+    call c_f_pointer(p, d, shape(values))
+    do j = 1, size(values, 2)
+      d(:, j) = values(:, j)
+    end do
+  end subroutine put_f64_table
+
+  !> The gap indices (from 1, 0 for none) into the caller's int array at p, from 0 (-1 for none).
+  subroutine put_gap_table(p, gaps)
+    type(c_ptr), intent(in) :: p
+    integer, intent(in) :: gaps(:, :)
+    integer(c_int), pointer :: d(:, :)
+    integer :: i, j
+    if (.not. c_associated(p)) return
+    call c_f_pointer(p, d, shape(gaps))
+    do j = 1, size(gaps, 2)
+      do i = 1, size(gaps, 1)
+        d(i, j) = gaps(i, j) - 1
+      end do
+    end do
+  end subroutine put_gap_table
 
   !> values into the caller's int array at p (nothing when p is NULL).
   subroutine put_i32(p, values)
