@@ -713,6 +713,9 @@ enum { NRERUNS = 5 };
  * reruns those too, only to measure that (41537's spread is then 61 %, and 63 % with a wall moved
  * by 1e-6 one way; REPRODUCIBLE_RESOLUTION keeps it BROKEN). */
 static int reproduce_any_count(void) { return getenv("VCI_FUZZ_REPRODUCE_ANY_COUNT") != NULL; }
+/* VCI_FUZZ_RERUN_CHAOTIC=1 reruns a run judged chaotic too and prints the errors, its verdict
+ * unchanged: to compare the two judgements' resolution (docs/BACKWARD.md) */
+static int rerun_chaotic(void) { return getenv("VCI_FUZZ_RERUN_CHAOTIC") != NULL; }
 static const double rerun_rtol_factor[NRERUNS] = {0.1, 1.0, 1.0, 1.0, 1.0};
 static const double rerun_start_move[NRERUNS] = {0.0, 1e-15, 2e-15, 5e-15, 1e-14};
 /* N steps forward from (q0, p0 moved by e) and N back, the backward walls moved as in the run
@@ -886,10 +889,12 @@ static int reversal(uint64_t seed) {
       if (fmax(err_q, err_p) <= chaos) verdict = EXIT_REVERSAL_CHAOTIC;
     }
     /* beyond what the bound can judge: is the error reproducible? */
-    if (verdict == EXIT_REVERSAL_BROKEN && k == 0 && (imp_f == imp_b || reproduce_any_count())) {
+    if ((verdict == EXIT_REVERSAL_BROKEN || (verdict == EXIT_REVERSAL_CHAOTIC && rerun_chaotic())) && k == 0 &&
+        (imp_f == imp_b || reproduce_any_count())) {
       rerun = 1;
       spread = error_spread(model, &md, scheme, stages, h, rtol, t0, q0, p0, nsteps, fmax(err_q, err_p), reruns, &worst);
-      if (spread > REPRODUCIBLE_SPREAD && worst <= REPRODUCIBLE_RESOLUTION) verdict = EXIT_REVERSAL_AMPLIFIED;
+      if (verdict == EXIT_REVERSAL_BROKEN && spread > REPRODUCIBLE_SPREAD && worst <= REPRODUCIBLE_RESOLUTION)
+        verdict = EXIT_REVERSAL_AMPLIFIED;
     }
   }
   if (verbose || verdict == EXIT_REVERSAL_BROKEN || verdict == EXIT_REVERSAL_ONE_SIDED ||
