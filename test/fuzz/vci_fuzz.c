@@ -22,8 +22,10 @@
  * irreversible impact in the step where the two directions part (parting_step: the steps are taken
  * one by one and each one's counters recorded; docs/BACKWARD.md). VCI_FUZZ_IMPACTS=1 prints both
  * lists. A run off only in its distance is judged against the scene's measured forward growth
- * (chaos_bound: "chaotic", counted apart); VCI_FUZZ_RTOL_SCALE, VCI_FUZZ_MOVE_START and
- * VCI_FUZZ_ASYMMETRY change a seed's rtol, start or backward walls to measure why (below).
+ * (chaos_bound: "chaotic", counted apart) and, beyond it, by whether reruns with rtol/10 and tiny
+ * start moves reproduce its error (error_spread: if not, "amplified round-off", counted apart);
+ * VCI_FUZZ_RTOL_SCALE, VCI_FUZZ_MOVE_START and VCI_FUZZ_ASYMMETRY change a seed's rtol, start or
+ * backward walls to measure why (below).
  * The seeds are fixed, so a failure replays:
  *
  *   vci_fuzz [--reversal] SEED_FIRST SEED_COUNT [SECONDS]   run the seeds, stop after SECONDS (default 60)
@@ -703,15 +705,15 @@ static void move_start(int n, double *p0) {
  * relative (far below the tolerance). An asymmetry of the algorithm is smooth in the start and
  * independent of the solves' tolerance, so its error comes back the same (the deliberate
  * VCI_FUZZ_ASYMMETRY: to 3 digits); the solves' errors, tolerance or round-off amplified by the
- * dynamics, change with one or both (measured: by 48 % to 5000 x). A run is judged to be amplified
- * solves' error only when every rerun is again off in its distance alone and the errors' relative
- * spread (max - min) / max exceeds REPRODUCIBLE_SPREAD. A reproducible part A beside a part R that
- * changes between reruns gives a spread of about R / (A + R): 30 % lets through an asymmetry
- * whose error is below about 2.3 times the solves' (no test on the error alone can see less), and
- * is 300 times an asymmetry's own spread and below the smallest measured solves' spread (48 %).
- * Only for errors up to REPRODUCIBLE_RESOLUTION (all the reruns'): beyond, the runs have parted as
- * far as a different branch at an impact takes them, and reruns differ whatever the cause (41537:
- * 1.8-5.8 for starts moved by 1e-15, with or without a wall moved by 1e-6 one way). */
+ * dynamics, change with one or both. A run is judged to be amplified solves' error only when every
+ * rerun is again off in its distance alone and the errors' relative spread (max - min) / max
+ * exceeds REPRODUCIBLE_SPREAD: above an asymmetry's own spread once it dominates (0-2 %), below the
+ * smallest measured solves' spread (47 %, over the 16 runs of docs/BACKWARD.md's "Distance alone").
+ * It lets through a wall moved one way whose error is up to 1.8-5.9 times the run's own and fails
+ * it from 2.5-22 times (no test on the error alone can see one below the solves' own error). Only
+ * for errors up to REPRODUCIBLE_RESOLUTION (all six): beyond, the runs have parted as far as a
+ * different branch at an impact parts them, and reruns differ whatever the cause (41537: errors
+ * 1.8 to 5.6 over its reruns, with or without a wall moved by 1e-6 one way). */
 #define REPRODUCIBLE_SPREAD 0.30
 #define REPRODUCIBLE_RESOLUTION 0.1
 enum { NRERUNS = 5 };
@@ -754,7 +756,8 @@ static double round_trip_error(vci_model model, cmodel_t *md, int scheme, int st
   if (s == VCI_OK) s = vci_get_index(it, &k);
   vci_integrator_destroy(&it);
   if (s != VCI_OK || k != 0 || after[COUNTER_SPLITS] != before[COUNTER_SPLITS] ||
-      after[COUNTER_FALLBACKS] != before[COUNTER_FALLBACKS] || after[COUNTER_IRREVERSIBLE] != before[COUNTER_IRREVERSIBLE] ||
+      after[COUNTER_FALLBACKS] != before[COUNTER_FALLBACKS] ||
+      after[COUNTER_IRREVERSIBLE] != before[COUNTER_IRREVERSIBLE] ||
       (after[COUNTER_IMPACTS] - forward[COUNTER_IMPACTS] != forward[COUNTER_IMPACTS] - before[COUNTER_IMPACTS] &&
        !reproduce_any_count()))
     return -1.0;
@@ -902,7 +905,8 @@ static int reversal(uint64_t seed) {
     if ((verdict == EXIT_REVERSAL_BROKEN || (verdict == EXIT_REVERSAL_CHAOTIC && rerun_chaotic())) && k == 0 &&
         (imp_f == imp_b || reproduce_any_count())) {
       rerun = 1;
-      spread = error_spread(model, &md, scheme, stages, h, rtol, t0, q0, p0, nsteps, fmax(err_q, err_p), reruns, &worst);
+      spread = error_spread(model, &md, scheme, stages, h, rtol, t0, q0, p0, nsteps, fmax(err_q, err_p), reruns,
+                            &worst);
       if (verdict == EXIT_REVERSAL_BROKEN && spread > REPRODUCIBLE_SPREAD && worst <= REPRODUCIBLE_RESOLUTION)
         verdict = EXIT_REVERSAL_AMPLIFIED;
     }
