@@ -707,8 +707,9 @@ static void move_start(int n, double *p0) {
  * VCI_FUZZ_ASYMMETRY: to 3 digits); the solves' errors, tolerance or round-off amplified by the
  * dynamics, change with one or both. A run is judged to be amplified solves' error only when every
  * rerun is again off in its distance alone and the errors' relative spread (max - min) / max
- * exceeds REPRODUCIBLE_SPREAD: above an asymmetry's own spread once it dominates (0-2 %), below the
- * smallest measured solves' spread (47 %, over the 16 runs of docs/BACKWARD.md's "Distance alone").
+ * exceeds REPRODUCIBLE_SPREAD: above an asymmetry's own spread once it dominates (0-6 % where its
+ * error is 30 times the run's own), below the smallest measured solves' spread (47 %, over the 16
+ * runs of docs/BACKWARD.md's "Distance alone").
  * It lets through a wall moved one way whose error is up to 1.8-5.9 times the run's own and fails
  * it from 2.5-22 times (no test on the error alone can see one below the solves' own error). Only
  * for errors up to REPRODUCIBLE_RESOLUTION (all six): beyond, the runs have parted as far as a
