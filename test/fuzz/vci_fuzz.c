@@ -22,8 +22,10 @@
  * irreversible impact in the step where the two directions part (parting_step: the steps are taken
  * one by one and each one's counters recorded; docs/BACKWARD.md). VCI_FUZZ_IMPACTS=1 prints both
  * lists. A run off only in its distance is judged against the scene's measured forward growth
- * (chaos_bound: "chaotic", counted apart); VCI_FUZZ_RTOL_SCALE, VCI_FUZZ_MOVE_START and
- * VCI_FUZZ_ASYMMETRY change a seed's rtol, start or backward walls to measure why (below).
+ * (chaos_bound: "chaotic", counted apart) and, beyond it, by whether reruns with rtol/10 and tiny
+ * start moves reproduce its error (error_spread: if not, "amplified round-off", counted apart);
+ * VCI_FUZZ_RTOL_SCALE, VCI_FUZZ_MOVE_START and VCI_FUZZ_ASYMMETRY change a seed's rtol, start or
+ * backward walls to measure why (below).
  * The seeds are fixed, so a failure replays:
  *
  *   vci_fuzz [--reversal] SEED_FIRST SEED_COUNT [SECONDS]   run the seeds, stop after SECONDS (default 60)
@@ -60,10 +62,12 @@
  * fallback never taken in one direction only; docs/BACKWARD.md) */
 enum { EXIT_REVERSAL_BROKEN = 73, EXIT_REVERSAL_UNJUDGED = 74, EXIT_REVERSAL_ONE_SIDED = 75,
        EXIT_REVERSAL_ONE_SIDED_LEFT = 76, EXIT_REVERSAL_ONE_SIDED_UNEXPLAINED = 77,
-       EXIT_REVERSAL_ONE_SIDED_ELSEWHERE = 78, EXIT_REVERSAL_CHAOTIC = 79 };
+       EXIT_REVERSAL_ONE_SIDED_ELSEWHERE = 78, EXIT_REVERSAL_CHAOTIC = 79, EXIT_REVERSAL_AMPLIFIED = 80 };
 /* ... and 78: one-sided with a symmetric scheme where the library reported an irreversible impact,
  * but not in the step where the two directions part (parting_step below): the reported impact is
- * not what made the run one-sided, so it explains nothing (a failure) */
+ * not what made the run one-sided, so it explains nothing (a failure); 79 and 80: off only in its
+ * distance, within the scene's measured chaos (chaos_bound) or, beyond it, with an error that
+ * reruns do not reproduce (error_spread: the solves' errors amplified; both counted apart) */
 
 /* The impacts of a reversal run, in the order met (forward: time increasing; backward: decreasing),
  * to find where the two directions first part (one-sided runs, sorted by cause: docs/BACKWARD.md) */
@@ -605,15 +609,29 @@ static double rtol_scale(void) {
   return env != NULL && atof(env) > 0.0 ? atof(env) : 1.0;
 }
 
+/* VCI_FUZZ_POKE_SAMPLES=0 turns the poke screen off (vci_set_poke_samples) in every reversal
+ * integrator: the library as it was before poke24g, whose missed pokes were one-way impacts (3479,
+ * 11036), to see the reproducibility judgement below fail a real asymmetry of the library */
+static int poke_setting(vci_integrator it) {
+  const char *env = getenv("VCI_FUZZ_POKE_SAMPLES");
+  return env != NULL ? vci_set_poke_samples(it, atoi(env)) : VCI_OK;
+}
+/* p0 moved by e (1 + |p0|) along a fixed direction of alternating signs (moved_forward_end,
+ * VCI_FUZZ_MOVE_START, the reproducibility reruns) */
+static void moved_momentum(int n, const double *p0, double e, double *pm) {
+  int i;
+  for (i = 0; i < n; ++i) pm[i] = p0[i] + e * (1.0 + fabs(p0[i])) * (i % 2 ? -0.6 : 0.8);
+}
 /* The end of N forward steps from (q0, p0 + eps (1 + |p0|) d), d a fixed direction of alternating
  * signs, with the run's model, scheme and tolerance; returns the step's status */
 static int moved_forward_end(vci_model model, int scheme, int stages, double h, double rtol, double t0, int n,
                              const double *q0, const double *p0, int nsteps, double eps, double *q, double *p) {
   vci_integrator it = NULL;
   double pm[MAXC], t;
-  int i, j, s;
-  for (i = 0; i < n; ++i) pm[i] = p0[i] + eps * (1.0 + fabs(p0[i])) * (i % 2 ? -0.6 : 0.8);
+  int j, s;
+  moved_momentum(n, p0, eps, pm);
   s = vci_integrator_create(&it, model, h);
+  if (s == VCI_OK) s = poke_setting(it);
   if (s == VCI_OK) s = vci_set_scheme(it, scheme, stages);
   if (s == VCI_OK) s = vci_set_tolerances(it, 0.0, rtol, 30);
   if (s == VCI_OK) s = vci_init_from_momentum(it, t0, q0, pm);
@@ -677,9 +695,94 @@ static void move_walls(cmodel_t *md, double d) {
  * start) does not (docs/BACKWARD.md, "Distance alone") */
 static void move_start(int n, double *p0) {
   const char *env = getenv("VCI_FUZZ_MOVE_START");
-  double e = env != NULL ? atof(env) : 0.0;
-  int i;
-  for (i = 0; i < n; ++i) p0[i] += e * (1.0 + fabs(p0[i])) * (i % 2 ? -0.6 : 0.8);
+  double moved[MAXC];
+  moved_momentum(n, p0, env != NULL ? atof(env) : 0.0, moved);
+  memcpy(p0, moved, (size_t)n * sizeof *p0);
+}
+
+/* Reproducibility of a distance-only error the chaos bound cannot judge (docs/BACKWARD.md,
+ * "Distance alone"): the round trip is rerun with rtol/10 and with p0 moved by 1e-15 ... 1e-14
+ * relative (far below the tolerance). An asymmetry of the algorithm is smooth in the start and
+ * independent of the solves' tolerance, so its error comes back the same (the deliberate
+ * VCI_FUZZ_ASYMMETRY: to 3 digits); the solves' errors, tolerance or round-off amplified by the
+ * dynamics, change with one or both. A run is judged to be amplified solves' error only when every
+ * rerun is again off in its distance alone and the errors' relative spread (max - min) / max
+ * exceeds REPRODUCIBLE_SPREAD: above an asymmetry's own spread once it dominates (0-6 % where its
+ * error is 30 times the run's own), below the smallest measured solves' spread (47 %, over the 16
+ * runs of docs/BACKWARD.md's "Distance alone").
+ * It lets through a wall moved one way whose error is up to 1.8-5.9 times the run's own and fails
+ * it from 2.5-22 times (no test on the error alone can see one below the solves' own error). Only
+ * for errors up to REPRODUCIBLE_RESOLUTION (all six): beyond, the runs have parted as far as a
+ * different branch at an impact parts them, and reruns differ whatever the cause (41537: errors
+ * 1.8 to 5.6 over its reruns, with or without a wall moved by 1e-6 one way). */
+#define REPRODUCIBLE_SPREAD 0.30
+#define REPRODUCIBLE_RESOLUTION 0.1
+enum { NRERUNS = 5 };
+/* Not where the impacts differ in number (seed 41537, 149/146): its end moves by O(1) for any start
+ * move down to 1e-13, so its reruns differ whatever else differs, and an impact met one way only is
+ * what the library's own one-way bugs looked like (docs/BACKWARD.md). VCI_FUZZ_REPRODUCE_ANY_COUNT=1
+ * reruns those too, only to measure that (41537's spread is then 61 %, and 63 % with a wall moved
+ * by 1e-6 one way; REPRODUCIBLE_RESOLUTION keeps it BROKEN). */
+static int reproduce_any_count(void) { return getenv("VCI_FUZZ_REPRODUCE_ANY_COUNT") != NULL; }
+/* VCI_FUZZ_RERUN_CHAOTIC=1 reruns a run judged chaotic too and prints the errors, its verdict
+ * unchanged: to compare the two judgements' resolution (docs/BACKWARD.md) */
+static int rerun_chaotic(void) { return getenv("VCI_FUZZ_RERUN_CHAOTIC") != NULL; }
+static const double rerun_rtol_factor[NRERUNS] = {0.1, 1.0, 1.0, 1.0, 1.0};
+static const double rerun_start_move[NRERUNS] = {0.0, 1e-15, 2e-15, 5e-15, 1e-14};
+/* N steps forward from (q0, p0 moved by e) and N back, the backward walls moved as in the run
+ * itself (VCI_FUZZ_ASYMMETRY); returns the round trip's error as the run's, or -1 when the rerun
+ * is not again off in its distance alone (a step failed, a split, fallback or irreversible impact,
+ * index not 0, or another number of impacts back than forward) */
+static double round_trip_error(vci_model model, cmodel_t *md, int scheme, int stages, double h, double rtol,
+                               double t0, const double *q0, const double *p0, int nsteps, double e) {
+  vci_integrator it = NULL;
+  double pm[MAXC], q[MAXC], p[MAXC], t, err = 0.0, offsets[MAXCG];
+  int64_t before[NCOUNTERS], forward[NCOUNTERS], after[NCOUNTERS], k = -1;
+  int i, j, s, n = md->n;
+  moved_momentum(n, p0, e, pm);
+  s = vci_integrator_create(&it, model, h);
+  if (s == VCI_OK) s = poke_setting(it);
+  if (s == VCI_OK) s = vci_set_scheme(it, scheme, stages);
+  if (s == VCI_OK) s = vci_set_tolerances(it, 0.0, rtol, 30);
+  if (s == VCI_OK) s = vci_init_from_momentum(it, t0, q0, pm);
+  if (s == VCI_OK) read_counters(it, before);
+  for (j = 0; j < nsteps && s == VCI_OK; ++j) s = vci_step(it, 1);
+  if (s == VCI_OK) read_counters(it, forward);
+  memcpy(offsets, md->offset, sizeof offsets);
+  move_walls(md, asymmetry());
+  for (j = 0; j < nsteps && s == VCI_OK; ++j) s = vci_step(it, -1);
+  memcpy(md->offset, offsets, sizeof offsets);
+  if (s == VCI_OK) read_counters(it, after);
+  if (s == VCI_OK) s = vci_get_state(it, &t, q, p);
+  if (s == VCI_OK) s = vci_get_index(it, &k);
+  vci_integrator_destroy(&it);
+  if (s != VCI_OK || k != 0 || after[COUNTER_SPLITS] != before[COUNTER_SPLITS] ||
+      after[COUNTER_FALLBACKS] != before[COUNTER_FALLBACKS] ||
+      after[COUNTER_IRREVERSIBLE] != before[COUNTER_IRREVERSIBLE] ||
+      (after[COUNTER_IMPACTS] - forward[COUNTER_IMPACTS] != forward[COUNTER_IMPACTS] - before[COUNTER_IMPACTS] &&
+       !reproduce_any_count()))
+    return -1.0;
+  for (i = 0; i < n; ++i)
+    err = fmax(err, fmax(fabs(q[i] - q0[i]) / (1.0 + fabs(q0[i])), fabs(p[i] - pm[i]) / (1.0 + fabs(pm[i]))));
+  return err;
+}
+/* The errors of the reruns (errors[NRERUNS], -1 for a rerun not off in its distance alone), the
+ * largest with the run's own error in *worst, and their relative spread; -1 when a rerun was not
+ * alike */
+static double error_spread(vci_model model, cmodel_t *md, int scheme, int stages, double h, double rtol, double t0,
+                           const double *q0, const double *p0, int nsteps, double err, double errors[NRERUNS],
+                           double *worst) {
+  double lo = err, hi = err;
+  int r, alike = 1;
+  for (r = 0; r < NRERUNS; ++r) {
+    errors[r] = round_trip_error(model, md, scheme, stages, h, rtol * rerun_rtol_factor[r], t0, q0, p0, nsteps,
+                                 rerun_start_move[r]);
+    if (errors[r] < 0.0) alike = 0;
+    lo = fmin(lo, errors[r]);
+    hi = fmax(hi, errors[r]);
+  }
+  *worst = hi;
+  return alike && hi > 0.0 ? (hi - lo) / hi : -1.0;
 }
 
 /* The reversal property on one random continuous scene: returns 0 (held), EXIT_REVERSAL_BROKEN or
@@ -690,7 +793,8 @@ static int reversal(uint64_t seed) {
   vci_integrator it = NULL;
   int separable, scheme, stages, s, i, n, nsteps, verdict = 0;
   double h, rtol, q0[MAXC], p0[MAXC], t0, q[MAXC], p[MAXC], t, err_q = 0.0, err_p = 0.0, tol, qe[MAXC], pe[MAXC];
-  double chaos = -1.0, growth[2] = {-1.0, -1.0}, offsets[MAXCG];
+  double chaos = -1.0, growth[2] = {-1.0, -1.0}, offsets[MAXCG], spread = -1.0, reruns[NRERUNS], worst = 0.0;
+  int rerun = 0;
   int64_t imp_f = 0, imp_b = 0, split_f = 0, split_b = 0, fb_f = 0, fb_b = 0, irr_f = 0, irr_b = 0, k = -1;
   const char *verbose = getenv("VCI_FUZZ_VERBOSE");
   static impact_list list_f, list_b;
@@ -726,6 +830,7 @@ static int reversal(uint64_t seed) {
     promise(vci_model_declare_bandwidth(model, 1, 0) == VCI_OK, "bandwidth 1");
   h = uniform(0.005, 0.05);
   promise(vci_integrator_create(&it, model, h) == VCI_OK, "integrator created");
+  promise(poke_setting(it) == VCI_OK, "poke setting");
   scheme = separable && chance(30) ? VCI_SCHEME_COMPOSITION : 1 + below(3);
   stages = scheme == VCI_SCHEME_COMPOSITION ? 2 * (1 + below(3)) : 1 + below(4);
   promise(vci_set_scheme(it, scheme, stages) == VCI_OK, "scheme set");
@@ -797,10 +902,20 @@ static int reversal(uint64_t seed) {
       chaos = chaos_bound(model, scheme, stages, h, rtol, t0, n, q0, p0, nsteps, qe, pe, growth);
       if (fmax(err_q, err_p) <= chaos) verdict = EXIT_REVERSAL_CHAOTIC;
     }
+    /* beyond what the bound can judge: is the error reproducible? */
+    if ((verdict == EXIT_REVERSAL_BROKEN || (verdict == EXIT_REVERSAL_CHAOTIC && rerun_chaotic())) && k == 0 &&
+        (imp_f == imp_b || reproduce_any_count())) {
+      rerun = 1;
+      spread = error_spread(model, &md, scheme, stages, h, rtol, t0, q0, p0, nsteps, fmax(err_q, err_p), reruns,
+                            &worst);
+      if (verdict == EXIT_REVERSAL_BROKEN && spread > REPRODUCIBLE_SPREAD && worst <= REPRODUCIBLE_RESOLUTION)
+        verdict = EXIT_REVERSAL_AMPLIFIED;
+    }
   }
   if (verbose || verdict == EXIT_REVERSAL_BROKEN || verdict == EXIT_REVERSAL_ONE_SIDED ||
       verdict == EXIT_REVERSAL_ONE_SIDED_LEFT || verdict == EXIT_REVERSAL_ONE_SIDED_UNEXPLAINED ||
-      verdict == EXIT_REVERSAL_ONE_SIDED_ELSEWHERE || verdict == EXIT_REVERSAL_CHAOTIC) { /* (to sort them) */
+      verdict == EXIT_REVERSAL_ONE_SIDED_ELSEWHERE || verdict == EXIT_REVERSAL_CHAOTIC ||
+      verdict == EXIT_REVERSAL_AMPLIFIED) { /* (to sort them) */
     char msg[600] = "";
     if (s != VCI_OK) vci_last_error(it, msg, sizeof msg);
     if (s == VCI_OK) {
@@ -822,12 +937,22 @@ static int reversal(uint64_t seed) {
            verdict == EXIT_REVERSAL_ONE_SIDED_UNEXPLAINED ? " one-sided-unexplained" :
            verdict == EXIT_REVERSAL_ONE_SIDED_ELSEWHERE ? " one-sided-irreversible-elsewhere" :
            verdict == EXIT_REVERSAL_CHAOTIC ? " chaotic" :
+           verdict == EXIT_REVERSAL_AMPLIFIED ? " amplified-round-off" :
            verdict ? " unjudged" : "", msg);
   }
   if (growth[0] != -1.0 || growth[1] != -1.0)
     printf("  forward growth %.3g (start moved by 1e-9), %.3g (1e-10); chaos bound %s %.2e (2N rtol x growth, "
            "the start's move capped at 1e-9), err %.2e\n", growth[0], growth[1], chaos < 0.0 ? "none:" : "",
            chaos < 0.0 ? fmin(2.0 * nsteps * rtol, 1e-9) * fmin(growth[0], growth[1]) : chaos, fmax(err_q, err_p));
+  if (rerun) {
+    printf("  reruns' errors: %.3g with rtol/10; %.3g, %.3g, %.3g, %.3g with p0 moved by 1e-15, 2e-15, 5e-15, 1e-14 "
+           "(-1: not off in its distance alone); ", reruns[0], reruns[1], reruns[2], reruns[3], reruns[4]);
+    if (spread < 0.0) printf("a rerun not alike: not judged\n");
+    else printf("spread %.0f %% with the run's %.3g: %s\n", 100.0 * spread, fmax(err_q, err_p),
+                worst > REPRODUCIBLE_RESOLUTION ? "an error beyond 0.1, not judged"
+                : spread > REPRODUCIBLE_SPREAD  ? "not reproducible (amplified round-off)"
+                                                : "reproducible");
+  }
   if (getenv("VCI_FUZZ_IMPACTS")) { /* both lists, the backward one reversed beside the forward one */
     int a = list_f.count < MAX_LISTED_IMPACTS ? list_f.count : MAX_LISTED_IMPACTS;
     int b = list_b.count < MAX_LISTED_IMPACTS ? list_b.count : MAX_LISTED_IMPACTS;
@@ -877,7 +1002,8 @@ static void run_child(uint64_t seed) {
 }
 
 int main(int argc, char **argv) {
-  long first, count, i, ran = 0, bad = 0, unjudged = 0, one_sided = 0, one_sided_left = 0, chaotic = 0, stopped = 0;
+  long first, count, i, ran = 0, bad = 0, unjudged = 0, one_sided = 0, one_sided_left = 0, chaotic = 0, amplified = 0;
+  long stopped = 0;
   double budget;
   time_t start = time(NULL);
   fuzz_trace = getenv("VCI_FUZZ_TRACE") != NULL;
@@ -928,6 +1054,8 @@ int main(int argc, char **argv) {
       ++one_sided_left;
     } else if (reversal_mode && WEXITSTATUS(status) == EXIT_REVERSAL_CHAOTIC) {
       ++chaotic;
+    } else if (reversal_mode && WEXITSTATUS(status) == EXIT_REVERSAL_AMPLIFIED) {
+      ++amplified;
     } else if (WEXITSTATUS(status) != 0) {
       static const char *why[] = {"exit from library code", "NaN/Inf given to LAPACK", "broken promise",
                                   "reversal broken", "", "", "",
@@ -953,7 +1081,9 @@ int main(int argc, char **argv) {
     printf(", %ld not judged (a failed step, or splits or energy fallbacks alike both ways), %ld not judged as"
            " one-sided (splits or energy fallbacks differ between the directions) with a symmetric scheme and an"
            " irreversible impact reported, %ld with the left rule (not symmetric), %ld chaotic (beyond 100 2N rtol,"
-           " within 2N rtol x the measured forward growth)", unjudged, one_sided, one_sided_left, chaotic);
+           " within 2N rtol x the measured forward growth), %ld amplified round-off (beyond that bound, an error"
+           " not reproduced by reruns with rtol/10 and p0 moved by 1e-15-1e-14)", unjudged, one_sided, one_sided_left,
+           chaotic, amplified);
   printf("%s\n", ran < count && !stopped ? " (time budget reached)" : "");
   return bad ? 1 : 0;
 }
