@@ -180,9 +180,9 @@ contains
         end if
         ! Reached the wall (to round-off) exactly at the end of the step: no reflection yet;
         ! the next step starts on the wall and reflects there.
+        call refuse_point_beyond(self, jstar, 1.0_dp - alpha <= landing_fraction, stat)
+        if (stat /= VCI_OK) return
         if (1.0_dp - alpha <= landing_fraction) then
-          call refuse_landing_beyond(self, jstar, stat)
-          if (stat /= VCI_OK) return
           self%q_start = self%q_wall; self%p_start = self%p_arrive
           call self%sys%get_multipliers(self%x_stage1, self%lambda_new)
           self%q_new = self%q_wall; self%p_new = self%p_arrive; self%e_new = e_minus
@@ -414,14 +414,17 @@ contains
     end function evaluate_towards
 
     !> Regular sub-step and stage 1 to wall j from (q_start, p- + mu grad g); f = E_d - E-. False when
-    !> the motion misses wall j, crosses another wall before it (then its sub-step does not end at
-    !> wall j) or a solve fails (stat then says whether that is fatal).
+    !> the motion misses wall j or a solve fails (stat then says whether that is fatal). Where it
+    !> crosses another wall before wall j (crossed_before) its sub-step does not end at wall j: f is
+    !> a point for the secant, never the root (mu_best). (Before, such a point either stopped the
+    !> search, which cut off the root beyond it in left-rule seed 15608, or, on the wall just left,
+    !> went unseen and was taken as the root: reversal seed 35643.)
     logical function evaluate(mu, f)
       real(dp), intent(in) :: mu
       real(dp), intent(out) :: f
       real(dp) :: tol_unused, lo, hi, glo, ghi
       integer :: poked
-      logical :: found
+      logical :: found, crossed
       evaluate = .false.
       consistent = .false.
       missed = .false.
@@ -462,7 +465,8 @@ contains
       if (stat /= VCI_OK) then
         call set_cause(self, 'gap evaluation at the wall'); return
       end if
-      if (crossed_before(j)) return
+      crossed = crossed_before(j)
+      if (stat /= VCI_OK) return
       call self%sys%momentum_out(self%x_stage1, self%q_start, alpha * tau, self%p_arrive, stat, self%p_start)
       if (stat == VCI_OK) call self%sys%energy_out(self%x_stage1, self%q_start, alpha * tau, e_minus, stat)
       if (stat /= VCI_OK) then
@@ -472,19 +476,33 @@ contains
       if (stat /= VCI_OK) return
       evaluate = ieee_is_finite(f)
       consistent = .true.; mu_state = mu
-      if (evaluate .and. abs(f) < abs(f_best)) then
+      ! a motion that crosses another wall first is a secant point, never the root (its sub-step
+      ! does not end at wall j)
+      if (evaluate .and. .not. crossed .and. abs(f) < abs(f_best)) then
         mu_best = mu; f_best = f
       end if
     end function evaluate
 
     !> Does the sub-step from q_start to the point on wall `reached` (its gaps in gaps_trial) end
-    !> beyond another wall that it started on the admissible side of?
+    !> beyond another wall that it started on the admissible side of, or on (to round-off: imp's own
+    !> wall, which it leaves) and now beyond by more than the solver's tolerance? (Reversal seed
+    !> 35643: imp's wall read -1.4e-17 at the start, so a tied impulse whose motion went back
+    !> through it, 7.6e-6 deep, before wall j was taken, and the impact point lay beyond it.)
+    !> stat is set where a gradient fails (then true).
     logical function crossed_before(reached)
       integer, intent(in) :: reached
       integer :: k
       crossed_before = .false.
       do k = 1, self%ng
-        if (k /= reached .and. self%gaps_start(k) >= 0.0_dp .and. self%gaps_trial(k) < 0.0_dp) crossed_before = .true.
+        if (k == reached .or. .not. self%gaps_trial(k) < 0.0_dp) cycle
+        if (self%gaps_start(k) >= 0.0_dp) then
+          crossed_before = .true.
+        else
+          call start_gradient(self, k, stat)
+          crossed_before = stat /= VCI_OK .or. &
+                           self%gaps_trial(k) < -start_gap_tolerance(self, k, self%gaps_trial(k))
+        end if
+        if (crossed_before) return
       end do
     end function crossed_before
   end subroutine tie_to_wall
@@ -1237,13 +1255,17 @@ contains
     end do
   end subroutine refuse_start_beyond
 
-  !> A step that lands on wall jstar (stage 1 at its end) is accepted with that wall point as its
-  !> end, which the end-of-step test (every gap >= 0) never sees: it must not lie beyond another
-  !> wall by more than the solver's tolerance (else the next step would start there), or it is
-  !> stage 1's miss: VCI_ERR_IMPACT (the safety net retries). One gap evaluation per landing.
-  subroutine refuse_landing_beyond(self, jstar, stat)
+  !> An impact point on wall jstar (stage 1's, after any tie of the previous impact) must not lie
+  !> beyond another wall, the one just reflected from included, by more than the solver's
+  !> tolerance, or it is stage 1's miss: VCI_ERR_IMPACT (the safety net retries). Nothing else
+  !> checks it: a step that lands there ends at that point, which the end-of-step test (every
+  !> gap >= 0) never sees, and the sub-step reflected from it is checked at its start only when
+  !> its end is beyond a wall (reversal seed 35643: a point 7.6e-6 beyond the wall just left was
+  !> reflected from with status OK). One gap evaluation per impact.
+  subroutine refuse_point_beyond(self, jstar, landing, stat)
     type(vci_stepper_t), intent(inout) :: self
     integer, intent(in) :: jstar
+    logical, intent(in) :: landing        !< the point ends the step (the message says so)
     integer, intent(out) :: stat
     integer :: k
     call self%sys%eval_gaps(self%q_wall, self%gaps_trial(1:self%ng), stat)
@@ -1256,10 +1278,14 @@ contains
       if (stat /= VCI_OK) return
       if (self%gaps_trial(k) >= -start_gap_tolerance(self, k, self%gaps_trial(k))) cycle
       stat = VCI_ERR_IMPACT
-      call vci_set_message(self%cause, vci_crossed_unseen_cause(jstar, ' at the step''s end', k, self%gaps_trial(k)))
+      if (landing) then
+        call vci_set_message(self%cause, vci_crossed_unseen_cause(jstar, ' at the step''s end', k, self%gaps_trial(k)))
+      else
+        call vci_set_message(self%cause, vci_crossed_unseen_cause(jstar, '', k, self%gaps_trial(k)))
+      end if
       return
     end do
-  end subroutine refuse_landing_beyond
+  end subroutine refuse_point_beyond
 
 
   !> Stage 1 for wall j: find alpha in (0, 1], b on the wall, lambda. Initial guess from the chord a -> b.
