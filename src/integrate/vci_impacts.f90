@@ -1069,7 +1069,9 @@ contains
 
   !> Stage 1 for wall j, poked within the sub-step (find_poke's bracket [lo, hi] with the samples'
   !> solutions in x_low, x_high): Newton from the interpolated crossing. found when it reached the
-  !> wall before hi (the first crossing; past hi it found the way back out).
+  !> wall before hi (the first crossing). Past hi it found the way back out of the dip, though the
+  !> motion enters the wall inside the bracket: the bracket is bisected on the trajectory and Newton
+  !> started again, up to RESTARTS times; then, or where a solve failed, found = .false. as before.
   subroutine stage_poke(self, j, tau, lo, hi, glo, ghi, alpha, found, stat)
     type(vci_stepper_t), intent(inout) :: self
     integer, intent(in) :: j
@@ -1077,23 +1079,75 @@ contains
     real(dp), intent(out) :: alpha
     logical, intent(out) :: found
     integer, intent(out) :: stat
-    integer :: nm, st
+    !> bisections of the bracket before each new start, and new starts, where Newton left it
+    integer, parameter :: NARROWINGS = 2, RESTARTS = 4
+    integer :: nm, st, k
+    real(dp) :: a, b, ga, gb
     character(len=40) :: what
     found = .false.
     nm = self%nsub
     what = wall_label('stage 1 (reaching wall ', j)
     call start_gradient(self, j, stat)
     if (stat /= VCI_OK) return
-    alpha = lo + (hi - lo) * glo / max(glo - ghi, tiny(1.0_dp))
-    alpha = min(max(alpha, lo + 1.0e-3_dp * (hi - lo)), hi)
-    self%x(1:nm) = self%x_low(1:nm) + (alpha - lo) / (hi - lo) * (self%x_high(1:nm) - self%x_low(1:nm))
-    call solve_wall(self, j, tau, alpha, what(1:len_trim(what)), st)
-    if (st /= VCI_OK) then
-      if (self%sys%unrecoverable) stat = st
-      return
+    a = lo; b = hi; ga = glo; gb = ghi
+    do k = 0, RESTARTS
+      if (k > 0) then
+        ! Newton went past the bracket, to where the motion comes back out of a dip (or failed),
+        ! though the samples at its ends say the motion enters the wall inside it: narrow it on the
+        ! samples and start again closer to the entry (reversal seed 26238, Lobatto s = 1:
+        ! backward, the bracket [0.375, 0.5] of a dip 1.5e-5 deep led to the exit at 0.516 and the
+        ! impact that the forward run met at the entry was dropped)
+        if (.not. narrowed(NARROWINGS)) exit
+      end if
+      alpha = a + (b - a) * ga / max(ga - gb, tiny(1.0_dp))
+      alpha = min(max(alpha, a + 1.0e-3_dp * (b - a)), b)
+      self%x(1:nm) = self%x_low(1:nm) + (alpha - a) / (b - a) * (self%x_high(1:nm) - self%x_low(1:nm))
+      call solve_wall(self, j, tau, alpha, what(1:len_trim(what)), st)
+      if (st /= VCI_OK .and. self%sys%unrecoverable) then
+        stat = st; return
+      end if
+      if (st == VCI_OK) then
+        alpha = self%sys%get_extra(self%x, KIND_STAGE1)
+        found = alpha > 0.0_dp .and. alpha <= hi
+        if (found .or. .not. alpha > hi) return
+      end if
+    end do
+    ! (the narrowing posed shorter sub-steps: the caller's own again, as restore_substep does)
+    if (stat == VCI_OK) then
+      call self%sys%pose_substep(self%q_start, self%p_start, tau, stat)
+      if (stat /= VCI_OK) call set_cause(self, 'constraint forms')
     end if
-    alpha = self%sys%get_extra(self%x, KIND_STAGE1)
-    found = alpha > 0.0_dp .and. alpha <= hi
+  contains
+    !> Bisect [a, b] count times on the discrete trajectory (regular sub-steps of length s tau, each
+    !> started between the bracket's kept solutions), keeping g(a) >= 0 > g(b). False where a solve
+    !> fails (stat set where a callback said so).
+    logical function narrowed(count)
+      integer, intent(in) :: count
+      integer :: i
+      real(dp) :: s, g
+      narrowed = .false.
+      do i = 1, count
+        s = 0.5_dp * (a + b)
+        self%x(1:nm) = 0.5_dp * (self%x_low(1:nm) + self%x_high(1:nm))
+        call substep(self, self%q_start, self%p_start, s * tau, st)
+        if (st /= VCI_OK) then
+          if (self%sys%unrecoverable) stat = st
+          return
+        end if
+        call self%sys%get_endpoint(self%x, self%q_trial)
+        call self%sys%eval_gaps(self%q_trial, self%gaps_trial(1:self%ng), stat)
+        if (stat /= VCI_OK) then
+          call set_cause(self, 'gap evaluation inside the sub-step'); return
+        end if
+        g = self%gaps_trial(j)
+        if (g < 0.0_dp) then
+          b = s; gb = g; self%x_high(1:nm) = self%x(1:nm)
+        else
+          a = s; ga = g; self%x_low(1:nm) = self%x(1:nm)
+        end if
+      end do
+      narrowed = .true.
+    end function narrowed
   end subroutine stage_poke
 
   !> Stage 2's free motion over the rest tau2 (in x, its end in q_trial) ends off the wall (num >= 0),
