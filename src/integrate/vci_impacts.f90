@@ -1069,9 +1069,10 @@ contains
 
   !> Stage 1 for wall j, poked within the sub-step (find_poke's bracket [lo, hi] with the samples'
   !> solutions in x_low, x_high): Newton from the interpolated crossing. found when it reached the
-  !> wall before hi (the first crossing). Past hi it found the way back out of the dip, though the
-  !> motion enters the wall inside the bracket: the bracket is bisected on the trajectory and Newton
-  !> started again, up to RESTARTS times; then, or where a solve failed, found = .false. as before.
+  !> wall before hi (the first crossing). Where it went past hi (the way back out of the dip, though
+  !> the motion enters the wall inside the bracket) or failed, the bracket is bisected on the
+  !> trajectory and Newton started again, up to RESTARTS times; then, or where a sample's solve
+  !> fails, or where Newton reached a fraction <= 0, found = .false. as before.
   subroutine stage_poke(self, j, tau, lo, hi, glo, ghi, alpha, found, stat)
     type(vci_stepper_t), intent(inout) :: self
     integer, intent(in) :: j
