@@ -464,8 +464,10 @@ int  vci_get_energy_fallbacks(vci_integrator integ, int64_t *count);
  *  impact keeps its condition on the rest of the step, and a run back through it need not return
  *  to its start. Also counted: a step taken without an impact in which a reversed run, sampling
  *  the step from its end, finds a wall poked that this run, sampling from its start, does not
- *  (a graze shallower than the scheme's error; docs/DESIGN.md, "A poke seen from the end only").
- *  Only impacts of the steps taken count (as vci_get_energy_fallbacks). count may be NULL.
+ *  (a graze shallower than the scheme's error; docs/DESIGN.md, "A poke seen from the end only"),
+ *  and a touch (an impact without impulse) whose arriving momentum leaves the wall: a reversed run
+ *  arrives with that momentum, moving into the wall, and reflects there (docs/BACKWARD.md, "The odd
+ *  ones"). Only impacts of the steps taken count (as vci_get_energy_fallbacks). count may be NULL.
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle; VCI_ERR_STATE: busy. */
 int  vci_get_irreversible_impacts(vci_integrator integ, int64_t *count);
 

@@ -180,9 +180,9 @@ contains
         end if
         ! Reached the wall (to round-off) exactly at the end of the step: no reflection yet;
         ! the next step starts on the wall and reflects there.
+        call refuse_point_beyond(self, jstar, 1.0_dp - alpha <= landing_fraction, stat)
+        if (stat /= VCI_OK) return
         if (1.0_dp - alpha <= landing_fraction) then
-          call refuse_landing_beyond(self, jstar, stat)
-          if (stat /= VCI_OK) return
           self%q_start = self%q_wall; self%p_start = self%p_arrive
           call self%sys%get_multipliers(self%x_stage1, self%lambda_new)
           self%q_new = self%q_wall; self%p_new = self%p_arrive; self%e_new = e_minus
@@ -414,14 +414,17 @@ contains
     end function evaluate_towards
 
     !> Regular sub-step and stage 1 to wall j from (q_start, p- + mu grad g); f = E_d - E-. False when
-    !> the motion misses wall j, crosses another wall before it (then its sub-step does not end at
-    !> wall j) or a solve fails (stat then says whether that is fatal).
+    !> the motion misses wall j or a solve fails (stat then says whether that is fatal). Where it
+    !> crosses another wall before wall j (crossed_before) its sub-step does not end at wall j: f is
+    !> a point for the secant, never the root (mu_best). (Before, such a point either stopped the
+    !> search, which cut off the root beyond it in left-rule seed 15608, or, on the wall just left,
+    !> went unseen and was taken as the root: reversal seed 35643.)
     logical function evaluate(mu, f)
       real(dp), intent(in) :: mu
       real(dp), intent(out) :: f
       real(dp) :: tol_unused, lo, hi, glo, ghi
       integer :: poked
-      logical :: found
+      logical :: found, crossed
       evaluate = .false.
       consistent = .false.
       missed = .false.
@@ -462,7 +465,8 @@ contains
       if (stat /= VCI_OK) then
         call set_cause(self, 'gap evaluation at the wall'); return
       end if
-      if (crossed_before(j)) return
+      crossed = crossed_before(j)
+      if (stat /= VCI_OK) return
       call self%sys%momentum_out(self%x_stage1, self%q_start, alpha * tau, self%p_arrive, stat, self%p_start)
       if (stat == VCI_OK) call self%sys%energy_out(self%x_stage1, self%q_start, alpha * tau, e_minus, stat)
       if (stat /= VCI_OK) then
@@ -472,19 +476,33 @@ contains
       if (stat /= VCI_OK) return
       evaluate = ieee_is_finite(f)
       consistent = .true.; mu_state = mu
-      if (evaluate .and. abs(f) < abs(f_best)) then
+      ! a motion that crosses another wall first is a secant point, never the root (its sub-step
+      ! does not end at wall j)
+      if (evaluate .and. .not. crossed .and. abs(f) < abs(f_best)) then
         mu_best = mu; f_best = f
       end if
     end function evaluate
 
     !> Does the sub-step from q_start to the point on wall `reached` (its gaps in gaps_trial) end
-    !> beyond another wall that it started on the admissible side of?
+    !> beyond another wall that it started on the admissible side of, or on (to round-off: imp's own
+    !> wall, which it leaves) and now beyond by more than the solver's tolerance? (Reversal seed
+    !> 35643: imp's wall read -1.4e-17 at the start, so a tied impulse whose motion went back
+    !> through it, 7.6e-6 deep, before wall j was taken, and the impact point lay beyond it.)
+    !> stat is set where a gradient fails (then true).
     logical function crossed_before(reached)
       integer, intent(in) :: reached
       integer :: k
       crossed_before = .false.
       do k = 1, self%ng
-        if (k /= reached .and. self%gaps_start(k) >= 0.0_dp .and. self%gaps_trial(k) < 0.0_dp) crossed_before = .true.
+        if (k == reached .or. .not. self%gaps_trial(k) < 0.0_dp) cycle
+        if (self%gaps_start(k) >= 0.0_dp) then
+          crossed_before = .true.
+        else
+          call start_gradient(self, k, stat)
+          crossed_before = stat /= VCI_OK .or. &
+                           self%gaps_trial(k) < -start_gap_tolerance(self, k, self%gaps_trial(k))
+        end if
+        if (crossed_before) return
       end do
     end function crossed_before
   end subroutine tie_to_wall
@@ -1051,7 +1069,10 @@ contains
 
   !> Stage 1 for wall j, poked within the sub-step (find_poke's bracket [lo, hi] with the samples'
   !> solutions in x_low, x_high): Newton from the interpolated crossing. found when it reached the
-  !> wall before hi (the first crossing; past hi it found the way back out).
+  !> wall before hi (the first crossing). Where it went past hi (the way back out of the dip, though
+  !> the motion enters the wall inside the bracket) or failed, the bracket is bisected on the
+  !> trajectory and Newton started again, up to RESTARTS times; then, or where a sample's solve
+  !> fails, or where Newton reached a fraction <= 0, found = .false. as before.
   subroutine stage_poke(self, j, tau, lo, hi, glo, ghi, alpha, found, stat)
     type(vci_stepper_t), intent(inout) :: self
     integer, intent(in) :: j
@@ -1059,23 +1080,75 @@ contains
     real(dp), intent(out) :: alpha
     logical, intent(out) :: found
     integer, intent(out) :: stat
-    integer :: nm, st
+    !> bisections of the bracket before each new start, and new starts, where Newton left it
+    integer, parameter :: NARROWINGS = 2, RESTARTS = 4
+    integer :: nm, st, k
+    real(dp) :: a, b, ga, gb
     character(len=40) :: what
     found = .false.
     nm = self%nsub
     what = wall_label('stage 1 (reaching wall ', j)
     call start_gradient(self, j, stat)
     if (stat /= VCI_OK) return
-    alpha = lo + (hi - lo) * glo / max(glo - ghi, tiny(1.0_dp))
-    alpha = min(max(alpha, lo + 1.0e-3_dp * (hi - lo)), hi)
-    self%x(1:nm) = self%x_low(1:nm) + (alpha - lo) / (hi - lo) * (self%x_high(1:nm) - self%x_low(1:nm))
-    call solve_wall(self, j, tau, alpha, what(1:len_trim(what)), st)
-    if (st /= VCI_OK) then
-      if (self%sys%unrecoverable) stat = st
-      return
+    a = lo; b = hi; ga = glo; gb = ghi
+    do k = 0, RESTARTS
+      if (k > 0) then
+        ! Newton went past the bracket, to where the motion comes back out of a dip (or failed),
+        ! though the samples at its ends say the motion enters the wall inside it: narrow it on the
+        ! samples and start again closer to the entry (reversal seed 26238, Lobatto s = 1:
+        ! backward, the bracket [0.375, 0.5] of a dip 1.5e-5 deep led to the exit at 0.516 and the
+        ! impact that the forward run met at the entry was dropped)
+        if (.not. narrowed(NARROWINGS)) exit
+      end if
+      alpha = a + (b - a) * ga / max(ga - gb, tiny(1.0_dp))
+      alpha = min(max(alpha, a + 1.0e-3_dp * (b - a)), b)
+      self%x(1:nm) = self%x_low(1:nm) + (alpha - a) / (b - a) * (self%x_high(1:nm) - self%x_low(1:nm))
+      call solve_wall(self, j, tau, alpha, what(1:len_trim(what)), st)
+      if (st /= VCI_OK .and. self%sys%unrecoverable) then
+        stat = st; return
+      end if
+      if (st == VCI_OK) then
+        alpha = self%sys%get_extra(self%x, KIND_STAGE1)
+        found = alpha > 0.0_dp .and. alpha <= hi
+        if (found .or. .not. alpha > hi) return
+      end if
+    end do
+    ! (the narrowing posed shorter sub-steps: the caller's own again, as restore_substep does)
+    if (stat == VCI_OK) then
+      call self%sys%pose_substep(self%q_start, self%p_start, tau, stat)
+      if (stat /= VCI_OK) call set_cause(self, 'constraint forms')
     end if
-    alpha = self%sys%get_extra(self%x, KIND_STAGE1)
-    found = alpha > 0.0_dp .and. alpha <= hi
+  contains
+    !> Bisect [a, b] count times on the discrete trajectory (regular sub-steps of length s tau, each
+    !> started between the bracket's kept solutions), keeping g(a) >= 0 > g(b). False where a solve
+    !> fails (stat set where a callback said so).
+    logical function narrowed(count)
+      integer, intent(in) :: count
+      integer :: i
+      real(dp) :: s, g
+      narrowed = .false.
+      do i = 1, count
+        s = 0.5_dp * (a + b)
+        self%x(1:nm) = 0.5_dp * (self%x_low(1:nm) + self%x_high(1:nm))
+        call substep(self, self%q_start, self%p_start, s * tau, st)
+        if (st /= VCI_OK) then
+          if (self%sys%unrecoverable) stat = st
+          return
+        end if
+        call self%sys%get_endpoint(self%x, self%q_trial)
+        call self%sys%eval_gaps(self%q_trial, self%gaps_trial(1:self%ng), stat)
+        if (stat /= VCI_OK) then
+          call set_cause(self, 'gap evaluation inside the sub-step'); return
+        end if
+        g = self%gaps_trial(j)
+        if (g < 0.0_dp) then
+          b = s; gb = g; self%x_high(1:nm) = self%x(1:nm)
+        else
+          a = s; ga = g; self%x_low(1:nm) = self%x(1:nm)
+        end if
+      end do
+      narrowed = .true.
+    end function narrowed
   end subroutine stage_poke
 
   !> Stage 2's free motion over the rest tau2 (in x, its end in q_trial) ends off the wall (num >= 0),
@@ -1111,6 +1184,7 @@ contains
     call self%sys%get_endpoint(self%x, self%q_guess)
     rate = dot_product(self%sys%grad, self%q_guess - self%q_wall) / eps_frac
     self%x(1:nx) = self%x_saved(1:nx)
+    if (departs_off_wall(rate * eps_frac)) self%stats%irreversible_impacts = self%stats%irreversible_impacts + 1
     if (.not. rate < 0.0_dp) then
       call self%sys%pose_substep(self%q_wall, self%p_arrive, tau2, stat)   ! (the free motion's again)
       if (stat /= VCI_OK) call set_cause(self, 'constraint forms')
@@ -1137,6 +1211,21 @@ contains
     call substep(self, self%q_wall, self%p_arrive, tau2, stat)
     if (stat /= VCI_OK) return
     call self%sys%get_endpoint(self%x, self%q_trial)
+  contains
+    !> A touch at a point stage 1 reached (the arriving positions cross into the wall there) whose
+    !> momentum p- leaves the wall: the arriving positions and p- disagree on the side the motion
+    !> comes from, an unresolved graze (their normal speeds differ by the scheme's O(tau^2)). The
+    !> reversed motion arrives here with this same p- (a touch keeps it) and departs into the wall,
+    !> so the other direction reflects where its stage 1 meets the point (reversal seed 101834,
+    !> Lobatto s = 1: forward a touch, rate +1.9e-3 over a rest of 0.0123, backward an impulse of
+    !> 0.286): counted (irreversible_impacts) where the departure dg, over 1e-3 of the rest, is off
+    !> the wall by more than the solver's tolerance on g.
+    logical function departs_off_wall(dg)
+      real(dp), intent(in) :: dg
+      real(dp) :: scale
+      scale = sum(abs(self%sys%grad) * (abs(self%q_wall) + abs(self%q_guess - self%q_wall)))
+      departs_off_wall = dg > 10.0_dp * (self%settings%atol + self%settings%rtol * scale)
+    end function departs_off_wall
   end subroutine poke_departure
 
   !> Of the walls violated at the sub-step's end (gaps_end < 0), not yet tried and with gap(j) < 0,
@@ -1237,13 +1326,17 @@ contains
     end do
   end subroutine refuse_start_beyond
 
-  !> A step that lands on wall jstar (stage 1 at its end) is accepted with that wall point as its
-  !> end, which the end-of-step test (every gap >= 0) never sees: it must not lie beyond another
-  !> wall by more than the solver's tolerance (else the next step would start there), or it is
-  !> stage 1's miss: VCI_ERR_IMPACT (the safety net retries). One gap evaluation per landing.
-  subroutine refuse_landing_beyond(self, jstar, stat)
+  !> An impact point on wall jstar (stage 1's, after any tie of the previous impact) must not lie
+  !> beyond another wall, the one just reflected from included, by more than the solver's
+  !> tolerance, or it is stage 1's miss: VCI_ERR_IMPACT (the safety net retries). Nothing else
+  !> checks it: a step that lands there ends at that point, which the end-of-step test (every
+  !> gap >= 0) never sees, and the sub-step reflected from it is checked at its start only when
+  !> its end is beyond a wall (reversal seed 35643: a point 7.6e-6 beyond the wall just left was
+  !> reflected from with status OK). One gap evaluation per impact.
+  subroutine refuse_point_beyond(self, jstar, landing, stat)
     type(vci_stepper_t), intent(inout) :: self
     integer, intent(in) :: jstar
+    logical, intent(in) :: landing        !< the point ends the step (the message says so)
     integer, intent(out) :: stat
     integer :: k
     call self%sys%eval_gaps(self%q_wall, self%gaps_trial(1:self%ng), stat)
@@ -1256,10 +1349,14 @@ contains
       if (stat /= VCI_OK) return
       if (self%gaps_trial(k) >= -start_gap_tolerance(self, k, self%gaps_trial(k))) cycle
       stat = VCI_ERR_IMPACT
-      call vci_set_message(self%cause, vci_crossed_unseen_cause(jstar, ' at the step''s end', k, self%gaps_trial(k)))
+      if (landing) then
+        call vci_set_message(self%cause, vci_crossed_unseen_cause(jstar, ' at the step''s end', k, self%gaps_trial(k)))
+      else
+        call vci_set_message(self%cause, vci_crossed_unseen_cause(jstar, '', k, self%gaps_trial(k)))
+      end if
       return
     end do
-  end subroutine refuse_landing_beyond
+  end subroutine refuse_point_beyond
 
 
   !> Stage 1 for wall j: find alpha in (0, 1], b on the wall, lambda. Initial guess from the chord a -> b.

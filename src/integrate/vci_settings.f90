@@ -46,8 +46,9 @@ module vci_settings
     integer(i8) :: fallbacks = 0          !< least-squares fallbacks (singular Newton matrices)
     integer(i8) :: fused_solves = 0   !< of newton_solves, those the scheme's fused routine did
     integer(i8) :: energy_fallbacks = 0  !< soft impacts off the discrete condition: E_d blended with H, or H kept
-    !> impacts whose condition could not be tied to the next wall's sub-step, and free steps with a
-    !> poke seen from their end only (vci_impacts: poke_seen_from_end)
+    !> impacts whose condition could not be tied to the next wall's sub-step, free steps with a
+    !> poke seen from their end only (vci_impacts: poke_seen_from_end), and touches whose arriving
+    !> momentum leaves the wall (poke_departure)
     integer(i8) :: irreversible_impacts = 0
     integer(i8) :: split_steps = 0       !< steps the safety net took as equal sub-steps
     integer(i8) :: largest_split = 0     !< the most sub-steps one of them needed
