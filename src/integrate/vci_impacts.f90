@@ -62,7 +62,17 @@ contains
         end if
       end if
       if (stat /= VCI_OK) return
-      if (poked == 0 .and. all(self%gaps_end(1:self%ng) >= 0.0_dp)) exit
+      if (poked == 0 .and. all(self%gaps_end(1:self%ng) >= 0.0_dp)) then
+        ! the last impact's motion leaves the rest of the step free: a smaller impulse whose motion
+        ! comes back to a wall may meet its energy row too, and the step then has two solutions
+        ! (return_root_exists); its reversal is not guaranteed, and the run says so
+        if (last_gap > 0) then
+          if (return_root_exists(self, impacts%records(impacts%count), tau, stat)) &
+            self%stats%irreversible_impacts = self%stats%irreversible_impacts + 1
+          if (stat /= VCI_OK) return
+        end if
+        exit
+      end if
       if (impacts%count >= self%settings%max_impacts_per_step) then
         stat = VCI_ERR_TOO_MANY_IMPACTS
         self%cause = vci_too_many_impacts_cause(self%settings%max_impacts_per_step)
@@ -506,6 +516,228 @@ contains
       end do
     end function crossed_before
   end subroutine tie_to_wall
+
+  !> Two solutions of a step with a soft impact (docs/BACKWARD.md, "Two solutions of a step with a
+  !> soft impact"; issue 24). imp, the last impact of the step (at q_start), took the root mu_w of
+  !> its energy row (discrete or blended, m = 0) whose motion leaves the rest tau of the step free.
+  !> A smaller impulse on the reflection's side may send the motion back to a wall (any wall) within
+  !> the rest and meet the row on the sub-step up to that wall, the row tie_to_wall makes a step with
+  !> two impacts solve: the step then has two solutions, and the other direction, which cuts the
+  !> motion into other sub-steps, may take the other one (vci_fuzz --reversal 31255: backward
+  !> 1.501 where the forward run took 1.136 and met a second impact). True when such a root is
+  !> found; the caller counts an irreversible impact. The step is left as it was: x, the sub-step's
+  !> points and momenta, its gaps, the wall normal, the carried position part and the posed
+  !> sub-step are put back, and the search's failures are not the step's (a callback's
+  !> unrecoverable failure is).
+  !>
+  !> The search is on the impulse line mu = t mu_w, on F(t): the row on the sub-step that really
+  !> leaves imp at that impulse (up to the first wall its motion meets, else the whole rest;
+  !> leaving_row). F is continuous where the wall met changes into none (at the impulse whose
+  !> motion grazes the wall at the rest's end the two sub-steps are one) and F(1) = 0. A screen
+  !> first, two H values and one sub-step:
+  !>  - at any root H+ - H- = -w delta (vci_scheme: blended_row), |delta| <= |e+| + |e-| with e the
+  !>    two sub-steps' offsets E_d - H, O(tau^2) for a symmetric scheme. With e+ taken as at most
+  !>    OFFSET_MARGIN times the taken root's (whose sub-step, the whole rest, is the longest), H+ of
+  !>    a root is at least H- - D, D = OFFSET_MARGIN (|e+_w| + |e-|): on the reflection's side of the
+  !>    fold of H (a parabola in t through t = 0, 1/2, 1; exact for H quadratic in p) that bounds
+  !>    t from below by t_lo;
+  !>  - the motion from the impulse t_lo mu_w over the rest: if it ends beyond no wall, no impulse
+  !>    between it and mu_w sends the motion back (a larger normal impulse ends it farther from the
+  !>    wall it leaves: assumed, not proven for other walls) and no second root of this kind exists.
+  !> Else F on the way back, [t_lo, t_g] (t_g: where the motion stops coming back to the wall it
+  !> met, by the end gap's linear interpolation), rises to a kink (the blended weight's) and falls
+  !> towards the graze (scans of seed 98668's impacts; the part above 0 was 0.025 of [t_lo, 1] wide
+  !> there): golden sections for its top, up to max_golden, stop at the first positive value, and
+  !> Illinois steps close the bracket from t_lo to it to the row's tolerance; a root whose motion
+  !> comes back to a wall is the second solution. Assumed, as measured: F has one top there.
+  !> (A second root whose motion also leaves free is stage 2's choice, not counted here.) Not on
+  !> systems of reuse_min unknowns and more, where Newton keeps factors across solves and the
+  !> search's solves would change the run's later iterates (the run must not change).
+  logical function return_root_exists(self, imp, tau, stat) result(found)
+    type(vci_stepper_t), intent(inout) :: self
+    type(vci_impact_t), intent(in) :: imp
+    real(dp), intent(in) :: tau
+    integer, intent(out) :: stat
+    real(dp), parameter :: OFFSET_MARGIN = 4.0_dp
+    real(dp), parameter :: GOLDEN = 0.6180339887498949_dp
+    integer, parameter :: max_golden = 8, max_refine = 40
+    integer :: nx, k, kept, st, wall_met
+    real(dp) :: mu_w, h0, hh, h1, e_w, d_off, b, c, t_f, t_lo, disc, tol, g_lo, t_g, gap_met
+    real(dp) :: t_a, f_a, t_b, f_b, t_c, f_c, t_d, f_d, t_p, f_p, f_lo, t, f, w_a, w_b
+    logical :: returns
+    found = .false.
+    stat = VCI_OK
+    nx = self%nsub
+    if (.not. (self%has_energy .and. self%m == 0)) return
+    if (imp%condition /= VCI_IMPACT_DISCRETE .and. imp%condition /= VCI_IMPACT_BLENDED) return
+    if (nx + 1 >= self%newton%reuse_min) return
+    mu_w = self%sys%get_extra(self%x, KIND_STAGE2)
+    if (.not. (abs(mu_w) > 0.0_dp)) return          ! a touch: no impulse, no reflection's side
+    ! the step as it stands
+    self%tie_x(1:nx + 1, 1) = self%x(1:nx + 1)
+    self%tie_q(:, 1) = self%q_end; self%tie_q(:, 2) = self%q_wall; self%tie_q(:, 3) = self%p_arrive
+    self%poke_keep_g(1:self%ng) = self%gaps_end(1:self%ng)
+    call self%sys%position_carry(self%q_start, self%poke_keep_q(:, 5))
+
+    ! the screen: the window of impulses a root can have, and the motion at its low end
+    call self%sys%energy_out(self%x, self%q_start, tau, e_w, stat)
+    if (stat == VCI_OK) call line_energy(0.0_dp, h0)
+    if (stat == VCI_OK) call line_energy(0.5_dp * mu_w, hh)
+    if (stat == VCI_OK) call line_energy(mu_w, h1)
+    if (stat /= VCI_OK) goto 90
+    d_off = OFFSET_MARGIN * (abs(e_w - h1) + abs(self%e_arrive_last - h0))
+    c = 2.0_dp * (h1 - 2.0_dp * hh + h0)             ! H = h0 + b t + c t^2 along mu = t mu_w
+    b = h1 - h0 - c
+    if (.not. (c > 0.0_dp)) goto 90                  ! H not convex along the normal: not sought
+    t_f = -b / (2.0_dp * c)
+    if (.not. (t_f < 1.0_dp)) goto 90
+    t_lo = t_f
+    disc = b**2 - 4.0_dp * c * d_off                 ! H(t) = h0 - d_off on the reflection's side
+    if (disc > 0.0_dp) t_lo = (-b + sqrt(disc)) / (2.0_dp * c)
+    t_lo = max(t_lo, t_f + 0.02_dp * (1.0_dp - t_f))
+    if (.not. (t_lo < 0.99_dp)) goto 90
+    call self%sys%eval_gaps(self%q_start, self%gaps_start(1:self%ng), stat)
+    if (stat /= VCI_OK) goto 90
+    call forget_start_gradients(self)
+    ! the screen: the motion from the least impulse a root can have
+    if (.not. leaving_row(t_lo * mu_w, f_lo, returns)) goto 90
+    if (.not. returns) goto 90
+    if (abs(f_lo) <= tol) then
+      found = .true.; goto 90
+    end if
+    ! where the motion stops coming back to the wall it met (its end gap is about linear in the
+    ! impulse; beyond, F is the whole rest's row, continuous with it)
+    g_lo = gap_met
+    t_g = t_lo + (1.0_dp - t_lo) * g_lo / (g_lo - self%poke_keep_g(wall_met))
+    if (.not. (t_g > t_lo .and. t_g < 1.0_dp)) goto 90
+    ! a positive F on the way back: F rises from t_lo to a kink (the blended weight's) and falls
+    ! to the graze (scans of 98668's impacts: the hump 0.025 of [t_lo, 1] wide); golden sections
+    ! for its top, up to the first positive value
+    t_p = t_lo; f_p = f_lo
+    if (.not. (f_lo > 0.0_dp)) then
+      t_a = t_lo; t_b = t_g
+      t_c = t_b - GOLDEN * (t_b - t_a); t_d = t_a + GOLDEN * (t_b - t_a)
+      if (.not. leaving_row(t_c * mu_w, f_c, returns)) goto 90
+      if (.not. leaving_row(t_d * mu_w, f_d, returns)) goto 90
+      do k = 1, max_golden
+        if (f_c > 0.0_dp .or. f_d > 0.0_dp) exit
+        if (f_c > f_d) then
+          t_b = t_d; t_d = t_c; f_d = f_c
+          t_c = t_b - GOLDEN * (t_b - t_a)
+          if (.not. leaving_row(t_c * mu_w, f_c, returns)) goto 90
+        else
+          t_a = t_c; t_c = t_d; f_c = f_d
+          t_d = t_a + GOLDEN * (t_b - t_a)
+          if (.not. leaving_row(t_d * mu_w, f_d, returns)) goto 90
+        end if
+      end do
+      if (f_c > 0.0_dp) then
+        t_p = t_c; f_p = f_c
+      else if (f_d > 0.0_dp) then
+        t_p = t_d; f_p = f_d
+      else
+        goto 90
+      end if
+      t_a = t_lo; f_a = f_lo
+    else
+      ! F > 0 from t_lo on: a root before the graze, where F is the whole rest's row (< 0 below mu_w)
+      t_a = t_g
+      if (.not. leaving_row(t_a * mu_w, f_a, returns)) goto 90
+      if (.not. (f_a < 0.0_dp)) goto 90
+    end if
+    ! Illinois steps on the bracket between t_a (F < 0) and t_p (F > 0) to the row's tolerance
+    t_b = t_p; f_b = f_p
+    w_a = f_a; w_b = f_b; kept = 0
+    do k = 1, max_refine
+      t = t_a - w_a * (t_b - t_a) / (w_b - w_a)
+      if (.not. leaving_row(t * mu_w, f, returns)) goto 90
+      if (abs(f) <= tol) then
+        found = returns; exit
+      end if
+      if (abs(t_b - t_a) <= 8.0_dp * epsilon(1.0_dp)) exit
+      if ((f > 0.0_dp) .eqv. (f_b > 0.0_dp)) then
+        t_b = t; f_b = f; w_b = f
+        if (kept < 0) w_a = 0.5_dp * w_a
+        kept = -1
+      else
+        t_a = t; f_a = f; w_a = f
+        if (kept > 0) w_b = 0.5_dp * w_b
+        kept = 1
+      end if
+    end do
+
+    ! back to the step as it was
+90  continue
+    if (stat /= VCI_OK .and. .not. self%sys%unrecoverable) stat = VCI_OK
+    if (stat == VCI_OK) self%cause = ''
+    self%x(1:nx + 1) = self%tie_x(1:nx + 1, 1)
+    self%q_end = self%tie_q(:, 1); self%q_wall = self%tie_q(:, 2); self%p_arrive = self%tie_q(:, 3)
+    self%p_start = imp%p_after
+    self%gaps_end(1:self%ng) = self%poke_keep_g(1:self%ng)
+    call self%sys%set_wall_normal(imp%grad_g)
+    call self%sys%restore_position_carry(self%q_start, self%poke_keep_q(:, 5))
+    call forget_start_gradients(self)
+    ! x holds increments from the posed start: the leaving sub-step posed again (as find_poke leaves it)
+    call self%sys%pose_substep(self%q_start, self%p_start, tau, st)
+    if (st /= VCI_OK .and. stat == VCI_OK) then
+      stat = st; call set_cause(self, 'constraint forms')
+    end if
+    if (stat /= VCI_OK) found = .false.
+  contains
+    !> H(q, p- + mu grad g) at the impact
+    subroutine line_energy(mu, e)
+      real(dp), intent(in) :: mu
+      real(dp), intent(out) :: e
+      self%p_leave = imp%p_before + mu * imp%grad_g
+      call self%sys%hamiltonian(imp%q, self%p_leave, e, stat)
+    end subroutine line_energy
+
+    !> F at impulse mu: imp's row (blended_row: the discrete one where its weight is 1) with E_d of
+    !> the sub-step that leaves imp at mu, up to the first wall its motion reaches (returns) or over
+    !> the whole rest; tol the row's tolerance. False where a solve fails or the motion crosses
+    !> another wall before the one stage 1 reached (that sub-step is not the one that leaves).
+    logical function leaving_row(mu, f, returns)
+      real(dp), intent(in) :: mu
+      real(dp), intent(out) :: f
+      logical, intent(out) :: returns
+      real(dp) :: e_out, alpha, sc
+      integer :: j, jw
+      leaving_row = .false.; returns = .false.; f = huge(1.0_dp)
+      self%p_start = imp%p_before + mu * imp%grad_g
+      call self%sys%put_endpoint(self%x, self%q_start, self%tie_q(:, 1))
+      call substep(self, self%q_start, self%p_start, tau, stat)
+      if (stat /= VCI_OK) return
+      call self%sys%get_endpoint(self%x, self%q_end)
+      call self%sys%eval_gaps(self%q_end, self%gaps_end(1:self%ng), stat)
+      if (stat /= VCI_OK) return
+      self%wall_tried(1:self%ng) = .false.
+      jw = first_by_chord(self, self%gaps_end)
+      wall_met = jw
+      if (jw > 0) gap_met = self%gaps_end(jw)
+      if (jw == 0) then
+        call self%sys%energy_out(self%x, self%q_start, tau, e_out, stat)
+      else
+        returns = .true.
+        call stage_wall(self, jw, tau, alpha, stat)
+        if (stat /= VCI_OK) return
+        call self%sys%get_endpoint(self%x, self%q_wall)
+        call self%sys%eval_gaps(self%q_wall, self%gaps_trial(1:self%ng), stat)
+        if (stat /= VCI_OK) return
+        do j = 1, self%ng
+          if (j /= jw .and. self%gaps_start(j) >= 0.0_dp .and. self%gaps_trial(j) < 0.0_dp) return
+        end do
+        call self%sys%energy_out(self%x, self%q_start, alpha * tau, e_out, stat)
+      end if
+      if (stat /= VCI_OK) return
+      call self%sys%set_wall_normal(imp%grad_g)
+      call self%sys%pose_stage2(imp%q, imp%p_before, tau, imp%gap, self%e_arrive_last)
+      call self%sys%pose_blend(stat)
+      if (stat == VCI_OK) call self%sys%blended_row(e_out, mu, f, sc, stat)
+      if (stat /= VCI_OK) return
+      tol = self%settings%atol + self%settings%rtol * sc
+      leaving_row = ieee_is_finite(f)
+    end function leaving_row
+  end function return_root_exists
 
   !> Does the sub-step from (q_start, p_start) of length tau (its solution in x) pass a wall and come
   !> back before it reaches a wall its end is beyond? Its end alone cannot tell: a curved motion
