@@ -561,7 +561,7 @@ contains
     real(dp), parameter :: OFFSET_MARGIN = 4.0_dp
     real(dp), parameter :: GOLDEN = 0.6180339887498949_dp
     integer, parameter :: max_golden = 8, max_refine = 40
-    integer :: nx, k, kept, st, wall_met
+    integer :: nx, k, kept, st, wall_met, wall_back
     real(dp) :: mu_w, h0, hh, h1, e_w, d_off, b, c, t_f, t_lo, disc, tol, g_lo, t_g, gap_met
     real(dp) :: t_a, f_a, t_b, f_b, t_c, f_c, t_d, f_d, t_p, f_p, f_lo, t, f, w_a, w_b
     logical :: returns
@@ -606,16 +606,30 @@ contains
       found = .true.; goto 90
     end if
     ! where the motion stops coming back to the wall it met (its end gap is about linear in the
-    ! impulse; beyond, F is the whole rest's row, continuous with it)
-    g_lo = gap_met
-    t_g = t_lo + (1.0_dp - t_lo) * g_lo / (g_lo - self%poke_keep_g(wall_met))
+    ! impulse: t_g by interpolation between t_lo and 1, again from where a probe overshot)
+    wall_back = wall_met; g_lo = gap_met
+    t_g = t_lo + (1.0_dp - t_lo) * g_lo / (g_lo - self%poke_keep_g(wall_back))
     if (.not. (t_g > t_lo .and. t_g < 1.0_dp)) goto 90
-    ! a positive F on the way back: F rises from t_lo to a kink (the blended weight's) and falls
-    ! to the graze (scans of 98668's impacts: the hump 0.025 of [t_lo, 1] wide); golden sections
-    ! for its top, up to the first positive value
-    t_p = t_lo; f_p = f_lo
-    if (.not. (f_lo > 0.0_dp)) then
-      t_a = t_lo; t_b = t_g
+    ! F just before the graze: the roots of 31255 and 91440 lie within 1e-3 of the window of it
+    do k = 1, 3
+      t_p = t_g - 1.0e-3_dp * (t_g - t_lo)
+      if (.not. leaving_row(t_p * mu_w, f_p, returns)) goto 90
+      if (returns) exit
+      t_g = t_lo + (t_p - t_lo) * g_lo / (g_lo - self%gaps_end(wall_back))
+    end do
+    if (.not. returns) goto 90
+    if (abs(f_p) <= tol) then
+      found = .true.; goto 90
+    end if
+    t_a = t_lo; f_a = f_lo
+    if (f_lo > 0.0_dp .and. f_p < 0.0_dp) then
+      t_a = t_p; f_a = f_p; t_p = t_lo; f_p = f_lo
+    else if (.not. (f_p > 0.0_dp)) then
+      ! both below 0: F may rise above it on the way (to the kink of the blended weight, and fall
+      ! again: scans of seed 98668's impacts, above 0 on 0.025 of [t_lo, 1]); golden sections for
+      ! its top on [t_lo, t_p], up to the first positive value
+      if (f_lo > 0.0_dp) goto 90
+      t_b = t_p
       t_c = t_b - GOLDEN * (t_b - t_a); t_d = t_a + GOLDEN * (t_b - t_a)
       if (.not. leaving_row(t_c * mu_w, f_c, returns)) goto 90
       if (.not. leaving_row(t_d * mu_w, f_d, returns)) goto 90
@@ -639,11 +653,6 @@ contains
         goto 90
       end if
       t_a = t_lo; f_a = f_lo
-    else
-      ! F > 0 from t_lo on: a root before the graze, where F is the whole rest's row (< 0 below mu_w)
-      t_a = t_g
-      if (.not. leaving_row(t_a * mu_w, f_a, returns)) goto 90
-      if (.not. (f_a < 0.0_dp)) goto 90
     end if
     ! Illinois steps on the bracket between t_a (F < 0) and t_p (F > 0) to the row's tolerance
     t_b = t_p; f_b = f_p
