@@ -560,11 +560,10 @@ contains
     integer, intent(out) :: stat
     real(dp), parameter :: OFFSET_MARGIN = 4.0_dp
     real(dp), parameter :: GOLDEN = 0.6180339887498949_dp
+    real(dp), parameter :: MAX_RATIO = 4.0_dp        ! (as energy_along: within a factor 4 of the root taken)
     integer, parameter :: max_golden = 8, max_refine = 40
-    integer :: nx, k, kept, st, wall_met, wall_back
-    real(dp) :: mu_w, h0, hh, h1, e_w, d_off, b, c, t_f, t_lo, disc, tol, g_lo, t_g, gap_met
-    real(dp) :: t_a, f_a, t_b, f_b, t_c, f_c, t_d, f_d, t_p, f_p, f_lo, t, f, w_a, w_b
-    logical :: returns
+    integer :: nx, st, wall_met
+    real(dp) :: mu_w, h0, hh, h1, e_w, d_off, b, c, t_f, t_lo, t_hi, disc, tol, gap_met
     found = .false.
     stat = VCI_OK
     nx = self%nsub
@@ -591,89 +590,19 @@ contains
     if (.not. (c > 0.0_dp)) goto 90                  ! H not convex along the normal: not sought
     t_f = -b / (2.0_dp * c)
     if (.not. (t_f < 1.0_dp)) goto 90
-    t_lo = t_f
-    disc = b**2 - 4.0_dp * c * d_off                 ! H(t) = h0 - d_off on the reflection's side
+    t_lo = t_f                                       ! H(t) = h0 - d_off on the reflection's side
+    disc = b**2 - 4.0_dp * c * d_off
     if (disc > 0.0_dp) t_lo = (-b + sqrt(disc)) / (2.0_dp * c)
     t_lo = max(t_lo, t_f + 0.02_dp * (1.0_dp - t_f))
-    if (.not. (t_lo < 0.99_dp)) goto 90
+    t_hi = min((-b + sqrt(b**2 + 4.0_dp * c * d_off)) / (2.0_dp * c), MAX_RATIO)   ! H(t) = h0 + d_off
+    if (.not. (t_lo < 0.99_dp .or. t_hi > 1.01_dp)) goto 90
     call self%sys%eval_gaps(self%q_start, self%gaps_start(1:self%ng), stat)
     if (stat /= VCI_OK) goto 90
     call forget_start_gradients(self)
-    ! the screen: the motion from the least impulse a root can have
-    if (.not. leaving_row(t_lo * mu_w, f_lo, returns)) goto 90
-    if (.not. returns) goto 90
-    if (abs(f_lo) <= tol) then
-      found = .true.; goto 90
-    end if
-    ! where the motion stops coming back to the wall it met (its end gap is about linear in the
-    ! impulse: t_g by interpolation between t_lo and 1, again from where a probe overshot)
-    wall_back = wall_met; g_lo = gap_met
-    t_g = t_lo + (1.0_dp - t_lo) * g_lo / (g_lo - self%poke_keep_g(wall_back))
-    if (.not. (t_g > t_lo .and. t_g < 1.0_dp)) goto 90
-    ! F just before the graze: the roots of 31255 and 91440 lie within 1e-3 of the window of it
-    do k = 1, 3
-      t_p = t_g - 1.0e-3_dp * (t_g - t_lo)
-      if (.not. leaving_row(t_p * mu_w, f_p, returns)) goto 90
-      if (returns) exit
-      t_g = t_lo + (t_p - t_lo) * g_lo / (g_lo - self%gaps_end(wall_back))
-    end do
-    if (.not. returns) goto 90
-    if (abs(f_p) <= tol) then
-      found = .true.; goto 90
-    end if
-    t_a = t_lo; f_a = f_lo
-    if (f_lo > 0.0_dp .and. f_p < 0.0_dp) then
-      t_a = t_p; f_a = f_p; t_p = t_lo; f_p = f_lo
-    else if (.not. (f_p > 0.0_dp)) then
-      ! both below 0: F may rise above it on the way (to the kink of the blended weight, and fall
-      ! again: scans of seed 98668's impacts, above 0 on 0.025 of [t_lo, 1]); golden sections for
-      ! its top on [t_lo, t_p], up to the first positive value
-      if (f_lo > 0.0_dp) goto 90
-      t_b = t_p
-      t_c = t_b - GOLDEN * (t_b - t_a); t_d = t_a + GOLDEN * (t_b - t_a)
-      if (.not. leaving_row(t_c * mu_w, f_c, returns)) goto 90
-      if (.not. leaving_row(t_d * mu_w, f_d, returns)) goto 90
-      do k = 1, max_golden
-        if (f_c > 0.0_dp .or. f_d > 0.0_dp) exit
-        if (f_c > f_d) then
-          t_b = t_d; t_d = t_c; f_d = f_c
-          t_c = t_b - GOLDEN * (t_b - t_a)
-          if (.not. leaving_row(t_c * mu_w, f_c, returns)) goto 90
-        else
-          t_a = t_c; t_c = t_d; f_c = f_d
-          t_d = t_a + GOLDEN * (t_b - t_a)
-          if (.not. leaving_row(t_d * mu_w, f_d, returns)) goto 90
-        end if
-      end do
-      if (f_c > 0.0_dp) then
-        t_p = t_c; f_p = f_c
-      else if (f_d > 0.0_dp) then
-        t_p = t_d; f_p = f_d
-      else
-        goto 90
-      end if
-      t_a = t_lo; f_a = f_lo
-    end if
-    ! Illinois steps on the bracket between t_a (F < 0) and t_p (F > 0) to the row's tolerance
-    t_b = t_p; f_b = f_p
-    w_a = f_a; w_b = f_b; kept = 0
-    do k = 1, max_refine
-      t = t_a - w_a * (t_b - t_a) / (w_b - w_a)
-      if (.not. leaving_row(t * mu_w, f, returns)) goto 90
-      if (abs(f) <= tol) then
-        found = returns; exit
-      end if
-      if (abs(t_b - t_a) <= 8.0_dp * epsilon(1.0_dp)) exit
-      if ((f > 0.0_dp) .eqv. (f_b > 0.0_dp)) then
-        t_b = t; f_b = f; w_b = f
-        if (kept < 0) w_a = 0.5_dp * w_a
-        kept = -1
-      else
-        t_a = t; f_a = f; w_a = f
-        if (kept > 0) w_b = 0.5_dp * w_b
-        kept = 1
-      end if
-    end do
+    ! smaller impulses (the motion comes back to the wall it leaves, or to another), then larger
+    ! ones (another wall ahead: 90992, where the forward's impulse is 1.09 times the backward's)
+    if (t_lo < 0.99_dp) found = side_has_root(t_lo)
+    if (.not. found .and. stat == VCI_OK .and. t_hi > 1.01_dp) found = side_has_root(t_hi)
 
     ! back to the step as it was
 90  continue
@@ -700,6 +629,89 @@ contains
       self%p_leave = imp%p_before + mu * imp%grad_g
       call self%sys%hamiltonian(imp%q, self%p_leave, e, stat)
     end subroutine line_energy
+
+    !> Is there a root of F whose motion comes back to a wall between t = 1 and t_far (t_lo or
+    !> t_hi)? The screen: the motion at t_far must come back (else none between, the end gap
+    !> being monotone in the impulse). Then t_g, where it stops coming back to the wall it met (the
+    !> end gap is about linear in t: interpolation between t_far and 1, again from a probe that
+    !> overshot), and F just inside the graze, at t_g + 1e-3 (t_far - t_g): the roots of 31255 and
+    !> 91440 lie that close to it. Where F there and at t_far have one sign, F may still cross 0
+    !> and back in between (98668: F rises to the blended weight's kink and falls, above 0 on 0.025
+    !> of [t_lo, 1]; 90992, above 1: the other way round): golden sections for its extremum of
+    !> the other sign, up to max_golden, stopping at the first value of that sign. Illinois steps
+    !> then close the bracket to the row's tolerance; the root counts where its motion comes back.
+    logical function side_has_root(t_far) result(has)
+      real(dp), intent(in) :: t_far
+      real(dp) :: f_far, g_far, t_g, t_p, f_p, t_a, f_a, t_b, f_b, t_c, f_c, t_d, f_d, t, f, w_a, w_b, sig
+      integer :: k, kept, wall_back
+      logical :: returns
+      has = .false.
+      if (.not. leaving_row(t_far * mu_w, f_far, returns)) return
+      if (.not. returns) return
+      if (abs(f_far) <= tol) then
+        has = .true.; return
+      end if
+      wall_back = wall_met; g_far = gap_met
+      t_g = t_far + (1.0_dp - t_far) * g_far / (g_far - self%poke_keep_g(wall_back))
+      if (.not. ((t_g - t_far) * (1.0_dp - t_g) > 0.0_dp)) return
+      do k = 1, 3
+        t_p = t_g + 1.0e-3_dp * (t_far - t_g)
+        if (.not. leaving_row(t_p * mu_w, f_p, returns)) return
+        if (returns) exit
+        t_g = t_far + (t_p - t_far) * g_far / (g_far - self%gaps_end(wall_back))
+      end do
+      if (.not. returns) return
+      if (abs(f_p) <= tol) then
+        has = .true.; return
+      end if
+      if ((f_p > 0.0_dp) .eqv. (f_far > 0.0_dp)) then
+        ! golden sections on [t_a, t_b] for the largest -sig F (sig: the sign at both ends)
+        sig = sign(1.0_dp, f_far)
+        t_a = min(t_far, t_p); t_b = max(t_far, t_p)
+        t_c = t_b - GOLDEN * (t_b - t_a); t_d = t_a + GOLDEN * (t_b - t_a)
+        if (.not. leaving_row(t_c * mu_w, f_c, returns)) return
+        if (.not. leaving_row(t_d * mu_w, f_d, returns)) return
+        do k = 1, max_golden
+          if (sig * f_c < 0.0_dp .or. sig * f_d < 0.0_dp) exit
+          if (sig * f_c < sig * f_d) then
+            t_b = t_d; t_d = t_c; f_d = f_c
+            t_c = t_b - GOLDEN * (t_b - t_a)
+            if (.not. leaving_row(t_c * mu_w, f_c, returns)) return
+          else
+            t_a = t_c; t_c = t_d; f_c = f_d
+            t_d = t_a + GOLDEN * (t_b - t_a)
+            if (.not. leaving_row(t_d * mu_w, f_d, returns)) return
+          end if
+        end do
+        if (sig * f_c < 0.0_dp) then
+          t_p = t_c; f_p = f_c
+        else if (sig * f_d < 0.0_dp) then
+          t_p = t_d; f_p = f_d
+        else
+          return
+        end if
+      end if
+      ! Illinois steps on the bracket [t_far, t_p] (F of opposite signs) to the row's tolerance
+      t_a = t_far; f_a = f_far; t_b = t_p; f_b = f_p
+      w_a = f_a; w_b = f_b; kept = 0
+      do k = 1, max_refine
+        t = t_a - w_a * (t_b - t_a) / (w_b - w_a)
+        if (.not. leaving_row(t * mu_w, f, returns)) return
+        if (abs(f) <= tol) then
+          has = returns; return
+        end if
+        if (abs(t_b - t_a) <= 8.0_dp * epsilon(1.0_dp) * abs(t)) return
+        if ((f > 0.0_dp) .eqv. (f_b > 0.0_dp)) then
+          t_b = t; f_b = f; w_b = f
+          if (kept < 0) w_a = 0.5_dp * w_a
+          kept = -1
+        else
+          t_a = t; f_a = f; w_a = f
+          if (kept > 0) w_b = 0.5_dp * w_b
+          kept = 1
+        end if
+      end do
+    end function side_has_root
 
     !> F at impulse mu: imp's row (blended_row: the discrete one where its weight is 1) with E_d of
     !> the sub-step that leaves imp at mu, up to the first wall its motion reaches (returns) or over
