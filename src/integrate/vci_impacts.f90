@@ -577,6 +577,7 @@ contains
     self%tie_q(:, 1) = self%q_end; self%tie_q(:, 2) = self%q_wall; self%tie_q(:, 3) = self%p_arrive
     self%poke_keep_g(1:self%ng) = self%gaps_end(1:self%ng)
     call self%sys%position_carry(self%q_start, self%poke_keep_q(:, 5))
+    call self%sys%keep_row_sizes()     ! (the next solve's row sizes come from the last Jacobian)
 
     ! the screen: the window of impulses a root can have, and the motion at its low end
     call self%sys%energy_out(self%x, self%q_start, tau, e_w, stat)
@@ -614,6 +615,7 @@ contains
     self%gaps_end(1:self%ng) = self%poke_keep_g(1:self%ng)
     call self%sys%set_wall_normal(imp%grad_g)
     call self%sys%restore_position_carry(self%q_start, self%poke_keep_q(:, 5))
+    call self%sys%restore_row_sizes()
     call forget_start_gradients(self)
     ! x holds increments from the posed start: the leaving sub-step posed again (as find_poke leaves it)
     call self%sys%pose_substep(self%q_start, self%p_start, tau, st)
