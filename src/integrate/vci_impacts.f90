@@ -520,48 +520,38 @@ contains
   !> Two solutions of a step with a soft impact (docs/BACKWARD.md, "Two solutions of a step with a
   !> soft impact"; issue 24). imp, the last impact of the step (at q_start), took the root mu_w of
   !> its energy row (discrete or blended, m = 0) whose motion leaves the rest tau of the step free.
-  !> A smaller impulse on the reflection's side may send the motion back to a wall (any wall) within
-  !> the rest and meet the row on the sub-step up to that wall, the row tie_to_wall makes a step with
+  !> Another impulse on the reflection's side may send the motion to a wall (any wall) within the
+  !> rest and meet the row on the sub-step up to that wall, the row tie_to_wall makes a step with
   !> two impacts solve: the step then has two solutions, and the other direction, which cuts the
-  !> motion into other sub-steps, may take the other one (vci_fuzz --reversal 31255: backward
-  !> 1.501 where the forward run took 1.136 and met a second impact). True when such a root is
-  !> found; the caller counts an irreversible impact. The step is left as it was: x, the sub-step's
-  !> points and momenta, its gaps, the wall normal, the carried position part and the posed
-  !> sub-step are put back, and the search's failures are not the step's (a callback's
-  !> unrecoverable failure is).
+  !> motion into other sub-steps, may take the other one (vci_fuzz --reversal 31255: backward 1.501
+  !> where the forward run took 1.136 and met a second impact). True when such a root is found; the
+  !> caller counts an irreversible impact. The step is left as it was: x, the sub-step's points and
+  !> momenta, its gaps, the wall normal, the carried position part, the scheme's row sizes
+  !> (keep_row_sizes) and the posed sub-step are put back, and the search's failures are not the
+  !> step's (a callback's unrecoverable failure is).
   !>
-  !> The search is on the impulse line mu = t mu_w, on F(t): the row on the sub-step that really
-  !> leaves imp at that impulse (up to the first wall its motion meets, else the whole rest;
-  !> leaving_row). F is continuous where the wall met changes into none (at the impulse whose
-  !> motion grazes the wall at the rest's end the two sub-steps are one) and F(1) = 0. A screen
-  !> first, two H values and one sub-step:
-  !>  - at any root H+ - H- = -w delta (vci_scheme: blended_row), |delta| <= |e+| + |e-| with e the
-  !>    two sub-steps' offsets E_d - H, O(tau^2) for a symmetric scheme. With e+ taken as at most
-  !>    OFFSET_MARGIN times the taken root's (whose sub-step, the whole rest, is the longest), H+ of
-  !>    a root is at least H- - D, D = OFFSET_MARGIN (|e+_w| + |e-|): on the reflection's side of the
-  !>    fold of H (a parabola in t through t = 0, 1/2, 1; exact for H quadratic in p) that bounds
-  !>    t from below by t_lo;
-  !>  - the motion from the impulse t_lo mu_w over the rest: if it ends beyond no wall, no impulse
-  !>    between it and mu_w sends the motion back (a larger normal impulse ends it farther from the
-  !>    wall it leaves: assumed, not proven for other walls) and no second root of this kind exists.
-  !> Else F on the way back, [t_lo, t_g] (t_g: where the motion stops coming back to the wall it
-  !> met, by the end gap's linear interpolation), rises to a kink (the blended weight's) and falls
-  !> towards the graze (scans of seed 98668's impacts; the part above 0 was 0.025 of [t_lo, 1] wide
-  !> there): golden sections for its top, up to max_golden, stop at the first positive value, and
-  !> Illinois steps close the bracket from t_lo to it to the row's tolerance; a root whose motion
-  !> comes back to a wall is the second solution. Assumed, as measured: F has one top there.
-  !> (A second root whose motion also leaves free is stage 2's choice, not counted here.) Not on
-  !> systems of reuse_min unknowns and more, where Newton keeps factors across solves and the
-  !> search's solves would change the run's later iterates (the run must not change).
+  !> On the impulse line mu = t mu_w the row is F(t), on the sub-step that really leaves imp at that
+  !> impulse (up to the first wall its motion meets, else the whole rest; leaving_row); F(1) = 0.
+  !> The window of impulses a root can have: at any root H+ - H- = -w delta (vci_scheme:
+  !> blended_row), |delta| <= |e+| + |e-| with e the two sub-steps' offsets E_d - H (O(tau^2) for a
+  !> symmetric scheme); with |e+| taken as at most about the taken root's (its sub-step, the whole
+  !> rest, is the longest), |H+ - H-| <= D = OFFSET_MARGIN (|e+_w| + |e-|), and H is a parabola in t
+  !> (through t = 0, 1/2, 1; exact for H quadratic in p): t_lo and t_hi on the reflection's side.
+  !> Below 1 the motion comes back to the wall it leaves, above 1 it may reach another wall ahead
+  !> (90992); each side is searched from its far end (side_has_root): one sub-step there decides
+  !> whether the motion comes back at all (the screen), and only then is F looked at. OFFSET_MARGIN
+  !> 2 and max_golden 4 were chosen by cost: 4 and 8 found the same 19 runs of the survey at 1.1 to
+  !> 1.2 times the instructions (docs/bench/poke.md). Not on systems of reuse_min unknowns and
+  !> more, where Newton keeps factors across solves, which the search's solves would change.
   logical function return_root_exists(self, imp, tau, stat) result(found)
     type(vci_stepper_t), intent(inout) :: self
     type(vci_impact_t), intent(in) :: imp
     real(dp), intent(in) :: tau
     integer, intent(out) :: stat
-    real(dp), parameter :: OFFSET_MARGIN = 4.0_dp
+    real(dp), parameter :: OFFSET_MARGIN = 2.0_dp
     real(dp), parameter :: GOLDEN = 0.6180339887498949_dp
     real(dp), parameter :: MAX_RATIO = 4.0_dp        ! (as energy_along: within a factor 4 of the root taken)
-    integer, parameter :: max_golden = 8, max_refine = 40
+    integer, parameter :: max_golden = 4, max_refine = 40
     integer :: nx, st, wall_met
     real(dp) :: mu_w, h0, hh, h1, e_w, d_off, b, c, t_f, t_lo, t_hi, disc, tol, gap_met
     found = .false.
@@ -741,7 +731,10 @@ contains
         call self%sys%energy_out(self%x, self%q_start, tau, e_out, stat)
       else
         returns = .true.
-        call stage_wall(self, jw, tau, alpha, stat)
+        alpha = -1.0_dp
+        if (jw == imp%gap) call back_to_the_wall_left(mu, alpha)
+        if (stat /= VCI_OK) return
+        if (alpha < 0.0_dp) call stage_wall(self, jw, tau, alpha, stat)
         if (stat /= VCI_OK) return
         call self%sys%get_endpoint(self%x, self%q_wall)
         call self%sys%eval_gaps(self%q_wall, self%gaps_trial(1:self%ng), stat)
@@ -760,6 +753,46 @@ contains
       tol = self%settings%atol + self%settings%rtol * sc
       leaving_row = ieee_is_finite(f)
     end function leaving_row
+
+    !> Stage 1 back to the wall imp left, from a start on it (x: the sub-step over tau at mu, its
+    !> end beyond that wall): the chord from a point on the wall crosses it at once, so stage_wall's
+    !> chord start fails there and it brackets the crossing on the trajectory (about 7 sub-steps:
+    !> 90 % of the search's cost on seed 98668). The gap along the trajectory is about
+    !> r s + (g_end - r) s^2 with r the departure's normal rate times tau: Newton on stage 1 from the
+    !> sub-step of s tau at its root s. alpha < 0 where that fails or reaches the start itself
+    !> (the caller then takes stage_wall's way); the sub-step's solution in x is then lost.
+    subroutine back_to_the_wall_left(mu, alpha)
+      real(dp), intent(in) :: mu
+      real(dp), intent(out) :: alpha
+      real(dp) :: rate, noise, r, s_est
+      integer :: j
+      alpha = -1.0_dp
+      j = imp%gap
+      self%q_wall = imp%q; self%p_arrive = imp%p_before
+      call self%sys%set_wall_normal(imp%grad_g)
+      call normal_rate(self, mu, rate, noise, stat)
+      if (stat /= VCI_OK) return
+      r = rate * tau
+      if (.not. (r > 0.0_dp .and. self%gaps_end(j) < 0.0_dp)) return
+      s_est = r / (r - self%gaps_end(j))
+      call start_gradient(self, j, stat)
+      if (stat /= VCI_OK) return
+      self%q_guess = self%q_start + s_est * (self%q_end - self%q_start)
+      call self%sys%put_endpoint(self%x, self%q_start, self%q_guess)
+      call substep(self, self%q_start, self%p_start, s_est * tau, stat)
+      if (stat /= VCI_OK) then
+        if (.not. self%sys%unrecoverable) stat = VCI_OK
+        call self%sys%put_endpoint(self%x, self%q_start, self%q_end)   ! (stage_wall's start again)
+        return
+      end if
+      call solve_wall(self, j, tau, s_est, 'stage 1 (back to the wall left)', stat)
+      if (stat == VCI_OK) alpha = self%sys%get_extra(self%x, KIND_STAGE1)
+      if (stat /= VCI_OK .or. .not. (alpha > 0.25_dp * s_est .and. alpha <= 1.0_dp)) then
+        if (stat /= VCI_OK .and. .not. self%sys%unrecoverable) stat = VCI_OK
+        alpha = -1.0_dp
+        call self%sys%put_endpoint(self%x, self%q_start, self%q_end)
+      end if
+    end subroutine back_to_the_wall_left
   end function return_root_exists
 
   !> Does the sub-step from (q_start, p_start) of length tau (its solution in x) pass a wall and come
