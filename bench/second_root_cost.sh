@@ -38,7 +38,7 @@ seconds() {
   local k t
   for k in 1 2 3; do
     LD_LIBRARY_PATH="$lib" /usr/bin/time -f '%e' -o "$WORK/t" "$@" >/dev/null 2>&1
-    cat "$WORK/t"
+    tail -n 1 "$WORK/t"
   done | sort -n | sed -n 2p
 }
 
