@@ -626,12 +626,14 @@ contains
     !> t_hi)? The screen: the motion at t_far must come back (else none between, the end gap
     !> being monotone in the impulse). Then t_g, where it stops coming back to the wall it met (the
     !> end gap is about linear in t: interpolation between t_far and 1, again from a probe that
-    !> overshot), and F just inside the graze, at t_g + 1e-3 (t_far - t_g): the roots of 31255 and
-    !> 91440 lie that close to it. Where F there and at t_far have one sign, F may still cross 0
-    !> and back in between (98668: F rises to the blended weight's kink and falls, above 0 on 0.025
-    !> of [t_lo, 1]; 90992, above 1: the other way round): golden sections for its extremum of
-    !> the other sign, up to max_golden, stopping at the first value of that sign. Illinois steps
-    !> then close the bracket to the row's tolerance; the root counts where its motion comes back.
+    !> overshot), and F just inside the graze, at t_g + 1e-3 (t_far - t_g): in 91440 (backward, at
+    !> t = 1.6403) F is above 0 only between the root, t = 0.9741, and the graze, 0.9754, 6e-3 of
+    !> [t_lo, 1] (a scan of 41 impulses). Where F there and at t_far have one sign, F may still
+    !> cross 0 and back in between (98668: F rises to the blended weight's kink and falls, above 0
+    !> for t in 0.615-0.640 of [0.40, 1]; 90992, above 1: the other way round): golden sections
+    !> for its extremum of the other sign, up to max_golden, stopping at the first value of that
+    !> sign. Illinois steps then close the bracket to the row's tolerance; the root counts where
+    !> its motion comes back.
     logical function side_has_root(t_far) result(has)
       real(dp), intent(in) :: t_far
       real(dp) :: f_far, g_far, t_g, t_p, f_p, t_a, f_a, t_b, f_b, t_c, f_c, t_d, f_d, t, f, w_a, w_b, sig
