@@ -540,9 +540,10 @@ contains
   !> Below 1 the motion comes back to the wall it leaves, above 1 it may reach another wall ahead
   !> (90992); each side is searched from its far end (side_has_root): one sub-step there decides
   !> whether the motion comes back at all (the screen), and only then is F looked at. OFFSET_MARGIN
-  !> 2 and max_golden 4 were chosen by cost: 4 and 8 found the same 19 runs of the survey at 1.1 to
-  !> 1.2 times the instructions (docs/bench/poke.md). Not on systems of reuse_min unknowns and
-  !> more, where Newton keeps factors across solves, which the search's solves would change.
+  !> 2 and max_golden 4 were chosen by cost: 4 and 8 found the same 19 runs of the survey at 1.14
+  !> times the instructions on seed 98668 (docs/bench/poke.md). Not on systems of reuse_min
+  !> unknowns and more, where Newton keeps factors across solves, which the search's solves would
+  !> change.
   logical function return_root_exists(self, imp, tau, stat) result(found)
     type(vci_stepper_t), intent(inout) :: self
     type(vci_impact_t), intent(in) :: imp
