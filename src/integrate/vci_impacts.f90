@@ -28,7 +28,7 @@ contains
     integer, intent(out) :: stat
     integer :: n, j, jstar, last_gap, poked
     real(dp) :: h, t, alpha, alpha_j, consumed, e_minus, s1res, p_lo, p_hi, p_glo, p_ghi
-    logical :: ok, cleared
+    logical :: ok, cleared, tied
     n = self%n; h = state%h; t = state%time()
     consumed = 0.0_dp
     stat = VCI_OK
@@ -67,7 +67,8 @@ contains
         ! comes back to a wall may meet its energy row too, and the step then has two solutions
         ! (return_root_exists); its reversal is not guaranteed, and the run says so
         if (last_gap > 0) then
-          if (return_root_exists(self, impacts%records(impacts%count), tau, stat)) &
+          if (second_root_exists(self, impacts%records(impacts%count), &
+                                 real(dir, dp) * impacts%records(impacts%count)%impulse, tau, 0, 0.0_dp, stat)) &
             self%stats%irreversible_impacts = self%stats%irreversible_impacts + 1
           if (stat /= VCI_OK) return
         end if
@@ -184,8 +185,16 @@ contains
         if (last_gap > 0) then
           if (impacts%records(impacts%count)%condition == VCI_IMPACT_DISCRETE .or. &
               impacts%records(impacts%count)%condition == VCI_IMPACT_BLENDED) then
-            call tie_to_wall(self, impacts%records(impacts%count), dir, tau, jstar, alpha, e_minus, s1res, stat)
+            call tie_to_wall(self, impacts%records(impacts%count), dir, tau, jstar, alpha, e_minus, s1res, stat, tied)
             if (stat /= VCI_OK) return
+            ! the tied impulse's motion comes back to wall jstar: a larger (or smaller) impulse whose
+            ! motion leaves the rest free may meet the whole rest's row too (second_root_exists)
+            if (tied) then
+              if (second_root_exists(self, impacts%records(impacts%count), &
+                                     real(dir, dp) * impacts%records(impacts%count)%impulse, tau, jstar, e_minus, stat)) &
+                self%stats%irreversible_impacts = self%stats%irreversible_impacts + 1
+              if (stat /= VCI_OK) return
+            end if
           end if
         end if
         ! Reached the wall (to round-off) exactly at the end of the step: no reflection yet;
@@ -304,18 +313,20 @@ contains
   !> impulse meets the condition (near a graze, where E_d hardly depends on mu, or the motion no
   !> longer reaches wall j first), the state of the impulse stage 2 found is put back: that impact keeps
   !> its condition on the whole rest of the step, as before (docs/BACKWARD.md: not reversible).
-  subroutine tie_to_wall(self, imp, dir, tau, j, alpha, e_minus, s1res, stat)
+  subroutine tie_to_wall(self, imp, dir, tau, j, alpha, e_minus, s1res, stat, tied)
     type(vci_stepper_t), intent(inout) :: self
     type(vci_impact_t), intent(inout) :: imp
     integer, intent(in) :: dir, j
     real(dp), intent(in) :: tau
     real(dp), intent(inout) :: alpha, e_minus, s1res
     integer, intent(out) :: stat
+    logical, intent(out) :: tied            !< imp's impulse was moved to the tie's root
     integer, parameter :: max_secants = 12
     integer :: k, nx
     real(dp) :: mu_a, mu_b, mu_c, f_a, f_b, f_c, mu_best, f_best, tol, mu_state, alpha0, e0, s10
     logical :: consistent, blend, missed
     stat = VCI_OK
+    tied = .false.
     nx = self%nsub
     mu_a = real(dir, dp) * imp%impulse
     ! with H at hand (m = 0) the row is the blended one, as stage 2 posed it (vci_scheme: blended_row)
@@ -377,6 +388,7 @@ contains
         self%stats%energy_fallbacks = self%stats%energy_fallbacks + 1
       end if
     end if
+    tied = .true.
   contains
     !> The energy row of imp with e_out = E_d of the sub-step leaving it at impulse mu, and its
     !> tolerance: E_d - E- (the discrete condition), or the blended row.
@@ -544,34 +556,49 @@ contains
   !> times the instructions on seed 98668 (docs/bench/poke.md). Not on systems of reuse_min
   !> unknowns and more, where Newton keeps factors across solves, which the search's solves would
   !> change.
-  logical function return_root_exists(self, imp, tau, stat) result(found)
+  logical function second_root_exists(self, imp, mu_w, tau, wall_taken, e_taken, stat) result(found)
     type(vci_stepper_t), intent(inout) :: self
     type(vci_impact_t), intent(in) :: imp
+    real(dp), intent(in) :: mu_w          !< the root taken, in the stepper's sign (p+ = p- + mu_w grad g)
     real(dp), intent(in) :: tau
+    !> 0: the root taken leaves the rest free (the step's last impact); else it was tied to this
+    !> wall, and e_taken is E_d of its sub-step up to it (resolve_impacts after tie_to_wall)
+    integer, intent(in) :: wall_taken
+    real(dp), intent(in) :: e_taken
     integer, intent(out) :: stat
     real(dp), parameter :: OFFSET_MARGIN = 2.0_dp
     real(dp), parameter :: GOLDEN = 0.6180339887498949_dp
     real(dp), parameter :: MAX_RATIO = 4.0_dp        ! (as energy_along: within a factor 4 of the root taken)
     integer, parameter :: max_golden = 4, max_refine = 40
     integer :: nx, st, wall_met
-    real(dp) :: mu_w, h0, hh, h1, e_w, d_off, b, c, t_f, t_lo, t_hi, disc, tol, gap_met
+    real(dp) :: h0, hh, h1, e_w, d_off, b, c, t_f, t_lo, t_hi, disc, tol, gap_met
+    logical :: want_return, screening
     found = .false.
+    screening = .false.
     stat = VCI_OK
     nx = self%nsub
     if (.not. (self%has_energy .and. self%m == 0)) return
     if (imp%condition /= VCI_IMPACT_DISCRETE .and. imp%condition /= VCI_IMPACT_BLENDED) return
     if (nx + 1 >= self%newton%reuse_min) return
-    mu_w = self%sys%get_extra(self%x, KIND_STAGE2)
     if (.not. (abs(mu_w) > 0.0_dp)) return          ! a touch: no impulse, no reflection's side
-    ! the step as it stands
+    want_return = wall_taken == 0                    ! the other kind of root than the one taken
+    ! the step as it stands (the next sub-step starts at q_start, or, after a tie, at q_wall)
     self%tie_x(1:nx + 1, 1) = self%x(1:nx + 1)
     self%tie_q(:, 1) = self%q_end; self%tie_q(:, 2) = self%q_wall; self%tie_q(:, 3) = self%p_arrive
     self%poke_keep_g(1:self%ng) = self%gaps_end(1:self%ng)
-    call self%sys%position_carry(self%q_start, self%poke_keep_q(:, 5))
+    if (want_return) then
+      call self%sys%position_carry(self%q_start, self%poke_keep_q(:, 5))
+    else
+      call self%sys%position_carry(self%q_wall, self%poke_keep_q(:, 5))
+    end if
     call self%sys%keep_row_sizes()     ! (the next solve's row sizes come from the last Jacobian)
 
-    ! the screen: the window of impulses a root can have, and the motion at its low end
-    call self%sys%energy_out(self%x, self%q_start, tau, e_w, stat)
+    ! the window of impulses a root can have
+    if (want_return) then
+      call self%sys%energy_out(self%x, self%q_start, tau, e_w, stat)
+    else
+      e_w = e_taken
+    end if
     if (stat == VCI_OK) call line_energy(0.0_dp, h0)
     if (stat == VCI_OK) call line_energy(0.5_dp * mu_w, hh)
     if (stat == VCI_OK) call line_energy(mu_w, h1)
@@ -605,7 +632,11 @@ contains
     self%p_start = imp%p_after
     self%gaps_end(1:self%ng) = self%poke_keep_g(1:self%ng)
     call self%sys%set_wall_normal(imp%grad_g)
-    call self%sys%restore_position_carry(self%q_start, self%poke_keep_q(:, 5))
+    if (want_return) then
+      call self%sys%restore_position_carry(self%q_start, self%poke_keep_q(:, 5))
+    else
+      call self%sys%restore_position_carry(self%q_wall, self%poke_keep_q(:, 5))
+    end if
     call self%sys%restore_row_sizes()
     call forget_start_gradients(self)
     ! x holds increments from the posed start: the leaving sub-step posed again (as find_poke leaves it)
@@ -639,23 +670,31 @@ contains
       real(dp), intent(in) :: t_far
       real(dp) :: f_far, g_far, t_g, t_p, f_p, t_a, f_a, t_b, f_b, t_c, f_c, t_d, f_d, t, f, w_a, w_b, sig
       integer :: k, kept, wall_back
-      logical :: returns
+      logical :: returns, ok
       has = .false.
-      if (.not. leaving_row(t_far * mu_w, f_far, returns)) return
-      if (.not. returns) return
+      screening = .true.         ! (a motion of the kind taken: no stage 1, no row)
+      ok = leaving_row(t_far * mu_w, f_far, returns)
+      screening = .false.
+      if (.not. ok .or. (returns .neqv. want_return)) return
       if (abs(f_far) <= tol) then
         has = .true.; return
       end if
-      wall_back = wall_met; g_far = gap_met
+      ! the wall whose end gap changes sign between t_far and 1: the one met at t_far, or the one
+      ! the root taken was tied to
+      if (want_return) then
+        wall_back = wall_met; g_far = gap_met
+      else
+        wall_back = wall_taken; g_far = self%gaps_end(wall_taken)
+      end if
       t_g = t_far + (1.0_dp - t_far) * g_far / (g_far - self%poke_keep_g(wall_back))
       if (.not. ((t_g - t_far) * (1.0_dp - t_g) > 0.0_dp)) return
       do k = 1, 3
         t_p = t_g + 1.0e-3_dp * (t_far - t_g)
         if (.not. leaving_row(t_p * mu_w, f_p, returns)) return
-        if (returns) exit
+        if (returns .eqv. want_return) exit
         t_g = t_far + (t_p - t_far) * g_far / (g_far - self%gaps_end(wall_back))
       end do
-      if (.not. returns) return
+      if (returns .neqv. want_return) return
       if (abs(f_p) <= tol) then
         has = .true.; return
       end if
@@ -693,7 +732,7 @@ contains
         t = t_a - w_a * (t_b - t_a) / (w_b - w_a)
         if (.not. leaving_row(t * mu_w, f, returns)) return
         if (abs(f) <= tol) then
-          has = returns; return
+          has = returns .eqv. want_return; return
         end if
         if (abs(t_b - t_a) <= 8.0_dp * epsilon(1.0_dp) * abs(t)) return
         if ((f > 0.0_dp) .eqv. (f_b > 0.0_dp)) then
@@ -730,6 +769,9 @@ contains
       jw = first_by_chord(self, self%gaps_end)
       wall_met = jw
       if (jw > 0) gap_met = self%gaps_end(jw)
+      if (screening .and. ((jw > 0) .neqv. want_return)) then
+        returns = jw > 0; return
+      end if
       if (jw == 0) then
         call self%sys%energy_out(self%x, self%q_start, tau, e_out, stat)
       else
@@ -796,7 +838,7 @@ contains
         call self%sys%put_endpoint(self%x, self%q_start, self%q_end)
       end if
     end subroutine back_to_the_wall_left
-  end function return_root_exists
+  end function second_root_exists
 
   !> Does the sub-step from (q_start, p_start) of length tau (its solution in x) pass a wall and come
   !> back before it reaches a wall its end is beyond? Its end alone cannot tell: a curved motion
