@@ -1,5 +1,5 @@
 #!/bin/bash
-# The cost of looking for a second root after a step's last impact (return_root_exists, issue 24;
+# The cost of looking for a second root after a step's last impact (second_root_exists, issue 24;
 # docs/bench/poke.md, "The second root's search"): callgrind instructions per impact step and per
 # regular step, and the whole program's wall seconds, with another build's library (MAIN_LIB: a
 # directory holding its libvci.so.0, e.g. main's) and with this build's, one markdown row per scene.

@@ -63,9 +63,9 @@ contains
       end if
       if (stat /= VCI_OK) return
       if (poked == 0 .and. all(self%gaps_end(1:self%ng) >= 0.0_dp)) then
-        ! the last impact's motion leaves the rest of the step free: a smaller impulse whose motion
-        ! comes back to a wall may meet its energy row too, and the step then has two solutions
-        ! (return_root_exists); its reversal is not guaranteed, and the run says so
+        ! the last impact's motion leaves the rest of the step free: another impulse whose motion
+        ! meets a wall may meet its energy row too, and the step then has two solutions
+        ! (second_root_exists); its reversal is not guaranteed, and the run says so
         if (last_gap > 0) then
           if (second_root_exists(self, impacts%records(impacts%count), &
                                  real(dir, dp) * impacts%records(impacts%count)%impulse, tau, 0, 0.0_dp, stat)) &
@@ -530,17 +530,20 @@ contains
   end subroutine tie_to_wall
 
   !> Two solutions of a step with a soft impact (docs/BACKWARD.md, "Two solutions of a step with a
-  !> soft impact"; issue 24). imp, the last impact of the step (at q_start), took the root mu_w of
-  !> its energy row (discrete or blended, m = 0) whose motion leaves the rest tau of the step free.
-  !> Another impulse on the reflection's side may send the motion to a wall (any wall) within the
-  !> rest and meet the row on the sub-step up to that wall, the row tie_to_wall makes a step with
-  !> two impacts solve: the step then has two solutions, and the other direction, which cuts the
-  !> motion into other sub-steps, may take the other one (vci_fuzz --reversal 31255: backward 1.501
-  !> where the forward run took 1.136 and met a second impact). True when such a root is found; the
-  !> caller counts an irreversible impact. The step is left as it was: x, the sub-step's points and
-  !> momenta, its gaps, the wall normal, the carried position part, the scheme's row sizes
-  !> (keep_row_sizes) and the posed sub-step are put back, and the search's failures are not the
-  !> step's (a callback's unrecoverable failure is).
+  !> soft impact"; issue 24). imp, an impact at q_start, took the root mu_w of its energy row
+  !> (discrete or blended, m = 0) whose motion either leaves the rest tau of the step free (the
+  !> step's last impact: wall_taken = 0) or meets wall wall_taken within it (tied there by
+  !> tie_to_wall). Another impulse on the reflection's side may give the other kind of motion and
+  !> meet the row too: for a root that leaves free, one whose motion meets a wall (any wall) within
+  !> the rest, the row held on the sub-step up to that wall; for a tied root, one whose motion
+  !> leaves the rest free, the row held on the whole rest. The step then has two solutions, and the
+  !> other direction, which cuts the motion into other sub-steps, may take the other one (vci_fuzz
+  !> --reversal 31255: backward 1.501 where the forward run took 1.136 and met a second impact).
+  !> True when such a root is found; the caller counts an irreversible impact. The step is left as
+  !> it was: x, the sub-step's points and momenta, its gaps, the wall normal, the carried position
+  !> part (of q_start, or of the wall point after a tie, where the next sub-step starts), the
+  !> scheme's row sizes (keep_row_sizes) and the posed sub-step are put back, and the search's
+  !> failures are not the step's (a callback's unrecoverable failure is).
   !>
   !> On the impulse line mu = t mu_w the row is F(t), on the sub-step that really leaves imp at that
   !> impulse (up to the first wall its motion meets, else the whole rest; leaving_row); F(1) = 0.
@@ -654,10 +657,11 @@ contains
       call self%sys%hamiltonian(imp%q, self%p_leave, e, stat)
     end subroutine line_energy
 
-    !> Is there a root of F whose motion comes back to a wall between t = 1 and t_far (t_lo or
-    !> t_hi)? The screen: the motion at t_far must come back (else none between, the end gap
-    !> being monotone in the impulse). Then t_g, where it stops coming back to the wall it met (the
-    !> end gap is about linear in t: interpolation between t_far and 1, again from a probe that
+    !> Is there a root of F of the other kind (want_return: its motion meets a wall; else it leaves
+    !> the rest free) between t = 1 and t_far (t_lo or t_hi)? The screen: the motion at t_far must be
+    !> of that kind (else none between, the end gap being monotone in the impulse), decided by its
+    !> sub-step alone. Then t_g, where the kind changes (by the end gap of the wall met at t_far, or
+    !> tied to, about linear in t: interpolation between t_far and 1, again from a probe that
     !> overshot), and F just inside the graze, at t_g + 1e-3 (t_far - t_g): in 91440 (backward, at
     !> t = 1.6403) F is above 0 only between the root, t = 0.9741, and the graze, 0.9754, 6e-3 of
     !> [t_lo, 1] (a scan of 41 impulses). Where F there and at t_far have one sign, F may still
@@ -665,7 +669,7 @@ contains
     !> for t in 0.615-0.640 of [0.40, 1]; 90992, above 1: the other way round): golden sections
     !> for its extremum of the other sign, up to max_golden, stopping at the first value of that
     !> sign. Illinois steps then close the bracket to the row's tolerance; the root counts where
-    !> its motion comes back.
+    !> its motion is of that kind.
     logical function side_has_root(t_far) result(has)
       real(dp), intent(in) :: t_far
       real(dp) :: f_far, g_far, t_g, t_p, f_p, t_a, f_a, t_b, f_b, t_c, f_c, t_d, f_d, t, f, w_a, w_b, sig

@@ -582,7 +582,7 @@ contains
   !> What a scheme carries from one solve to the next beyond the posed system (the discrete
   !> scheme's row sizes from the last Jacobian, which size the next solve's rows before its own
   !> Jacobian), kept before side solves that must leave the run as it was (vci_impacts:
-  !> return_root_exists) and put back after them. Nothing here.
+  !> second_root_exists) and put back after them. Nothing here.
   subroutine keep_row_sizes(self)
     class(vci_scheme_t), intent(inout) :: self
   end subroutine keep_row_sizes
