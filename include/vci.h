@@ -467,7 +467,11 @@ int  vci_get_energy_fallbacks(vci_integrator integ, int64_t *count);
  *  (a graze shallower than the scheme's error; docs/DESIGN.md, "A poke seen from the end only"),
  *  and a touch (an impact without impulse) whose arriving momentum leaves the wall: a reversed run
  *  arrives with that momentum, moving into the wall, and reflects there (docs/BACKWARD.md, "The odd
- *  ones"). Only impacts of the steps taken count (as vci_get_energy_fallbacks). count may be NULL.
+ *  ones"), and an impact whose energy condition has a second root of the other kind: another impulse
+ *  whose motion meets a wall within the rest of the step where the impulse taken leaves it free, or
+ *  the other way round (a soft impact: the step has two solutions and a run back may take the other;
+ *  docs/BACKWARD.md, "Two solutions of a step with a soft impact").
+ *  Only impacts of the steps taken count (as vci_get_energy_fallbacks). count may be NULL.
  *  Returns VCI_OK; VCI_ERR_ARGUMENT: bad handle; VCI_ERR_STATE: busy. */
 int  vci_get_irreversible_impacts(vci_integrator integ, int64_t *count);
 

@@ -421,9 +421,10 @@ class Integrator:
     @property
     def irreversible_impacts(self):
         """Impacts whose energy condition could not be tied to the sub-step leaving them up to the next
-        wall, free steps in which a run back would poke a wall this run does not see, and touches
-        whose arriving momentum leaves the wall (a run back through any of them need not return;
-        docs/BACKWARD.md, docs/DESIGN.md)."""
+        wall, free steps in which a run back would poke a wall this run does not see, touches whose
+        arriving momentum leaves the wall, and impacts whose energy condition has a second root of the
+        other kind (meeting a wall within the step or leaving it free; a run back through any of them
+        need not return; docs/BACKWARD.md, docs/DESIGN.md)."""
         c = ffi.new("int64_t *")
         self._check(lib.vci_get_irreversible_impacts(self._h[0], c))
         return int(c[0])

@@ -28,7 +28,7 @@ contains
     integer, intent(out) :: stat
     integer :: n, j, jstar, last_gap, poked
     real(dp) :: h, t, alpha, alpha_j, consumed, e_minus, s1res, p_lo, p_hi, p_glo, p_ghi
-    logical :: ok, cleared
+    logical :: ok, cleared, tied
     n = self%n; h = state%h; t = state%time()
     consumed = 0.0_dp
     stat = VCI_OK
@@ -62,7 +62,18 @@ contains
         end if
       end if
       if (stat /= VCI_OK) return
-      if (poked == 0 .and. all(self%gaps_end(1:self%ng) >= 0.0_dp)) exit
+      if (poked == 0 .and. all(self%gaps_end(1:self%ng) >= 0.0_dp)) then
+        ! the last impact's motion leaves the rest of the step free: another impulse whose motion
+        ! meets a wall may meet its energy row too, and the step then has two solutions
+        ! (second_root_exists); its reversal is not guaranteed, and the run says so
+        if (last_gap > 0) then
+          if (second_root_exists(self, impacts%records(impacts%count), &
+                                 real(dir, dp) * impacts%records(impacts%count)%impulse, tau, 0, 0.0_dp, stat)) &
+            self%stats%irreversible_impacts = self%stats%irreversible_impacts + 1
+          if (stat /= VCI_OK) return
+        end if
+        exit
+      end if
       if (impacts%count >= self%settings%max_impacts_per_step) then
         stat = VCI_ERR_TOO_MANY_IMPACTS
         self%cause = vci_too_many_impacts_cause(self%settings%max_impacts_per_step)
@@ -174,8 +185,16 @@ contains
         if (last_gap > 0) then
           if (impacts%records(impacts%count)%condition == VCI_IMPACT_DISCRETE .or. &
               impacts%records(impacts%count)%condition == VCI_IMPACT_BLENDED) then
-            call tie_to_wall(self, impacts%records(impacts%count), dir, tau, jstar, alpha, e_minus, s1res, stat)
+            call tie_to_wall(self, impacts%records(impacts%count), dir, tau, jstar, alpha, e_minus, s1res, stat, tied)
             if (stat /= VCI_OK) return
+            ! the tied impulse's motion comes back to wall jstar: a larger (or smaller) impulse whose
+            ! motion leaves the rest free may meet the whole rest's row too (second_root_exists)
+            if (tied) then
+              if (second_root_exists(self, impacts%records(impacts%count), &
+                                     real(dir, dp) * impacts%records(impacts%count)%impulse, tau, jstar, e_minus, stat)) &
+                self%stats%irreversible_impacts = self%stats%irreversible_impacts + 1
+              if (stat /= VCI_OK) return
+            end if
           end if
         end if
         ! Reached the wall (to round-off) exactly at the end of the step: no reflection yet;
@@ -294,18 +313,20 @@ contains
   !> impulse meets the condition (near a graze, where E_d hardly depends on mu, or the motion no
   !> longer reaches wall j first), the state of the impulse stage 2 found is put back: that impact keeps
   !> its condition on the whole rest of the step, as before (docs/BACKWARD.md: not reversible).
-  subroutine tie_to_wall(self, imp, dir, tau, j, alpha, e_minus, s1res, stat)
+  subroutine tie_to_wall(self, imp, dir, tau, j, alpha, e_minus, s1res, stat, tied)
     type(vci_stepper_t), intent(inout) :: self
     type(vci_impact_t), intent(inout) :: imp
     integer, intent(in) :: dir, j
     real(dp), intent(in) :: tau
     real(dp), intent(inout) :: alpha, e_minus, s1res
     integer, intent(out) :: stat
+    logical, intent(out) :: tied            !< imp's impulse was moved to the tie's root
     integer, parameter :: max_secants = 12
     integer :: k, nx
     real(dp) :: mu_a, mu_b, mu_c, f_a, f_b, f_c, mu_best, f_best, tol, mu_state, alpha0, e0, s10
     logical :: consistent, blend, missed
     stat = VCI_OK
+    tied = .false.
     nx = self%nsub
     mu_a = real(dir, dp) * imp%impulse
     ! with H at hand (m = 0) the row is the blended one, as stage 2 posed it (vci_scheme: blended_row)
@@ -367,6 +388,7 @@ contains
         self%stats%energy_fallbacks = self%stats%energy_fallbacks + 1
       end if
     end if
+    tied = .true.
   contains
     !> The energy row of imp with e_out = E_d of the sub-step leaving it at impulse mu, and its
     !> tolerance: E_d - E- (the discrete condition), or the blended row.
@@ -506,6 +528,321 @@ contains
       end do
     end function crossed_before
   end subroutine tie_to_wall
+
+  !> Two solutions of a step with a soft impact (docs/BACKWARD.md, "Two solutions of a step with a
+  !> soft impact"; issue 24). imp, an impact at q_start, took the root mu_w of its energy row
+  !> (discrete or blended, m = 0) whose motion either leaves the rest tau of the step free (the
+  !> step's last impact: wall_taken = 0) or meets wall wall_taken within it (tied there by
+  !> tie_to_wall). Another impulse on the reflection's side may give the other kind of motion and
+  !> meet the row too: for a root that leaves free, one whose motion meets a wall (any wall) within
+  !> the rest, the row held on the sub-step up to that wall; for a tied root, one whose motion
+  !> leaves the rest free, the row held on the whole rest. The step then has two solutions, and the
+  !> other direction, which cuts the motion into other sub-steps, may take the other one (vci_fuzz
+  !> --reversal 31255: backward 1.501 where the forward run took 1.136 and met a second impact).
+  !> True when such a root is found; the caller counts an irreversible impact. The step is left as
+  !> it was: x, the sub-step's points and momenta, its gaps, the wall normal, the carried position
+  !> part (of q_start, or of the wall point after a tie, where the next sub-step starts), the
+  !> scheme's row sizes (keep_row_sizes) and the posed sub-step are put back, and the search's
+  !> failures are not the step's (a callback's unrecoverable failure is).
+  !>
+  !> On the impulse line mu = t mu_w the row is F(t), on the sub-step that really leaves imp at that
+  !> impulse (up to the first wall its motion meets, else the whole rest; leaving_row); F(1) = 0.
+  !> The window of impulses a root can have: at any root H+ - H- = -w delta (vci_scheme:
+  !> blended_row), |delta| <= |e+| + |e-| with e the two sub-steps' offsets E_d - H (O(tau^2) for a
+  !> symmetric scheme); with |e+| taken as at most about the taken root's (its sub-step, the whole
+  !> rest, is the longest), |H+ - H-| <= D = OFFSET_MARGIN (|e+_w| + |e-|), and H is a parabola in t
+  !> (through t = 0, 1/2, 1; exact for H quadratic in p): t_lo and t_hi on the reflection's side.
+  !> Below 1 the motion comes back to the wall it leaves, above 1 it may reach another wall ahead
+  !> (90992); each side is searched from its far end (side_has_root): one sub-step there decides
+  !> whether the motion comes back at all (the screen), and only then is F looked at. OFFSET_MARGIN
+  !> 2 and max_golden 4 were chosen by cost: 4 and 8 found the same 19 runs of the survey at 1.14
+  !> times the instructions on seed 98668 (docs/bench/poke.md). Not on systems of reuse_min
+  !> unknowns and more, where Newton keeps factors across solves, which the search's solves would
+  !> change.
+  logical function second_root_exists(self, imp, mu_w, tau, wall_taken, e_taken, stat) result(found)
+    type(vci_stepper_t), intent(inout) :: self
+    type(vci_impact_t), intent(in) :: imp
+    real(dp), intent(in) :: mu_w          !< the root taken, in the stepper's sign (p+ = p- + mu_w grad g)
+    real(dp), intent(in) :: tau
+    !> 0: the root taken leaves the rest free (the step's last impact); else it was tied to this
+    !> wall, and e_taken is E_d of its sub-step up to it (resolve_impacts after tie_to_wall)
+    integer, intent(in) :: wall_taken
+    real(dp), intent(in) :: e_taken
+    integer, intent(out) :: stat
+    real(dp), parameter :: OFFSET_MARGIN = 2.0_dp
+    real(dp), parameter :: GOLDEN = 0.6180339887498949_dp
+    real(dp), parameter :: MAX_RATIO = 4.0_dp        ! (as energy_along: within a factor 4 of the root taken)
+    integer, parameter :: max_golden = 4, max_refine = 40
+    integer :: nx, st, wall_met
+    real(dp) :: h0, hh, h1, e_w, d_off, b, c, t_f, t_lo, t_hi, disc, tol, gap_met
+    logical :: want_return, screening
+    found = .false.
+    screening = .false.
+    stat = VCI_OK
+    nx = self%nsub
+    if (.not. (self%has_energy .and. self%m == 0)) return
+    if (imp%condition /= VCI_IMPACT_DISCRETE .and. imp%condition /= VCI_IMPACT_BLENDED) return
+    if (nx + 1 >= self%newton%reuse_min) return
+    if (.not. (abs(mu_w) > 0.0_dp)) return          ! a touch: no impulse, no reflection's side
+    want_return = wall_taken == 0                    ! the other kind of root than the one taken
+    ! the step as it stands (the next sub-step starts at q_start, or, after a tie, at q_wall)
+    self%tie_x(1:nx + 1, 1) = self%x(1:nx + 1)
+    self%tie_q(:, 1) = self%q_end; self%tie_q(:, 2) = self%q_wall; self%tie_q(:, 3) = self%p_arrive
+    self%poke_keep_g(1:self%ng) = self%gaps_end(1:self%ng)
+    if (want_return) then
+      call self%sys%position_carry(self%q_start, self%poke_keep_q(:, 5))
+    else
+      call self%sys%position_carry(self%q_wall, self%poke_keep_q(:, 5))
+    end if
+    call self%sys%keep_row_sizes()     ! (the next solve's row sizes come from the last Jacobian)
+
+    ! the window of impulses a root can have
+    if (want_return) then
+      call self%sys%energy_out(self%x, self%q_start, tau, e_w, stat)
+    else
+      e_w = e_taken
+    end if
+    if (stat == VCI_OK) call line_energy(0.0_dp, h0)
+    if (stat == VCI_OK) call line_energy(0.5_dp * mu_w, hh)
+    if (stat == VCI_OK) call line_energy(mu_w, h1)
+    if (stat /= VCI_OK) goto 90
+    d_off = OFFSET_MARGIN * (abs(e_w - h1) + abs(self%e_arrive_last - h0))
+    c = 2.0_dp * (h1 - 2.0_dp * hh + h0)             ! H = h0 + b t + c t^2 along mu = t mu_w
+    b = h1 - h0 - c
+    if (.not. (c > 0.0_dp)) goto 90                  ! H not convex along the normal: not sought
+    t_f = -b / (2.0_dp * c)
+    if (.not. (t_f < 1.0_dp)) goto 90
+    t_lo = t_f                                       ! H(t) = h0 - d_off on the reflection's side
+    disc = b**2 - 4.0_dp * c * d_off
+    if (disc > 0.0_dp) t_lo = (-b + sqrt(disc)) / (2.0_dp * c)
+    t_lo = max(t_lo, t_f + 0.02_dp * (1.0_dp - t_f))
+    t_hi = min((-b + sqrt(b**2 + 4.0_dp * c * d_off)) / (2.0_dp * c), MAX_RATIO)   ! H(t) = h0 + d_off
+    if (.not. (t_lo < 0.99_dp .or. t_hi > 1.01_dp)) goto 90
+    call self%sys%eval_gaps(self%q_start, self%gaps_start(1:self%ng), stat)
+    if (stat /= VCI_OK) goto 90
+    call forget_start_gradients(self)
+    ! smaller impulses (the motion comes back to the wall it leaves, or to another), then larger
+    ! ones (another wall ahead: 90992, where the forward's impulse is 1.09 times the backward's)
+    if (t_lo < 0.99_dp) found = side_has_root(t_lo)
+    if (.not. found .and. stat == VCI_OK .and. t_hi > 1.01_dp) found = side_has_root(t_hi)
+
+    ! back to the step as it was
+90  continue
+    if (stat /= VCI_OK .and. .not. self%sys%unrecoverable) stat = VCI_OK
+    if (stat == VCI_OK) self%cause = ''
+    self%x(1:nx + 1) = self%tie_x(1:nx + 1, 1)
+    self%q_end = self%tie_q(:, 1); self%q_wall = self%tie_q(:, 2); self%p_arrive = self%tie_q(:, 3)
+    self%p_start = imp%p_after
+    self%gaps_end(1:self%ng) = self%poke_keep_g(1:self%ng)
+    call self%sys%set_wall_normal(imp%grad_g)
+    if (want_return) then
+      call self%sys%restore_position_carry(self%q_start, self%poke_keep_q(:, 5))
+    else
+      call self%sys%restore_position_carry(self%q_wall, self%poke_keep_q(:, 5))
+    end if
+    call self%sys%restore_row_sizes()
+    call forget_start_gradients(self)
+    ! x holds increments from the posed start: the leaving sub-step posed again (as find_poke leaves it)
+    call self%sys%pose_substep(self%q_start, self%p_start, tau, st)
+    if (st /= VCI_OK .and. stat == VCI_OK) then
+      stat = st; call set_cause(self, 'constraint forms')
+    end if
+    if (stat /= VCI_OK) found = .false.
+  contains
+    !> H(q, p- + mu grad g) at the impact
+    subroutine line_energy(mu, e)
+      real(dp), intent(in) :: mu
+      real(dp), intent(out) :: e
+      self%p_leave = imp%p_before + mu * imp%grad_g
+      call self%sys%hamiltonian(imp%q, self%p_leave, e, stat)
+    end subroutine line_energy
+
+    !> Is there a root of F of the other kind (want_return: its motion meets a wall; else it leaves
+    !> the rest free) between t = 1 and t_far (t_lo or t_hi)? The screen: the motion at t_far must be
+    !> of that kind (else none between, the end gap being monotone in the impulse), decided by its
+    !> sub-step alone. Then t_g, where the kind changes (by the end gap of the wall met at t_far, or
+    !> tied to, about linear in t: interpolation between t_far and 1, again from a probe that
+    !> overshot), and F just inside the graze, at t_g + 1e-3 (t_far - t_g): in 91440 (backward, at
+    !> t = 1.6403) F is above 0 only between the root, t = 0.9741, and the graze, 0.9754, 6e-3 of
+    !> [t_lo, 1] (a scan of 41 impulses). Where F there and at t_far have one sign, F may still
+    !> cross 0 and back in between (98668: F rises to the blended weight's kink and falls, above 0
+    !> for t in 0.615-0.640 of [0.40, 1]; 90992, above 1: the other way round): golden sections
+    !> for its extremum of the other sign, up to max_golden, stopping at the first value of that
+    !> sign. Illinois steps then close the bracket to the row's tolerance; the root counts where
+    !> its motion is of that kind.
+    logical function side_has_root(t_far) result(has)
+      real(dp), intent(in) :: t_far
+      real(dp) :: f_far, g_far, t_g, t_p, f_p, t_a, f_a, t_b, f_b, t_c, f_c, t_d, f_d, t, f, w_a, w_b, sig
+      integer :: k, kept, wall_back
+      logical :: returns, ok
+      has = .false.
+      screening = .true.         ! (a motion of the kind taken: no stage 1, no row)
+      ok = leaving_row(t_far * mu_w, f_far, returns)
+      screening = .false.
+      if (.not. ok .or. (returns .neqv. want_return)) return
+      if (abs(f_far) <= tol) then
+        has = .true.; return
+      end if
+      ! the wall whose end gap changes sign between t_far and 1: the one met at t_far, or the one
+      ! the root taken was tied to
+      if (want_return) then
+        wall_back = wall_met; g_far = gap_met
+      else
+        wall_back = wall_taken; g_far = self%gaps_end(wall_taken)
+      end if
+      t_g = t_far + (1.0_dp - t_far) * g_far / (g_far - self%poke_keep_g(wall_back))
+      if (.not. ((t_g - t_far) * (1.0_dp - t_g) > 0.0_dp)) return
+      do k = 1, 3
+        t_p = t_g + 1.0e-3_dp * (t_far - t_g)
+        if (.not. leaving_row(t_p * mu_w, f_p, returns)) return
+        if (returns .eqv. want_return) exit
+        t_g = t_far + (t_p - t_far) * g_far / (g_far - self%gaps_end(wall_back))
+      end do
+      if (returns .neqv. want_return) return
+      if (abs(f_p) <= tol) then
+        has = .true.; return
+      end if
+      if ((f_p > 0.0_dp) .eqv. (f_far > 0.0_dp)) then
+        ! golden sections on [t_a, t_b] for the largest -sig F (sig: the sign at both ends)
+        sig = sign(1.0_dp, f_far)
+        t_a = min(t_far, t_p); t_b = max(t_far, t_p)
+        t_c = t_b - GOLDEN * (t_b - t_a); t_d = t_a + GOLDEN * (t_b - t_a)
+        if (.not. leaving_row(t_c * mu_w, f_c, returns)) return
+        if (.not. leaving_row(t_d * mu_w, f_d, returns)) return
+        do k = 1, max_golden
+          if (sig * f_c < 0.0_dp .or. sig * f_d < 0.0_dp) exit
+          if (sig * f_c < sig * f_d) then
+            t_b = t_d; t_d = t_c; f_d = f_c
+            t_c = t_b - GOLDEN * (t_b - t_a)
+            if (.not. leaving_row(t_c * mu_w, f_c, returns)) return
+          else
+            t_a = t_c; t_c = t_d; f_c = f_d
+            t_d = t_a + GOLDEN * (t_b - t_a)
+            if (.not. leaving_row(t_d * mu_w, f_d, returns)) return
+          end if
+        end do
+        if (sig * f_c < 0.0_dp) then
+          t_p = t_c; f_p = f_c
+        else if (sig * f_d < 0.0_dp) then
+          t_p = t_d; f_p = f_d
+        else
+          return
+        end if
+      end if
+      ! Illinois steps on the bracket [t_far, t_p] (F of opposite signs) to the row's tolerance
+      t_a = t_far; f_a = f_far; t_b = t_p; f_b = f_p
+      w_a = f_a; w_b = f_b; kept = 0
+      do k = 1, max_refine
+        t = t_a - w_a * (t_b - t_a) / (w_b - w_a)
+        if (.not. leaving_row(t * mu_w, f, returns)) return
+        if (abs(f) <= tol) then
+          has = returns .eqv. want_return; return
+        end if
+        if (abs(t_b - t_a) <= 8.0_dp * epsilon(1.0_dp) * abs(t)) return
+        if ((f > 0.0_dp) .eqv. (f_b > 0.0_dp)) then
+          t_b = t; f_b = f; w_b = f
+          if (kept < 0) w_a = 0.5_dp * w_a
+          kept = -1
+        else
+          t_a = t; f_a = f; w_a = f
+          if (kept > 0) w_b = 0.5_dp * w_b
+          kept = 1
+        end if
+      end do
+    end function side_has_root
+
+    !> F at impulse mu: imp's row (blended_row: the discrete one where its weight is 1) with E_d of
+    !> the sub-step that leaves imp at mu, up to the first wall its motion reaches (returns) or over
+    !> the whole rest; tol the row's tolerance. False where a solve fails or the motion crosses
+    !> another wall before the one stage 1 reached (that sub-step is not the one that leaves).
+    logical function leaving_row(mu, f, returns)
+      real(dp), intent(in) :: mu
+      real(dp), intent(out) :: f
+      logical, intent(out) :: returns
+      real(dp) :: e_out, alpha, sc
+      integer :: j, jw
+      leaving_row = .false.; returns = .false.; f = huge(1.0_dp)
+      self%p_start = imp%p_before + mu * imp%grad_g
+      call self%sys%put_endpoint(self%x, self%q_start, self%tie_q(:, 1))
+      call substep(self, self%q_start, self%p_start, tau, stat)
+      if (stat /= VCI_OK) return
+      call self%sys%get_endpoint(self%x, self%q_end)
+      call self%sys%eval_gaps(self%q_end, self%gaps_end(1:self%ng), stat)
+      if (stat /= VCI_OK) return
+      self%wall_tried(1:self%ng) = .false.
+      jw = first_by_chord(self, self%gaps_end)
+      wall_met = jw
+      if (jw > 0) gap_met = self%gaps_end(jw)
+      if (screening .and. ((jw > 0) .neqv. want_return)) then
+        returns = jw > 0; return
+      end if
+      if (jw == 0) then
+        call self%sys%energy_out(self%x, self%q_start, tau, e_out, stat)
+      else
+        returns = .true.
+        alpha = -1.0_dp
+        if (jw == imp%gap) call back_to_the_wall_left(mu, alpha)
+        if (stat /= VCI_OK) return
+        if (alpha < 0.0_dp) call stage_wall(self, jw, tau, alpha, stat)
+        if (stat /= VCI_OK) return
+        call self%sys%get_endpoint(self%x, self%q_wall)
+        call self%sys%eval_gaps(self%q_wall, self%gaps_trial(1:self%ng), stat)
+        if (stat /= VCI_OK) return
+        do j = 1, self%ng
+          if (j /= jw .and. self%gaps_start(j) >= 0.0_dp .and. self%gaps_trial(j) < 0.0_dp) return
+        end do
+        call self%sys%energy_out(self%x, self%q_start, alpha * tau, e_out, stat)
+      end if
+      if (stat /= VCI_OK) return
+      call self%sys%set_wall_normal(imp%grad_g)
+      call self%sys%pose_stage2(imp%q, imp%p_before, tau, imp%gap, self%e_arrive_last)
+      call self%sys%pose_blend(stat)
+      if (stat == VCI_OK) call self%sys%blended_row(e_out, mu, f, sc, stat)
+      if (stat /= VCI_OK) return
+      tol = self%settings%atol + self%settings%rtol * sc
+      leaving_row = ieee_is_finite(f)
+    end function leaving_row
+
+    !> Stage 1 back to the wall imp left, from a start on it (x: the sub-step over tau at mu, its
+    !> end beyond that wall): the chord from a point on the wall crosses it at once, so stage_wall's
+    !> chord start fails there and it brackets the crossing on the trajectory (about 7 sub-steps:
+    !> 90 % of the search's cost on seed 98668). The gap along the trajectory is about
+    !> r s + (g_end - r) s^2 with r the departure's normal rate times tau: Newton on stage 1 from the
+    !> sub-step of s tau at its root s. alpha < 0 where that fails or reaches the start itself
+    !> (the caller then takes stage_wall's way); the sub-step's solution in x is then lost.
+    subroutine back_to_the_wall_left(mu, alpha)
+      real(dp), intent(in) :: mu
+      real(dp), intent(out) :: alpha
+      real(dp) :: rate, noise, r, s_est
+      integer :: j
+      alpha = -1.0_dp
+      j = imp%gap
+      self%q_wall = imp%q; self%p_arrive = imp%p_before
+      call self%sys%set_wall_normal(imp%grad_g)
+      call normal_rate(self, mu, rate, noise, stat)
+      if (stat /= VCI_OK) return
+      r = rate * tau
+      if (.not. (r > 0.0_dp .and. self%gaps_end(j) < 0.0_dp)) return
+      s_est = r / (r - self%gaps_end(j))
+      call start_gradient(self, j, stat)
+      if (stat /= VCI_OK) return
+      self%q_guess = self%q_start + s_est * (self%q_end - self%q_start)
+      call self%sys%put_endpoint(self%x, self%q_start, self%q_guess)
+      call substep(self, self%q_start, self%p_start, s_est * tau, stat)
+      if (stat /= VCI_OK) then
+        if (.not. self%sys%unrecoverable) stat = VCI_OK
+        call self%sys%put_endpoint(self%x, self%q_start, self%q_end)   ! (stage_wall's start again)
+        return
+      end if
+      call solve_wall(self, j, tau, s_est, 'stage 1 (back to the wall left)', stat)
+      if (stat == VCI_OK) alpha = self%sys%get_extra(self%x, KIND_STAGE1)
+      if (stat /= VCI_OK .or. .not. (alpha > 0.25_dp * s_est .and. alpha <= 1.0_dp)) then
+        if (stat /= VCI_OK .and. .not. self%sys%unrecoverable) stat = VCI_OK
+        alpha = -1.0_dp
+        call self%sys%put_endpoint(self%x, self%q_start, self%q_end)
+      end if
+    end subroutine back_to_the_wall_left
+  end function second_root_exists
 
   !> Does the sub-step from (q_start, p_start) of length tau (its solution in x) pass a wall and come
   !> back before it reaches a wall its end is beyond? Its end alone cannot tell: a curved motion

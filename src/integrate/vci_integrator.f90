@@ -56,7 +56,9 @@ module vci_integrator
     !> leaves them up to the next wall (the search found no such impulse); a reversed run poses
     !> another condition there and need not return (docs/BACKWARD.md, "Impacts that cannot be tied");
     !> and steps taken free whose poke screen from the end (a reversed run's) finds a poke that the
-    !> one from the start did not (docs/DESIGN.md, "A poke seen from the end only")
+    !> one from the start did not (docs/DESIGN.md, "A poke seen from the end only"); and impacts
+    !> whose energy condition has a second root of the other kind, meeting a wall within the rest
+    !> or leaving it free (two solutions: docs/BACKWARD.md, "Two solutions of a step with a soft impact")
     integer(i8) :: irreversible_impacts = 0
     !> steps that failed and were then taken as 2, 4, ... equal sub-steps (the safety net,
     !> set_step_splits; docs/DESIGN.md §2), and the most sub-steps one of them needed

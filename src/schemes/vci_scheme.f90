@@ -111,6 +111,7 @@ module vci_scheme
     procedure :: path_point
     procedure :: path_bernstein
     procedure :: forget_jacobian
+    procedure :: keep_row_sizes, restore_row_sizes
     procedure :: fused_substep => no_fused_substep
     procedure :: substep_sensitivity => no_substep_sensitivity
     procedure :: setup_common
@@ -577,6 +578,19 @@ contains
   subroutine forget_jacobian(self)
     class(vci_scheme_t), intent(inout) :: self
   end subroutine forget_jacobian
+
+  !> What a scheme carries from one solve to the next beyond the posed system (the discrete
+  !> scheme's row sizes from the last Jacobian, which size the next solve's rows before its own
+  !> Jacobian), kept before side solves that must leave the run as it was (vci_impacts:
+  !> second_root_exists) and put back after them. Nothing here.
+  subroutine keep_row_sizes(self)
+    class(vci_scheme_t), intent(inout) :: self
+  end subroutine keep_row_sizes
+
+  !> Back to the row sizes keep_row_sizes kept.
+  subroutine restore_row_sizes(self)
+    class(vci_scheme_t), intent(inout) :: self
+  end subroutine restore_row_sizes
 
   !> The posed regular sub-step solved in one fused routine, when the scheme has one for this
   !> system (done true: x solved, res filled); else done false and x untouched: the caller runs

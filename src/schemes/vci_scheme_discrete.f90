@@ -74,6 +74,9 @@ module vci_scheme_discrete
     integer, allocatable, private :: fpiv(:)
     !> flu, fpiv, frw hold the factors of the last fused solve's Newton matrix (near its solution)
     logical, private :: flu_kept = .false.
+    !> jscale, jabs, kin and jac_known as keep_row_sizes kept them (jabs only below vci_large_system)
+    real(dp), allocatable, private :: jscale_kept(:), jabs_kept(:, :), kin_kept(:)
+    logical, private :: jac_known_kept = .false.
   contains
     procedure :: setup
     procedure :: unknowns
@@ -84,6 +87,8 @@ module vci_scheme_discrete
     procedure :: momentum_out, energy_out, hamiltonian
     procedure :: impact_momentum
     procedure :: forget_jacobian
+    procedure :: keep_row_sizes => discrete_keep_row_sizes
+    procedure :: restore_row_sizes => discrete_restore_row_sizes
     procedure :: chord_ratio => substep_chord_ratio
     procedure :: block_key => stage_block_key
     procedure :: fused_substep
@@ -253,7 +258,8 @@ contains
                                         self%start_lo, self%end_key, self%end_lo, self%kin, self%cjo, self%sizes, &
                                         self%fjac, self%flu, self%fr, self%fsc, self%frt, self%fsct, self%fxt, &
                                         self%fdx, self%frw, self%fx0, self%fpiv, self%gg1, self%fcol, &
-                                        self%lkey, self%ld1, self%ld2, self%lhess)
+                                        self%lkey, self%ld1, self%ld2, self%lhess, self%jscale_kept, &
+                                        self%jabs_kept, self%kin_kept)
     ! the fused solve's matrices only for the small systems it takes (vci_large_system; else 1 x 1:
     ! a chain of n = 4096 kept two n x n arrays here, one of them zeroed and so resident)
     nf = merge(n + m, 1, n + m < vci_large_system)
@@ -277,7 +283,8 @@ contains
               self%d1(n), self%hess(nh, nh), self%g(max(1, model%n_gaps)), self%bb(n), self%start_key(n), self%start_lo(n), &
               self%end_key(n), self%end_lo(n), self%kin(n), &
               self%rp(nx), self%rm(nx), self%sp(nx), self%sm(nx), self%xp(nx), self%jscale(nx), &
-              self%jabs(nj, nj), self%lkey(2, n), self%ld1(n), self%ld2(n), self%lhess(nh, nh), stat=stat)
+              self%jabs(nj, nj), self%lkey(2, n), self%ld1(n), self%ld2(n), self%lhess(nh, nh), &
+              self%jscale_kept(nx), self%kin_kept(n), self%jabs_kept(nf + 1, nf + 1), stat=stat)
     if (stat /= 0) return
     self%l_known = .false.
     self%jscale = 0.0_dp
@@ -1215,6 +1222,30 @@ contains
     self%jac_known = .false.
     self%l_known = .false.   ! (a model changed between solves is asked again)
   end subroutine forget_jacobian
+
+  !> The row sizes the next solve starts with (jscale: the round-off floor of every row, from the
+  !> last Jacobian; jabs, kin, jac_known), kept (vci_scheme: keep_row_sizes). jabs is kept only
+  !> where it is small (below vci_large_system unknowns), which is where side solves are made.
+  subroutine discrete_keep_row_sizes(self)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    integer :: nk
+    self%jscale_kept = self%jscale
+    self%kin_kept = self%kin
+    self%jac_known_kept = self%jac_known
+    nk = min(size(self%jabs, 1), size(self%jabs_kept, 1))
+    self%jabs_kept(1:nk, 1:nk) = self%jabs(1:nk, 1:nk)
+  end subroutine discrete_keep_row_sizes
+
+  !> Back to the row sizes discrete_keep_row_sizes kept.
+  subroutine discrete_restore_row_sizes(self)
+    class(vci_scheme_discrete_t), intent(inout) :: self
+    integer :: nk
+    self%jscale = self%jscale_kept
+    self%kin = self%kin_kept
+    self%jac_known = self%jac_known_kept
+    nk = min(size(self%jabs, 1), size(self%jabs_kept, 1))
+    self%jabs(1:nk, 1:nk) = self%jabs_kept(1:nk, 1:nk)
+  end subroutine discrete_restore_row_sizes
 
   !> b_j, both layouts.
   pure real(dp) function position(self, x, j)
