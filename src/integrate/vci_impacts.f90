@@ -739,15 +739,7 @@ contains
           has = returns .eqv. want_return; return
         end if
         if (abs(t_b - t_a) <= 8.0_dp * epsilon(1.0_dp) * abs(t)) return
-        if ((f > 0.0_dp) .eqv. (f_b > 0.0_dp)) then
-          t_b = t; f_b = f; w_b = f
-          if (kept < 0) w_a = 0.5_dp * w_a
-          kept = -1
-        else
-          t_a = t; f_a = f; w_a = f
-          if (kept > 0) w_b = 0.5_dp * w_b
-          kept = 1
-        end if
+        call illinois_update(t, f, t_a, f_a, w_a, t_b, f_b, w_b, kept)
       end do
     end function side_has_root
 
@@ -2140,15 +2132,7 @@ contains
               stat = stat_b; return
             end if
             if (abs(f) <= 1.0e-4_dp * tol .or. abs(mu_hi - mu_lo) <= 8.0_dp * epsilon(1.0_dp) * abs(mu)) exit
-            if ((f > 0.0_dp) .eqv. (f_hi > 0.0_dp)) then
-              mu_hi = mu; f_hi = f; whi = f
-              if (kept < 0) wlo = 0.5_dp * wlo
-              kept = -1
-            else
-              mu_lo = mu; f_lo = f; wlo = f
-              if (kept > 0) whi = 0.5_dp * whi
-              kept = 1
-            end if
+            call illinois_update(mu, f, mu_lo, f_lo, wlo, mu_hi, f_hi, whi, kept)
           end do
           if (abs(f) > tol) then
             stat = VCI_ERR_NEWTON
@@ -2626,4 +2610,23 @@ contains
     name = wall_label('wall ', j)
     name(len_trim(name):) = ' '
   end function wall_name
+  !> One Illinois step on a root bracketed by a and b (f_a, f_b of opposite signs) with secant
+  !> weights w_a, w_b: the end whose f has the sign of f at x moves to x and takes f as its weight;
+  !> an end kept a second time in a row has its weight halved, so that both ends move in. kept: 0 at
+  !> the start, then -1 when b moved last, 1 when a did.
+  pure subroutine illinois_update(x, f, a, f_a, w_a, b, f_b, w_b, kept)
+    real(dp), intent(in) :: x, f
+    real(dp), intent(inout) :: a, f_a, w_a, b, f_b, w_b
+    integer, intent(inout) :: kept
+    if ((f > 0.0_dp) .eqv. (f_b > 0.0_dp)) then
+      b = x; f_b = f; w_b = f
+      if (kept < 0) w_a = 0.5_dp * w_a
+      kept = -1
+    else
+      a = x; f_a = f; w_a = f
+      if (kept > 0) w_b = 0.5_dp * w_b
+      kept = 1
+    end if
+  end subroutine illinois_update
+
 end submodule vci_impacts
