@@ -5,6 +5,7 @@
                                   bitwise the same /members (whatever ranks, threads, chunks wrote them)
                                   and, when there is one, the same /analysis (ellipse_ensemble's)
   check_files.py done FILE        print how many members the file holds (status != -1); 0 if unreadable
+  check_files.py every-rank FILE  the same, but 0 until every rank has run one of them
   check_files.py killed FILE      a killed run's file: opens, not complete, holds some members, and
                                   every member it holds has all its datasets written
 """
@@ -99,6 +100,19 @@ def done(path):
         print(0)
 
 
+def every_rank(path):
+    """As done, but 0 until every rank has run a member the file holds: sigkill.sh kills once this
+    is large enough, and the killed file must show the members distributed (a rank that starts
+    late on a loaded machine is not a fault)."""
+    try:
+        with h5py.File(path, "r") as f:
+            held = f["members/status"][:] >= 0
+            ranks = set(f["run/rank"][:][held].tolist())
+            print(0 if len(ranks) < f.attrs["ranks"] else int(np.count_nonzero(held)))
+    except Exception:  # not yet created, or not yet readable
+        print(0)
+
+
 def killed(path):
     with h5py.File(path, "r") as f:
         layout(f, path)
@@ -126,4 +140,5 @@ if __name__ == "__main__":
         print(__doc__)
         sys.exit(2)
     mode, files = sys.argv[1], sys.argv[2:]
-    {"same": lambda: same(files), "done": lambda: done(files[0]), "killed": lambda: killed(files[0])}[mode]()
+    {"same": lambda: same(files), "done": lambda: done(files[0]),
+     "every-rank": lambda: every_rank(files[0]), "killed": lambda: killed(files[0])}[mode]()
