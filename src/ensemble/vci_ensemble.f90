@@ -192,14 +192,21 @@ contains
     end if
     nt = max(1, config%threads)
     !$ if (config%threads <= 0) nt = omp_get_max_threads()
-    ! Each iteration writes only column i of `results`; dynamic scheduling because impact-rich
-    ! members cost more.
-    !$omp parallel do num_threads(nt) schedule(dynamic, 1) default(none) &
-    !$omp   shared(factory, config, table, results, n_members) private(i)
-    do i = 1, n_members
-      call vci_ensemble_run_member(factory, config, table, i, results)
-    end do
-    !$omp end parallel do
+    if (nt == 1) then
+      ! one thread: no OpenMP team (the runtime ends the program when it cannot allocate one)
+      do i = 1, n_members
+        call vci_ensemble_run_member(factory, config, table, i, results)
+      end do
+    else
+      ! Each iteration writes only column i of `results`; dynamic scheduling because impact-rich
+      ! members cost more.
+      !$omp parallel do num_threads(nt) schedule(dynamic, 1) default(none) &
+      !$omp   shared(factory, config, table, results, n_members) private(i)
+      do i = 1, n_members
+        call vci_ensemble_run_member(factory, config, table, i, results)
+      end do
+      !$omp end parallel do
+    end if
     if (present(message)) message = ''
   end subroutine vci_ensemble_run
 
@@ -352,7 +359,10 @@ contains
 
     stat = 0
     call factory%build_model(member, params, model, stat)
-    if (stat /= 0 .or. .not. allocated(model)) then
+    if (stat == VCI_ERR_MEMORY) then      ! (the library's prototype factories: a copy not allocated)
+      write (msg, '(a,i0)') 'factory: out of memory for the model of member ', member
+      call store_failure(results, j, VCI_ERR_MEMORY, msg); return
+    else if (stat /= 0 .or. .not. allocated(model)) then
       write (msg, '(a,i0,a,i0)') 'factory: building the model of member ', member, ' failed with status ', stat
       call store_failure(results, j, VCI_ERR_CALLBACK, msg); return
     end if
@@ -468,6 +478,7 @@ contains
       stat = VCI_ERR_ARGUMENT; return
     end if
     allocate (model, source=self%prototype, stat=stat)
+    if (stat /= 0) stat = VCI_ERR_MEMORY
   end subroutine prototype_build
 
   !> The default build_model: the factory's discrete model (build).
@@ -501,6 +512,7 @@ contains
       stat = VCI_ERR_ARGUMENT; return
     end if
     allocate (model, source=self%prototype, stat=stat)
+    if (stat /= 0) stat = VCI_ERR_MEMORY
   end subroutine lagrangian_prototype_build
 
   ! --- the member's observer ---

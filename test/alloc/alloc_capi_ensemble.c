@@ -5,8 +5,11 @@
  * makes on the way. Each call must return VCI_OK with the same results as a run that never failed
  * (bit for bit), or VCI_ERR_MEMORY with a message; before the fix the copy of the results into the
  * caller's arrays made reshape temporaries of a table's size without stat=, and the first such
- * failure ended this program ("Error allocating ... bytes"). Usage: vci_alloc_capi_ensemble; the
- * exit status is the number of failed checks. */
+ * failure ended this program ("Error allocating ... bytes"). Usage: vci_alloc_capi_ensemble [MIN
+ * [MEMBERS]] (defaults: a table's size, 4096; ctest also runs 256 8, where the members' own
+ * allocations fail: each must be that member's VCI_ERR_MEMORY); the exit status is the number of
+ * failed checks. Below 256 bytes the C ABI's copy of the model handle (an intrinsic assignment of a
+ * type with allocatable components, no stat=) still ends the program (SIGSEGV). */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -35,10 +38,12 @@ typedef struct {
   double t[M], q[M], p[M], impact_t[CAP * M];
   int64_t steps[M], impacts[M];
   int impact_gap[CAP * M];
+  char messages[160 * M];
 } outcome;
 
 static outcome reference, trial;
 static double t0[M], q0[M], p0[M];
+static int members = M;   /* argv[2]: fewer members, for a small MIN */
 
 static int run(vci_model model, outcome *o) {
   vci_ensemble_config c = VCI_ENSEMBLE_CONFIG_INIT;
@@ -46,8 +51,8 @@ static int run(vci_model model, outcome *o) {
   c.h = 0.05; c.nsteps = 40; c.start_kind = VCI_START_MOMENTUM; c.threads = 1; c.impact_cap = CAP;
   memset(o, 0xff, sizeof *o);
   r.status = o->status; r.t = o->t; r.q = o->q; r.p = o->p; r.steps = o->steps; r.impacts = o->impacts;
-  r.impact_t = o->impact_t; r.impact_gap = o->impact_gap;
-  return vci_ensemble_run(model, &c, M, t0, q0, p0, &r);
+  r.impact_t = o->impact_t; r.impact_gap = o->impact_gap; r.messages = o->messages; r.message_size = 160;
+  return vci_ensemble_run(model, &c, members, t0, q0, p0, &r);
 }
 
 /* member j of the trial as in the reference, bit for bit (status, state, counts, impacts) */
@@ -68,9 +73,12 @@ int main(int argc, char **argv) {
   cb.lagrangian = l_value; cb.dl_dq = l_dq; cb.dl_dv = l_dv; cb.hessians = l_hess;
   cb.gaps = walls; cb.gap_gradients = wall_grads;
   if (vci_model_create_lagrangian(&model, 1, 0, 2, &cb, NULL) != VCI_OK) return 1;
-  for (int j = 0; j < M; ++j) { t0[j] = 0.0; q0[j] = 0.0; p0[j] = 0.5 + 5.5 * j / (M - 1); }
+  if (argc > 2) members = atoi(argv[2]);
+  if (members < 2 || members > M) return 2;
+  for (int j = 0; j < members; ++j) { t0[j] = 0.0; q0[j] = 0.0; p0[j] = 0.5 + 5.5 * j / (members - 1); }
   CHECK(run(model, &reference) == VCI_OK, "the run without a failure");
-  CHECK(reference.impacts[M - 1] > 0, "the fastest member bounces (%lld impacts)", (long long)reference.impacts[M - 1]);
+  CHECK(reference.impacts[members - 1] > 0, "the fastest member bounces (%lld impacts)",
+        (long long)reference.impacts[members - 1]);
   for (k = 1; k <= 2000; ++k) {
     char msg[512];
     long long pending;
@@ -85,10 +93,16 @@ int main(int argc, char **argv) {
     ++met;
     if (st == VCI_OK) {
       int bad = 0, lost = 0;
-      for (int j = 0; j < M; ++j) {
+      for (int j = 0; j < members; ++j) {
         if (member_equal(j)) continue;
         if (trial.status[j] == VCI_ERR_MEMORY && trial.steps[j] < reference.steps[j]) ++lost;
-        else ++bad;
+        else {
+          ++bad;
+          printf("  k = %lld member %d: status %d (alone %d), steps %lld (%lld), impacts %lld (%lld)\n", k, j,
+                 trial.status[j], reference.status[j], (long long)trial.steps[j], (long long)reference.steps[j],
+                 (long long)trial.impacts[j], (long long)reference.impacts[j]);
+          printf("    %s\n", trial.messages + 160 * j);
+        }
       }
       if (lost > 0) ++member_memory; else ++absorbed;
       CHECK(bad == 0 && lost <= 1, "k = %lld: VCI_OK after a failure: %d members other than alone, %d out of memory",
