@@ -1013,6 +1013,28 @@ contains
     end if
   end subroutine restore_substep
 
+  !> The regular sub-step of s tau from (q_start, p_start), its solve started from x: its end in
+  !> q_trial and the gaps there in gaps_trial. False when the solve failed (stat set only where a
+  !> callback said the failure is unrecoverable) or a gap evaluation did (stat set).
+  logical function gaps_inside(self, s, tau, stat)
+    type(vci_stepper_t), intent(inout) :: self
+    real(dp), intent(in) :: s, tau
+    integer, intent(inout) :: stat
+    integer :: st
+    gaps_inside = .false.
+    call substep(self, self%q_start, self%p_start, s * tau, st)
+    if (st /= VCI_OK) then
+      if (self%sys%unrecoverable) stat = st
+      return
+    end if
+    call self%sys%get_endpoint(self%x, self%q_trial)
+    call self%sys%eval_gaps(self%q_trial, self%gaps_trial(1:self%ng), stat)
+    if (stat /= VCI_OK) then
+      call set_cause(self, 'gap evaluation inside the sub-step'); return
+    end if
+    gaps_inside = .true.
+  end function gaps_inside
+
   !> The trajectory's point at fraction s of the sub-step of length tau: the end of a regular
   !> sub-step of s tau from (q_start, p_start), its solve started between the nearest path points
   !> on either side, and its gaps; it joins the path (add_path_point). False when the solve failed
@@ -1021,7 +1043,7 @@ contains
     type(vci_stepper_t), intent(inout) :: self
     real(dp), intent(in) :: s, tau
     integer, intent(out) :: stat
-    integer :: st, i
+    integer :: i
     real(dp) :: f
     stat = VCI_OK
     path_sample = .false.
@@ -1031,16 +1053,7 @@ contains
     end do
     f = (s - self%poke_path_s(i - 1)) / (self%poke_path_s(i) - self%poke_path_s(i - 1))
     self%x(1:self%nsub) = (1.0_dp - f) * self%poke_path_x(1:self%nsub, i - 1) + f * self%poke_path_x(1:self%nsub, i)
-    call substep(self, self%q_start, self%p_start, s * tau, st)
-    if (st /= VCI_OK) then
-      if (self%sys%unrecoverable) stat = st     ! a callback said so; else no sample, no poke
-      return
-    end if
-    call self%sys%get_endpoint(self%x, self%q_trial)
-    call self%sys%eval_gaps(self%q_trial, self%gaps_trial(1:self%ng), stat)
-    if (stat /= VCI_OK) then
-      call set_cause(self, 'gap evaluation inside the sub-step'); return
-    end if
+    if (.not. gaps_inside(self, s, tau, stat)) return   ! (no sample, no poke)
     call add_path_point(self, s, self%q_trial, self%gaps_trial(1:self%ng), self%x)
     path_sample = .true.
   end function path_sample
@@ -1459,16 +1472,7 @@ contains
       do i = 1, count
         s = 0.5_dp * (a + b)
         self%x(1:nm) = 0.5_dp * (self%x_low(1:nm) + self%x_high(1:nm))
-        call substep(self, self%q_start, self%p_start, s * tau, st)
-        if (st /= VCI_OK) then
-          if (self%sys%unrecoverable) stat = st
-          return
-        end if
-        call self%sys%get_endpoint(self%x, self%q_trial)
-        call self%sys%eval_gaps(self%q_trial, self%gaps_trial(1:self%ng), stat)
-        if (stat /= VCI_OK) then
-          call set_cause(self, 'gap evaluation inside the sub-step'); return
-        end if
+        if (.not. gaps_inside(self, s, tau, stat)) return
         g = self%gaps_trial(j)
         if (g < 0.0_dp) then
           b = s; gb = g; self%x_high(1:nm) = self%x(1:nm)
